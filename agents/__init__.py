@@ -1,0 +1,1 @@
+"""Reference controllers, training and evaluation for the connenv environments."""

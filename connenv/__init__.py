@@ -1,0 +1,7 @@
+"""connenv: Gymnasium environments for mechanical systems steered by active constraints and mechanical connections."""
+
+from gymnasium.envs.registration import register
+
+__version__ = "0.1.0"
+
+register(id="connenv/Swing-v0", entry_point="connenv.envs.swing:SwingEnv", max_episode_steps=500)

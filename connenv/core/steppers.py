@@ -1,0 +1,114 @@
+"""Steppers: advance a state over one control segment.
+
+A control segment is a stretch of time of length ``tau`` on which the assigned
+coordinates move at constant velocity: u(s) = u + s·u̇ for 0 ≤ s ≤ tau. A
+stepper is called as ``stepper(system, y, u, u_dot, tau) -> y`` and uses the
+system's ``vector_field(y, u, u_dot)``; the exact stepper uses its
+``exact_flow(y, u, tau)`` where u̇ = 0. All of them broadcast over leading
+batch axes of y.
+
+Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
+flow), ``"rk4"`` with ``substeps``, or one of scipy's ``"dop853"``, ``"rk45"``,
+``"lsoda"``, ``"radau"`` with ``rtol`` and ``atol``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+
+class StepperError(ArithmeticError):
+    """A stepper produced a non-finite state or could not meet its tolerance."""
+
+
+@dataclass(frozen=True)
+class RK4:
+    """Classic fourth-order Runge–Kutta with ``substeps`` equal steps per segment."""
+
+    substeps: int = 1
+
+    def __call__(self, system, y, u, u_dot, tau):
+        h = tau / self.substeps
+        for i in range(self.substeps):
+            s = i * h
+            k1 = system.vector_field(y, u + s * u_dot, u_dot)
+            k2 = system.vector_field(y + 0.5 * h * k1, u + (s + 0.5 * h) * u_dot, u_dot)
+            k3 = system.vector_field(y + 0.5 * h * k2, u + (s + 0.5 * h) * u_dot, u_dot)
+            k4 = system.vector_field(y + h * k3, u + (s + h) * u_dot, u_dot)
+            y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        return _finite(y, self)
+
+
+@dataclass(frozen=True)
+class Scipy:
+    """One of scipy.integrate.solve_ivp's methods (DOP853, RK45, LSODA, Radau), adaptive."""
+
+    method: str = "DOP853"
+    rtol: float = 1e-10
+    atol: float = 1e-12
+
+    def __call__(self, system, y, u, u_dot, tau):
+        shape = np.shape(y)
+
+        def rhs(s, flat):
+            return system.vector_field(flat.reshape(shape), u + s * u_dot, u_dot).ravel()
+
+        sol = solve_ivp(rhs, (0.0, tau), np.ravel(y), method=self.method, rtol=self.rtol, atol=self.atol)
+        if not sol.success:
+            raise StepperError(f"{self}: {sol.message} over a segment of {tau} s")
+        return _finite(sol.y[:, -1].reshape(shape), self)
+
+
+@dataclass(frozen=True)
+class Exact:
+    """The system's closed-form flow on segments where u is held; ``fallback`` where it moves."""
+
+    fallback: Scipy = Scipy()
+
+    def __call__(self, system, y, u, u_dot, tau):
+        if np.any(u_dot != 0.0):
+            return self.fallback(system, y, u, u_dot, tau)
+        return _finite(system.exact_flow(y, u, tau), self)
+
+
+SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
+INTEGRATORS = ("exact", "rk4", *SCIPY_METHODS)
+
+
+def make_stepper(integrator: str, system=None, **options):
+    """Build a stepper by name, validating its options (and, for "exact", that the system has a flow).
+
+    rk4 takes ``substeps`` (int ≥ 1); the scipy methods take ``rtol`` and
+    ``atol`` (> 0); exact takes the scipy options for the segments where u moves.
+    """
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"integrator={integrator!r} is not one of {INTEGRATORS}")
+    allowed = {"rk4": {"substeps"}}.get(integrator, {"rtol", "atol"})
+    unknown = set(options) - allowed
+    if unknown:
+        raise ValueError(
+            f"unknown option(s) {sorted(unknown)} for integrator={integrator!r}; it takes {sorted(allowed)}"
+        )
+    if integrator == "rk4":
+        substeps = options.get("substeps", 1)
+        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+            raise ValueError(f"substeps={substeps!r} must be an integer ≥ 1")
+        return RK4(int(substeps))
+    for name in ("rtol", "atol"):
+        value = options.get(name, 1.0)
+        if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+            raise ValueError(f"{name}={value!r} must be a finite number > 0")
+    if integrator == "exact":
+        if system is not None and not hasattr(system, "exact_flow"):
+            raise ValueError(f"integrator='exact' needs a closed-form flow, which {type(system).__name__} has not")
+        return Exact(Scipy(**options))
+    return Scipy(SCIPY_METHODS[integrator], **options)
+
+
+def _finite(y, stepper):
+    if not np.all(np.isfinite(y)):
+        raise StepperError(f"{stepper} produced a non-finite state {y}")
+    return y

@@ -1,0 +1,37 @@
+"""Checks at the boundary: every bad input names the parameter, its value and the valid range."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def check_number(name: str, value, low: float = -math.inf, high: float = math.inf, *, open_low=False, open_high=False):
+    """Return value as a float if it is a finite real in the interval, else raise ValueError."""
+    interval = f"{'(' if open_low else '['}{low}, {high}{')' if open_high else ']'}"
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name}={value!r} must be a real number in {interval}")
+    value = float(value)
+    below = value <= low if open_low else value < low
+    above = value >= high if open_high else value > high
+    if not math.isfinite(value) or below or above:
+        raise ValueError(f"{name}={value!r} is out of range: must be finite and in {interval}")
+    return value
+
+
+def check_keys(name: str, given, allowed):
+    """Raise ValueError if the mapping ``given`` has keys outside ``allowed``."""
+    unknown = set(given) - set(allowed)
+    if unknown:
+        raise ValueError(f"unknown key(s) {sorted(unknown)} in {name}; valid keys: {sorted(allowed)}")
+
+
+def check_action(action, space):
+    """The action as a float array of the space's shape, finite, clipped into the space."""
+    a = np.asarray(action, dtype=np.float64)
+    if a.shape != space.shape:
+        raise ValueError(f"action has shape {a.shape}; expected {space.shape} (action={action!r})")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"action={action!r} is not finite; expected values in [{space.low}, {space.high}]")
+    return np.clip(a, space.low, space.high)

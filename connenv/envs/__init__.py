@@ -1,0 +1,1 @@
+"""Gymnasium tasks, one module per environment."""

@@ -1,0 +1,1 @@
+"""Mechanical systems, one module per system: metric, potential, vector fields, exact flows."""
