@@ -54,7 +54,7 @@ class Scipy:
         shape = np.shape(y)
 
         def rhs(s, flat):
-            return system.vector_field(flat.reshape(shape), u + s * u_dot, u_dot).ravel()
+            return _finite(system.vector_field(flat.reshape(shape), u + s * u_dot, u_dot).ravel(), self)
 
         sol = solve_ivp(rhs, (0.0, tau), np.ravel(y), method=self.method, rtol=self.rtol, atol=self.atol)
         if not sol.success:
@@ -76,6 +76,7 @@ class Exact:
 
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
 INTEGRATORS = ("exact", "rk4", *SCIPY_METHODS)
+STEPPER_OPTIONS = ("substeps", "rtol", "atol")
 
 
 def make_stepper(integrator: str, system=None, **options):
@@ -109,6 +110,7 @@ def make_stepper(integrator: str, system=None, **options):
 
 
 def _finite(y, stepper):
+    """y, unless it holds a non-finite number (state or derivative), which raises StepperError."""
     if not np.all(np.isfinite(y)):
-        raise StepperError(f"{stepper} produced a non-finite state {y}")
+        raise StepperError(f"{stepper} produced a non-finite value {y}")
     return y

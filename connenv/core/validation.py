@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
+
+from connenv.core.steppers import STEPPER_OPTIONS
 
 
 def check_number(name: str, value, low: float = -math.inf, high: float = math.inf, *, open_low=False, open_high=False):
@@ -25,6 +28,14 @@ def check_keys(name: str, given, allowed):
     unknown = set(given) - set(allowed)
     if unknown:
         raise ValueError(f"unknown key(s) {sorted(unknown)} in {name}; valid keys: {sorted(allowed)}")
+
+
+def check_stepper_options(env_name: str, options, env_cls):
+    """Raise ValueError for make kwargs that are neither the env's parameters nor stepper options."""
+    unknown = set(options) - set(STEPPER_OPTIONS)
+    if unknown:
+        params = [p for p in inspect.signature(env_cls.__init__).parameters if p not in ("self", "stepper_options")]
+        raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {params + list(STEPPER_OPTIONS)}")
 
 
 def check_action(action, space):

@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_action, check_keys, check_number
+from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.systems.swing import Swing
 
 LIFT_FLOOR = 1e-4  # floor of h in the reward's logarithm: amplitude ≈ 0.014 rad
@@ -134,6 +134,7 @@ class SwingEnv(gym.Env):
         self.system = Swing(
             mass=check_number("mass", mass, 0.0, open_low=True), g=check_number("g", g, 0.0, open_low=True)
         )
+        check_stepper_options("Swing-v0", stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}

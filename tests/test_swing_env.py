@@ -1,0 +1,179 @@
+"""Swing-v0 as a Gymnasium env: checkers, determinism, pickling, the task and every bad input."""
+
+import copy
+import math
+import pickle
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import connenv  # noqa: F401
+from agents.controllers import PiccoliKulkarni
+
+
+def test_gymnasium_and_sb3_checkers_are_clean():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym_check_env(gym.make("connenv/Swing-v0").unwrapped)
+        sb3_check_env(gym.make("connenv/Swing-v0"), warn=True)
+
+
+def rollout(env, seed, steps=300):
+    obs, _ = env.reset(seed=seed)
+    env.action_space.seed(seed)
+    trace = [obs]
+    for _ in range(steps):
+        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        trace.append(np.append(obs, [reward, info["energy"]]))
+        if terminated or truncated:
+            trace.append(env.reset()[0])
+    return np.concatenate(trace)
+
+
+def test_seeded_rollouts_are_bit_identical_and_seeds_matter():
+    a = rollout(gym.make("connenv/Swing-v0"), 7)
+    b = rollout(gym.make("connenv/Swing-v0"), 7)
+    c = rollout(gym.make("connenv/Swing-v0"), 8)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+def test_start_is_near_rest_at_r_max():
+    env = gym.make("connenv/Swing-v0")
+    for seed in range(50):
+        _, info = env.reset(seed=seed)
+        assert 0.05 <= abs(info["state"]["theta"]) <= 0.1
+        assert info["state"]["theta_dot"] == 0.0 and info["state"]["r"] == 2.0 and info["state"]["t"] == 0.0
+
+
+@pytest.mark.parametrize("clone", [lambda e: pickle.loads(pickle.dumps(e)), copy.deepcopy])
+def test_env_pickles_and_continues_identically(clone):
+    env = gym.make("connenv/Swing-v0", integrator="rk4", substeps=4)
+    env.reset(seed=3)
+    for _ in range(20):
+        env.step(np.array([0.3], np.float32))
+    twin = clone(env)
+    for _ in range(20):
+        a = env.step(np.array([-0.5], np.float32))
+        b = twin.step(np.array([-0.5], np.float32))
+        assert np.array_equal(a[0], b[0]) and a[1] == b[1] and a[4]["state"] == b[4]["state"]
+
+
+def test_info_carries_the_physical_state():
+    env = gym.make("connenv/Swing-v0", mass=2.0)
+    _, info = env.reset(options={"state": {"theta": 0.5, "theta_dot": -1.0, "r": 1.8}})
+    state = info["state"]
+    assert set(state) == {"theta", "theta_dot", "p", "r", "t"}
+    assert state["p"] == pytest.approx(2.0 * 1.8**2 * -1.0)
+    assert info["energy"] == pytest.approx(0.5 * 2.0 * 1.8**2 * 1.0 - 2.0 * 9.81 * 1.8 * math.cos(0.5))
+    _, _, _, _, info = env.step(np.array([0.0], np.float32))
+    assert info["state"]["t"] == pytest.approx(0.05) and info["state"]["r"] == pytest.approx(1.8)
+
+
+def test_success_terminates_when_the_energy_implies_the_target_amplitude():
+    env = gym.make("connenv/Swing-v0")
+    # squatting at the bottom with the speed of amplitude π/2 at r = r_max: a jump to r_min reaches it
+    speed = math.sqrt(2 * 9.81 / 2.0)
+    env.reset(options={"state": {"theta": 0.0, "theta_dot": speed * 0.999, "r": 2.0}})
+    *_, terminated, _, info = env.step(np.array([1.0], np.float32))
+    assert not terminated and not info["is_success"]
+    env.reset(options={"state": {"theta": 0.0, "theta_dot": speed * 0.999, "r": 2.0}})
+    _, reward, terminated, _, info = env.step(np.array([-1.0], np.float32))
+    assert terminated and info["is_success"] and info["amplitude"] >= math.pi / 2
+    # reward = ln(h′/h) − 0.01, and the jump at the bottom multiplies h by (r_max/r_min)³
+    assert reward == pytest.approx(3 * math.log(2.0 / 1.6) - 0.01, rel=1e-9)
+
+
+def test_observations_stay_in_the_space_while_pumping_over_the_top():
+    env = gym.make("connenv/Swing-v0", target_amplitude=math.pi)
+    policy = PiccoliKulkarni()
+    for seed in range(5):
+        obs, _ = env.reset(seed=seed)
+        done = False
+        while not done:
+            assert env.observation_space.contains(obs)
+            obs, _, terminated, truncated, info = env.step(policy.predict(obs)[0])
+            done = terminated or truncated
+        assert info["is_success"]
+
+
+def test_controller_predict_handles_a_batch_like_sb3():
+    obs = np.array([[1, 0.1, 0.5, 1], [1, 0.1, -0.5, 1], [1, -0.1, -0.5, -1]], np.float32)
+    action, state = PiccoliKulkarni().predict(obs, deterministic=True)
+    assert action.shape == (3, 1) and state is None
+    assert action[:, 0].tolist() == [-1.0, 1.0, -1.0]
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"r_min": 0.0}, "r_min=0.0"),
+        ({"r_min": -1.0}, "r_min=-1.0"),
+        ({"r_max": 1.5}, "r_max=1.5"),
+        ({"r_min": float("nan")}, "r_min=nan"),
+        ({"g": 0.0}, "g=0.0"),
+        ({"mass": -1.0}, "mass=-1.0"),
+        ({"dt": 0.0}, "dt=0.0"),
+        ({"dt": "fast"}, "dt='fast'"),
+        ({"target_amplitude": 3.5}, "target_amplitude=3.5"),
+        ({"target_amplitude": 0.0}, "target_amplitude=0.0"),
+        ({"max_radial_speed": 0.0}, "max_radial_speed=0.0"),
+        ({"integrator": "euler"}, "integrator='euler'"),
+        ({"integrator": "rk4", "substeps": 0}, "substeps=0"),
+        ({"integrator": "dop853", "rtol": -1e-9}, "rtol=-1e-09"),
+        ({"bogus": 1}, "bogus"),
+        ({"render_mode": "ascii"}, "render_mode='ascii'"),
+    ],
+)
+def test_bad_parameters_are_named_with_their_range(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        gym.make("connenv/Swing-v0", **kwargs)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"start": 1}, "start"),
+        ({"state": {"omega": 1.0}}, "omega"),
+        ({"state": {"r": 2.5}}, r"state r=2.5 .*\[1.6, 2.0\]"),
+        ({"state": {"theta": float("nan")}}, "state theta=nan"),
+        ({"state": {"theta_dot": 1.0, "p": 1.0}}, "both theta_dot and p"),
+        ({"state": {"theta_dot": 100.0}}, "state theta_dot=100.0"),
+        ({"state": {"p": float("inf")}}, "state p=inf"),
+    ],
+)
+def test_bad_reset_states_are_named(options, message):
+    env = gym.make("connenv/Swing-v0")
+    with pytest.raises(ValueError, match=message):
+        env.reset(options=options)
+
+
+@pytest.mark.parametrize(
+    "action, message",
+    [(np.zeros(2, np.float32), r"shape \(2,\)"), (np.float32(0.5), r"shape \(\)"), (np.array([np.nan]), "not finite")],
+)
+def test_bad_actions_are_rejected(action, message):
+    env = gym.make("connenv/Swing-v0").unwrapped
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        env.step(action)
+
+
+def test_actions_outside_the_box_are_clipped_to_the_radius_range():
+    env = gym.make("connenv/Swing-v0").unwrapped
+    env.reset(seed=0)
+    env.step(np.array([-7.0], np.float32))
+    assert env.r == 1.6
+
+
+def test_rgb_array_render_is_an_image():
+    env = gym.make("connenv/Swing-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.shape == (500, 500, 3) and frame.dtype == np.uint8
+    assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 2  # something is drawn
+    env.close()
