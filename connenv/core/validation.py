@@ -43,6 +43,6 @@ def check_action(action, space):
     a = np.asarray(action, dtype=np.float64)
     if a.shape != space.shape:
         raise ValueError(f"action has shape {a.shape}; expected {space.shape} (action={action!r})")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         raise ValueError(f"action={action!r} is not finite; expected values in [{space.low}, {space.high}]")
-    return np.clip(a, space.low, space.high)
+    return np.minimum(np.maximum(a, space.low), space.high)

@@ -102,8 +102,8 @@ class SwingEnv(gym.Env):
     keeps the energy drift under 1e-8 over 1000 steps (`python -m connenv.bench`).
 
     Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `r`, `t` in SI),
-    `"energy"` (E = p²/(2 m r²) − m g r cos θ, J), `"amplitude"` (rad) and
-    `"is_success"`.
+    `"energy"` (E = p²/(2 m r²) − m g r cos θ, J), `"lift"` (h, above),
+    `"amplitude"` (rad) and `"is_success"`.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
@@ -171,9 +171,8 @@ class SwingEnv(gym.Env):
             self.y = self.stepper(self.system, self.y, np.array([r]), np.array([r_dot]), tau)
         self.r = r + r_dot * tau
         self.t += self.dt
-        lift = self.system.lift(self.y, self.r)
-        reward = math.log(max(lift, LIFT_FLOOR) / max(lift_before, LIFT_FLOOR)) - TIME_COST
         info = self._info()
+        reward = math.log(max(info["lift"], LIFT_FLOOR) / max(lift_before, LIFT_FLOOR)) - TIME_COST
         if self.render_mode == "human":
             self.render()
         return self._obs(), reward, info["is_success"], False, info
@@ -223,17 +222,20 @@ class SwingEnv(gym.Env):
     def _obs(self):
         theta, theta_dot = self.y[0], self._theta_dot()
         r_mid, r_half = 0.5 * (self.r_max + self.r_min), 0.5 * (self.r_max - self.r_min)
-        obs = [math.cos(theta), math.sin(theta), theta_dot / self.theta_dot_scale, (self.r - r_mid) / r_half]
-        return np.clip(obs, -self.obs_high, self.obs_high).astype(np.float32)
+        bound = self.obs_high[2]
+        speed = min(max(theta_dot / self.theta_dot_scale, -bound), bound)
+        return np.array([math.cos(theta), math.sin(theta), speed, (self.r - r_mid) / r_half], np.float32)
 
     def _theta_dot(self):
         return self.y[1] / (self.system.mass * self.r**2)
 
     def _info(self):
         theta, p = self.y
+        lift = float(self.system.lift(self.y, self.r))
         return {
             "state": {"theta": theta, "theta_dot": self._theta_dot(), "p": p, "r": self.r, "t": self.t},
             "energy": float(self.system.energy(self.y, self.r)),
-            "amplitude": float(self.system.amplitude(self.y, self.r)),
-            "is_success": bool(self.system.lift(self.y, self.r) >= self.target_lift),
+            "lift": lift,
+            "amplitude": math.acos(min(max(1.0 - lift, -1.0), 1.0)),
+            "is_success": lift >= self.target_lift,
         }
