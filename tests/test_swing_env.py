@@ -129,6 +129,7 @@ def test_controller_predict_handles_a_batch_like_sb3():
         ({"render_mode": "ascii"}, "render_mode='ascii'"),
     ],
 )
+@pytest.mark.filterwarnings("ignore:.*not in the possible render_modes")  # gymnasium's own warning comes first
 def test_bad_parameters_are_named_with_their_range(kwargs, message):
     with pytest.raises(ValueError, match=message):
         gym.make("connenv/Swing-v0", **kwargs)

@@ -127,6 +127,19 @@ def test_closed_form_flow_equals_numerical_integration(theta, theta_dot):
     np.testing.assert_allclose(swing.exact_flow(y0, r, 0.83), reference, atol=1e-10)
 
 
+@pytest.mark.parametrize("offset", [0.0, 1e-6, 1e-5, 1e-3])
+def test_exact_stepper_is_right_at_and_near_the_upright_equilibrium(offset):
+    """Near the separatrix scipy's ellipj is inaccurate and at θ = π, θ̇ = 0 the elliptic phase is
+    infinite; the exact stepper must still agree with DOP853 there, in a batch with an ordinary state.
+    The reference is tight and the top is unstable (growth e^{ωt}), so the match is to 1e-6."""
+    swing, tau, r = Swing(), 6.0, np.array([1.8])
+    y = np.array([[math.pi - offset, 0.0], [0.3, 0.0]])
+    reference = make_stepper("dop853", rtol=1e-13, atol=1e-13)(swing, y, r, np.zeros(1), tau)
+    np.testing.assert_allclose(make_stepper("exact", swing)(swing, y, r, np.zeros(1), tau), reference, atol=1e-6)
+    if offset >= 1e-6:
+        assert reference[0, 0] < 3.0  # it has fallen away from the top
+
+
 def test_closed_form_flow_broadcasts_over_a_batch():
     swing = Swing()
     y = np.stack([np.linspace(-3, 3, 7), np.linspace(-20, 20, 7)], -1)

@@ -64,14 +64,22 @@ class Scipy:
 
 @dataclass(frozen=True)
 class Exact:
-    """The system's closed-form flow on segments where u is held; ``fallback`` where it moves."""
+    """The system's closed-form flow on segments where u is held; ``fallback`` where it moves
+    and for the states where ``exact_flow`` answers NaN (outside the closed form's accurate domain)."""
 
     fallback: Scipy = Scipy()
 
     def __call__(self, system, y, u, u_dot, tau):
         if np.any(u_dot != 0.0):
             return self.fallback(system, y, u, u_dot, tau)
-        return _finite(system.exact_flow(y, u, tau), self)
+        flow = system.exact_flow(y, u, tau)
+        outside = np.isnan(flow).any(axis=-1)
+        if np.any(outside):
+            y = np.asarray(y, float)
+            u = np.broadcast_to(u, (*y.shape[:-1], np.shape(u)[-1]))
+            flow = np.array(flow)
+            flow[outside] = self.fallback(system, y[outside], u[outside], np.zeros_like(u[outside]), tau)
+        return _finite(flow, self)
 
 
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}

@@ -1,0 +1,239 @@
+"""Evaluate policies on the same seeded episodes and print one table row per policy.
+
+    python -m agents.evaluate --env connenv/Swing-v0 --policy analytic random runs/Swing-v0_ppo_s0/connenv-Swing-v0.zip
+
+Episode i of every policy starts from ``reset(seed=seed + i)``, so the rows compare like with like. A policy is
+``analytic`` (the env's controller in agents.controllers), ``random`` (uniform actions, seeded) or the zip of a
+trained SB3 model. The rl-zoo3 run folder around a zip, as ``train.py`` and ``python -m rl_zoo3.train`` write it,
+tells the algorithm (``{env}/args.yml``) and the observation statistics of VecNormalize (``{env}/vecnormalize.pkl``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import yaml
+from gymnasium.wrappers import RenderCollection
+
+import connenv  # noqa: F401  (registers the envs)
+from agents.controllers import analytic_policy
+
+ENV_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+GIF_SIZE = 200  # pixels
+GIF_FRAME_STRIDE = 2  # keep one frame in two
+
+
+@dataclass
+class Episode:
+    """One evaluation episode: its return, whether it reached the target, when (simulated s), how many steps."""
+
+    ret: float
+    success: bool
+    time: float
+    length: int
+
+
+class RandomPolicy:
+    """Uniform actions from the action space, drawn from its own seeded generator."""
+
+    def __init__(self, action_space: gym.Space, seed: int):
+        self.action_space = copy.deepcopy(action_space)
+        self.action_space.seed(seed)
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):
+        return self.action_space.sample(), state
+
+
+class NormalizedPolicy:
+    """A trained model fed observations normalized with the VecNormalize statistics it was trained with."""
+
+    def __init__(self, model, vec_normalize):
+        self.model, self.vec_normalize = model, vec_normalize
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):
+        return self.model.predict(self.vec_normalize.normalize_obs(obs), state, episode_start, deterministic)
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer > 0, also written as 1e5."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if value <= 0 or not value.is_integer():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer (valid: 1, 2, ...)")
+    return int(value)
+
+
+def policy_spec(text: str) -> str:
+    """argparse type: 'analytic', 'random' or an existing model zip."""
+    if text in ("analytic", "random") or (text.endswith(".zip") and Path(text).is_file()):
+        return text
+    raise argparse.ArgumentTypeError(f"{text!r} is not 'analytic', 'random' or an existing model PATH.zip")
+
+
+def run_file(model_path: Path, name: str) -> Path | None:
+    """A file of the rl-zoo3 run folder around a model zip ({run}/{env}/name), or None."""
+    return next(model_path.parent.glob(f"*/{name}"), None)
+
+
+def algo_of(model_path: Path) -> str:
+    """The algorithm that trained a model zip, read from its run folder's args.yml."""
+    args_file = run_file(model_path, "args.yml")
+    if args_file is None:
+        raise ValueError(f"cannot tell which algorithm trained {model_path}: no run folder args.yml; pass --algo")
+    return yaml.load(args_file.read_text(), Loader=yaml.UnsafeLoader)["algo"]  # rl-zoo3 writes an OrderedDict
+
+
+def load_model(model_path: str | Path, env_id: str, algo: str | None = None):
+    """An SB3 model checked against the env's spaces, behind its VecNormalize statistics if it has some."""
+    from rl_zoo3.utils import ALGOS
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    model_path = Path(model_path)
+    if not model_path.is_file():
+        raise FileNotFoundError(f"policy {str(model_path)!r}: no such file; give 'analytic', 'random' or a model zip")
+    algo = algo or algo_of(model_path)
+    if algo not in ALGOS:
+        raise ValueError(f"algo {algo!r} is not one of {sorted(ALGOS)}")
+    model = ALGOS[algo].load(model_path, device="cpu")
+    env = gym.make(env_id)
+    for space in ("observation_space", "action_space"):
+        if getattr(model, space) != getattr(env, space):
+            raise ValueError(
+                f"{model_path} was trained with {space} {getattr(model, space)}, but {env_id} has {getattr(env, space)}"
+            )
+    stats = run_file(model_path, "vecnormalize.pkl")
+    if stats is None:
+        return model
+    vec_normalize = VecNormalize.load(str(stats), DummyVecEnv([lambda: env]))
+    vec_normalize.training = False
+    return NormalizedPolicy(model, vec_normalize)
+
+
+def make_policy(spec: str, env_id: str, seed: int, algo: str | None = None) -> tuple[str, object]:
+    """(label, policy) for 'analytic', 'random' or a model zip; a zip's label is algo:run-folder."""
+    if spec == "analytic":
+        return spec, analytic_policy(env_id)
+    if spec == "random":
+        return spec, RandomPolicy(gym.make(env_id).action_space, seed)
+    if not spec.endswith(".zip"):
+        raise ValueError(f"policy {spec!r} is not 'analytic', 'random' or a model PATH.zip")
+    algo = algo or algo_of(Path(spec))
+    return f"{algo}:{Path(spec).parent.name}", load_model(spec, env_id, algo)
+
+
+def run_episode(env: gym.Env, policy, seed: int) -> Episode:
+    """One episode from reset(seed=seed), deterministic actions."""
+    obs, _ = env.reset(seed=seed)
+    ret, length, done = 0.0, 0, False
+    while not done:
+        action, _ = policy.predict(obs, deterministic=True)
+        obs, reward, terminated, truncated, info = env.step(action)
+        ret, length, done = ret + float(reward), length + 1, terminated or truncated
+    return Episode(ret, bool(info["is_success"]), float(info["state"]["t"]), length)
+
+
+def save_gif(frames: list[np.ndarray], path: str | Path, fps: float):
+    """A small looping GIF: every GIF_FRAME_STRIDE-th frame, GIF_SIZE pixels wide."""
+    from PIL import Image
+
+    images = [Image.fromarray(frame) for frame in frames[::GIF_FRAME_STRIDE]]
+    images = [image.resize((GIF_SIZE, GIF_SIZE * image.height // image.width)) for image in images]
+    duration = round(1000 * GIF_FRAME_STRIDE / fps)
+    images[0].save(path, save_all=True, append_images=images[1:], duration=duration, loop=0)
+
+
+def evaluate(env_id: str, policy, episodes: int, seed: int, video: str | Path | None = None) -> list[Episode]:
+    """Episodes reset with seeds seed, seed + 1, ...; with `video`, the first is also written as a GIF."""
+    env = gym.make(env_id)
+    first_env = RenderCollection(gym.make(env_id, render_mode="rgb_array")) if video else env
+    results = [run_episode(first_env if i == 0 else env, policy, seed + i) for i in range(episodes)]
+    if video:
+        save_gif(first_env.render(), video, env.metadata["render_fps"])
+    env.close()
+    first_env.close()
+    return results
+
+
+def summarize(label: str, episodes: list[Episode]) -> dict:
+    """Mean ± std return, success rate, mean time to success (over successes, None if none), mean length."""
+    returns = np.array([e.ret for e in episodes])
+    times = [e.time for e in episodes if e.success]
+    return {
+        "policy": label,
+        "return_mean": float(returns.mean()),
+        "return_std": float(returns.std()),
+        "success_rate": float(np.mean([e.success for e in episodes])),
+        "time_to_success_mean": float(np.mean(times)) if times else None,
+        "length_mean": float(np.mean([e.length for e in episodes])),
+        "episodes": [asdict(e) for e in episodes],
+    }
+
+
+def compare(
+    env_id: str, specs: list[str], episodes: int = 100, seed: int = 0, algo: str | None = None, video=None
+) -> dict:
+    """Evaluate each policy spec on the same episodes; `video` films the first policy's first episode."""
+    rows = []
+    for i, spec in enumerate(specs):
+        label, policy = make_policy(spec, env_id, seed, algo)
+        rows.append(summarize(label, evaluate(env_id, policy, episodes, seed, video if i == 0 else None)))
+    return {"env": env_id, "seed": seed, "episodes": episodes, "policies": rows}
+
+
+def format_table(report: dict) -> str:
+    """The report as a text table, one row per policy."""
+    width = max(len("policy"), *(len(row["policy"]) for row in report["policies"]))
+    seeds = f"seeds {report['seed']}..{report['seed'] + report['episodes'] - 1}"
+    lines = [
+        f"{report['env']}: {report['episodes']} episodes, {seeds}",
+        f"{'policy':<{width}}  {'return':>15}  {'success':>7}  {'time to target (s)':>18}  {'length':>6}",
+    ]
+    for row in report["policies"]:
+        ret = f"{row['return_mean']:.3f} ± {row['return_std']:.3f}"
+        time = "-" if row["time_to_success_mean"] is None else f"{row['time_to_success_mean']:.2f}"
+        success = f"{100 * row['success_rate']:.0f}%"
+        lines.append(f"{row['policy']:<{width}}  {ret:>15}  {success:>7}  {time:>18}  {row['length_mean']:>6.1f}")
+    return "\n".join(lines)
+
+
+def write_json(report: dict, path: str | Path):
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(report, indent=1))
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="connenv/Swing-v0", choices=ENV_IDS)
+    parser.add_argument(
+        "--policy", nargs="+", type=policy_spec, default=["analytic", "random"], help="analytic, random or PATH.zip"
+    )
+    parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
+    parser.add_argument("--episodes", type=positive_int, default=100)
+    parser.add_argument("--seed", type=int, default=0, help="episode i is reset with seed + i")
+    parser.add_argument("--json", help="default: runs/eval_{env}_s{seed}.json")
+    parser.add_argument("--video", help="GIF of the first policy's first episode")
+    args = parser.parse_args(argv)
+    args.json = args.json or f"runs/eval_{args.env.split('/')[-1]}_s{args.seed}.json"
+    return args
+
+
+def main(argv: list[str] | None = None) -> dict:
+    args = parse_args(argv)
+    report = compare(args.env, args.policy, args.episodes, args.seed, args.algo, args.video)
+    print(format_table(report))
+    write_json(report, args.json)
+    print(f"wrote {args.json}" + (f" and {args.video}" if args.video else ""))
+    return report
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,171 @@
+"""Training and evaluation: train.py and agents.evaluate on tiny budgets, and rl-zoo3 run on the package unchanged."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import yaml
+from stable_baselines3 import PPO
+
+from agents import evaluate
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV_ID = "connenv/Swing-v0"
+DT = 0.05  # Swing-v0's default step, s
+
+
+def import_train():
+    """train.py lives at the top of the repo, outside the packages."""
+    spec = importlib.util.spec_from_file_location("train", ROOT / "train.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+train = import_train()
+
+
+@pytest.fixture(scope="module")
+def ppo_run(tmp_path_factory):
+    """A PPO run of one rollout (8 envs × 256 steps), evaluated periodically every 1024 steps."""
+    runs = tmp_path_factory.mktemp("runs")
+    argv = ["--algo", "ppo", "--timesteps", "300", "--runs", str(runs), "--eval-episodes", "2", "--eval-freq", "1024"]
+    return train.main(argv)
+
+
+def check_run(results: dict, algo: str):
+    """The run folder holds the model, the hyperparameters used and the results; the model reloads and acts."""
+    model_path = Path(results["model"])
+    run_dir = model_path.parent
+    assert run_dir.name == f"Swing-v0_{algo}_s0"
+    config = yaml.load((run_dir / "connenv-Swing-v0" / "config.yml").read_text(), Loader=yaml.UnsafeLoader)
+    expected = yaml.safe_load((ROOT / "agents" / "hyperparams" / f"{algo}.yml").read_text())[ENV_ID]
+    assert dict(config) == expected
+    assert json.loads((run_dir / "results.json").read_text())["timesteps"] == results["timesteps"]
+    labels = [row["policy"] for row in results["evaluation"]["policies"]]
+    assert labels == [f"{algo}:{run_dir.name}", "analytic", "random"]
+    policy = evaluate.load_model(model_path, ENV_ID)  # the algorithm is read from the run folder
+    env = gym.make(ENV_ID)
+    for seed in range(5):
+        action, _ = policy.predict(env.reset(seed=seed)[0], deterministic=True)
+        assert env.action_space.contains(action)
+    return policy
+
+
+def test_ppo_run_folder_holds_normalized_model_and_periodic_evaluations(ppo_run):
+    assert ppo_run["timesteps"] == 8 * 256  # PPO collects whole rollouts
+    policy = check_run(ppo_run, "ppo")
+    assert isinstance(policy, evaluate.NormalizedPolicy)  # ppo.yml normalizes observations
+    periodic = np.load(Path(ppo_run["model"]).parent / "evaluations.npz")
+    assert list(periodic["timesteps"]) == [1024, 2048]
+    assert periodic["results"].shape == (2, train.PERIODIC_EVAL_EPISODES)
+
+
+@pytest.mark.parametrize("algo", ["sac", "td3"])
+def test_off_policy_run_folder_holds_model_that_reloads(algo, tmp_path):
+    argv = ["--algo", algo, "--timesteps", "1100", "--runs", str(tmp_path), "--eval-episodes", "2", "--eval-freq", "-1"]
+    results = train.main(argv)
+    assert results["timesteps"] == 1100  # past learning_starts, so some gradient steps were taken
+    check_run(results, algo)
+
+
+def test_train_table_evaluates_all_policies_on_the_same_episodes(ppo_run):
+    report = ppo_run["evaluation"]
+    assert (report["seed"], report["episodes"]) == (0, 2)
+    assert [len(row["episodes"]) for row in report["policies"]] == [2, 2, 2]
+    analytic = evaluate.compare(ENV_ID, ["analytic"], 2, 0)["policies"][0]
+    assert analytic["episodes"] == report["policies"][1]["episodes"]
+
+
+def test_evaluation_is_deterministic_on_seeded_episodes():
+    first = evaluate.compare(ENV_ID, ["analytic", "random"], episodes=4, seed=7)
+    again = evaluate.compare(ENV_ID, ["analytic", "random"], episodes=4, seed=7)
+    other = evaluate.compare(ENV_ID, ["analytic"], episodes=4, seed=8)
+    assert first == again
+    returns = [e["ret"] for e in first["policies"][0]["episodes"]]
+    assert [e["ret"] for e in other["policies"][0]["episodes"]][:3] == returns[1:]  # episode i is seed + i
+
+
+def test_analytic_controller_beats_random_policy():
+    report = evaluate.compare(ENV_ID, ["analytic", "random"], episodes=10, seed=0)
+    analytic, random = report["policies"]
+    assert analytic["success_rate"] == 1.0 and random["success_rate"] == 0.0
+    assert analytic["return_mean"] > random["return_mean"]
+    assert random["time_to_success_mean"] is None and random["length_mean"] == 500  # the time limit
+    table = evaluate.format_table(report).splitlines()
+    mean, std = f"{analytic['return_mean']:.3f}", f"{analytic['return_std']:.3f}"
+    assert table[2].split()[:5] == ["analytic", mean, "±", std, "100%"]
+
+
+def test_time_to_success_is_simulated_time_of_the_steps_taken():
+    episodes = evaluate.evaluate(ENV_ID, evaluate.make_policy("analytic", ENV_ID, 0)[1], episodes=3, seed=0)
+    for episode in episodes:
+        assert episode.success
+        assert episode.time == pytest.approx(episode.length * DT)
+
+
+def test_video_is_a_gif_of_the_first_episode(tmp_path):
+    from PIL import Image
+
+    video = tmp_path / "swing.gif"
+    (episode,) = evaluate.evaluate(ENV_ID, evaluate.make_policy("analytic", ENV_ID, 0)[1], 1, 0, video)
+    with Image.open(video) as gif:
+        assert gif.format == "GIF"
+        assert gif.n_frames == len(range(0, episode.length + 1, evaluate.GIF_FRAME_STRIDE))  # reset + each step
+
+
+def test_evaluate_cli_writes_table_and_json(tmp_path, capsys):
+    out = tmp_path / "eval.json"
+    evaluate.main(["--policy", "analytic", "random", "--episodes", "2", "--seed", "5", "--json", str(out)])
+    report = json.loads(out.read_text())
+    assert [row["policy"] for row in report["policies"]] == ["analytic", "random"]
+    assert "analytic" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("main", "argv", "named"),
+    [
+        (train.main, ["--env", "Nope-v0"], ["'Nope-v0'", "connenv/Swing-v0"]),
+        (train.main, ["--algo", "nope"], ["'nope'", "ppo", "sac", "td3"]),
+        (train.main, ["--timesteps", "0"], ["'0'", "positive integer"]),
+        (train.main, ["--timesteps", "-5"], ["'-5'", "positive integer"]),
+        (train.main, ["--algo", "a2c"], ["a2c.yml", "--hyperparams"]),
+        (evaluate.main, ["--episodes", "0"], ["'0'", "positive integer"]),
+        (evaluate.main, ["--policy", "nope"], ["'nope'", "analytic", "random"]),
+    ],
+)
+def test_bad_cli_input_exits_naming_value_and_choices(main, argv, named, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    for word in named:
+        assert word in err
+
+
+def test_model_of_another_env_is_rejected(tmp_path):
+    path = tmp_path / "pendulum.zip"
+    PPO("MlpPolicy", "Pendulum-v1", n_steps=64, batch_size=64).save(path)
+    with pytest.raises(ValueError, match="observation_space"):
+        evaluate.load_model(path, ENV_ID, algo="ppo")
+    with pytest.raises(ValueError, match="pass --algo"):
+        evaluate.load_model(path, ENV_ID)
+
+
+@pytest.mark.parametrize("conf", [[], ["--conf-file", str(ROOT / "agents" / "hyperparams" / "ppo.yml")]])
+def test_rl_zoo3_trains_on_the_package_unchanged(conf, tmp_path):
+    command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo", "--env", ENV_ID, "--gym-packages", "connenv"]
+    command += ["--n-timesteps", "200", "--eval-freq", "-1", "--seed", "0", "--num-threads", "1", "-f", str(tmp_path)]
+    command += conf
+    done = subprocess.run(command, check=False, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    (model_path,) = (tmp_path / "ppo").glob("connenv-Swing-v0_1/connenv-Swing-v0.zip")
+    action, _ = evaluate.load_model(model_path, ENV_ID).predict(np.zeros(4, np.float32))
+    assert gym.make(ENV_ID).action_space.contains(action)

@@ -1,0 +1,104 @@
+"""Train an agent with rl-zoo3, then compare it with the analytic controller and a random policy.
+
+    python train.py --env connenv/Swing-v0 --algo ppo --timesteps 150000 --seed 0
+
+Hyperparameters come from agents/hyperparams/{algo}.yml (rl-zoo3's layout, the env id as top-level key) or from
+--hyperparams PATH; --timesteps overrides their n_timesteps. rl-zoo3's ExperimentManager reads them, builds the
+envs, shows a progress bar and evaluates periodically on a separate env. The run folder, runs/{env}_{algo}_s{seed}/,
+is laid out as rl-zoo3's: the model {env}.zip, best_model.zip and evaluations.npz of the periodic evaluation,
+{env}/config.yml (the hyperparameters used), {env}/args.yml and {env}/vecnormalize.pkl if normalized; train.py adds
+results.json, the final evaluation of agents.evaluate on the same episodes for every policy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from pathlib import Path
+
+import torch as th
+from rl_zoo3.exp_manager import ExperimentManager
+from rl_zoo3.utils import ALGOS
+from stable_baselines3.common.utils import set_random_seed
+from tqdm import TqdmExperimentalWarning
+
+import agents
+from agents import evaluate
+
+HYPERPARAMS = Path(agents.__file__).parent / "hyperparams"
+PERIODIC_EVAL_EPISODES = 10
+warnings.filterwarnings("ignore", category=TqdmExperimentalWarning)  # SB3's progress bar is tqdm.rich, "experimental"
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="connenv/Swing-v0", choices=evaluate.ENV_IDS)
+    parser.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
+    parser.add_argument("--timesteps", type=evaluate.positive_int, help="default: n_timesteps of the hyperparameters")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--hyperparams", help="rl-zoo3 YAML file (default: agents/hyperparams/{algo}.yml)")
+    parser.add_argument("--eval-freq", type=int, default=25_000, help="steps between periodic evaluations, ≤ 0: none")
+    parser.add_argument("--eval-episodes", type=evaluate.positive_int, default=100, help="episodes of the final table")
+    parser.add_argument("--eval-seed", type=int, default=0, help="final episode i is reset with eval-seed + i")
+    parser.add_argument("--runs", default="runs", help="folder of the run folders")
+    parser.add_argument("--num-threads", type=evaluate.positive_int, default=1, help="torch threads")
+    args = parser.parse_args(argv)
+    args.hyperparams = args.hyperparams or str(HYPERPARAMS / f"{args.algo}.yml")
+    if not Path(args.hyperparams).is_file():
+        parser.error(f"--hyperparams {args.hyperparams!r}: no such file; give a YAML file for --algo {args.algo}")
+    return args
+
+
+def train(args: argparse.Namespace):
+    """Train with rl-zoo3's ExperimentManager into the run folder; return the model and the path of its zip."""
+    set_random_seed(args.seed)
+    th.set_num_threads(args.num_threads)
+    manager = ExperimentManager(
+        args,
+        args.algo,
+        args.env,
+        args.runs,
+        n_timesteps=args.timesteps or 0,
+        eval_freq=args.eval_freq,
+        n_eval_episodes=PERIODIC_EVAL_EPISODES,
+        seed=args.seed,
+        config=args.hyperparams,
+        log_interval=-1,
+        show_progress=True,
+        verbose=0,
+    )
+    # One named folder per env, algo and seed instead of rl-zoo3's numbered {log_folder}/{algo}/{env}_{n}.
+    manager.save_path = str(Path(args.runs) / f"{args.env.split('/')[-1]}_{args.algo}_s{args.seed}")
+    manager.params_path = str(Path(manager.save_path) / manager.env_name)
+    model, _ = manager.setup_experiment()
+    manager.learn(model)
+    manager.save_trained_model(model)
+    return model, Path(manager.save_path) / f"{manager.env_name}.zip"
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Train, evaluate beside the analytic controller and a random policy, print the table, write results.json."""
+    args = parse_args(argv)
+    start = time.perf_counter()
+    model, model_path = train(args)
+    train_seconds = time.perf_counter() - start
+    specs = [str(model_path), "analytic", "random"]
+    report = evaluate.compare(args.env, specs, args.eval_episodes, args.eval_seed, args.algo)
+    print(f"trained {model.num_timesteps} timesteps in {train_seconds:.0f} s")
+    print(evaluate.format_table(report))
+    results = {
+        "algo": args.algo,
+        "seed": args.seed,
+        "timesteps": model.num_timesteps,
+        "train_seconds": train_seconds,
+        "hyperparams": args.hyperparams,
+        "model": str(model_path),
+        "evaluation": report,
+    }
+    evaluate.write_json(results, model_path.parent / "results.json")
+    return results
+
+
+if __name__ == "__main__":
+    main()
