@@ -5,3 +5,4 @@ from gymnasium.envs.registration import register
 __version__ = "0.1.0"
 
 register(id="connenv/Swing-v0", entry_point="connenv.envs.swing:SwingEnv", max_episode_steps=500)
+register(id="connenv/Skier-v0", entry_point="connenv.envs.skier:SkierEnv", max_episode_steps=1000)

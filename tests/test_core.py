@@ -134,6 +134,7 @@ class BlowUp:
         return y**2
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered")  # the blow-up itself
 @pytest.mark.parametrize("integrator, options", [("rk4", {"substeps": 4}), ("dop853", {}), ("lsoda", {})])
 def test_a_diverging_stepper_raises_instead_of_returning_garbage(integrator, options):
     stepper = make_stepper(integrator, **options)

@@ -114,21 +114,24 @@ def _matvec(M, v):
 def _gradient(f, q, *args):
     """∂f/∂q for a scalar f(q, *args), q of shape (..., n), by scipy.differentiate.derivative.
 
-    derivative calls f with extra trailing axes for its stencil; the other
-    arguments get matching singleton axes so that everything broadcasts.
+    derivative is elementwise: it adds trailing stencil axes and drops converged
+    elements as it goes, and it does both to the arrays passed in its ``args``.
+    So every other number f needs goes through ``args`` as a scalar column, and
+    f_i stacks the columns back into vectors.
     """
-    batch = q.shape[:-1]
-    q_flat = q.reshape(-1, q.shape[-1])
-    args_flat = [np.broadcast_to(a, batch + a.shape[-1:]).reshape(-1, a.shape[-1]) for a in args]
-    columns = []
-    for i in range(q.shape[-1]):
+    batch, n = q.shape[:-1], q.shape[-1]
+    vectors = [q, *(np.broadcast_to(a, batch + a.shape[-1:]) for a in args)]
+    sizes = [v.shape[-1] for v in vectors]
+    columns = [v.reshape(-1, v.shape[-1])[:, j] for v in vectors for j in range(v.shape[-1])]
+    gradient = []
+    for i in range(n):
 
-        def f_i(s, i=i):
-            extra = (1,) * (s.ndim - 1)
-            qs = np.array(np.broadcast_to(q_flat.reshape(-1, *extra, q.shape[-1]), s.shape + q.shape[-1:]))
-            qs[..., i] = s
-            return f(qs, *(a.reshape(-1, *extra, a.shape[-1]) for a in args_flat))
+        def f_i(s, *cols, i=i):
+            cols = [np.broadcast_to(c, s.shape) for c in cols]
+            cols[i] = s
+            split = np.cumsum(sizes)[:-1]
+            qs, *rest = (np.stack(group, axis=-1) for group in np.split(np.array(cols), split))
+            return f(qs, *rest)
 
-        res = derivative(f_i, q_flat[:, i], initial_step=0.1)
-        columns.append(res.df)
-    return np.stack(columns, axis=-1).reshape(q.shape)
+        gradient.append(derivative(f_i, columns[i], args=tuple(columns), initial_step=0.1).df)
+    return np.stack(gradient, axis=-1).reshape(q.shape)

@@ -14,6 +14,7 @@ flow), ``"rk4"`` with ``substeps``, or one of scipy's ``"dop853"``, ``"rk45"``,
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,12 +33,14 @@ class RK4:
 
     def __call__(self, system, y, u, u_dot, tau):
         h = tau / self.substeps
+        held = not np.any(u_dot)  # then u(s) = u throughout: skip the control's array arithmetic
         for i in range(self.substeps):
             s = i * h
-            k1 = system.vector_field(y, u + s * u_dot, u_dot)
-            k2 = system.vector_field(y + 0.5 * h * k1, u + (s + 0.5 * h) * u_dot, u_dot)
-            k3 = system.vector_field(y + 0.5 * h * k2, u + (s + 0.5 * h) * u_dot, u_dot)
-            k4 = system.vector_field(y + h * k3, u + (s + h) * u_dot, u_dot)
+            u0, u_half, u1 = (u, u, u) if held else (u + s * u_dot, u + (s + 0.5 * h) * u_dot, u + (s + h) * u_dot)
+            k1 = system.vector_field(y, u0, u_dot)
+            k2 = system.vector_field(y + 0.5 * h * k1, u_half, u_dot)
+            k3 = system.vector_field(y + 0.5 * h * k2, u_half, u_dot)
+            k4 = system.vector_field(y + h * k3, u1, u_dot)
             y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         return _finite(y, self)
 
@@ -80,6 +83,21 @@ class Exact:
             flow = np.array(flow)
             flow[outside] = self.fallback(system, y[outside], u[outside], np.zeros_like(u[outside]), tau)
         return _finite(flow, self)
+
+
+def control_segments(u: float, u_cmd: float, dt: float, max_speed: float | None = None):
+    """Control segments (u at the start, u̇, duration) covering one step of length dt toward the command u_cmd.
+
+    Without max_speed, u jumps to the command: one segment held at u_cmd. With it,
+    u ramps toward the command at that speed, then holds where it got to.
+    """
+    if max_speed is None:
+        return [(u_cmd, 0.0, dt)]
+    distance = u_cmd - u
+    ramp = min(dt, abs(distance) / max_speed)
+    u_dot = math.copysign(max_speed, distance)
+    u_after = u_cmd if ramp < dt else u + u_dot * ramp
+    return [s for s in [(u, u_dot, ramp), (u_after, 0.0, dt - ramp)] if s[2] > 0.0]
 
 
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}

@@ -13,14 +13,14 @@ SIZE = 500
 class Canvas:
     """A square pygame surface in world coordinates (metres, y up), shown or returned as an array."""
 
-    def __init__(self, half_width: float, center_y: float, render_mode: str, fps: int):
+    def __init__(self, half_width: float, center_y: float, render_mode: str, fps: int, center_x: float = 0.0):
         try:
             import pygame
         except ImportError as e:
             raise DependencyNotInstalled('pygame is not installed, run `pip install "gymnasium[classic-control]"`') from e
         self.pygame, self.render_mode, self.fps = pygame, render_mode, fps
         self.scale = SIZE / (2 * half_width)
-        self.center_y = center_y
+        self.center_x, self.center_y = center_x, center_y
         pygame.font.init()
         if render_mode == "human":
             pygame.display.init()
@@ -31,7 +31,7 @@ class Canvas:
         self.font = pygame.font.Font(None, 22)
 
     def px(self, x, y):
-        return int(SIZE / 2 + x * self.scale), int(SIZE / 2 - (y - self.center_y) * self.scale)
+        return int(SIZE / 2 + (x - self.center_x) * self.scale), int(SIZE / 2 - (y - self.center_y) * self.scale)
 
     def show(self):
         if self.render_mode == "human":
@@ -64,6 +64,42 @@ class SwingRenderer:
         pg.draw.circle(c.screen, (204, 77, 77), bob, 12)
         pg.draw.circle(c.screen, (0, 0, 0), pivot, 5)
         c.screen.blit(c.font.render(f"t = {t:5.2f} s   r = {r:4.2f} m", True, (0, 0, 0)), (10, 10))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()
+
+
+class SkierRenderer:
+    """The trail, and the skier as a stick figure: legs bent at the knee as h drops, torso and head along the normal."""
+
+    def __init__(self, trail, h_max: float, render_mode: str, fps: int):
+        self.trail, self.h_max = trail, h_max
+        xs = np.linspace(trail.lo, trail.hi, 300)
+        ys = trail.profile(xs)[0]
+        half = 0.55 * max(trail.hi - trail.lo, ys.max() - ys.min() + 2.5 * h_max)
+        self.canvas = Canvas(half, 0.5 * (ys.max() + ys.min()) + h_max, render_mode, fps, 0.5 * (trail.lo + trail.hi))
+        self.points = [self.canvas.px(x, y) for x, y in zip(xs, ys)]
+
+    def draw(self, x: float, h: float, h_min: float, t: float):
+        c, pg = self.canvas, self.canvas.pygame
+        c.screen.fill((255, 255, 255))
+        pg.draw.lines(c.screen, (70, 110, 160), False, self.points, 4)
+        f, f1, _, _ = self.trail.derivatives(x)
+        sigma = math.sqrt(1.0 + f1 * f1)
+        tangent, normal = np.array([1.0, f1]) / sigma, np.array([-f1, 1.0]) / sigma
+        foot = np.array([x, f])
+        hip = foot + h * normal  # the barycentre
+        bend = math.sqrt(max((0.5 * self.h_max) ** 2 - (0.5 * h) ** 2, 0.0))  # knee out, legs of length h_max
+        knee = foot + 0.5 * h * normal + bend * tangent
+        neck = hip + 0.45 * self.h_max * normal
+        for a, b in ((foot, knee), (knee, hip), (hip, neck)):
+            pg.draw.line(c.screen, (40, 40, 40), c.px(*a), c.px(*b), 4)
+        pg.draw.line(c.screen, (40, 40, 40), c.px(*(foot - 0.4 * tangent)), c.px(*(foot + 0.4 * tangent)), 3)  # ski
+        head = neck + 0.15 * self.h_max * normal
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*head), max(int(0.15 * self.h_max * c.scale), 3))
+        pg.draw.circle(c.screen, (0, 0, 0), c.px(*hip), 4)
+        c.screen.blit(c.font.render(f"t = {t:5.2f} s   h = {h:4.2f} m", True, (0, 0, 0)), (10, 10))
         return c.show()
 
     def close(self):

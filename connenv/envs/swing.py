@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import make_stepper
+from connenv.core.steppers import control_segments, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.systems.swing import Swing
 
@@ -167,7 +167,7 @@ class SwingEnv(gym.Env):
         a = check_action(action, self.action_space)[0]
         r_cmd = self.r_min + 0.5 * (a + 1.0) * (self.r_max - self.r_min)
         lift_before = self.system.lift(self.y, self.r)
-        for r, r_dot, tau in self._segments(r_cmd):
+        for r, r_dot, tau in control_segments(self.r, r_cmd, self.dt, self.max_radial_speed):
             self.y = self.stepper(self.system, self.y, np.array([r]), np.array([r_dot]), tau)
         self.r = r + r_dot * tau
         self.t += self.dt
@@ -193,17 +193,6 @@ class SwingEnv(gym.Env):
             self._renderer = None
 
     # -- internals -----------------------------------------------------------
-
-    def _segments(self, r_cmd):
-        """Control segments (r at start, ṙ, duration) covering one step."""
-        if self.max_radial_speed is None:
-            return [(r_cmd, 0.0, self.dt)]
-        distance = r_cmd - self.r
-        ramp = min(self.dt, abs(distance) / self.max_radial_speed)
-        r_dot = math.copysign(self.max_radial_speed, distance)
-        r_after = r_cmd if ramp < self.dt else self.r + r_dot * ramp
-        segments = [(self.r, r_dot, ramp), (r_after, 0.0, self.dt - ramp)]
-        return [s for s in segments if s[2] > 0.0]
 
     def _set_state(self, state):
         check_keys("options['state']", state, {"theta", "theta_dot", "p", "r"})

@@ -1,0 +1,292 @@
+"""Skier-v0: pump along a trail by raising and lowering the barycentre, and escape the valley."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.steppers import control_segments, make_stepper
+from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
+from connenv.systems.skier import Skier, check_curvature
+from connenv.systems.trails import make_trail
+
+PROGRESS_FLOOR = 1e-4  # floor of the progress in the reward's logarithm
+TIME_COST = 0.01  # reward paid per step until success
+SPEED_BOUND = 3.0  # |observed speed| is clipped here
+START_OFFSETS = (0.5, 2.0)  # m from the trail's lowest point, either side
+DEFAULT_INTEGRATOR = "dop853"
+DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # the fastest passing stepper: python -m connenv.bench --env skier
+
+
+class SkierEnv(gym.Env):
+    r"""
+    ## Description
+
+    A skier on a narrow trail y = f(x) in a vertical plane pumps by raising and
+    lowering the barycentre (Bressan): the controller assigns its height h above
+    the trail, along the trail's normal, an *active constraint*. With x the
+    horizontal position of the feet, σ = √(1 + f′²), curvature κ = f″/σ³ and slope
+    angle φ (tan φ = f′), the barycentre moves with T = ½ m [(1 − κh)² σ² ẋ² + ḣ²]
+    in the potential V = m g (f + h cos φ); p = m (1 − κh)² σ² ẋ. The skier is
+    strongly fit for jumps: a jump of h leaves (x, p) unchanged. Standing up
+    where the trail curves up and the skier is fast, and crouching at the turning
+    points, pumps energy in, as on a swing (on the circular `halfpipe` it is
+    exactly a swing of radius R − h). The goal is to escape the valley: reach a
+    rim, or `target_x` on a trail without rims.
+
+    ## Action Space
+
+    `Box(-1, 1, (1,), float32)`; actions outside are clipped, a wrong shape or a
+    non-finite value raises ValueError.
+
+    | Num | Action | Min | Max |
+    |-----|--------|-----|-----|
+    | 0 | commanded height: h = h_min + (a + 1)/2 · (h_max − h_min) | -1 | 1 |
+
+    By default h jumps to the command at the start of the step. With
+    `max_height_speed` set, h moves toward it at that speed instead.
+
+    ## Observation Space
+
+    `Box(6,) float32`:
+
+    | Num | Observation | Min | Max |
+    |-----|-------------|-----|-----|
+    | 0 | (x − x_mid)/x_half, x_mid and x_half the centre and half-width of the trail's domain | -1 | 1 |
+    | 1 | sin φ | -1 | 1 |
+    | 2 | cos φ | 0 | 1 |
+    | 3 | speed along the trail σẋ / v*, v* = √(2 g Δz), Δz the height to climb (below) | -3 | 3 |
+    | 4 | (h − h_mid)/h_half over [h_min, h_max] | -1 | 1 |
+    | 5 | κ h_max, the curvature at the feet in units of 1/h_max | -k* | k* |
+
+    k* is max |κ| h_max over the trail. The position and the speed are clipped
+    to their bounds (the position only once the skier has left the domain, after
+    success).
+
+    ## Rewards
+
+    With z = E/(m g) the height the barycentre would reach at rest, z₀ its
+    lowest value (at rest at the bottom, crouched) and z* the value that just
+    reaches the goal crouched (at a rim of the valley z* = H + h_min), the
+    progress is ε = (z − z₀)/(z* − z₀), Δz = z* − z₀, and
+
+        reward = ln(max(ε′, 1e-4) / max(ε, 1e-4)) − 0.01
+
+    ε before the step, ε′ after it. The logarithm pays each pumping half-cycle
+    for the factor by which it multiplies the energy above the bottom, as on the
+    swing; the constant pays for time. Summed to success: ln(ε_T/ε₀) − 0.01·steps.
+
+    ## Starting State
+
+    At rest with h = h_min, x₀ uniform on 0.5 ≤ |x₀ − x_b| ≤ 2.0 m (np_random),
+    x_b the trail's lowest point (x = 0 on the valley). From there escape is
+    impossible at constant h. `reset(options={"state": {...}})` sets any of `x`,
+    `x_dot` or `p`, `h` exactly.
+
+    ## Episode End
+
+    Terminated on success (`info["is_success"]`): x at or beyond a rim (|x| ≥ L/2
+    on the valley, the lips on the halfpipe) or at or past `target_x`, checked at
+    the end of each step. Truncated after 1000 steps (50 s at the default dt) by
+    the registration's time limit.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | h_min | 0.5 | (0, h_max) |
+    | h_max | 1.0 | (h_min, ∞), with 1 − κ h_max > 0 on the whole trail |
+    | mass | 70.0 | (0, ∞) |
+    | g | 9.81 | (0, ∞) |
+    | dt | 0.05 | (0, ∞) |
+    | trail | "valley" | "valley", "halfpipe", a sympy expression in x (or its text), or four callables (f, f′, f″, f‴) |
+    | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; user trails: domain=(lo, hi) and the expression's other symbols |
+    | target_x | None | required for a trail without rims: a point of the domain above the bottom |
+    | max_height_speed | None | None or (0, ∞) m/s |
+    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    Beyond its domain a trail continues as its osculating parabola, so the step
+    that crosses a rim stays finite. Every `info` has `"state"` (`x`, `x_dot`,
+    `p`, `h`, `t`, `s` the arc length from the trail's origin, `kappa`, in SI),
+    `"energy"` (E = p²/(2 m (1 − κh)² σ²) + m g (f + h cos φ), J), `"progress"`
+    (ε) and `"is_success"`.
+    """
+
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        h_min: float = 0.5,
+        h_max: float = 1.0,
+        mass: float = 70.0,
+        g: float = 9.81,
+        dt: float = 0.05,
+        trail="valley",
+        trail_params: dict | None = None,
+        target_x: float | None = None,
+        max_height_speed: float | None = None,
+        integrator: str = DEFAULT_INTEGRATOR,
+        **stepper_options,
+    ):
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']} or None")
+        self.h_min = check_number("h_min", h_min, 0.0, open_low=True)
+        self.h_max = check_number("h_max", h_max, self.h_min, open_low=True)
+        self.dt = check_number("dt", dt, 0.0, open_low=True)
+        self.max_height_speed = (
+            None if max_height_speed is None else check_number("max_height_speed", max_height_speed, 0.0, open_low=True)
+        )
+        if trail_params is not None and not isinstance(trail_params, dict):
+            raise ValueError(f"trail_params={trail_params!r} must be a dict or None")
+        self.trail = make_trail(trail, trail_params)
+        check_curvature(self.trail, self.h_max)
+        self.system = Skier(
+            self.trail, mass=check_number("mass", mass, 0.0, open_low=True), g=check_number("g", g, 0.0, open_low=True)
+        )
+        check_stepper_options("Skier-v0", stepper_options, type(self))
+        if integrator == DEFAULT_INTEGRATOR:
+            stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
+        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+        self.render_mode = render_mode
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
+
+        xs = self.trail.grid()
+        f, f1, f2, _ = self.trail.profile(xs)
+        sigma = np.sqrt(1.0 + f1**2)
+        self.x_bottom = float(xs[np.argmin(f)])
+        self.goals = self._goals(target_x)
+        self.z_floor = float(np.min(f + self.h_min / sigma))
+        self.z_goal = min(self._crouched_height(x) for x in self.goals)
+        if self.z_goal <= self.z_floor:
+            raise ValueError(f"target_x={target_x!r} is at the bottom of the trail; nothing to climb")
+        self.speed_scale = math.sqrt(2.0 * self.system.g * (self.z_goal - self.z_floor))
+        self.kappa_bound = float(np.max(np.abs(f2 / sigma**3))) * self.h_max
+        self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
+        high = np.array([1.0, 1.0, 1.0, SPEED_BOUND, 1.0, self.kappa_bound], np.float32)
+        low = -high
+        low[2] = 0.0
+        self.observation_space = spaces.Box(low, high, dtype=np.float32)
+
+        self.y = np.zeros(2)  # (x, p)
+        self.h, self.t, self.side = self.h_min, 0.0, 1.0
+        self._renderer = None
+
+    # -- Gymnasium API -------------------------------------------------------
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        options = dict(options or {})
+        check_keys("reset options", options, {"state"})
+        offset = self.np_random.uniform(*START_OFFSETS) * self.np_random.choice([-1.0, 1.0])
+        x0 = min(max(self.x_bottom + offset, self.trail.lo), self.trail.hi)
+        self.y, self.h, self.t = np.array([x0, 0.0]), self.h_min, 0.0
+        if "state" in options:
+            self._set_state(options["state"])
+        self.side = math.copysign(1.0, self.y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
+        return self._obs(), self._info()
+
+    def step(self, action):
+        a = check_action(action, self.action_space)[0]
+        h_cmd = self.h_min + 0.5 * (a + 1.0) * (self.h_max - self.h_min)
+        progress_before = self._progress(self._energy())
+        for h, h_dot, tau in control_segments(self.h, h_cmd, self.dt, self.max_height_speed):
+            self.y = self.stepper(self.system, self.y, np.array([h]), np.array([h_dot]), tau)
+        self.h = h + h_dot * tau
+        self.t += self.dt
+        info = self._info()
+        reward = math.log(max(info["progress"], PROGRESS_FLOOR) / max(progress_before, PROGRESS_FLOOR)) - TIME_COST
+        if self.render_mode == "human":
+            self.render()
+        return self._obs(), reward, info["is_success"], False, info
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn('render() without render_mode; pass render_mode="rgb_array" or "human" to make().')
+            return None
+        if self._renderer is None:
+            from connenv.envs.rendering import SkierRenderer
+
+            self._renderer = SkierRenderer(self.trail, self.h_max, self.render_mode, self.metadata["render_fps"])
+        return self._renderer.draw(self.y[0], self.h, self.h_min, self.t)
+
+    def close(self):
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # -- internals -----------------------------------------------------------
+
+    def _goals(self, target_x):
+        """The points to reach: the rims, or target_x."""
+        if target_x is None:
+            if not self.trail.rims:
+                raise ValueError("this trail has no rims: give target_x, a point of its domain to reach")
+            return (self.trail.lo, self.trail.hi)
+        return (check_number("target_x", target_x, self.trail.lo, self.trail.hi),)
+
+    def _crouched_height(self, x):
+        """Height of the barycentre at rest at x with h = h_min: f + h_min cos φ."""
+        f, f1, _, _ = self.trail.profile(np.array(x))
+        return float(f + self.h_min / math.sqrt(1.0 + f1**2))
+
+    def _set_state(self, state):
+        check_keys("options['state']", state, {"x", "x_dot", "p", "h"})
+        if "x_dot" in state and "p" in state:
+            raise ValueError("options['state'] gives both x_dot and p; give one of them")
+        x = check_number("state x", state.get("x", self.y[0]), self.trail.lo, self.trail.hi)
+        h = check_number("state h", state.get("h", self.h_min), self.h_min, self.h_max)
+        if "p" in state:
+            p = check_number("state p", state["p"])
+        else:
+            w = self.system.geometry(x, h)[5]
+            p = self.system.mass * w * w * check_number("state x_dot", state.get("x_dot", 0.0))
+        self.y, self.h = np.array([x, p]), h
+
+    def _energy(self):
+        return float(self.system.energy(self.y, self.h))
+
+    def _progress(self, energy):
+        return (energy / (self.system.mass * self.system.g) - self.z_floor) / (self.z_goal - self.z_floor)
+
+    def _success(self):
+        x = self.y[0]
+        if self.side == 0.0:
+            return bool(x <= self.goals[0] or x >= self.goals[1])
+        return bool((x - self.goals[0]) * self.side <= 0.0)
+
+    def _obs(self):
+        x = self.y[0]
+        _, f1, sigma, kappa, *_ = self.system.geometry(x, self.h)
+        mid, half = 0.5 * (self.trail.hi + self.trail.lo), 0.5 * (self.trail.hi - self.trail.lo)
+        h_mid, h_half = 0.5 * (self.h_max + self.h_min), 0.5 * (self.h_max - self.h_min)
+        speed = sigma * float(self.system.velocity(self.y, self.h)) / self.speed_scale
+        obs = [
+            min(max((x - mid) / half, -1.0), 1.0),
+            f1 / sigma,
+            1.0 / sigma,
+            min(max(speed, -SPEED_BOUND), SPEED_BOUND),
+            (self.h - h_mid) / h_half,
+            min(max(kappa * self.h_max, -self.kappa_bound), self.kappa_bound),
+        ]
+        return np.array(obs, np.float32)
+
+    def _info(self):
+        x, p = self.y
+        energy = self._energy()
+        kappa = float(self.system.geometry(x, self.h)[3])
+        state = {
+            "x": x,
+            "x_dot": float(self.system.velocity(self.y, self.h)),
+            "p": p,
+            "h": self.h,
+            "t": self.t,
+            "s": float(self.trail.arc_length(x)),
+            "kappa": kappa,
+        }
+        return {"state": state, "energy": energy, "progress": self._progress(energy), "is_success": self._success()}

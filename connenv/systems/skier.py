@@ -1,0 +1,89 @@
+"""Bressan's skier: a barycentre at assigned height h above a trail y = f(x), along its normal.
+
+x is the free coordinate (q = x), h the assigned one (u = h). With σ = √(1 + f′²),
+κ = f″/σ³, tan φ = f′ and the normal n = (−sin φ, cos φ), the barycentre is
+P = (x, f) + h n, and Ṗ = (1 − κh) σ ẋ t + ḣ n, so
+
+    T = ½ m [w² ẋ² + ḣ²],   w = (1 − κh) σ,   V = m g (f + h cos φ) = m g (f + h/σ)
+
+G12 = 0 and G22 = m: the skier is strongly fit for jumps, and a jump of h leaves
+(x, p) unchanged, p = m w² ẋ. Hamilton's equations of H = p²/(2 m w²) + V:
+
+    ẋ = p / (m w²),    ṗ = p² w′ / (m w³) − m g f′ (1 − κh)
+
+with w′ = (1 − κh) σ′ − h κ′ σ, σ′ = f′ f″/σ, κ′ = f‴/σ³ − 3 f′ f″²/σ⁵, and
+V′ = m g (f′ − h f′ f″/σ³) = m g f′ (1 − κh). The model holds while 1 − κh > 0:
+at 1 − κh = 0 the barycentre sits on the centre of curvature and w = 0.
+
+States are y = (x, p) on the last axis; everything broadcasts over leading axes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from connenv.systems.trails import Trail
+
+
+@dataclass(frozen=True)
+class Skier:
+    trail: Trail
+    mass: float = 70.0
+    g: float = 9.81
+
+    n = 1
+    m = 1
+
+    def geometry(self, x, h):
+        """(f, f′, σ, κ, 1 − κh, w, w′) at x for barycentre height h."""
+        f, f1, f2, f3 = self.trail.derivatives(x)
+        sigma = (1.0 + f1 * f1) ** 0.5
+        kappa = f2 / sigma**3
+        lever = 1.0 - kappa * h
+        sigma_1 = f1 * f2 / sigma
+        kappa_1 = f3 / sigma**3 - 3.0 * f1 * f2 * f2 / sigma**5
+        return f, f1, sigma, kappa, lever, lever * sigma, lever * sigma_1 - h * kappa_1 * sigma
+
+    def metric(self, q, u):
+        w = self.geometry(q[..., 0], u[..., 0])[5]
+        one = np.ones_like(w)[..., None, None]
+        return self.mass * w[..., None, None] ** 2 * one, 0.0 * one, self.mass * one
+
+    def potential(self, q, u):
+        f, _, sigma, *_ = self.geometry(q[..., 0], u[..., 0])
+        return self.mass * self.g * (f + u[..., 0] / sigma)
+
+    def vector_field(self, y, u, u_dot):
+        """Hand-derived (ẋ, ṗ); u_dot is accepted for the common interface and drops out."""
+        single = y.ndim == 1  # one state: numpy scalars, which the trail evaluates without array calls
+        x, p, h = (y[0], y[1], u[0]) if single else (y[..., 0], y[..., 1], u[..., 0])
+        _, f1, _, _, lever, w, w_1 = self.geometry(x, h)
+        x_dot = p / (self.mass * w * w)
+        p_dot = x_dot * x_dot * self.mass * w * w_1 - self.mass * self.g * f1 * lever
+        return np.array([x_dot, p_dot]) if single else np.stack([x_dot, p_dot], axis=-1)
+
+    def velocity(self, y, h):
+        """ẋ = p / (m w²)."""
+        w = self.geometry(y[..., 0], h)[5]
+        return y[..., 1] / (self.mass * w * w)
+
+    def energy(self, y, h):
+        """E = p²/(2 m w²) + m g (f + h cos φ), zero with the barycentre at the trail's level y = 0."""
+        f, _, sigma, _, _, w, _ = self.geometry(y[..., 0], h)
+        return y[..., 1] ** 2 / (2 * self.mass * w * w) + self.mass * self.g * (f + h / sigma)
+
+
+def check_curvature(trail: Trail, h_max: float):
+    """Raise ValueError where 1 − κ h_max ≤ 0 on the trail's domain, naming the worst point."""
+    xs = trail.grid()
+    _, f1, f2, _ = trail.profile(xs)
+    kappa = f2 / (1.0 + f1 * f1) ** 1.5
+    worst = int(np.argmax(kappa))
+    if 1.0 - kappa[worst] * h_max <= 0.0:
+        raise ValueError(
+            f"h_max={h_max} reaches the trail's centre of curvature: at x={xs[worst]:.6g} the curvature is "
+            f"{kappa[worst]:.6g}/m (radius {1 / kappa[worst]:.6g} m), so 1 − κ h_max = {1 - kappa[worst] * h_max:.3g} "
+            f"≤ 0 and the metric degenerates; h_max must stay below {1 / kappa[worst]:.6g} m on this trail"
+        )
