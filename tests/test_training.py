@@ -169,3 +169,12 @@ def test_rl_zoo3_trains_on_the_package_unchanged(conf, tmp_path):
     (model_path,) = (tmp_path / "ppo").glob("connenv-Swing-v0_1/connenv-Swing-v0.zip")
     action, _ = evaluate.load_model(model_path, ENV_ID).predict(np.zeros(4, np.float32))
     assert gym.make(ENV_ID).action_space.contains(action)
+
+
+def test_skier_trains_with_its_hyperparameters_and_the_controller_escapes(tmp_path):
+    """train.py and the evaluation CLI on Skier-v0: a tiny PPO run, and analytic against random."""
+    argv = ["--env", "connenv/Skier-v0", "--timesteps", "300", "--runs", str(tmp_path), "--eval-episodes", "2"]
+    results = train.main([*argv, "--eval-freq", "-1"])
+    assert Path(results["model"]).name == "connenv-Skier-v0.zip"
+    analytic, random = results["evaluation"]["policies"][1:]
+    assert analytic["success_rate"] == 1.0 and random["success_rate"] == 0.0
