@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import math
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
 from connenv.core.steppers import control_segments, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
+from connenv.envs.base import RenderedEnv
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
 
@@ -21,7 +21,7 @@ DEFAULT_INTEGRATOR = "dop853"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # the fastest passing stepper: python -m connenv.bench --env skier
 
 
-class SkierEnv(gym.Env):
+class SkierEnv(RenderedEnv):
     r"""
     ## Description
 
@@ -116,8 +116,6 @@ class SkierEnv(gym.Env):
     (ε) and `"is_success"`.
     """
 
-    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
-
     def __init__(
         self,
         render_mode: str | None = None,
@@ -134,11 +132,9 @@ class SkierEnv(gym.Env):
         integrator: str = DEFAULT_INTEGRATOR,
         **stepper_options,
     ):
-        if render_mode not in (None, *self.metadata["render_modes"]):
-            raise ValueError(f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']} or None")
+        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
         self.h_min = check_number("h_min", h_min, 0.0, open_low=True)
         self.h_max = check_number("h_max", h_max, self.h_min, open_low=True)
-        self.dt = check_number("dt", dt, 0.0, open_low=True)
         self.max_height_speed = (
             None if max_height_speed is None else check_number("max_height_speed", max_height_speed, 0.0, open_low=True)
         )
@@ -153,8 +149,6 @@ class SkierEnv(gym.Env):
         if integrator == DEFAULT_INTEGRATOR:
             stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
-        self.render_mode = render_mode
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
 
         xs = self.trail.grid()
         f, f1, f2, _ = self.trail.profile(xs)
@@ -175,7 +169,6 @@ class SkierEnv(gym.Env):
 
         self.y = np.zeros(2)  # (x, p)
         self.h, self.t, self.side = self.h_min, 0.0, 1.0
-        self._renderer = None
 
     # -- Gymnasium API -------------------------------------------------------
 
@@ -205,20 +198,13 @@ class SkierEnv(gym.Env):
             self.render()
         return self._obs(), reward, info["is_success"], False, info
 
-    def render(self):
-        if self.render_mode is None:
-            gym.logger.warn('render() without render_mode; pass render_mode="rgb_array" or "human" to make().')
-            return None
-        if self._renderer is None:
-            from connenv.envs.rendering import SkierRenderer
+    def _make_renderer(self):
+        from connenv.envs.rendering import SkierRenderer
 
-            self._renderer = SkierRenderer(self.trail, self.h_max, self.render_mode, self.metadata["render_fps"])
-        return self._renderer.draw(self.y[0], self.h, self.h_min, self.t)
+        return SkierRenderer(self.trail, self.h_max, self.render_mode, self.metadata["render_fps"])
 
-    def close(self):
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+    def _draw(self, renderer):
+        return renderer.draw(self.y[0], self.h, self.h_min, self.t)
 
     # -- internals -----------------------------------------------------------
 

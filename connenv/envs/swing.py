@@ -4,19 +4,19 @@ from __future__ import annotations
 
 import math
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
 from connenv.core.steppers import control_segments, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
+from connenv.envs.base import RenderedEnv
 from connenv.systems.swing import Swing
 
 LIFT_FLOOR = 1e-4  # floor of h in the reward's logarithm: amplitude ≈ 0.014 rad
 TIME_COST = 0.01  # reward paid per step until success
 
 
-class SwingEnv(gym.Env):
+class SwingEnv(RenderedEnv):
     r"""
     ## Description
 
@@ -106,8 +106,6 @@ class SwingEnv(gym.Env):
     `"amplitude"` (rad) and `"is_success"`.
     """
 
-    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
-
     def __init__(
         self,
         render_mode: str | None = None,
@@ -122,11 +120,9 @@ class SwingEnv(gym.Env):
         integrator: str = "exact",
         **stepper_options,
     ):
-        if render_mode not in (None, *self.metadata["render_modes"]):
-            raise ValueError(f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']} or None")
+        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
         self.r_min = check_number("r_min", r_min, 0.0, open_low=True)
         self.r_max = check_number("r_max", r_max, self.r_min, open_low=True)
-        self.dt = check_number("dt", dt, 0.0, open_low=True)
         self.target_amplitude = check_number("target_amplitude", target_amplitude, 0.0, math.pi, open_low=True)
         self.max_radial_speed = (
             None if max_radial_speed is None else check_number("max_radial_speed", max_radial_speed, 0.0, open_low=True)
@@ -136,8 +132,6 @@ class SwingEnv(gym.Env):
         )
         check_stepper_options("Swing-v0", stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
-        self.render_mode = render_mode
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
 
         self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / self.r_min)
         self.target_lift = 1.0 - math.cos(self.target_amplitude)
@@ -149,7 +143,6 @@ class SwingEnv(gym.Env):
         self.y = np.zeros(2)  # (θ, p)
         self.r = self.r_max
         self.t = 0.0
-        self._renderer = None
 
     # -- Gymnasium API -------------------------------------------------------
 
@@ -177,20 +170,13 @@ class SwingEnv(gym.Env):
             self.render()
         return self._obs(), reward, info["is_success"], False, info
 
-    def render(self):
-        if self.render_mode is None:
-            gym.logger.warn('render() without render_mode; pass render_mode="rgb_array" or "human" to make().')
-            return None
-        if self._renderer is None:
-            from connenv.envs.rendering import SwingRenderer
+    def _make_renderer(self):
+        from connenv.envs.rendering import SwingRenderer
 
-            self._renderer = SwingRenderer(self.r_max, self.render_mode, self.metadata["render_fps"])
-        return self._renderer.draw(self.y[0], self.r, self.r_min, self.t)
+        return SwingRenderer(self.r_max, self.render_mode, self.metadata["render_fps"])
 
-    def close(self):
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+    def _draw(self, renderer):
+        return renderer.draw(self.y[0], self.r, self.r_min, self.t)
 
     # -- internals -----------------------------------------------------------
 
