@@ -51,11 +51,27 @@ class SkierPumping:
         return np.where(climbing, 1.0, -1.0).astype(np.float32)[..., None], state
 
 
-ANALYTIC = {"connenv/Swing-v0": PiccoliKulkarni, "connenv/Skier-v0": SkierPumping}
+CONTROLLERS = {
+    "connenv/Swing-v0": {"pumping": lambda env: PiccoliKulkarni()},
+    "connenv/Skier-v0": {"pumping": lambda env: SkierPumping()},
+}
+"""Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 
 
-def analytic_policy(env_id: str):
-    """The analytic reference controller of a registered env."""
-    if env_id not in ANALYTIC:
-        raise ValueError(f"no analytic controller for env {env_id!r}; known: {sorted(ANALYTIC)}")
-    return ANALYTIC[env_id]()
+def controller_names(env_id: str) -> list[str]:
+    """The names `controller` takes for an env: "analytic" (its first controller) and each controller's own."""
+    return ["analytic", *CONTROLLERS.get(env_id, {})]
+
+
+def controller(env_id: str, name: str = "analytic", env=None):
+    """The named reference controller of a registered env; "analytic" is its first. env: the env it will drive
+    (default: a new one made with the registration's parameters)."""
+    import gymnasium as gym
+
+    known = CONTROLLERS.get(env_id)
+    if not known:
+        raise ValueError(f"no analytic controller for env {env_id!r}; known: {sorted(CONTROLLERS)}")
+    if name not in controller_names(env_id):
+        raise ValueError(f"no controller {name!r} for {env_id}; valid: {controller_names(env_id)}")
+    factory = next(iter(known.values())) if name == "analytic" else known[name]
+    return factory((env or gym.make(env_id)).unwrapped)

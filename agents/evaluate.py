@@ -3,8 +3,10 @@
     python -m agents.evaluate --env connenv/Swing-v0 --policy analytic random runs/Swing-v0_ppo_s0/connenv-Swing-v0.zip
 
 Episode i of every policy starts from ``reset(seed=seed + i)``, so the rows compare like with like. A policy is
-``analytic`` (the env's controller in agents.controllers), ``random`` (uniform actions, seeded) or the zip of a
-trained SB3 model. The rl-zoo3 run folder around a zip, as ``train.py`` and ``python -m rl_zoo3.train`` write it,
+``analytic`` (the env's first controller in agents.controllers), the name of one of its controllers (``arc``,
+``holonomy``, ...), ``random`` (uniform actions, seeded) or the zip of a trained SB3 model. Columns beyond return,
+success, time and length are the env's own measures, the info keys named by its ``metadata["measures"]``,
+averaged over the episodes' final infos. The rl-zoo3 run folder around a zip, as ``train.py`` and ``python -m rl_zoo3.train`` write it,
 tells the algorithm (``{env}/args.yml``) and the observation statistics of VecNormalize (``{env}/vecnormalize.pkl``).
 """
 
@@ -22,21 +24,24 @@ import yaml
 from gymnasium.wrappers import RenderCollection
 
 import connenv  # noqa: F401  (registers the envs)
-from agents.controllers import analytic_policy
+from agents.controllers import CONTROLLERS, controller, controller_names
 
 ENV_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+CONTROLLER_NAMES = sorted({name for env_id in CONTROLLERS for name in controller_names(env_id)})
 GIF_SIZE = 200  # pixels
 GIF_FRAME_STRIDE = 2  # keep one frame in two
 
 
 @dataclass
 class Episode:
-    """One evaluation episode: its return, whether it reached the target, when (simulated s), how many steps."""
+    """One evaluation episode: its return, whether it reached the target, when (simulated s), how many steps,
+    and the env's measures at its end."""
 
     ret: float
     success: bool
     time: float
     length: int
+    measures: dict
 
 
 class RandomPolicy:
@@ -72,10 +77,10 @@ def positive_int(text: str) -> int:
 
 
 def policy_spec(text: str) -> str:
-    """argparse type: 'analytic', 'random' or an existing model zip."""
-    if text in ("analytic", "random") or (text.endswith(".zip") and Path(text).is_file()):
+    """argparse type: a controller name, 'random' or an existing model zip."""
+    if text in (*CONTROLLER_NAMES, "random") or (text.endswith(".zip") and Path(text).is_file()):
         return text
-    raise argparse.ArgumentTypeError(f"{text!r} is not 'analytic', 'random' or an existing model PATH.zip")
+    raise argparse.ArgumentTypeError(f"{text!r} is not one of {CONTROLLER_NAMES}, 'random' or an existing PATH.zip")
 
 
 def run_file(model_path: Path, name: str) -> Path | None:
@@ -118,13 +123,13 @@ def load_model(model_path: str | Path, env_id: str, algo: str | None = None):
 
 
 def make_policy(spec: str, env_id: str, seed: int, algo: str | None = None) -> tuple[str, object]:
-    """(label, policy) for 'analytic', 'random' or a model zip; a zip's label is algo:run-folder."""
-    if spec == "analytic":
-        return spec, analytic_policy(env_id)
+    """(label, policy) for a controller name, 'random' or a model zip; a zip's label is algo:run-folder."""
+    if spec in CONTROLLER_NAMES:
+        return spec, controller(env_id, spec)
     if spec == "random":
         return spec, RandomPolicy(gym.make(env_id).action_space, seed)
     if not spec.endswith(".zip"):
-        raise ValueError(f"policy {spec!r} is not 'analytic', 'random' or a model PATH.zip")
+        raise ValueError(f"policy {spec!r} is not one of {controller_names(env_id)}, 'random' or a model PATH.zip")
     algo = algo or algo_of(Path(spec))
     return f"{algo}:{Path(spec).parent.name}", load_model(spec, env_id, algo)
 
@@ -137,7 +142,8 @@ def run_episode(env: gym.Env, policy, seed: int) -> Episode:
         action, _ = policy.predict(obs, deterministic=True)
         obs, reward, terminated, truncated, info = env.step(action)
         ret, length, done = ret + float(reward), length + 1, terminated or truncated
-    return Episode(ret, bool(info["is_success"]), float(info["state"]["t"]), length)
+    measures = {key: float(info[key]) for key in env.unwrapped.metadata.get("measures", ())}
+    return Episode(ret, bool(info["is_success"]), float(info["state"]["t"]), length, measures)
 
 
 def save_gif(frames: list[np.ndarray], path: str | Path, fps: float):
@@ -163,9 +169,11 @@ def evaluate(env_id: str, policy, episodes: int, seed: int, video: str | Path | 
 
 
 def summarize(label: str, episodes: list[Episode]) -> dict:
-    """Mean ± std return, success rate, mean time to success (over successes, None if none), mean length."""
+    """Mean ± std return, success rate, mean time to success (over successes, None if none), mean length, and the
+    mean of each of the env's measures."""
     returns = np.array([e.ret for e in episodes])
     times = [e.time for e in episodes if e.success]
+    measures = {key: float(np.mean([e.measures[key] for e in episodes])) for key in episodes[0].measures}
     return {
         "policy": label,
         "return_mean": float(returns.mean()),
@@ -173,6 +181,7 @@ def summarize(label: str, episodes: list[Episode]) -> dict:
         "success_rate": float(np.mean([e.success for e in episodes])),
         "time_to_success_mean": float(np.mean(times)) if times else None,
         "length_mean": float(np.mean([e.length for e in episodes])),
+        "measures_mean": measures,
         "episodes": [asdict(e) for e in episodes],
     }
 
@@ -192,15 +201,20 @@ def format_table(report: dict) -> str:
     """The report as a text table, one row per policy."""
     width = max(len("policy"), *(len(row["policy"]) for row in report["policies"]))
     seeds = f"seeds {report['seed']}..{report['seed'] + report['episodes'] - 1}"
+    measures = list(report["policies"][0]["measures_mean"])
     lines = [
         f"{report['env']}: {report['episodes']} episodes, {seeds}",
-        f"{'policy':<{width}}  {'return':>15}  {'success':>7}  {'time to target (s)':>18}  {'length':>6}",
+        f"{'policy':<{width}}  {'return':>15}  {'success':>7}  {'time to target (s)':>18}  {'length':>6}"
+        + "".join(f"  {key:>12}" for key in measures),
     ]
     for row in report["policies"]:
         ret = f"{row['return_mean']:.3f} ± {row['return_std']:.3f}"
         time = "-" if row["time_to_success_mean"] is None else f"{row['time_to_success_mean']:.2f}"
         success = f"{100 * row['success_rate']:.0f}%"
-        lines.append(f"{row['policy']:<{width}}  {ret:>15}  {success:>7}  {time:>18}  {row['length_mean']:>6.1f}")
+        extra = "".join(f"  {row['measures_mean'][key]:>12.4g}" for key in measures)
+        lines.append(
+            f"{row['policy']:<{width}}  {ret:>15}  {success:>7}  {time:>18}  {row['length_mean']:>6.1f}{extra}"
+        )
     return "\n".join(lines)
 
 
@@ -214,7 +228,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default="connenv/Swing-v0", choices=ENV_IDS)
     parser.add_argument(
-        "--policy", nargs="+", type=policy_spec, default=["analytic", "random"], help="analytic, random or PATH.zip"
+        "--policy",
+        nargs="+",
+        type=policy_spec,
+        default=["analytic", "random"],
+        help=f"one of {CONTROLLER_NAMES} (the env's controllers; analytic is its first), random or PATH.zip",
     )
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)

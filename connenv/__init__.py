@@ -6,3 +6,6 @@ __version__ = "0.1.0"
 
 register(id="connenv/Swing-v0", entry_point="connenv.envs.swing:SwingEnv", max_episode_steps=500)
 register(id="connenv/Skier-v0", entry_point="connenv.envs.skier:SkierEnv", max_episode_steps=1000)
+register(id="connenv/RollingBall-v0", entry_point="connenv.envs.rolling_ball:RollingBallEnv", max_episode_steps=200)
+register(id="connenv/RollingBallPose-v0", entry_point="connenv.envs.rolling_ball:RollingBallPoseEnv", max_episode_steps=300)
+register(id="connenv/RollingBallGoal-v0", entry_point="connenv.envs.rolling_ball:RollingBallGoalEnv", max_episode_steps=200)
