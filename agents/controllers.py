@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from agents.rolling_ball import Holonomy, OptimalArc, for_env
+
 
 class PiccoliKulkarni:
     """Pump a swing (Piccoli & Kulkarni 2005): stand, r = r_min, while the swing moves away
@@ -54,6 +56,9 @@ class SkierPumping:
 CONTROLLERS = {
     "connenv/Swing-v0": {"pumping": lambda env: PiccoliKulkarni()},
     "connenv/Skier-v0": {"pumping": lambda env: SkierPumping()},
+    "connenv/RollingBall-v0": {"arc": for_env(OptimalArc), "holonomy": for_env(Holonomy)},
+    "connenv/RollingBallPose-v0": {"holonomy": for_env(Holonomy, pose=True)},
+    "connenv/RollingBallGoal-v0": {"arc": for_env(OptimalArc), "holonomy": for_env(Holonomy)},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

@@ -4,8 +4,9 @@ A control segment is a stretch of time of length ``tau`` on which the assigned
 coordinates move at constant velocity: u(s) = u + s·u̇ for 0 ≤ s ≤ tau. A
 stepper is called as ``stepper(system, y, u, u_dot, tau) -> y`` and uses the
 system's ``vector_field(y, u, u_dot)``; the exact stepper uses its
-``exact_flow(y, u, tau)`` where u̇ = 0. All of them broadcast over leading
-batch axes of y.
+``exact_segment(y, u, u_dot, tau)`` (a closed-form step for any constant u̇)
+or else its ``exact_flow(y, u, tau)`` where u̇ = 0. All of them broadcast over
+leading batch axes of y.
 
 Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
 flow), ``"rk4"`` with ``substeps``, or one of scipy's ``"dop853"``, ``"rk45"``,
@@ -67,12 +68,15 @@ class Scipy:
 
 @dataclass(frozen=True)
 class Exact:
-    """The system's closed-form flow on segments where u is held; ``fallback`` where it moves
-    and for the states where ``exact_flow`` answers NaN (outside the closed form's accurate domain)."""
+    """The system's closed-form step: ``exact_segment`` on every segment where the system has one; else
+    ``exact_flow`` on segments where u is held, and ``fallback`` where it moves and for the states where
+    ``exact_flow`` answers NaN (outside the closed form's accurate domain)."""
 
     fallback: Scipy = Scipy()
 
     def __call__(self, system, y, u, u_dot, tau):
+        if hasattr(system, "exact_segment"):
+            return _finite(system.exact_segment(y, u, u_dot, tau), self)
         if np.any(u_dot != 0.0):
             return self.fallback(system, y, u, u_dot, tau)
         flow = system.exact_flow(y, u, tau)
@@ -129,7 +133,7 @@ def make_stepper(integrator: str, system=None, **options):
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
             raise ValueError(f"{name}={value!r} must be a finite number > 0")
     if integrator == "exact":
-        if system is not None and not hasattr(system, "exact_flow"):
+        if system is not None and not (hasattr(system, "exact_flow") or hasattr(system, "exact_segment")):
             raise ValueError(f"integrator='exact' needs a closed-form flow, which {type(system).__name__} has not")
         return Exact(Scipy(**options))
     return Scipy(SCIPY_METHODS[integrator], **options)

@@ -40,9 +40,14 @@ def check_stepper_options(env_name: str, options, env_cls):
 
 def check_action(action, space):
     """The action as a float array of the space's shape, finite, clipped into the space."""
+    return np.minimum(np.maximum(finite_action(action, space), space.low), space.high)
+
+
+def finite_action(action, space):
+    """The action as a float array of the space's shape, finite, else ValueError; not clipped."""
     a = np.asarray(action, dtype=np.float64)
     if a.shape != space.shape:
         raise ValueError(f"action has shape {a.shape}; expected {space.shape} (action={action!r})")
     if not np.isfinite(a).all():
         raise ValueError(f"action={action!r} is not finite; expected values in [{space.low}, {space.high}]")
-    return np.minimum(np.maximum(a, space.low), space.high)
+    return a

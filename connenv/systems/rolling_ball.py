@@ -1,0 +1,294 @@
+"""A ball rolling on a plane without slipping and without turning (spinning about the vertical).
+
+A kinematic model is all this scene needs: the controller assigns the velocity v = (vx, vy) of the centre, so
+there is no inertia to integrate (Lawton, slides 7–10; Lioe 2004). R ∈ SO(3) is the attitude (body → space
+coordinates) and ρ the radius. Rolling without slipping and without turning fixes the angular velocity:
+
+    ω = e_z × v / ρ = (−vy, vx, 0)/ρ,    Ṙ = ω̂ R,    (ẋ, ẏ) = v
+
+With v held over a step of length τ the update R ← exp(τ ω̂) R is exact (Rodrigues, by scipy's Rotation). In the
+stepper interface the centre (x, y) is the assigned coordinate u, v = u̇, and the state y is R flattened row by row
+(9 numbers on the last axis), so the generic steppers integrate the matrix ODE Ṙ = ω̂R too.
+
+Reorientation is the holonomy of the rolling distribution: a straight roll by d turns the ball about the horizontal
+axis e_z × d by |d|/ρ, and a closed material path turns it about the vertical by the spherical area it encloses
+(Lioe 2004). Rolling at unit speed along a circle of curvature k from the heading α, with ω₀ = e_z × (cos α, sin α)/ρ,
+
+    R(s) = Rz(k s) · exp(s (ω₀ − k e_z)^) · R(0)                                   (the arc)
+
+and the shortest rolling path to a given attitude, position free, is such an arc (Lioe 2004): the sub-Riemannian
+geodesics of the distribution. Rolled in n straight steps of length ℓ whose heading turns by δ between steps, the
+same computation gives exactly
+
+    R_n = Rz(n δ) · (Rz(−δ) · exp(ℓ ω₀^))^n · R(0)                                (the discrete arc)
+
+Everywhere below a rotation E "to roll" acts in space, R → E R; E = R* Rᵀ reaches the attitude R*.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq, root
+from scipy.spatial.transform import Rotation
+
+E_Z = np.array([0.0, 0.0, 1.0])
+ARC_BRANCHES = 3
+"""Branches m of the rotation vector searched by optimal_arc: 2(β + mπ) n̂ for m = −4 … 3 (see there)."""
+ARC_GRID = 2048  # points of the scan for sign changes, per branch
+CLOSURE = 1e-9  # largest rotation (rad) a solution may miss its target by before it is discarded
+
+
+def rz(angle) -> Rotation:
+    return Rotation.from_rotvec(np.multiply.outer(angle, E_Z))
+
+
+@dataclass(frozen=True)
+class Arc:
+    """A circular arc rolled at unit speed: initial heading α (rad), curvature k (1/m), length s (m)."""
+
+    heading: float
+    curvature: float
+    length: float
+
+
+@dataclass(frozen=True)
+class DiscreteArc:
+    """n straight steps of length ℓ, the first at heading α, each turning by δ from the last."""
+
+    heading: float
+    turn: float
+    step_length: float
+    steps: int
+
+    def displacements(self) -> np.ndarray:
+        """(n, 2): the straight steps in order."""
+        headings = self.heading + self.turn * np.arange(self.steps)
+        return self.step_length * np.stack([np.cos(headings), np.sin(headings)], axis=-1)
+
+
+@dataclass(frozen=True)
+class RollingBall:
+    radius: float = 1.0
+
+    def spin(self, v):
+        """e_z × v / ρ: the angular velocity of rolling at v, and the rotation vector of a straight roll by v."""
+        v = np.asarray(v, float)
+        return np.stack([-v[..., 1], v[..., 0], np.zeros_like(v[..., 0])], axis=-1) / self.radius
+
+    def vector_field(self, y, u, u_dot):
+        """Ṙ = ω̂ R, flattened; u (the centre) does not enter."""
+        w = self.spin(u_dot)
+        R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))
+        hat = np.zeros((*w.shape[:-1], 3, 3))
+        hat[..., 0, 2], hat[..., 1, 2], hat[..., 2, 0], hat[..., 2, 1] = w[..., 1], -w[..., 0], -w[..., 1], w[..., 0]
+        return (hat @ R).reshape(np.shape(y))
+
+    def exact_segment(self, y, u, u_dot, tau):
+        """R ← exp(τ ω̂) R, exact for v held over the segment."""
+        R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))
+        return (Rotation.from_rotvec(tau * self.spin(u_dot)).as_matrix() @ R).reshape(np.shape(y))
+
+    def roll(self, displacements) -> Rotation:
+        """The rotation of rolling the straight legs `displacements` (k, 2) one after the other."""
+        rotation = Rotation.identity()
+        for d in np.atleast_2d(displacements):
+            rotation = Rotation.from_rotvec(self.spin(d)) * rotation
+        return rotation
+
+    # -- arcs --------------------------------------------------------------
+
+    def arc_rotation(self, arc: Arc, s=None) -> Rotation:
+        """R(s) R(0)ᵀ = Rz(k s) exp(s (ω₀ − k e_z)^) along the arc, at s (default: its end)."""
+        s = arc.length if s is None else s
+        w = self.spin([math.cos(arc.heading), math.sin(arc.heading)]) - arc.curvature * E_Z
+        return rz(arc.curvature * s) * Rotation.from_rotvec(np.multiply.outer(s, w))
+
+    def arc_position(self, arc: Arc, s=None):
+        """Displacement of the centre along the arc at s (default: its end)."""
+        s = arc.length if s is None else np.asarray(s, float)
+        a, k = arc.heading, arc.curvature
+        if k == 0.0:
+            return np.stack([s * math.cos(a), s * math.sin(a)], axis=-1)
+        return np.stack([(np.sin(a + k * s) - math.sin(a)) / k, (math.cos(a) - np.cos(a + k * s)) / k], axis=-1)
+
+    def optimal_arc(self, rotation: Rotation) -> Arc:
+        """The shortest arc that rolls the ball by `rotation`; its length is the sub-Riemannian distance.
+
+        With φ = k s the total turn of the heading, the arc is Rz(φ) exp(r̂) with r = s (ω₀ − k e_z), so
+        Rz(−φ) E must have a rotation vector r with r_z = −φ; then s = ρ |r_xy| and α = atan2(−r_x, r_y). The
+        rotation vectors of a rotation with unit quaternion (cos β, sin β n̂) are 2(β + mπ) n̂, m ∈ ℤ: for each
+        branch the root condition is one equation in φ. Its roots are bracketed on a grid and refined by brentq;
+        each is checked by rolling it, and the shortest is kept. A vertical rotation Rz(γ) has no such root: it
+        is reached by a whole turn of the second factor, |r| = 2π, so s = ρ √(4π² − φ²) with φ = γ + 2πj.
+        """
+        if rotation.magnitude() == 0.0:
+            return Arc(0.0, 0.0, 0.0)
+        candidates = [self._arc_from_root(rotation, m, phi) for m, phi in self._arc_roots(rotation)]
+        candidates += self._whole_turns(rotation)
+        closing = [arc for arc in candidates if arc is not None and self.misses(arc, rotation) <= CLOSURE]
+        if not closing:
+            raise ArithmeticError(f"no arc found that rolls the ball by {rotation.as_rotvec()}")
+        return min(closing, key=lambda arc: arc.length)
+
+    def misses(self, arc: Arc, rotation: Rotation) -> float:
+        """Angle (rad) between the arc's rotation and `rotation`."""
+        return float((self.arc_rotation(arc) * rotation.inv()).magnitude())
+
+    def _branch_vectors(self, rotation: Rotation, phi, m):
+        """r_m(φ) = 2(β + mπ) n̂ for the quaternion of Rz(−φ) E, continued smoothly in φ."""
+        bx, by, bz, bw = rotation.as_quat()
+        c, s = np.cos(phi / 2), -np.sin(phi / 2)
+        vec = np.stack([c * bx - s * by, c * by + s * bx, c * bz + s * bw], axis=-1)
+        w = c * bw - s * bz
+        norm = np.linalg.norm(vec, axis=-1)
+        beta = np.arctan2(norm, w)
+        return (2 * (beta + m * math.pi) / np.where(norm > 0, norm, 1.0))[..., None] * vec
+
+    def _arc_roots(self, rotation: Rotation):
+        """(m, φ) with r_m(φ)_z + φ = 0, for m = −B−1 … B and |φ| ≤ 2π(B + 1), where |r_m| allows a root."""
+        bound = 2 * math.pi * (ARC_BRANCHES + 1)
+        grid = np.linspace(-bound, bound, ARC_GRID)
+        for m in range(-ARC_BRANCHES - 1, ARC_BRANCHES + 1):
+            f = self._branch_vectors(rotation, grid, m)[:, 2] + grid
+            for i in np.flatnonzero(np.sign(f[:-1]) * np.sign(f[1:]) <= 0):
+                g = lambda phi, m=m: self._branch_vectors(rotation, phi, m)[2] + phi  # noqa: E731
+                yield m, brentq(g, grid[i], grid[i + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps)
+
+    def _arc_from_root(self, rotation: Rotation, m: int, phi: float) -> Arc | None:
+        r = self._branch_vectors(rotation, phi, m)
+        length = self.radius * math.hypot(r[0], r[1])
+        return None if length == 0.0 else Arc(math.atan2(-r[0], r[1]), phi / length, length)
+
+    def _whole_turns(self, rotation: Rotation) -> list[Arc]:
+        """Arcs to a vertical rotation Rz(γ): a whole turn of exp(s(ω₀ − k e_z)^), φ = γ + 2πj, |φ| < 2π."""
+        if np.linalg.norm(rotation.apply(E_Z) - E_Z) > CLOSURE:
+            return []
+        gamma = rotation.as_rotvec() @ E_Z
+        arcs = []
+        for phi in (gamma, gamma - math.copysign(2 * math.pi, gamma)):
+            length = self.radius * math.sqrt(max(4 * math.pi**2 - phi**2, 0.0))
+            if length > 0.0:
+                arcs.append(Arc(0.0, phi / length, length))
+        return arcs
+
+    def discrete_arc_rotation(self, arc: DiscreteArc) -> Rotation:
+        """Rz(n δ) (Rz(−δ) exp(ℓ ω₀^))^n: the rotation of rolling the steps of `arc`."""
+        first = Rotation.from_rotvec(self.spin(arc.step_length * np.array([math.cos(arc.heading), math.sin(arc.heading)])))
+        return rz(arc.steps * arc.turn) * (rz(-arc.turn) * first) ** arc.steps
+
+    def discrete_arc(self, rotation: Rotation, steps: int, guess: Arc) -> DiscreteArc | None:
+        """The n-step discrete arc that rolls the ball exactly by `rotation`, near the arc `guess`, or None.
+
+        Newton's method (scipy's hybrid root finder) on the three unknowns (α, δ, ℓ), from the chords of the arc:
+        α + kℓ/2, kℓ, ℓ = s/n. The discrete arc converges to the arc as n grows.
+        """
+        step = guess.length / steps
+        x0 = [guess.heading + guess.curvature * step / 2, guess.curvature * step, step]
+
+        def residual(x):
+            return (self.discrete_arc_rotation(DiscreteArc(x[0], x[1], x[2], steps)) * rotation.inv()).as_rotvec()
+
+        solution = root(residual, x0, method="hybr", options={"xtol": 1e-15})
+        heading, turn, length = solution.x
+        arc = DiscreteArc(heading, turn, abs(length), steps) if length >= 0 else None
+        if arc is None or np.linalg.norm(residual(solution.x)) > CLOSURE:
+            return None
+        return arc
+
+    # -- holonomy ------------------------------------------------------------
+
+    def tilt_and_yaw(self, rotation: Rotation) -> tuple[np.ndarray, float]:
+        """(t, γ) with rotation = exp(t̂) Rz(γ): t horizontal, |t| ≤ π, taking e_z where the rotation takes it."""
+        up = rotation.apply(E_Z)
+        axis = np.cross(E_Z, up)
+        sin, cos = np.linalg.norm(axis), up[2]
+        if sin > 0.0:
+            tilt = math.atan2(sin, cos) * axis / sin
+        else:
+            tilt = np.array([math.pi, 0.0, 0.0]) if cos < 0 else np.zeros(3)
+        yaw = Rotation.from_rotvec(-tilt) * rotation
+        return tilt, float(yaw.as_rotvec() @ E_Z)
+
+    def turn_legs(self, yaw: float, shift) -> np.ndarray:
+        """Lawton's turn (slide 8), placed so that it ends displaced by `shift`, |shift| = ρ|yaw|:
+        roll ρπ/2 along e, ρ·yaw along −e⊥, ρπ/2 along −e. The ball turns by `yaw` about the vertical: the legs
+        trace on the sphere a lune between two meridians, of area `yaw`. With e = (1, 0) it is the seed's maneuver."""
+        if yaw == 0.0:
+            return np.zeros((0, 2))
+        normal = -np.asarray(shift, float) / (self.radius * yaw)  # e⊥
+        e = np.array([normal[1], -normal[0]])
+        quarter = self.radius * math.pi / 2 * e
+        return np.stack([quarter, -self.radius * yaw * normal, -quarter])
+
+    def holonomy_legs(self, rotation: Rotation, position=None) -> np.ndarray:
+        """Straight legs (k, 2) that roll the ball by `rotation`: turns about the vertical by holonomy, then one
+        straight tilt. With `position` the legs also bring the centre from there back to the origin.
+
+        rotation = exp(t̂) Rz(γ). The tilt is a straight roll by ρ t × e_z. Position free, one turn of γ does the rest.
+        To close at the origin, two turns of γ₁ + γ₂ = γ must carry the centre by D = −position − ρ t × e_z, their
+        shifts ρ|γᵢ| long in directions of our choosing: γᵢ = γ/2 if |D| ≤ ρ|γ| (an isosceles triangle), else
+        γ₁,₂ = (γ ± |D|/ρ)/2, of opposite signs and both shifts along D.
+        """
+        tilt, yaw = self.tilt_and_yaw(rotation)
+        tilt_leg = self.radius * np.cross(tilt, E_Z)[:2]
+        if position is None:
+            turns = [(yaw, [0.0, -self.radius * yaw])]
+        else:
+            target = -np.asarray(position, float) - tilt_leg
+            turns = self._two_turns(yaw, target)
+        legs = [self.turn_legs(g, shift) for g, shift in turns]
+        return np.concatenate([*legs, tilt_leg[None] if tilt.any() else np.zeros((0, 2))])
+
+    def _two_turns(self, yaw: float, target):
+        reach = np.linalg.norm(target) / self.radius
+        direction = target / (reach * self.radius) if reach > 0 else np.array([1.0, 0.0])
+        if reach > abs(yaw):
+            yaws = ((yaw + reach) / 2, (yaw - reach) / 2)
+            return [(g, self.radius * abs(g) * direction) for g in yaws]
+        half = self.radius * yaw / 2
+        across = math.sqrt(max(half**2 - (reach * self.radius / 2) ** 2, 0.0))
+        side = np.array([-direction[1], direction[0]]) * across
+        middle = target / 2
+        return [(yaw / 2, middle + side), (yaw / 2, middle - side)]
+
+
+def split_legs(legs, step_length: float) -> np.ndarray:
+    """Steps (k, 2) that roll each straight leg in full steps of step_length, and one partial step for the rest."""
+    steps = []
+    for leg in np.atleast_2d(legs):
+        length = float(np.linalg.norm(leg))
+        whole = math.floor(length / step_length)
+        direction = leg / length if length > 0 else leg
+        steps += [step_length * direction] * whole
+        if length - whole * step_length > 1e-15:
+            steps.append((length - whole * step_length) * direction)
+    return np.array(steps).reshape(-1, 2)
+
+
+def attitude_error(R, R_target):
+    """R R*ᵀ: the rotation from the target to R in space; it rolls as R does (Ṗ = ω̂ P)."""
+    return R @ np.swapaxes(R_target, -1, -2)
+
+
+def rotation_angle(P):
+    """The angle of rotation matrices P (..., 3, 3), accurate near 0 and π: atan2(|vee(P − Pᵀ)|/2, (tr P − 1)/2)."""
+    skew = np.stack([P[..., 2, 1] - P[..., 1, 2], P[..., 0, 2] - P[..., 2, 0], P[..., 1, 0] - P[..., 0, 1]], -1)
+    return np.arctan2(0.5 * np.linalg.norm(skew, axis=-1), 0.5 * (np.trace(P, axis1=-2, axis2=-1) - 1.0))
+
+
+def six_d(R):
+    """The continuous 6-D form of rotations (Zhou et al. 2019): the first two columns, (..., 6)."""
+    return np.concatenate([R[..., :, 0], R[..., :, 1]], axis=-1)
+
+
+def from_six_d(x):
+    """Rotation matrices from the 6-D form, by Gram–Schmidt (exact for the columns of a rotation)."""
+    x = np.asarray(x, float)
+    a, b = x[..., :3], x[..., 3:]
+    c1 = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    b = b - np.sum(c1 * b, axis=-1, keepdims=True) * c1
+    c2 = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    return np.stack([c1, c2, np.cross(c1, c2)], axis=-1)
