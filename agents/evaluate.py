@@ -107,8 +107,9 @@ def load_model(model_path: str | Path, env_id: str, algo: str | None = None):
     algo = algo or algo_of(model_path)
     if algo not in ALGOS:
         raise ValueError(f"algo {algo!r} is not one of {sorted(ALGOS)}")
-    model = ALGOS[algo].load(model_path, device="cpu")
     env = gym.make(env_id)
+    goal_env = isinstance(env.observation_space, gym.spaces.Dict)  # SB3 loads a HER model only with its env
+    model = ALGOS[algo].load(model_path, device="cpu", **({"env": DummyVecEnv([lambda: env])} if goal_env else {}))
     for space in ("observation_space", "action_space"):
         if getattr(model, space) != getattr(env, space):
             raise ValueError(

@@ -74,7 +74,9 @@ class OptimalArc(PlanFollower):
             discrete = self.ball.discrete_arc(rotation, steps, arc)
             if discrete is not None and discrete.step_length <= self.step_length * (1 + 1e-12):
                 return discrete.displacements()
-        raise ArithmeticError(f"no discrete arc of {fewest}–{fewest + EXTRA_STEPS - 1} steps rolls {rotation.as_rotvec()}")
+        raise ArithmeticError(
+            f"no discrete arc of {fewest}–{fewest + EXTRA_STEPS - 1} steps rolls {rotation.as_rotvec()}"
+        )
 
 
 class Holonomy(PlanFollower):

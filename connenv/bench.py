@@ -1,9 +1,9 @@
 """Benchmark of the steppers on an env: energy drift and speed, to choose its default.
 
-    python -m connenv.bench [--env swing|skier] [--quick] [--integrators exact rk4 ...]
+    python -m connenv.bench [--env swing|skier|ball] [--quick] [--integrators exact rk4 ...]
 
 Every candidate runs a 1000-step episode at constant control (action +1 held)
-from two starts at rest (the first only with --quick):
+from two starts (the first only with --quick):
 
 - Swing-v0: r = r_max = 2 m, from θ₀ = π/2, the task's target amplitude, and
   θ₀ = 3.0, near the top, where the flow is close to the separatrix. Energy
@@ -12,10 +12,15 @@ from two starts at rest (the first only with --quick):
 - Skier-v0: standing, h = h_max = 1 m, on the valley from x₀ = 2.0 (the far end
   of the default starts) and x₀ = 5.5, near the rim (the most energy an episode
   holds before success). Energy scale m g H, H = 3 m the valley's depth.
+- RollingBall-v0: a straight roll at v = (v_max, 0) from R₀ = I and from
+  R₀ = Rx(2), whose closed form is R(t) = Ry(v_max t/ρ) R₀.
 
-Energy drift is max_t |E(t) − E(0)| / scale over the episode, E from
-info["energy"] (E(0) from reset); E is conserved at constant control. A
-candidate passes if its drift is ≤ 1e-8 from every start.
+For the swing and the skier the drift is the energy's, max_t |E(t) − E(0)| /
+scale over the episode, E from info["energy"] (E(0) from reset); E is
+conserved at constant control. For the ball it is the state error against the
+closed form, max_t of the angle between R(t) and Ry(v_max t/ρ) R₀ (which also
+bounds the drift off SO(3)). A candidate passes if its drift is ≤ 1e-8 from
+every start.
 
 Speed is the median wall time of env.step, on the unwrapped envs (no
 TimeLimit, order-enforcing or checker wrappers). Each env step is timed right
@@ -38,9 +43,11 @@ import time
 import gymnasium as gym
 import numpy as np
 import scipy
+from scipy.spatial.transform import Rotation
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv.core.steppers import INTEGRATORS
+from connenv.systems.rolling_ball import rotation_angle
 
 STEPS = 1000
 DRIFT_LIMIT = 1e-8
@@ -50,25 +57,43 @@ DRIFT_LIMIT = 1e-8
 class Bench:
     env_id: str
     starts: dict  # label -> reset state
-    scale: str  # the energy scale, as printed
-    energy_scale: object  # env -> J
+    measure: str  # what the drift measures, as printed
+    drift: object  # (env, info at reset, info) -> the drift at that step
     control: str  # what the held action +1 means
+
+
+def energy_drift(scale):
+    """|E − E(0)| / scale, the scale a function of the env."""
+    return lambda env, info0, info: abs(info["energy"] - info0["energy"]) / scale(env)
+
+
+def straight_roll_error(env, info0, info):
+    """Angle between R(t) and its closed form Ry(v_max t/ρ) R₀ for the held action (1, 0)."""
+    exact = Rotation.from_rotvec([0.0, env.v_max * info["state"]["t"] / env.system.radius, 0.0]).as_matrix()
+    return float(rotation_angle(info["state"]["R"] @ (exact @ info0["state"]["R"]).T))
 
 
 BENCHES = {
     "swing": Bench(
         "connenv/Swing-v0",
         {"θ₀=π/2": {"theta": math.pi / 2, "theta_dot": 0.0}, "θ₀=3.0": {"theta": 3.0, "theta_dot": 0.0}},
-        "m g r",
-        lambda env: env.system.mass * env.system.g * env.r,
+        "|E(t) − E(0)| / (m g r)",
+        energy_drift(lambda env: env.system.mass * env.system.g * env.r),
         "r = r_max = 2 m",
     ),
     "skier": Bench(
         "connenv/Skier-v0",
         {"x₀=2.0": {"x": 2.0, "h": 1.0}, "x₀=5.5": {"x": 5.5, "h": 1.0}},
-        "m g H",
-        lambda env: env.system.mass * env.system.g * env.trail.H,
+        "|E(t) − E(0)| / (m g H)",
+        energy_drift(lambda env: env.system.mass * env.system.g * env.trail.H),
         "h = h_max = 1 m on the valley",
+    ),
+    "ball": Bench(
+        "connenv/RollingBall-v0",
+        {"R₀=I": {"R": np.eye(3)}, "R₀=Rx(2)": {"R": Rotation.from_rotvec([2.0, 0.0, 0.0]).as_matrix()}},
+        "angle between R(t) and its closed form",
+        straight_roll_error,
+        "v = (v_max, 0), a straight roll",
     ),
 }
 SCIPY_RTOLS = (1e-6, 1e-8, 1e-10, 1e-12)
@@ -86,12 +111,12 @@ def candidates():
 
 
 def run_episode(bench, integrator, options, start, pendulum):
-    """One episode at constant control: (energy drift, env step times, Pendulum step times) in s."""
+    """One episode at constant control: (drift, env step times, Pendulum step times) in s."""
     env = gym.make(bench.env_id, integrator=integrator, **options).unwrapped
-    _, info = env.reset(options={"state": start})
-    energy_scale = bench.energy_scale(env)
-    action, pendulum_action = np.array([1.0], np.float32), np.array([0.0], np.float32)
-    energy0, drift = info["energy"], 0.0
+    info0 = env.reset(options={"state": start})[1]
+    action = np.zeros(env.action_space.shape, np.float32)
+    action[0] = 1.0
+    pendulum_action, drift = np.array([0.0], np.float32), 0.0
     swing_times, pendulum_times = np.empty(STEPS), np.empty(STEPS)
     clock = time.perf_counter
     for i in range(STEPS):
@@ -101,7 +126,7 @@ def run_episode(bench, integrator, options, start, pendulum):
         _, _, _, _, info = env.step(action)
         end = clock()
         pendulum_times[i], swing_times[i] = middle - start, end - middle
-        drift = max(drift, abs(info["energy"] - energy0) / energy_scale)
+        drift = max(drift, bench.drift(env, info0, info))
     env.close()
     return drift, swing_times, pendulum_times
 
@@ -129,9 +154,10 @@ def main(argv=None):
         f"gymnasium {gym.__version__}, {os.cpu_count()} cores, {platform.machine()}, "
         f"load average {os.getloadavg()[0]:.2f}"
     )
+    dt = gym.make(bench.env_id).unwrapped.dt
     print(
-        f"{bench.env_id} (unwrapped), {STEPS} steps of dt = 0.05 s at action +1 ({bench.control}), from rest at "
-        f"{', '.join(starts)}; drift = max |E(t) − E(0)| / ({bench.scale}); "
+        f"{bench.env_id} (unwrapped), {STEPS} steps of dt = {dt} s at action +1 ({bench.control}), from "
+        f"{', '.join(starts)}; drift = max over the episode of the {bench.measure}; "
         f"time = median µs per env.step; ratio = that / median of Pendulum-v1 steps interleaved with it\n"
     )
     pendulum = gym.make("Pendulum-v1").unwrapped

@@ -17,7 +17,9 @@ class Canvas:
         try:
             import pygame
         except ImportError as e:
-            raise DependencyNotInstalled('pygame is not installed, run `pip install "gymnasium[classic-control]"`') from e
+            raise DependencyNotInstalled(
+                'pygame is not installed, run `pip install "gymnasium[classic-control]"`'
+            ) from e
         self.pygame, self.render_mode, self.fps = pygame, render_mode, fps
         self.scale = SIZE / (2 * half_width)
         self.center_x, self.center_y = center_x, center_y

@@ -133,6 +133,7 @@ class RollingBallEnv(RenderedEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.observation_space = self._observation_space()
         self.R, self.R_target, self.position = np.eye(3), np.eye(3), np.zeros(2)
+        self.error, self.angle_error = np.eye(3), 0.0  # P = R R*ᵀ and its angle e
         self.t, self.path_length, self.distance = 0.0, 0.0, 0.0
         self.path = [self.position]
 
@@ -149,7 +150,8 @@ class RollingBallEnv(RenderedEnv):
         if "target" in options:
             self.R_target = check_rotation("target", options["target"])
         self.path = [self.position]
-        self.distance = self.system.optimal_arc(Rotation.from_matrix(self._error())).length
+        self._update_error()
+        self.distance = self.system.optimal_arc(Rotation.from_matrix(self.error)).length
         return self._obs(), self._info()
 
     def step(self, action):
@@ -164,6 +166,7 @@ class RollingBallEnv(RenderedEnv):
                 f"radius = {self.system.radius}: ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}"
             )
         self.R, self.position = R, self.position + v * self.dt
+        self._update_error()
         self.t += self.dt
         self.path_length += float(np.hypot(*v)) * self.dt
         self.path.append(self.position)
@@ -179,7 +182,7 @@ class RollingBallEnv(RenderedEnv):
         return RollingBallRenderer(self.system.radius, self.render_mode, self.metadata["render_fps"])
 
     def _draw(self, renderer):
-        return renderer.draw(self.R, self.R_target, np.array(self.path), self.t, self._angle_error())
+        return renderer.draw(self.R, self.R_target, np.array(self.path), self.t, self.angle_error)
 
     # -- task ----------------------------------------------------------------
 
@@ -187,17 +190,17 @@ class RollingBallEnv(RenderedEnv):
         return spaces.Box(-1.0, 1.0, (6,), np.float32)
 
     def _obs(self):
-        return six_d(self._error()).astype(np.float32)
+        return six_d(self.error).astype(np.float32)
 
     def _progress(self):
         """What the reward pays the decrease of: the angle error (rad)."""
-        return self._angle_error()
+        return self.angle_error
 
     def _reward(self, before, info):
         return before - self._progress() - TIME_COST
 
     def _success(self):
-        return self._angle_error() <= self.tolerance
+        return self.angle_error <= self.tolerance
 
     # -- internals -----------------------------------------------------------
 
@@ -209,16 +212,14 @@ class RollingBallEnv(RenderedEnv):
         if "R" in state:
             self.R = check_rotation("state R", state["R"])
 
-    def _error(self):
-        return attitude_error(self.R, self.R_target)
-
-    def _angle_error(self):
-        return float(rotation_angle(self._error()))
+    def _update_error(self):
+        self.error = attitude_error(self.R, self.R_target)
+        self.angle_error = float(rotation_angle(self.error))
 
     def _info(self):
         return {
             "state": {"x": self.position[0], "y": self.position[1], "R": self.R.copy(), "t": self.t},
-            "angle_error": self._angle_error(),
+            "angle_error": self.angle_error,
             "path_length": self.path_length,
             "distance": self.distance,
             "path_ratio": self.path_length / self.distance if self.distance > 0 else math.nan,
@@ -275,10 +276,10 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     def _obs(self):
         scaled = np.clip(self.position / (4 * math.pi * self.system.radius), -POSITION_BOUND, POSITION_BOUND)
-        return np.concatenate([six_d(self._error()), scaled]).astype(np.float32)
+        return np.concatenate([six_d(self.error), scaled]).astype(np.float32)
 
     def _progress(self):
-        return self._angle_error() + float(np.hypot(*self.position)) / self.system.radius
+        return self.angle_error + float(np.hypot(*self.position)) / self.system.radius
 
     def _success(self):
         return super()._success() and float(np.hypot(*self.position)) <= self.position_tolerance
@@ -321,7 +322,11 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     def _obs(self):
         achieved = six_d(self.R).astype(np.float32)
-        return {"observation": achieved, "achieved_goal": achieved.copy(), "desired_goal": six_d(self.R_target).astype(np.float32)}
+        return {
+            "observation": achieved,
+            "achieved_goal": achieved.copy(),
+            "desired_goal": six_d(self.R_target).astype(np.float32),
+        }
 
     def _reward(self, before, info):
         obs = self._obs()

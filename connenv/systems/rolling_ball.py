@@ -176,7 +176,9 @@ class RollingBall:
 
     def discrete_arc_rotation(self, arc: DiscreteArc) -> Rotation:
         """Rz(n δ) (Rz(−δ) exp(ℓ ω₀^))^n: the rotation of rolling the steps of `arc`."""
-        first = Rotation.from_rotvec(self.spin(arc.step_length * np.array([math.cos(arc.heading), math.sin(arc.heading)])))
+        first = Rotation.from_rotvec(
+            self.spin(arc.step_length * np.array([math.cos(arc.heading), math.sin(arc.heading)]))
+        )
         return rz(arc.steps * arc.turn) * (rz(-arc.turn) * first) ** arc.steps
 
     def discrete_arc(self, rotation: Rotation, steps: int, guess: Arc) -> DiscreteArc | None:
