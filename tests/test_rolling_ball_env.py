@@ -114,32 +114,20 @@ def test_controllers_reach_every_sampled_target(env_id, names, tolerance):
     for name in names:
         policy = controller(env_id, name, env)
         for seed in range(15):
-            obs, info = env.reset(seed=seed)
-            done = False
-            while not done:
-                obs, _, terminated, truncated, info = env.step(policy.predict(obs)[0])
-                done = terminated or truncated
-            assert terminated and info["angle_error"] <= tolerance
-            assert info.get("position_error", 0.0) <= tolerance
+            episode = evaluate.run_episode(env, policy, seed)
+            assert episode.success and episode.measures["angle_error"] <= tolerance
+            assert episode.measures.get("position_error", 0.0) <= tolerance
 
 
 def test_optimal_arc_rolls_no_further_than_the_distance_and_holonomy_further():
     """In the env the arc controller rolls within 1% of the optimal arc's length (its discrete arc), and never
     further than the holonomy planner on the same target."""
     env = gym.make(ORIENT, tolerance=1e-6)
-    lengths = {}
-    for name in ("arc", "holonomy"):
-        policy = controller(ORIENT, name, env)
-        for seed in range(10):
-            obs, info = env.reset(seed=seed)
-            done = False
-            while not done:
-                obs, _, terminated, truncated, info = env.step(policy.predict(obs)[0])
-                done = terminated or truncated
-            lengths[name, seed] = info["path_ratio"]
+    arc, holonomy = (controller(ORIENT, name, env) for name in ("arc", "holonomy"))
     for seed in range(10):
-        assert 1.0 <= lengths["arc", seed] <= 1.01
-        assert lengths["arc", seed] <= lengths["holonomy", seed]
+        arc_ratio = evaluate.run_episode(env, arc, seed).measures["path_ratio"]
+        assert 1.0 <= arc_ratio <= 1.01
+        assert arc_ratio <= evaluate.run_episode(env, holonomy, seed).measures["path_ratio"]
 
 
 def test_goal_env_reward_is_compute_reward_on_single_and_batched_goals():

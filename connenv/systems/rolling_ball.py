@@ -128,10 +128,10 @@ class RollingBall:
             return Arc(0.0, 0.0, 0.0)
         candidates = [self._arc_from_root(rotation, m, phi) for m, phi in self._arc_roots(rotation)]
         candidates += self._whole_turns(rotation)
-        closing = [arc for arc in candidates if arc is not None and self.misses(arc, rotation) <= CLOSURE]
-        if not closing:
-            raise ArithmeticError(f"no arc found that rolls the ball by {rotation.as_rotvec()}")
-        return min(closing, key=lambda arc: arc.length)
+        for arc in sorted((arc for arc in candidates if arc is not None), key=lambda arc: arc.length):
+            if self.misses(arc, rotation) <= CLOSURE:
+                return arc
+        raise ArithmeticError(f"no arc found that rolls the ball by {rotation.as_rotvec()}")
 
     def misses(self, arc: Arc, rotation: Rotation) -> float:
         """Angle (rad) between the arc's rotation and `rotation`."""
