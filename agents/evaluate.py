@@ -212,7 +212,7 @@ def format_table(report: dict) -> str:
         ret = f"{row['return_mean']:.3f} ± {row['return_std']:.3f}"
         time = "-" if row["time_to_success_mean"] is None else f"{row['time_to_success_mean']:.2f}"
         success = f"{100 * row['success_rate']:.0f}%"
-        extra = "".join(f"  {row['measures_mean'][key]:>12.4g}" for key in measures)
+        extra = "".join(f"  {row['measures_mean'][key]:>#12.4g}" for key in measures)
         lines.append(
             f"{row['policy']:<{width}}  {ret:>15}  {success:>7}  {time:>18}  {row['length_mean']:>6.1f}{extra}"
         )
