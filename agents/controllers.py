@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from agents.gaits import GaitPlanner
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
 
 
@@ -59,6 +60,7 @@ CONTROLLERS = {
     "connenv/RollingBall-v0": {"arc": for_env(OptimalArc), "holonomy": for_env(Holonomy)},
     "connenv/RollingBallPose-v0": {"holonomy": for_env(Holonomy, pose=True)},
     "connenv/RollingBallGoal-v0": {"arc": for_env(OptimalArc), "holonomy": for_env(Holonomy)},
+    "connenv/KozlovShell-v0": {"gaits": lambda env: GaitPlanner(env)},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

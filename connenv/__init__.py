@@ -9,3 +9,4 @@ register(id="connenv/Skier-v0", entry_point="connenv.envs.skier:SkierEnv", max_e
 register(id="connenv/RollingBall-v0", entry_point="connenv.envs.rolling_ball:RollingBallEnv", max_episode_steps=200)
 register(id="connenv/RollingBallPose-v0", entry_point="connenv.envs.rolling_ball:RollingBallPoseEnv", max_episode_steps=300)
 register(id="connenv/RollingBallGoal-v0", entry_point="connenv.envs.rolling_ball:RollingBallGoalEnv", max_episode_steps=200)
+register(id="connenv/KozlovShell-v0", entry_point="connenv.envs.kozlov_shell:KozlovShellEnv", max_episode_steps=300)

@@ -89,8 +89,7 @@ def classify(system: ActiveConstraintSystem, q_samples, u_samples, rtol: float =
     """
     q = np.atleast_2d(np.asarray(q_samples, float))
     u = np.atleast_2d(np.asarray(u_samples, float))
-    q, u = np.broadcast_arrays(q[:, None, :], u[None, :, :])
-    q, u = q.reshape(-1, system.n), u.reshape(-1, system.m)
+    q, u = np.repeat(q, len(u), axis=0), np.tile(u, (len(q), 1))  # every q with every u
     A, K, B = bressan_matrices(system, q, u)
     _, G12, _ = system.metric(q, u)
     k_zero = np.max(np.abs(K)) <= rtol * (1.0 + np.max(np.abs(A)) * np.max(np.abs(G12)))

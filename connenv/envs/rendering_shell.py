@@ -1,0 +1,49 @@
+"""pygame drawing of KozlovShell-v0: the shell, its inner mass, the target and the wake."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from connenv.envs.rendering import Canvas
+
+OUTLINE_POINTS = 64
+
+
+class KozlovShellRenderer:
+    """The ellipse with its body x axis, the inner mass, the target with its success circle, and the path of the
+    centre (the wake) drawn over the shell; the view is centred between the start and the target."""
+
+    def __init__(self, a: float, b: float, reach: float, render_mode: str, fps: int):
+        self.canvas = Canvas(0.5 * reach + a + 0.3, 0.0, render_mode, fps)
+        angles = np.linspace(0.0, 2.0 * math.pi, OUTLINE_POINTS, endpoint=False)
+        self.outline = np.stack([a * np.cos(angles), b * np.sin(angles)], axis=-1)  # body frame
+        self.a = a
+
+    def draw(self, pose, u, target, path, success_radius: float, t: float):
+        c, pg = self.canvas, self.canvas.pygame
+        c.center_x, c.center_y = 0.5 * (path[0][0] + target[0]), 0.5 * (path[0][1] + target[1])
+        c.screen.fill((255, 255, 255))
+        x, y, theta = pose
+        rotation = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+
+        def to_space(points):
+            return np.asarray(points) @ rotation.T + (x, y)
+
+        outline = [c.px(*p) for p in to_space(self.outline)]
+        pg.draw.polygon(c.screen, (225, 232, 245), outline)
+        pg.draw.polygon(c.screen, (70, 110, 160), outline, 3)
+        nose = to_space([(0.0, 0.0), (self.a, 0.0)])
+        pg.draw.line(c.screen, (70, 110, 160), c.px(*nose[0]), c.px(*nose[1]), 1)
+        pg.draw.circle(c.screen, (40, 140, 40), c.px(*target), max(int(success_radius * c.scale), 2), 2)
+        pg.draw.circle(c.screen, (40, 140, 40), c.px(*target), 3)
+        if len(path) > 1:
+            pg.draw.lines(c.screen, (90, 90, 90), False, [c.px(*p) for p in path], 1)
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*to_space([u])[0]), 7)
+        distance = math.hypot(target[0] - x, target[1] - y)
+        c.screen.blit(c.font.render(f"t = {t:5.2f} s   distance = {distance:4.2f} m", True, (0, 0, 0)), (10, 10))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()
