@@ -133,7 +133,7 @@ class RollingBallEnv(RenderedEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.observation_space = self._observation_space()
         self.R, self.R_target, self.position = np.eye(3), np.eye(3), np.zeros(2)
-        self.error, self.angle_error = np.eye(3), 0.0  # P = R R*ᵀ and its angle e
+        self._update_error()  # self.error, P = R R*ᵀ, and self.angle_error, its angle e
         self.t, self.path_length, self.distance = 0.0, 0.0, 0.0
         self.path = [self.position]
 
@@ -320,21 +320,19 @@ class RollingBallGoalEnv(RollingBallEnv):
         box = spaces.Box(-1.0, 1.0, (6,), np.float32)
         return spaces.Dict({"observation": box, "achieved_goal": box, "desired_goal": box})
 
+    def _update_error(self):
+        super()._update_error()
+        self.goals = six_d(self.R).astype(np.float32), six_d(self.R_target).astype(np.float32)  # achieved, desired
+
     def _obs(self):
-        achieved = six_d(self.R).astype(np.float32)
-        return {
-            "observation": achieved,
-            "achieved_goal": achieved.copy(),
-            "desired_goal": six_d(self.R_target).astype(np.float32),
-        }
+        achieved, desired = self.goals
+        return {"observation": achieved.copy(), "achieved_goal": achieved.copy(), "desired_goal": desired.copy()}
 
     def _reward(self, before, info):
-        obs = self._obs()
-        return float(self.compute_reward(obs["achieved_goal"], obs["desired_goal"], info))
+        return float(self.compute_reward(*self.goals, info))
 
     def _success(self):
-        obs = self._obs()
-        return bool(self.compute_terminated(obs["achieved_goal"], obs["desired_goal"], None))
+        return bool(self.compute_terminated(*self.goals, None))
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
