@@ -4,9 +4,39 @@ from gymnasium.envs.registration import register
 
 __version__ = "0.1.0"
 
-register(id="connenv/Swing-v0", entry_point="connenv.envs.swing:SwingEnv", max_episode_steps=500)
-register(id="connenv/Skier-v0", entry_point="connenv.envs.skier:SkierEnv", max_episode_steps=1000)
-register(id="connenv/RollingBall-v0", entry_point="connenv.envs.rolling_ball:RollingBallEnv", max_episode_steps=200)
-register(id="connenv/RollingBallPose-v0", entry_point="connenv.envs.rolling_ball:RollingBallPoseEnv", max_episode_steps=300)
-register(id="connenv/RollingBallGoal-v0", entry_point="connenv.envs.rolling_ball:RollingBallGoalEnv", max_episode_steps=200)
-register(id="connenv/KozlovShell-v0", entry_point="connenv.envs.kozlov_shell:KozlovShellEnv", max_episode_steps=300)
+register(
+    id="connenv/Swing-v0",
+    entry_point="connenv.envs.swing:SwingEnv",
+    vector_entry_point="connenv.envs.swing:SwingVectorEnv",
+    max_episode_steps=500,
+)
+register(
+    id="connenv/Skier-v0",
+    entry_point="connenv.envs.skier:SkierEnv",
+    vector_entry_point="connenv.envs.skier:SkierVectorEnv",
+    max_episode_steps=1000,
+)
+register(
+    id="connenv/RollingBall-v0",
+    entry_point="connenv.envs.rolling_ball:RollingBallEnv",
+    vector_entry_point="connenv.envs.rolling_ball:RollingBallVectorEnv",
+    max_episode_steps=200,
+)
+register(
+    id="connenv/RollingBallPose-v0",
+    entry_point="connenv.envs.rolling_ball:RollingBallPoseEnv",
+    vector_entry_point="connenv.envs.rolling_ball:RollingBallPoseVectorEnv",
+    max_episode_steps=300,
+)
+register(
+    id="connenv/RollingBallGoal-v0",
+    entry_point="connenv.envs.rolling_ball:RollingBallGoalEnv",
+    vector_entry_point="connenv.envs.rolling_ball:RollingBallGoalVectorEnv",
+    max_episode_steps=200,
+)
+register(
+    id="connenv/KozlovShell-v0",
+    entry_point="connenv.envs.kozlov_shell:KozlovShellEnv",
+    vector_entry_point="connenv.envs.kozlov_shell:KozlovShellVectorEnv",
+    max_episode_steps=300,
+)

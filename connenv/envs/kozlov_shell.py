@@ -11,6 +11,7 @@ from gymnasium import spaces
 from connenv.core.steppers import make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
+from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform direction
@@ -199,7 +200,7 @@ class KozlovShellEnv(RenderedEnv):
         self.u, self.t = u_cmd, self.t + self.dt
         self.path.append(tuple(self.y[:2]))
         info = self._info()
-        reward = (distance_before - info["distance"]) / self.success_radius - TIME_COST
+        reward = self.reward(distance_before, info["distance"])
         if self.render_mode == "human":
             self.render()
         return self._obs(), reward, info["is_success"], False, info
@@ -236,35 +237,87 @@ class KozlovShellEnv(RenderedEnv):
         return self.y[3:] if self.system is self.full_system else np.zeros(3)
 
     def _distance(self):
-        return math.hypot(self.target[0] - self.y[0], self.target[1] - self.y[1])
+        return self.distance(self.y[:2], self.target)
 
     def _obs(self):
-        c, s = math.cos(self.y[2]), math.sin(self.y[2])
-        dx, dy = self.target - self.y[:2]
-        body_target = np.clip([c * dx + s * dy, -s * dx + c * dy], -TARGET_BOUND, TARGET_BOUND)
-        momentum = np.clip(self._momentum() / self.momentum_scale, -MOMENTUM_BOUND, MOMENTUM_BOUND)
-        return np.array([*body_target, c, s, *(self.u / self.u_max), *momentum], np.float32)
+        return self.observe(self.y[:3], self.u, self._momentum(), self.target)
 
     def _info(self):
-        momentum = self._momentum()
-        x, y, theta = (float(v) for v in self.y[:3])
-        distance = self._distance()
-        state = {
-            "x": x,
-            "y": y,
-            "theta": theta,
-            "u": tuple(map(float, self.u)),
-            "momentum": tuple(map(float, momentum)),
-        }
-        spatial = self.full_system.spatial_momentum(np.array([x, y, theta, *momentum]))
+        return self.describe(self.y[:3], self.u, self._momentum(), self.target, self.t, self.system is self.full_system)
+
+    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
+
+    def distance(self, xy, target, ops=SCALAR):
+        """From the shell's centre to the target, m."""
+        return ops.hypot(target[..., 0] - xy[..., 0], target[..., 1] - xy[..., 1])
+
+    def reward(self, distance_before, distance_after):
+        return (distance_before - distance_after) / self.success_radius - TIME_COST
+
+    def observe(self, pose, u, momentum, target, ops=SCALAR):
+        c, s = ops.cos(pose[..., 2]), ops.sin(pose[..., 2])
+        dx, dy = target[..., 0] - pose[..., 0], target[..., 1] - pose[..., 1]
+        body_target = [ops.clip(c * dx + s * dy, -TARGET_BOUND, TARGET_BOUND)]
+        body_target.append(ops.clip(-s * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
+        scaled_u = u / self.u_max
+        scaled_momentum = np.clip(momentum / self.momentum_scale, -MOMENTUM_BOUND, MOMENTUM_BOUND)
+        parts = [*body_target, c, s, scaled_u[..., 0], scaled_u[..., 1]]
+        return ops.pack(parts + [scaled_momentum[..., i] for i in range(3)])
+
+    def describe(self, pose, u, momentum, target, t, full, ops=SCALAR):
+        x, y, theta = (ops.real(pose[..., i]) for i in range(3))
+        distance = self.distance(pose, target, ops)
+        state = {"x": x, "y": y, "theta": theta, "u": ops.vector(u), "momentum": ops.vector(momentum), "t": t}
         return {
-            "state": {**state, "t": self.t},
-            "spatial_momentum": tuple(map(float, spatial)),
-            "target": tuple(map(float, self.target)),
+            "state": state,
+            "spatial_momentum": ops.vector(self.full_system.spatial_momentum(np.concatenate([pose, momentum], -1))),
+            "target": ops.vector(target),
             "distance": distance,
-            "model": "full" if self.system is self.full_system else "reduced",
-            "is_success": distance <= self.success_radius,
+            "model": ops.where(full, "full", "reduced"),
+            "is_success": ops.flag(distance <= self.success_radius),
         }
+
+
+class KozlovShellVectorEnv(TaskVectorEnv):
+    """KozlovShell-v0 over a batch (``gym.make_vec("connenv/KozlovShell-v0", num_envs=N)``; see
+    ``connenv.envs.vector``). Rows reset at rest step the reduced model, rows reset with a momentum the full one,
+    as the single env does."""
+
+    single_env = KozlovShellEnv
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
+        super().__init__(num_envs, max_episode_steps, **kwargs)
+        self.pose, self.momentum = np.zeros((num_envs, 3)), np.zeros((num_envs, 3))
+        self.u, self.target, self.t = np.zeros((num_envs, 2)), np.zeros((num_envs, 2)), np.zeros(num_envs)
+        self.full = np.zeros(num_envs, bool)  # the rows in the full (Kirchhoff) model
+
+    def _capture(self, i):
+        env = self.env
+        self.pose[i], self.momentum[i], self.u[i] = env.y[:3], env._momentum(), env.u
+        self.target[i], self.t[i], self.full[i] = env.target, env.t, env.system is env.full_system
+
+    def _advance(self, actions):
+        env = self.env
+        u_cmd = actions * env.u_max
+        u_dot = (u_cmd - self.u) / env.dt
+        distance_before = env.distance(self.pose, self.target, BATCH)
+        if not self.full.any():
+            self.pose = self.stepper(env.reduced_system, self.pose, self.u, u_dot, env.dt)
+        else:
+            y, full = np.concatenate([self.pose, self.momentum], axis=-1), self.full
+            y[full] = self.stepper(env.full_system, y[full], self.u[full], u_dot[full], env.dt)
+            if not full.all():
+                rest = ~full
+                y[rest, :3] = self.stepper(env.reduced_system, self.pose[rest], self.u[rest], u_dot[rest], env.dt)
+            self.pose, self.momentum = y[:, :3], y[:, 3:]
+        self.u, self.t = u_cmd, self.t + env.dt
+        return env.reward(distance_before, env.distance(self.pose, self.target, BATCH))
+
+    def _observe(self):
+        return self.env.observe(self.pose, self.u, self.momentum, self.target, BATCH)
+
+    def _describe(self):
+        return self.env.describe(self.pose, self.u, self.momentum, self.target, self.t, self.full, BATCH)
 
 
 def _check_b(b, a):

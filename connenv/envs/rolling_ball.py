@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import check_keys, check_number, check_stepper_options, finite_action
 from connenv.envs.base import RenderedEnv
+from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
 from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -112,6 +113,7 @@ class RollingBallEnv(RenderedEnv):
     """
 
     metadata = {**RenderedEnv.metadata, "measures": ("angle_error", "path_ratio")}
+    measures_distance = True  # whether reset solves for the optimal arc (info "distance"); the vector env may not
 
     def __init__(
         self,
@@ -133,7 +135,7 @@ class RollingBallEnv(RenderedEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.observation_space = self._observation_space()
         self.R, self.R_target, self.position = np.eye(3), np.eye(3), np.zeros(2)
-        self._update_error()  # self.error, P = R R*ᵀ, and self.angle_error, its angle e
+        self.update_error(self)  # self.error, P = R R*ᵀ, and self.angle_error, its angle e
         self.t, self.path_length, self.distance = 0.0, 0.0, 0.0
         self.path = [self.position]
 
@@ -150,31 +152,26 @@ class RollingBallEnv(RenderedEnv):
         if "target" in options:
             self.R_target = check_rotation("target", options["target"])
         self.path = [self.position]
-        self._update_error()
-        self.distance = self.system.optimal_arc(Rotation.from_matrix(self.error)).length
-        return self._obs(), self._info()
+        self.update_error(self)
+        self.distance = math.nan
+        if self.measures_distance:
+            self.distance = self.system.optimal_arc(Rotation.from_matrix(self.error)).length
+        return self.observe(self), self.describe(self)
 
     def step(self, action):
-        a = finite_action(action, self.action_space)
-        v = self.v_max * a / max(1.0, float(np.hypot(*a)))
-        before = self._progress()
-        R = self.stepper(self.system, self.R.ravel(), self.position, v, self.dt).reshape(3, 3)
-        drift = float(np.linalg.norm(R.T @ R - np.eye(3)))
-        if drift > DRIFT_LIMIT:
-            raise StepperError(
-                f"{self.stepper} left SO(3) at t = {self.t + self.dt:.6g} s with dt = {self.dt}, "
-                f"radius = {self.system.radius}: ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}"
-            )
-        self.R, self.position = R, self.position + v * self.dt
-        self._update_error()
+        v = self.velocity(finite_action(action, self.action_space))
+        before = self.progress(self)
+        self.R = self.roll(self, v)
+        self.position = self.position + v * self.dt
+        self.update_error(self)
         self.t += self.dt
-        self.path_length += float(np.hypot(*v)) * self.dt
+        self.path_length += math.hypot(v[0], v[1]) * self.dt
         self.path.append(self.position)
-        info = self._info()
-        reward = self._reward(before, info)
+        info = self.describe(self)
+        reward = self.reward(self, before)
         if self.render_mode == "human":
             self.render()
-        return self._obs(), reward, info["is_success"], False, info
+        return self.observe(self), reward, info["is_success"], False, info
 
     def _make_renderer(self):
         from connenv.envs.rendering import RollingBallRenderer
@@ -185,22 +182,55 @@ class RollingBallEnv(RenderedEnv):
         return renderer.draw(self.R, self.R_target, np.array(self.path), self.t, self.angle_error)
 
     # -- task ----------------------------------------------------------------
+    # s is the state: the env itself (Python floats and one R), or a vector env's batch with ops=BATCH. Both carry
+    # R, R_target, position, error (P), angle_error, t, path_length and distance.
 
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (6,), np.float32)
 
-    def _obs(self):
-        return six_d(self.error).astype(np.float32)
+    def velocity(self, a, ops=SCALAR):
+        """v = v_max a, with a projected radially onto the unit disk."""
+        return self.v_max * a / ops.column(ops.maximum(1.0, ops.hypot(a[..., 0], a[..., 1])))
 
-    def _progress(self):
+    def roll(self, s, v):
+        """R after a step at velocity v, or StepperError where the stepper has left SO(3)."""
+        R = self.stepper(self.system, s.R.reshape(*s.R.shape[:-2], 9), s.position, v, self.dt).reshape(s.R.shape)
+        drift = np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1))
+        if np.any(drift > DRIFT_LIMIT):
+            raise StepperError(
+                f"{self.stepper} left SO(3) at t = {np.max(s.t) + self.dt:.6g} s with dt = {self.dt}, "
+                f"radius = {self.system.radius}: ‖RᵀR − I‖ = {np.max(drift):.3g} > {DRIFT_LIMIT}"
+            )
+        return R
+
+    def update_error(self, s, ops=SCALAR):
+        s.error = attitude_error(s.R, s.R_target)
+        s.angle_error = ops.real(rotation_angle(s.error))
+
+    def observe(self, s, ops=SCALAR):
+        return six_d(s.error).astype(np.float32)
+
+    def progress(self, s, ops=SCALAR):
         """What the reward pays the decrease of: the angle error (rad)."""
-        return self.angle_error
+        return s.angle_error
 
-    def _reward(self, before, info):
-        return before - self._progress() - TIME_COST
+    def reward(self, s, before, ops=SCALAR):
+        return before - self.progress(s, ops) - TIME_COST
 
-    def _success(self):
-        return self.angle_error <= self.tolerance
+    def success(self, s, ops=SCALAR):
+        return s.angle_error <= self.tolerance
+
+    def describe(self, s, ops=SCALAR):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
+        return {
+            "state": {"x": s.position[..., 0], "y": s.position[..., 1], "R": s.R.copy(), "t": s.t},
+            "angle_error": s.angle_error,
+            "path_length": s.path_length,
+            "distance": s.distance,
+            "path_ratio": ratio,
+            "is_success": ops.flag(self.success(s, ops)),
+        }
 
     # -- internals -----------------------------------------------------------
 
@@ -212,19 +242,6 @@ class RollingBallEnv(RenderedEnv):
         if "R" in state:
             self.R = check_rotation("state R", state["R"])
 
-    def _update_error(self):
-        self.error = attitude_error(self.R, self.R_target)
-        self.angle_error = float(rotation_angle(self.error))
-
-    def _info(self):
-        return {
-            "state": {"x": self.position[0], "y": self.position[1], "R": self.R.copy(), "t": self.t},
-            "angle_error": self.angle_error,
-            "path_length": self.path_length,
-            "distance": self.distance,
-            "path_ratio": self.path_length / self.distance if self.distance > 0 else math.nan,
-            "is_success": bool(self._success()),
-        }
 
 
 class RollingBallPoseEnv(RollingBallEnv):
@@ -274,18 +291,19 @@ class RollingBallPoseEnv(RollingBallEnv):
         high = np.array([1.0] * 6 + [POSITION_BOUND] * 2, np.float32)
         return spaces.Box(-high, high, dtype=np.float32)
 
-    def _obs(self):
-        scaled = np.clip(self.position / (4 * math.pi * self.system.radius), -POSITION_BOUND, POSITION_BOUND)
-        return np.concatenate([six_d(self.error), scaled]).astype(np.float32)
+    def observe(self, s, ops=SCALAR):
+        scaled = np.clip(s.position / (4 * math.pi * self.system.radius), -POSITION_BOUND, POSITION_BOUND)
+        return np.concatenate([six_d(s.error), scaled], axis=-1).astype(np.float32)
 
-    def _progress(self):
-        return self.angle_error + float(np.hypot(*self.position)) / self.system.radius
+    def progress(self, s, ops=SCALAR):
+        return s.angle_error + ops.hypot(s.position[..., 0], s.position[..., 1]) / self.system.radius
 
-    def _success(self):
-        return super()._success() and float(np.hypot(*self.position)) <= self.position_tolerance
+    def success(self, s, ops=SCALAR):
+        close = ops.hypot(s.position[..., 0], s.position[..., 1]) <= self.position_tolerance
+        return super().success(s, ops) & close
 
-    def _info(self):
-        return {**super()._info(), "position_error": float(np.hypot(*self.position))}
+    def describe(self, s, ops=SCALAR):
+        return {**super().describe(s, ops), "position_error": ops.hypot(s.position[..., 0], s.position[..., 1])}
 
 
 class RollingBallGoalEnv(RollingBallEnv):
@@ -320,19 +338,19 @@ class RollingBallGoalEnv(RollingBallEnv):
         box = spaces.Box(-1.0, 1.0, (6,), np.float32)
         return spaces.Dict({"observation": box, "achieved_goal": box, "desired_goal": box})
 
-    def _update_error(self):
-        super()._update_error()
-        self.goals = six_d(self.R).astype(np.float32), six_d(self.R_target).astype(np.float32)  # achieved, desired
+    def update_error(self, s, ops=SCALAR):
+        super().update_error(s, ops)
+        s.goals = six_d(s.R).astype(np.float32), six_d(s.R_target).astype(np.float32)  # achieved, desired
 
-    def _obs(self):
-        achieved, desired = self.goals
+    def observe(self, s, ops=SCALAR):
+        achieved, desired = s.goals
         return {"observation": achieved.copy(), "achieved_goal": achieved.copy(), "desired_goal": desired.copy()}
 
-    def _reward(self, before, info):
-        return float(self.compute_reward(*self.goals, info))
+    def reward(self, s, before, ops=SCALAR):
+        return ops.real(self.compute_reward(*s.goals, None))
 
-    def _success(self):
-        return bool(self.compute_terminated(*self.goals, None))
+    def success(self, s, ops=SCALAR):
+        return self.compute_terminated(*s.goals, None)
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
@@ -346,3 +364,60 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     def compute_truncated(self, achieved_goal, desired_goal, info):
         return np.zeros(np.shape(self.goal_angle(achieved_goal, desired_goal)), bool)
+
+
+class RollingBallVectorEnv(TaskVectorEnv):
+    """RollingBall-v0 over a batch (``gym.make_vec("connenv/RollingBall-v0", num_envs=N)``; see
+    ``connenv.envs.vector``), and the base of the Pose and Goal vector envs.
+
+    Takes the single env's make kwargs and ``measure_distance`` (default False): the optimal arc from each start
+    (info ``"distance"``, and ``"path_ratio"``) costs a root search of about 5 ms per reset, which would dominate
+    the batch; without it both are NaN.
+    """
+
+    single_env = RollingBallEnv
+    clips_actions = False  # projected onto the unit disk by velocity()
+    STATE = ("R", "R_target", "position", "t", "path_length", "distance", "error", "angle_error")
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, measure_distance=False, **kwargs):
+        super().__init__(num_envs, max_episode_steps, **kwargs)
+        self.env.measures_distance = bool(measure_distance)
+        self.R, self.R_target = np.tile(np.eye(3), (num_envs, 1, 1)), np.tile(np.eye(3), (num_envs, 1, 1))
+        self.position = np.zeros((num_envs, 2))
+        self.t, self.path_length, self.distance = np.zeros(num_envs), np.zeros(num_envs), np.full(num_envs, math.nan)
+        self.env.update_error(self, BATCH)
+
+    def _capture(self, i):
+        for name in self.STATE:
+            getattr(self, name)[i] = getattr(self.env, name)
+        for batch, row in zip(getattr(self, "goals", ()), getattr(self.env, "goals", ())):
+            batch[i] = row
+
+    def _advance(self, actions):
+        env = self.env
+        v = env.velocity(actions, BATCH)
+        before = env.progress(self, BATCH)
+        self.R = env.roll(self, v)
+        self.position = self.position + v * env.dt
+        env.update_error(self, BATCH)
+        self.t = self.t + env.dt
+        self.path_length = self.path_length + np.hypot(v[:, 0], v[:, 1]) * env.dt
+        return env.reward(self, before, BATCH)
+
+    def _observe(self):
+        return self.env.observe(self, BATCH)
+
+    def _describe(self):
+        return self.env.describe(self, BATCH)
+
+
+class RollingBallPoseVectorEnv(RollingBallVectorEnv):
+    """RollingBallPose-v0 over a batch; as RollingBallVectorEnv."""
+
+    single_env = RollingBallPoseEnv
+
+
+class RollingBallGoalVectorEnv(RollingBallVectorEnv):
+    """RollingBallGoal-v0 over a batch, dict observations of arrays; as RollingBallVectorEnv."""
+
+    single_env = RollingBallGoalEnv

@@ -10,6 +10,7 @@ from gymnasium import spaces
 from connenv.core.steppers import control_segments, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
+from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
 
@@ -185,15 +186,14 @@ class SkierEnv(RenderedEnv):
         return self._obs(), self._info()
 
     def step(self, action):
-        a = check_action(action, self.action_space)[0]
-        h_cmd = self.h_min + 0.5 * (a + 1.0) * (self.h_max - self.h_min)
+        h_cmd = self.command(check_action(action, self.action_space)[0])
         progress_before = self._progress(self._energy())
         for h, h_dot, tau in control_segments(self.h, h_cmd, self.dt, self.max_height_speed):
             self.y = self.stepper(self.system, self.y, np.array([h]), np.array([h_dot]), tau)
         self.h = h + h_dot * tau
         self.t += self.dt
         info = self._info()
-        reward = math.log(max(info["progress"], PROGRESS_FLOOR) / max(progress_before, PROGRESS_FLOOR)) - TIME_COST
+        reward = self.reward(progress_before, info["progress"])
         if self.render_mode == "human":
             self.render()
         return self._obs(), reward, info["is_success"], False, info
@@ -240,39 +240,90 @@ class SkierEnv(RenderedEnv):
     def _progress(self, energy):
         return (energy / (self.system.mass * self.system.g) - self.z_floor) / (self.z_goal - self.z_floor)
 
-    def _success(self):
-        x = self.y[0]
-        if self.side == 0.0:
-            return bool(x <= self.goals[0] or x >= self.goals[1])
-        return bool((x - self.goals[0]) * self.side <= 0.0)
-
     def _obs(self):
-        x = self.y[0]
-        _, f1, sigma, kappa, *_ = self.system.geometry(x, self.h)
-        mid, half = 0.5 * (self.trail.hi + self.trail.lo), 0.5 * (self.trail.hi - self.trail.lo)
-        h_mid, h_half = 0.5 * (self.h_max + self.h_min), 0.5 * (self.h_max - self.h_min)
-        speed = sigma * float(self.system.velocity(self.y, self.h)) / self.speed_scale
-        obs = [
-            min(max((x - mid) / half, -1.0), 1.0),
-            f1 / sigma,
-            1.0 / sigma,
-            min(max(speed, -SPEED_BOUND), SPEED_BOUND),
-            (self.h - h_mid) / h_half,
-            min(max(kappa * self.h_max, -self.kappa_bound), self.kappa_bound),
-        ]
-        return np.array(obs, np.float32)
+        return self.observe(self.y, self.h)
 
     def _info(self):
-        x, p = self.y
-        energy = self._energy()
-        kappa = float(self.system.geometry(x, self.h)[3])
+        return self.describe(self.y, self.h, self.t, self.side)
+
+    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
+
+    def command(self, a):
+        """The commanded height of action a."""
+        return self.h_min + 0.5 * (a + 1.0) * (self.h_max - self.h_min)
+
+    def reward(self, progress_before, progress_after, ops=SCALAR):
+        floor = PROGRESS_FLOOR
+        return ops.log(ops.maximum(progress_after, floor) / ops.maximum(progress_before, floor)) - TIME_COST
+
+    def success(self, x, side):
+        """At or beyond a rim (side 0), or at or past the one goal from the side the episode started on."""
+        if len(self.goals) == 2:
+            return (x <= self.goals[0]) | (x >= self.goals[1])
+        return (x - self.goals[0]) * side <= 0.0
+
+    def observe(self, y, h, ops=SCALAR):
+        x = y[..., 0]
+        _, f1, sigma, kappa, *_ = self.system.geometry(x, h)
+        mid, half = 0.5 * (self.trail.hi + self.trail.lo), 0.5 * (self.trail.hi - self.trail.lo)
+        h_mid, h_half = 0.5 * (self.h_max + self.h_min), 0.5 * (self.h_max - self.h_min)
+        speed = sigma * ops.real(self.system.velocity(y, h)) / self.speed_scale
+        return ops.pack(
+            [
+                ops.clip((x - mid) / half, -1.0, 1.0),
+                f1 / sigma,
+                1.0 / sigma,
+                ops.clip(speed, -SPEED_BOUND, SPEED_BOUND),
+                (h - h_mid) / h_half,
+                ops.clip(kappa * self.h_max, -self.kappa_bound, self.kappa_bound),
+            ]
+        )
+
+    def describe(self, y, h, t, side, ops=SCALAR):
+        x, p = y[..., 0], y[..., 1]
+        energy = ops.real(self.system.energy(y, h))
         state = {
             "x": x,
-            "x_dot": float(self.system.velocity(self.y, self.h)),
+            "x_dot": ops.real(self.system.velocity(y, h)),
             "p": p,
-            "h": self.h,
-            "t": self.t,
-            "s": float(self.trail.arc_length(x)),
-            "kappa": kappa,
+            "h": h,
+            "t": t,
+            "s": ops.real(self.trail.arc_length(x)),
+            "kappa": ops.real(self.system.geometry(x, h)[3]),
         }
-        return {"state": state, "energy": energy, "progress": self._progress(energy), "is_success": self._success()}
+        progress = self._progress(energy)
+        return {"state": state, "energy": energy, "progress": progress, "is_success": ops.flag(self.success(x, side))}
+
+
+class SkierVectorEnv(TaskVectorEnv):
+    """Skier-v0 over a batch (``gym.make_vec("connenv/Skier-v0", num_envs=N)``; see ``connenv.envs.vector``).
+
+    Takes Skier-v0's make kwargs except ``max_height_speed`` (see ``TaskVectorEnv.jump_only``).
+    """
+
+    single_env = SkierEnv
+    jump_only = "max_height_speed"
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
+        super().__init__(num_envs, max_episode_steps, **kwargs)
+        self.y, self.h = np.zeros((num_envs, 2)), np.full(num_envs, self.env.h_min)
+        self.t, self.side = np.zeros(num_envs), np.zeros(num_envs)
+        self.hold = np.zeros((num_envs, 1))  # ḣ = 0: h jumps to the command and is held over the step
+
+    def _capture(self, i):
+        env = self.env
+        self.y[i], self.h[i], self.t[i], self.side[i] = env.y, env.h, env.t, env.side
+
+    def _advance(self, actions):
+        env = self.env
+        h_cmd = env.command(actions[:, 0])
+        progress_before = env._progress(env.system.energy(self.y, self.h))
+        self.y = self.stepper(env.system, self.y, h_cmd[:, None], self.hold, env.dt)
+        self.h, self.t = h_cmd, self.t + env.dt
+        return env.reward(progress_before, env._progress(env.system.energy(self.y, self.h)), BATCH)
+
+    def _observe(self):
+        return self.env.observe(self.y, self.h, BATCH)
+
+    def _describe(self):
+        return self.env.describe(self.y, self.h, self.t, self.side, BATCH)

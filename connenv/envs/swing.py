@@ -10,6 +10,7 @@ from gymnasium import spaces
 from connenv.core.steppers import control_segments, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
+from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
 from connenv.systems.swing import Swing
 
 LIFT_FLOOR = 1e-4  # floor of h in the reward's logarithm: amplitude ≈ 0.014 rad
@@ -157,15 +158,14 @@ class SwingEnv(RenderedEnv):
         return self._obs(), self._info()
 
     def step(self, action):
-        a = check_action(action, self.action_space)[0]
-        r_cmd = self.r_min + 0.5 * (a + 1.0) * (self.r_max - self.r_min)
+        r_cmd = self.command(check_action(action, self.action_space)[0])
         lift_before = self.system.lift(self.y, self.r)
         for r, r_dot, tau in control_segments(self.r, r_cmd, self.dt, self.max_radial_speed):
             self.y = self.stepper(self.system, self.y, np.array([r]), np.array([r_dot]), tau)
         self.r = r + r_dot * tau
         self.t += self.dt
         info = self._info()
-        reward = math.log(max(info["lift"], LIFT_FLOOR) / max(lift_before, LIFT_FLOOR)) - TIME_COST
+        reward = self.reward(lift_before, info["lift"])
         if self.render_mode == "human":
             self.render()
         return self._obs(), reward, info["is_success"], False, info
@@ -195,22 +195,65 @@ class SwingEnv(RenderedEnv):
         self.y, self.r = np.array([theta, p]), r
 
     def _obs(self):
-        theta, theta_dot = self.y[0], self._theta_dot()
-        r_mid, r_half = 0.5 * (self.r_max + self.r_min), 0.5 * (self.r_max - self.r_min)
-        bound = self.obs_high[2]
-        speed = min(max(theta_dot / self.theta_dot_scale, -bound), bound)
-        return np.array([math.cos(theta), math.sin(theta), speed, (self.r - r_mid) / r_half], np.float32)
-
-    def _theta_dot(self):
-        return self.y[1] / (self.system.mass * self.r**2)
+        return self.observe(self.y[0], self.y[1], self.r)
 
     def _info(self):
-        theta, p = self.y
-        lift = float(self.system.lift(self.y, self.r))
+        return self.describe(self.y, self.r, self.t)
+
+    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
+
+    def command(self, a):
+        """The commanded radius of action a."""
+        return self.r_min + 0.5 * (a + 1.0) * (self.r_max - self.r_min)
+
+    def reward(self, lift_before, lift_after, ops=SCALAR):
+        return ops.log(ops.maximum(lift_after, LIFT_FLOOR) / ops.maximum(lift_before, LIFT_FLOOR)) - TIME_COST
+
+    def observe(self, theta, p, r, ops=SCALAR):
+        r_mid, r_half = 0.5 * (self.r_max + self.r_min), 0.5 * (self.r_max - self.r_min)
+        bound = self.obs_high[2]
+        speed = ops.clip(p / (self.system.mass * r**2) / self.theta_dot_scale, -bound, bound)
+        return ops.pack([ops.cos(theta), ops.sin(theta), speed, (r - r_mid) / r_half])
+
+    def describe(self, y, r, t, ops=SCALAR):
+        theta, p = y[..., 0], y[..., 1]
+        lift = ops.real(self.system.lift(y, r))
         return {
-            "state": {"theta": theta, "theta_dot": self._theta_dot(), "p": p, "r": self.r, "t": self.t},
-            "energy": float(self.system.energy(self.y, self.r)),
+            "state": {"theta": theta, "theta_dot": p / (self.system.mass * r**2), "p": p, "r": r, "t": t},
+            "energy": ops.real(self.system.energy(y, r)),
             "lift": lift,
-            "amplitude": math.acos(min(max(1.0 - lift, -1.0), 1.0)),
-            "is_success": lift >= self.target_lift,
+            "amplitude": ops.acos(ops.clip(1.0 - lift, -1.0, 1.0)),
+            "is_success": ops.flag(lift >= self.target_lift),
         }
+
+
+class SwingVectorEnv(TaskVectorEnv):
+    """Swing-v0 over a batch (``gym.make_vec("connenv/Swing-v0", num_envs=N)``; see ``connenv.envs.vector``).
+
+    Takes Swing-v0's make kwargs except ``max_radial_speed`` (see ``TaskVectorEnv.jump_only``).
+    """
+
+    single_env = SwingEnv
+    jump_only = "max_radial_speed"
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
+        super().__init__(num_envs, max_episode_steps, **kwargs)
+        self.y, self.r, self.t = np.zeros((num_envs, 2)), np.full(num_envs, self.env.r_max), np.zeros(num_envs)
+        self.hold = np.zeros((num_envs, 1))  # ṙ = 0: r jumps to the command and is held over the step
+
+    def _capture(self, i):
+        self.y[i], self.r[i], self.t[i] = self.env.y, self.env.r, self.env.t
+
+    def _advance(self, actions):
+        env = self.env
+        r_cmd = env.command(actions[:, 0])
+        lift_before = env.system.lift(self.y, self.r)
+        self.y = self.stepper(env.system, self.y, r_cmd[:, None], self.hold, env.dt)
+        self.r, self.t = r_cmd, self.t + env.dt
+        return env.reward(lift_before, env.system.lift(self.y, self.r), BATCH)
+
+    def _observe(self):
+        return self.env.observe(self.y[:, 0], self.y[:, 1], self.r, BATCH)
+
+    def _describe(self):
+        return self.env.describe(self.y, self.r, self.t, BATCH)

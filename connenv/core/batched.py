@@ -1,0 +1,154 @@
+"""Steppers for a batch of independent states, each row stepped as the single-state stepper would step it.
+
+RK4 and the closed-form flows broadcast over leading axes already: row i of a batch gets the arithmetic a
+single state gets. scipy's adaptive ``solve_ivp`` does not: on a flattened batch it takes one step size for all
+rows, chosen by the error of the whole vector, so row i would not follow the path of the same state stepped
+alone. ``EmbeddedRK`` is scipy's explicit Runge–Kutta driver (``scipy.integrate._ivp.rk``: the initial step of
+Hairer, Nørsett & Wanner II.4, the error norm and the step-size control with its SAFETY, MIN_FACTOR and
+MAX_FACTOR) rewritten over a batch with one step size, accept/reject decision and clock per row, using scipy's own
+DOP853 and RK45 tableaus: for a single row it makes the decisions solve_ivp makes, and agrees with it to
+rounding (tests). The implicit and multistep methods (LSODA, Radau) are not rewritten; ``batched`` runs them one
+row at a time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import DOP853, RK45
+
+from connenv.core.steppers import Exact, Scipy, StepperError
+
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # scipy.integrate._ivp.rk's step-size control
+TABLEAUS = {"DOP853": DOP853, "RK45": RK45}
+
+
+@dataclass(frozen=True)
+class EmbeddedRK:
+    """scipy's DOP853 or RK45 with per-row adaptive steps over a batch of states (..., n)."""
+
+    method: str = "DOP853"
+    rtol: float = 1e-10
+    atol: float = 1e-12
+
+    def __call__(self, system, y, u, u_dot, tau):
+        y = np.asarray(y, float)
+        n = y.shape[-1]
+        rows = y.reshape(-1, n).copy()
+        lead = y.shape[:-1]
+        u = np.broadcast_to(u, (*lead, np.shape(u)[-1])).reshape(len(rows), -1)
+        u_dot = np.broadcast_to(u_dot, u.shape[:-1] + (np.shape(u_dot)[-1],)).reshape(len(rows), -1)
+
+        def rhs(s, states, idx):
+            f = system.vector_field(states, u[idx] + s[:, None] * u_dot[idx], u_dot[idx])
+            if not np.all(np.isfinite(f)):
+                raise StepperError(f"{self} produced a non-finite derivative {f[~np.isfinite(f).all(-1)]}")
+            return f
+
+        everyone = np.arange(len(rows))
+        t = np.zeros(len(rows))
+        f = rhs(t, rows, everyone)
+        h_abs = self._initial_step(rhs, rows, f, tau, everyone)
+        rejected = np.zeros(len(rows), bool)
+        active = everyone
+        while active.size:
+            active = self._attempt(rhs, active, t, rows, f, h_abs, rejected, tau)
+        return rows.reshape(y.shape)
+
+    def _initial_step(self, rhs, y0, f0, tau, idx):
+        """scipy.integrate._ivp.common.select_initial_step, per row."""
+        order = TABLEAUS[self.method].error_estimator_order
+        scale = self.atol + np.abs(y0) * self.rtol
+        d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            h0 = np.where((d0 < 1e-5) | (d1 < 1e-5), 1e-6, 0.01 * d0 / d1)
+        h0 = np.minimum(h0, tau)
+        f1 = rhs(h0, y0 + h0[:, None] * f0, idx)
+        d2 = _rms((f1 - f0) / scale) / h0
+        with np.errstate(divide="ignore"):
+            h1 = np.where(
+                (d1 <= 1e-15) & (d2 <= 1e-15),
+                np.maximum(1e-6, h0 * 1e-3),
+                (0.01 / np.maximum(d1, d2)) ** (1.0 / (order + 1)),
+            )
+        return np.minimum(np.minimum(100 * h0, h1), tau)
+
+    def _attempt(self, rhs, idx, t, y, f, h_abs, rejected, tau):
+        """One step attempt for the rows idx (scipy's RungeKutta._step_impl, one pass of its loop); updates the
+        per-row arrays in place and returns the rows that have not reached tau."""
+        tableau = TABLEAUS[self.method]
+        t0, y0, f0 = t[idx], y[idx], f[idx]
+        min_step = 10 * np.abs(np.nextafter(t0, np.inf) - t0)
+        h = np.where(rejected[idx], h_abs[idx], np.maximum(h_abs[idx], min_step))
+        if np.any(h < min_step):
+            bad = idx[h < min_step]
+            raise StepperError(
+                f"{self}: required step size is less than spacing between numbers at rows {bad.tolist()} "
+                f"(t = {t[bad].tolist()} of a segment of {tau} s)"
+            )
+        t_new = np.minimum(t0 + h, tau)
+        h = t_new - t0
+        K = np.empty((tableau.n_stages + 1, *y0.shape))
+        K[0] = f0
+        for s in range(1, tableau.n_stages):
+            dy = np.tensordot(tableau.A[s, :s], K[:s], axes=1) * h[:, None]
+            K[s] = rhs(t0 + tableau.C[s] * h, y0 + dy, idx)
+        y_new = y0 + h[:, None] * np.tensordot(tableau.B, K[:-1], axes=1)
+        f_new = K[-1] = rhs(t0 + h, y_new, idx)
+        scale = self.atol + np.maximum(np.abs(y0), np.abs(y_new)) * self.rtol
+        error = self._error_norm(tableau, K, h, scale)
+        with np.errstate(divide="ignore"):
+            growth = SAFETY * error ** (-1.0 / (tableau.error_estimator_order + 1))
+        accept = error < 1
+        factor = np.where(error == 0, MAX_FACTOR, np.minimum(MAX_FACTOR, growth))
+        factor = np.where(rejected[idx], np.minimum(1.0, factor), factor)
+        h_abs[idx] = np.where(accept, h * factor, h * np.maximum(MIN_FACTOR, growth))
+        rejected[idx] = ~accept
+        done = idx[accept]
+        t[done], y[done], f[done] = t_new[accept], y_new[accept], f_new[accept]
+        return idx[~accept | (t_new < tau)]
+
+    def _error_norm(self, tableau, K, h, scale):
+        n = scale.shape[-1]
+        if self.method == "RK45":
+            return np.sqrt(np.sum((np.tensordot(tableau.E, K, axes=1) * h[:, None] / scale) ** 2, axis=-1) / n)
+        err5 = np.sum((np.tensordot(tableau.E5, K, axes=1) / scale) ** 2, axis=-1)
+        err3 = np.sum((np.tensordot(tableau.E3, K, axes=1) / scale) ** 2, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            error = np.abs(h) * err5 / np.sqrt((err5 + 0.01 * err3) * n)
+        return np.where((err5 == 0) & (err3 == 0), 0.0, error)
+
+
+@dataclass(frozen=True)
+class RowByRow:
+    """A stepper applied to one row of the batch at a time (for LSODA and Radau, whose step control is not
+    rewritten here): slow, but row i is exactly the single state's step."""
+
+    stepper: Scipy
+
+    def __call__(self, system, y, u, u_dot, tau):
+        y = np.asarray(y, float)
+        u = np.broadcast_to(u, (*y.shape[:-1], np.shape(u)[-1]))
+        u_dot = np.broadcast_to(u_dot, u.shape)
+        out = np.empty_like(y)
+        for i in np.ndindex(y.shape[:-1]):
+            out[i] = self.stepper(system, y[i], u[i], u_dot[i], tau)
+        return out
+
+
+def batched(stepper):
+    """The stepper to use on a batch so that row i follows the single-state stepper's path (see the module)."""
+    if isinstance(stepper, Scipy):
+        if stepper.method in TABLEAUS:
+            return EmbeddedRK(stepper.method, stepper.rtol, stepper.atol)
+        return RowByRow(stepper)
+    if isinstance(stepper, Exact):
+        return dataclasses.replace(stepper, fallback=batched(stepper.fallback))
+    return stepper
+
+
+def _rms(x):
+    """The RMS norm of each row, scipy's ``norm`` of ``_ivp.common``."""
+    return np.sqrt(np.sum(x * x, axis=-1) / x.shape[-1])

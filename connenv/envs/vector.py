@@ -1,0 +1,173 @@
+"""Native vector envs: N copies of a connenv task stepped together over numpy arrays.
+
+Each vector env keeps one single env, its *prototype*: it checks the make kwargs, holds the spaces, the system
+and the constants, and its task methods (observation, reward, success, info) are the ones the vector env calls,
+on arrays over the batch, with the array operations of ``BATCH`` in place of the scalar ones of ``SCALAR``. A
+single env runs those methods on Python floats, which is several times faster than numpy on one state.
+
+Seeding, resets and autoreset are Gymnasium's SyncVectorEnv's, so that row i of a vector env and env i of a
+SyncVectorEnv made from the same id and kwargs follow the same episodes (to rounding; tests):
+
+- ``reset(seed=s)`` seeds row i with s + i (a list seeds row i with its i-th entry; None draws fresh entropy for
+  rows never seeded and keeps the others' generators), as ``gym.make(id).reset(seed=s + i)`` would;
+- every reset of row i, the first and the automatic ones, runs the prototype's ``reset`` with row i's generator,
+  so the start states are the single env's draws; ``options`` go to every row, and automatic resets take none;
+- autoreset is NEXT_STEP (``metadata["autoreset_mode"]``, as in Gymnasium's CartPoleVectorEnv): the step after
+  a row terminates or truncates resets it, ignores its action and returns its reset observation and info with
+  reward 0 and both flags False;
+- ``max_episode_steps`` (the registration's, passed by ``gym.make_vec``) truncates as TimeLimit does.
+
+Steppers are the prototype's through ``connenv.core.batched.batched``, which keeps row i on the single state's
+path (adaptive scipy methods get per-row step control). Infos are Gymnasium's vector convention, a dict of
+arrays over the batch (nested for ``"state"``), each key ``k`` with its mask ``"_k"`` (all True: every row has
+every key). Actions are an array (N, *single action shape); a wrong shape or a non-finite entry raises
+ValueError. Rendering is the single env's.
+"""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from connenv.core.batched import batched
+from connenv.core.validation import check_action, finite_action
+
+SCALAR = SimpleNamespace(
+    sin=math.sin,
+    cos=math.cos,
+    sqrt=math.sqrt,
+    log=math.log,
+    acos=math.acos,
+    hypot=math.hypot,
+    maximum=max,
+    clip=lambda x, low, high: min(max(x, low), high),
+    column=lambda x: x,
+    where=lambda condition, a, b: a if condition else b,
+    pack=lambda parts: np.array(parts, np.float32),
+    real=float,
+    flag=bool,
+    vector=lambda a: tuple(map(float, a)),
+)
+"""Operations on one state, as Python floats (the single env's)."""
+
+BATCH = SimpleNamespace(
+    sin=np.sin,
+    cos=np.cos,
+    sqrt=np.sqrt,
+    log=np.log,
+    acos=np.arccos,
+    hypot=np.hypot,
+    maximum=np.maximum,
+    clip=lambda x, low, high: np.minimum(np.maximum(x, low), high),
+    column=lambda x: x[..., None],
+    where=np.where,
+    pack=lambda parts: np.stack(np.broadcast_arrays(*parts), axis=-1).astype(np.float32),
+    real=lambda x: np.asarray(x, float),
+    flag=lambda x: np.asarray(x, bool),
+    vector=lambda a: np.array(a, float),
+)
+"""The same operations on arrays over a batch (the vector env's)."""
+
+
+class TaskVectorEnv(VectorEnv):
+    """Base of the native vector envs. Subclasses set ``single_env`` (the task class) and define:
+
+    - ``_capture(i)``: copy the prototype's state, just reset, into row i;
+    - ``_advance(actions)``: step every row; return the rewards;
+    - ``_observe()`` and ``_describe()``: the observations and the info dict over the batch.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+    single_env: type
+    clips_actions = True  # actions are clipped into the space, as check_action does; else only checked
+    jump_only: str | None = None  # the make kwarg of a ramp speed, refused: a ramp gives each row its own segments
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
+        if self.jump_only is not None and kwargs.get(self.jump_only) is not None:
+            raise ValueError(
+                f"{self.jump_only}={kwargs[self.jump_only]!r}: the vector env takes only None, since a ramp gives each "
+                "row its own segment lengths; use gym.make_vec(..., vectorization_mode='sync') for it"
+            )
+        for name, value, low in (("num_envs", num_envs, 1), ("max_episode_steps", max_episode_steps, 1)):
+            if not (value is None and name == "max_episode_steps") and (
+                isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low
+            ):
+                raise ValueError(f"{name}={value!r} must be an integer ≥ {low}")
+        if kwargs.get("render_mode") is not None:
+            raise ValueError(f"render_mode={kwargs['render_mode']!r}: a vector env does not render; use gym.make(id)")
+        kwargs.pop("render_mode", None)
+        self.env = self.single_env(**kwargs)
+        self.stepper = batched(self.env.stepper)
+        self.num_envs, self.max_episode_steps = int(num_envs), max_episode_steps
+        self.single_action_space, self.single_observation_space = self.env.action_space, self.env.observation_space
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.metadata = {**self.metadata, "render_fps": self.env.metadata["render_fps"]}
+        self.render_mode = None
+        self.generators = [None] * self.num_envs  # row i's np_random
+        self.steps = np.zeros(self.num_envs, np.int64)
+        self.prev_done = np.zeros(self.num_envs, bool)
+        self.all_rows = np.ones(self.num_envs, bool)  # the "_key" mask of every info key
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed if isinstance(seed, int) else None)
+        if seed is None or isinstance(seed, int):
+            seeds = [None if seed is None else seed + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed has {len(seeds)} entries; a list of seeds needs num_envs={self.num_envs}")
+        for i, row_seed in enumerate(seeds):
+            self._reset_row(i, row_seed, options)
+        self.steps[:] = 0
+        self.prev_done[:] = False
+        return self._observe(), self._with_masks(self._describe())
+
+    def step(self, actions):
+        actions = (check_action if self.clips_actions else finite_action)(actions, self.action_space)
+        reward = np.asarray(self._advance(actions), float)
+        self.steps += 1
+        restart = np.flatnonzero(self.prev_done)
+        for i in restart:
+            self._reset_row(i)
+        self.steps[restart] = 0
+        info = self._describe()
+        terminated = np.array(info["is_success"], bool)
+        limit = math.inf if self.max_episode_steps is None else self.max_episode_steps
+        truncated = self.steps >= limit
+        reward[restart], terminated[restart], truncated[restart] = 0.0, False, False
+        self.prev_done = terminated | truncated
+        return self._observe(), reward, terminated, truncated, self._with_masks(info)
+
+    def _reset_row(self, i, seed=None, options=None):
+        """Reset row i by the prototype's reset, with row i's generator (seeded anew if seed is given)."""
+        if seed is not None or self.generators[i] is None:
+            self.generators[i] = seeding.np_random(seed)[0]
+        self.env.np_random = self.generators[i]
+        self.env.reset(options=options)
+        self._capture(i)
+
+    def _with_masks(self, info):
+        """Gymnasium's vector info: each key k with the mask "_k" of the rows that have it (all of them)."""
+        masked = {}
+        for key, value in info.items():
+            masked[key] = self._with_masks(value) if isinstance(value, dict) else value
+            masked[f"_{key}"] = self.all_rows
+        return masked
+
+    def _capture(self, i):
+        raise NotImplementedError
+
+    def _advance(self, actions):
+        raise NotImplementedError
+
+    def _observe(self):
+        raise NotImplementedError
+
+    def _describe(self):
+        raise NotImplementedError

@@ -1,0 +1,221 @@
+"""Native vector envs: row i is env i of a SyncVectorEnv of single envs, episodes and resets included; the per-row
+adaptive stepper is scipy's DOP853 row by row; bad input is refused as in the single envs."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+from scipy.integrate import solve_ivp
+
+import connenv  # noqa: F401  (registers the envs)
+from connenv.core import StepperError, make_stepper
+from connenv.core.batched import EmbeddedRK, RowByRow, batched
+from connenv.systems.skier import Skier
+from connenv.systems.trails import make_trail
+
+RTOL = 1e-12  # |vector − single| ≤ RTOL · max(1, |single|), for every number of obs, reward and info
+
+# kwargs that make episodes short, so that a run holds terminations, truncations and autoresets
+CASES = {
+    "connenv/Swing-v0": dict(max_episode_steps=40, target_amplitude=0.12),
+    "connenv/Skier-v0": dict(max_episode_steps=15, target_x=0.3),  # one goal, reached from the side of the start
+    "connenv/RollingBall-v0": dict(max_episode_steps=30, tolerance=2.0),
+    "connenv/RollingBallPose-v0": dict(max_episode_steps=30, tolerance=2.5, position_tolerance=0.2),
+    "connenv/RollingBallGoal-v0": dict(max_episode_steps=30, tolerance=2.0),
+    "connenv/KozlovShell-v0": dict(max_episode_steps=30, success_radius=0.45),
+}
+BALLS = ("connenv/RollingBall-v0", "connenv/RollingBallPose-v0", "connenv/RollingBallGoal-v0")
+VECTOR_ONLY = {env_id: {"measure_distance": True} for env_id in BALLS}  # the single envs always measure it
+
+
+def flat(info, prefix=""):
+    """{dotted key: array} of a vector info, masks left out; tuples and strings of SyncVectorEnv's object arrays
+    become numbers and strings."""
+    out = {}
+    for key, value in info.items():
+        if isinstance(value, dict):
+            out.update(flat(value, f"{prefix}{key}."))
+        elif not key.startswith("_"):
+            array = np.asarray(value)
+            if array.dtype == object:
+                array = np.array([v if isinstance(v, str) else np.asarray(v, float) for v in value])
+            out[prefix + key] = array
+    return out
+
+
+def assert_same(native, sync, what):
+    native, sync = (flat(native), flat(sync)) if isinstance(native, dict) else ({"": native}, {"": sync})
+    assert native.keys() == sync.keys(), what
+    for key, a in native.items():
+        b = sync[key]
+        assert a.shape == b.shape, (what, key)
+        if a.dtype.kind in "USb":
+            assert np.array_equal(a, b), (what, key, a, b)
+        else:
+            a, b = a.astype(float), b.astype(float)
+            both_nan = np.isnan(a) & np.isnan(b)
+            gap = np.where(both_nan, 0.0, np.abs(a - b) / np.maximum(1.0, np.abs(b)))
+            assert np.all(gap <= RTOL), (what, key, float(np.max(gap)))
+
+
+def single_env(env_id, kwargs):
+    """gym.make(env_id) under Gymnasium's own TimeLimit: rl_zoo3, once imported (by other tests), replaces it by
+    one that reports no truncation on a step that also terminates."""
+    time_limit = next(c for c in gym.wrappers.TimeLimit.__mro__ if c.__module__.startswith("gymnasium"))
+    env_kwargs = {key: value for key, value in kwargs.items() if key != "max_episode_steps"}
+    steps = kwargs.get("max_episode_steps", gym.spec(env_id).max_episode_steps)
+    return time_limit(gym.make(env_id, **env_kwargs).unwrapped, steps)
+
+
+def run_both(env_id, n, steps, seed, kwargs, vector_kwargs=None, options=None):
+    """Step the native vector env and a SyncVectorEnv of single envs on the same seed and random actions,
+    asserting equality at every step; return how many episodes ended by termination and by truncation."""
+    native = gym.make_vec(env_id, n, vectorization_mode="vector_entry_point", **kwargs, **(vector_kwargs or {}))
+    sync = gym.vector.SyncVectorEnv([lambda: single_env(env_id, kwargs)] * n)
+    for a, b, name in zip(native.reset(seed=seed, options=options), sync.reset(seed=seed, options=options), "oi"):
+        assert_same(a, b, f"reset {name}")
+    actions = np.random.default_rng(seed).uniform(-1.0, 1.0, (steps, *native.action_space.shape)).astype(np.float32)
+    ends = np.zeros(2, int)
+    for t, action in enumerate(actions):
+        got, want = native.step(action), sync.step(action)
+        for name, a, b in zip(("obs", "reward", "terminated", "truncated", "info"), got, want):
+            assert_same(a, b, f"{name} at step {t}")
+        ends += [got[2].sum(), got[3].sum()]
+    return ends
+
+
+@pytest.mark.parametrize("env_id", sorted(CASES))
+def test_each_row_is_the_single_env_over_episodes_and_autoresets(env_id):
+    """Row i, seeded s + i, follows gym.make(env_id) reset with seed s + i, through NEXT_STEP autoresets."""
+    terminated, truncated = run_both(env_id, 4, 100, 7, CASES[env_id], VECTOR_ONLY.get(env_id))
+    assert terminated > 0 and truncated > 0  # both ways an episode ends, and the resets after them, were compared
+
+
+def test_swing_rows_match_over_whole_default_episodes():
+    """Swing-v0 as registered: two full 500-step episodes per row on the exact flow."""
+    assert run_both("connenv/Swing-v0", 3, 1002, 0, {}).sum() >= 6
+
+
+def test_skier_rows_match_on_the_default_valley():
+    """The default valley with its two rims, 100 steps a row on the per-row DOP853."""
+    assert run_both("connenv/Skier-v0", 3, 110, 2, {"max_episode_steps": 100})[1] == 3
+
+
+def test_shell_rows_in_the_full_model_match_and_mix_with_reduced_rows():
+    """Reset with a momentum puts every row in the full (Kirchhoff) model; autoresets put rows back at rest in the
+    reduced one, so the batch steps both models at once."""
+    options = {"state": {"momentum": (0.3, -0.2, 0.1), "u": (0.1, 0.05)}}
+    kwargs = dict(max_episode_steps=25, success_radius=0.45)
+    assert run_both("connenv/KozlovShell-v0", 3, 60, 3, kwargs, options=options).sum() > 0
+
+
+@pytest.mark.parametrize("integrator", [{"integrator": "rk4", "substeps": 2}, {"integrator": "lsoda"}])
+def test_other_steppers_keep_rows_on_the_single_path(integrator):
+    kwargs = {**CASES["connenv/Swing-v0"], **integrator, "max_episode_steps": 15}
+    run_both("connenv/Swing-v0", 3, 20, 1, kwargs)
+
+
+def skier_system():
+    return Skier(make_trail("valley", None))
+
+
+def test_per_row_dop853_is_scipys_dop853_on_each_row():
+    """EmbeddedRK takes scipy's decisions for each row: each row equals solve_ivp(method="DOP853") on that row
+    alone, while solve_ivp on the flattened batch, with one step size for all rows, does not."""
+    system, rtol, atol, tau = skier_system(), 1e-8, 1e-10, 0.5
+    rng = np.random.default_rng(0)
+    y = np.column_stack([rng.uniform(-5.0, 5.0, 6), rng.uniform(-300.0, 300.0, 6)])
+    h, hold = rng.uniform(0.5, 1.0, (6, 1)), np.zeros((6, 1))
+    batch = EmbeddedRK("DOP853", rtol, atol)(system, y, h, hold, tau)
+    for i in range(6):
+        field = lambda s, yi, i=i: system.vector_field(yi, h[i], hold[i])  # noqa: E731
+        alone = solve_ivp(field, (0, tau), y[i], "DOP853", rtol=rtol, atol=atol)
+        assert np.allclose(batch[i], alone.y[:, -1], rtol=1e-14, atol=1e-13)
+    coupled = make_stepper("dop853", rtol=rtol, atol=atol)(system, y, h, hold, tau)
+    assert np.max(np.abs(coupled - batch)) > 1e-8  # why the batch needs per-row step control
+
+
+def test_per_row_rk45_and_row_by_row_lsoda_match_the_single_state_steps():
+    system = skier_system()
+    y, h, hold = np.array([[2.0, 0.0], [-1.0, 150.0], [4.0, -80.0]]), np.full((3, 1), 0.8), np.zeros((3, 1))
+    for name in ("rk45", "lsoda"):
+        single = make_stepper(name, rtol=1e-9, atol=1e-11)
+        rows = batched(single)
+        assert isinstance(rows, EmbeddedRK if name == "rk45" else RowByRow)
+        alone = np.array([single(system, y[i], h[i], hold[i], 0.05) for i in range(3)])
+        assert np.allclose(rows(system, y, h, hold, 0.05), alone, rtol=1e-14, atol=1e-13)
+
+
+def test_per_row_stepper_that_cannot_meet_its_tolerance_raises():
+    """A vector field that blows up within the segment: the step size collapses and the row is named."""
+
+    class Blowup:
+        def vector_field(self, y, u, u_dot):
+            return y * y
+
+    with pytest.raises(StepperError, match=r"step size is less than spacing .* rows \[1\]"):
+        EmbeddedRK("DOP853", 1e-8, 1e-10)(Blowup(), np.array([[0.1], [100.0]]), np.zeros((2, 1)), np.zeros((2, 1)), 1.0)
+
+
+@pytest.mark.parametrize("env_id", sorted(CASES))
+def test_vector_env_is_registered_with_next_step_autoreset(env_id):
+    env = gym.make_vec(env_id, 5, vectorization_mode="vector_entry_point")
+    assert env.metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP
+    assert env.action_space.shape == (5, *env.single_action_space.shape)
+    obs, info = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+    assert info["_is_success"].all() and info["is_success"].shape == (5,)
+
+
+def test_seeded_vector_runs_are_bit_identical_and_seeds_map_to_rows():
+    def run(seed):
+        env = gym.make_vec("connenv/Skier-v0", 3, vectorization_mode="vector_entry_point")
+        obs = [env.reset(seed=seed)[0]]
+        for _ in range(5):
+            obs.append(env.step(np.full((3, 1), 0.5, np.float32))[0])
+        return np.array(obs)
+
+    assert np.array_equal(run(4), run(4))
+    assert np.array_equal(run([6, 5, 4])[:, 2], run(4)[:, 0])  # a list seeds row i with its i-th entry
+
+
+@pytest.mark.parametrize(
+    ("action", "message"),
+    [(np.zeros((3, 2)), r"shape \(3, 2\); expected \(3, 1\)"), (np.zeros(3), r"expected \(3, 1\)"),
+     (np.array([[0.0], [math.nan], [0.0]]), "not finite")],
+)
+def test_bad_actions_are_refused(action, message):
+    env = gym.make_vec("connenv/Swing-v0", 3, vectorization_mode="vector_entry_point")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        env.step(action)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        (dict(num_envs=0), "num_envs=0 must be an integer ≥ 1"),
+        (dict(num_envs=2, max_episode_steps=0), "max_episode_steps=0"),
+        (dict(num_envs=2, max_radial_speed=1.0), "max_radial_speed=1.0: the vector env takes only None"),
+        (dict(num_envs=2, r_min=3.0), "r_max"),  # the single env's checks
+        (dict(num_envs=2, render_mode="human"), "does not render"),
+    ],
+)
+def test_bad_make_kwargs_are_refused(kwargs, message):
+    from connenv.envs.swing import SwingVectorEnv
+
+    with pytest.raises(ValueError, match=message):
+        SwingVectorEnv(**kwargs)
+
+
+def test_a_diverging_stepper_raises_in_the_batch():
+    """RK4 with one substep at dt = 0.5 leaves SO(3): the vector env raises as the single env does."""
+    env = gym.make_vec("connenv/RollingBall-v0", 4, vectorization_mode="vector_entry_point", dt=0.5, integrator="rk4")
+    env.reset(seed=0)
+    with pytest.raises(StepperError, match=r"RK4\(substeps=1\) left SO\(3\) .* dt = 0.5"):
+        for _ in range(20):
+            env.step(np.ones((4, 2), np.float32))
