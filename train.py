@@ -8,6 +8,10 @@ envs, shows a progress bar and evaluates periodically on a separate env. The run
 is laid out as rl-zoo3's: the model {env}.zip, best_model.zip and evaluations.npz of the periodic evaluation,
 {env}/config.yml (the hyperparameters used), {env}/args.yml and {env}/vecnormalize.pkl if normalized; train.py adds
 results.json, the final evaluation of agents.evaluate on the same episodes for every policy.
+
+With --vector-env the training and periodic-evaluation envs are the env's native vector env (gym.make_vec with its
+vector_entry_point, through agents.vec_env.NativeVecEnv) instead of SB3's DummyVecEnv of single envs; the final
+evaluation stays on single envs.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from tqdm import TqdmExperimentalWarning
 
 import agents
 from agents import evaluate
+from agents.vec_env import make_native_vec_env
 
 HYPERPARAMS = Path(agents.__file__).parent / "hyperparams"
 PERIODIC_EVAL_EPISODES = 10
@@ -43,6 +48,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--eval-seed", type=int, default=0, help="final episode i is reset with eval-seed + i")
     parser.add_argument("--runs", default="runs", help="folder of the run folders")
     parser.add_argument("--num-threads", type=evaluate.positive_int, default=1, help="torch threads")
+    parser.add_argument("--vector-env", action="store_true", help="train on the env's native vector env")
     args = parser.parse_args(argv)
     args.hyperparams = args.hyperparams or str(HYPERPARAMS / f"{args.algo}.yml")
     if not Path(args.hyperparams).is_file():
@@ -50,11 +56,32 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
+class VectorExperimentManager(ExperimentManager):
+    """rl-zoo3's ExperimentManager on the native vector env: create_envs is the one hook that builds the training
+    and periodic-evaluation envs. Both are native, so that SB3 finds the same wrappers around them when it copies
+    the VecNormalize statistics from one to the other."""
+
+    def create_envs(self, n_envs: int, eval_env: bool = False, no_log: bool = False):
+        if self.env_wrapper is not None or self.frame_stack is not None:
+            raise ValueError("--vector-env takes no env_wrapper or frame_stack hyperparameters; they wrap single envs")
+        env = make_native_vec_env(
+            self.env_name.gym_id,
+            n_envs,
+            seed=self.seed,
+            env_kwargs=self.eval_env_kwargs if eval_env else self.env_kwargs,
+            monitor_dir=None if eval_env or no_log else self.save_path,
+            monitor_kwargs=self.monitor_kwargs,
+        )
+        if self.vec_env_wrapper is not None:
+            env = self.vec_env_wrapper(env)
+        return self._maybe_normalize(env, eval_env)
+
+
 def train(args: argparse.Namespace):
     """Train with rl-zoo3's ExperimentManager into the run folder; return the model and the path of its zip."""
     set_random_seed(args.seed)
     th.set_num_threads(args.num_threads)
-    manager = ExperimentManager(
+    manager = (VectorExperimentManager if args.vector_env else ExperimentManager)(
         args,
         args.algo,
         args.env,

@@ -219,3 +219,18 @@ def test_a_diverging_stepper_raises_in_the_batch():
     with pytest.raises(StepperError, match=r"RK4\(substeps=1\) left SO\(3\) .* dt = 0.5"):
         for _ in range(20):
             env.step(np.ones((4, 2), np.float32))
+
+
+def test_partial_reset_restarts_only_the_masked_rows():
+    """Gymnasium's reset_mask: row 1 restarts from its own generator's next start, rows 0 and 2 keep their state."""
+    env = gym.make_vec("connenv/KozlovShell-v0", 3, vectorization_mode="vector_entry_point")
+    env.reset(seed=0)
+    stepped, _, _, _, _ = env.step(np.full((3, 2), 0.5, np.float32))
+    single = gym.make("connenv/KozlovShell-v0")
+    single.reset(seed=1)
+    second_start, _ = single.reset()
+    obs, info = env.reset(options={"reset_mask": np.array([False, True, False])})
+    assert np.array_equal(obs[[0, 2]], stepped[[0, 2]]) and np.allclose(obs[1], second_start, atol=1e-7)
+    assert list(info["_distance"]) == [False, True, False]
+    with pytest.raises(ValueError, match="reset_mask"):
+        env.reset(options={"reset_mask": np.zeros(3, bool)})

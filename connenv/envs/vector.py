@@ -15,7 +15,9 @@ SyncVectorEnv made from the same id and kwargs follow the same episodes (to roun
 - autoreset is NEXT_STEP (``metadata["autoreset_mode"]``, as in Gymnasium's CartPoleVectorEnv): the step after
   a row terminates or truncates resets it, ignores its action and returns its reset observation and info with
   reward 0 and both flags False;
-- ``max_episode_steps`` (the registration's, passed by ``gym.make_vec``) truncates as TimeLimit does.
+- ``max_episode_steps`` (the registration's, passed by ``gym.make_vec``) truncates as TimeLimit does;
+- ``reset(options={"reset_mask": mask})`` resets only the rows in mask, as SyncVectorEnv's partial reset
+  (``agents.vec_env`` uses it to give SB3 its same-step autoreset).
 
 Steppers are the prototype's through ``connenv.core.batched.batched``, which keeps row i on the single state's
 path (adaptive scipy methods get per-row step control). Infos are Gymnasium's vector convention, a dict of
@@ -115,6 +117,8 @@ class TaskVectorEnv(VectorEnv):
         self.all_rows = np.ones(self.num_envs, bool)  # the "_key" mask of every info key
 
     def reset(self, *, seed=None, options=None):
+        """Reset every row, or with ``options={"reset_mask": mask}`` (Gymnasium's partial reset, a bool array over
+        the batch) the rows in mask; the other options go to each row's reset. The info masks are the rows reset."""
         super().reset(seed=seed if isinstance(seed, int) else None)
         if seed is None or isinstance(seed, int):
             seeds = [None if seed is None else seed + i for i in range(self.num_envs)]
@@ -122,11 +126,15 @@ class TaskVectorEnv(VectorEnv):
             seeds = list(seed)
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed has {len(seeds)} entries; a list of seeds needs num_envs={self.num_envs}")
-        for i, row_seed in enumerate(seeds):
-            self._reset_row(i, row_seed, options)
-        self.steps[:] = 0
-        self.prev_done[:] = False
-        return self._observe(), self._with_masks(self._describe())
+        options = dict(options or {})
+        mask = np.asarray(options.pop("reset_mask", self.all_rows))
+        if mask.shape != (self.num_envs,) or mask.dtype != bool or not mask.any():
+            raise ValueError(f"reset_mask={mask!r} must be a bool array of shape ({self.num_envs},) with a True entry")
+        for i in np.flatnonzero(mask):
+            self._reset_row(i, seeds[i], options or None)
+        self.steps[mask] = 0
+        self.prev_done[mask] = False
+        return self._observe(), self._with_masks(self._describe(), mask)
 
     def step(self, actions):
         actions = (check_action if self.clips_actions else finite_action)(actions, self.action_space)
@@ -152,12 +160,13 @@ class TaskVectorEnv(VectorEnv):
         self.env.reset(options=options)
         self._capture(i)
 
-    def _with_masks(self, info):
-        """Gymnasium's vector info: each key k with the mask "_k" of the rows that have it (all of them)."""
+    def _with_masks(self, info, mask=None):
+        """Gymnasium's vector info: each key k with the mask "_k" of the rows it is about (default: all)."""
+        mask = self.all_rows if mask is None else mask
         masked = {}
         for key, value in info.items():
-            masked[key] = self._with_masks(value) if isinstance(value, dict) else value
-            masked[f"_{key}"] = self.all_rows
+            masked[key] = self._with_masks(value, mask) if isinstance(value, dict) else value
+            masked[f"_{key}"] = mask
         return masked
 
     def _capture(self, i):
