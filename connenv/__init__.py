@@ -40,3 +40,13 @@ register(
     vector_entry_point="connenv.envs.kozlov_shell:KozlovShellVectorEnv",
     max_episode_steps=300,
 )
+register(
+    id="connenv/KapitzaPendulum-v0",
+    entry_point="connenv.envs.kapitza:KapitzaPendulumEnv",
+    max_episode_steps=2000,
+)
+register(
+    id="connenv/KapitzaSwingUp-v0",
+    entry_point="connenv.envs.kapitza:KapitzaSwingUpEnv",
+    max_episode_steps=6000,
+)
