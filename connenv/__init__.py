@@ -43,10 +43,12 @@ register(
 register(
     id="connenv/KapitzaPendulum-v0",
     entry_point="connenv.envs.kapitza:KapitzaPendulumEnv",
+    vector_entry_point="connenv.envs.kapitza:KapitzaPendulumVectorEnv",
     max_episode_steps=2000,
 )
 register(
     id="connenv/KapitzaSwingUp-v0",
     entry_point="connenv.envs.kapitza:KapitzaSwingUpEnv",
+    vector_entry_point="connenv.envs.kapitza:KapitzaSwingUpVectorEnv",
     max_episode_steps=6000,
 )

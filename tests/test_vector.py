@@ -27,6 +27,8 @@ CASES = {
     "connenv/RollingBallPose-v0": dict(max_episode_steps=30, tolerance=2.5, position_tolerance=0.2),
     "connenv/RollingBallGoal-v0": dict(max_episode_steps=30, tolerance=2.0),
     "connenv/KozlovShell-v0": dict(max_episode_steps=30, success_radius=0.45),
+    "connenv/KapitzaPendulum-v0": dict(max_episode_steps=60, tolerance=0.21, pivot="horizontal"),  # it falls
+    "connenv/KapitzaSwingUp-v0": dict(max_episode_steps=40, hold_time=0.05, tolerance=3.07),
 }
 BALLS = ("connenv/RollingBall-v0", "connenv/RollingBallPose-v0", "connenv/RollingBallGoal-v0")
 VECTOR_ONLY = {env_id: {"measure_distance": True} for env_id in BALLS}  # the single envs always measure it
@@ -117,6 +119,18 @@ def test_shell_rows_in_the_full_model_match_and_mix_with_reduced_rows():
 def test_other_steppers_keep_rows_on_the_single_path(integrator):
     kwargs = {**CASES["connenv/Swing-v0"], **integrator, "max_episode_steps": 15}
     run_both("connenv/Swing-v0", 3, 20, 1, kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"pivot": "planar", "max_episode_steps": 100},  # up to three segments a step, cut at each row's end stops
+        {"damping": 0.2, "max_episode_steps": 50},  # no closed form: per-row DOP853 on segments of per-row length
+        {"integrator": "rk4", "substeps": 3, "max_episode_steps": 50},
+    ],
+)
+def test_kapitza_rows_with_their_own_end_stops_match(kwargs):
+    assert run_both("connenv/KapitzaPendulum-v0", 3, 120, 4, kwargs).sum() > 0
 
 
 def skier_system():

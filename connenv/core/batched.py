@@ -9,6 +9,9 @@ MAX_FACTOR) rewritten over a batch with one step size, accept/reject decision an
 DOP853 and RK45 tableaus: for a single row it makes the decisions solve_ivp makes, and agrees with it to
 rounding (tests). The implicit and multistep methods (LSODA, Radau) are not rewritten; ``batched`` runs them one
 row at a time.
+
+A batch may take one segment length tau per row (shape of the batch), where the rows' control segments differ
+(the Kapitza pivot's end stops); the steppers here take it, and ``batched`` hands it to the others as a column.
 """
 
 from __future__ import annotations
@@ -48,6 +51,7 @@ class EmbeddedRK:
             return f
 
         everyone = np.arange(len(rows))
+        tau = np.broadcast_to(np.reshape(tau, (-1,) if np.ndim(tau) else ()), (len(rows),))  # one per row
         t = np.zeros(len(rows))
         f = rhs(t, rows, everyone)
         h_abs = self._initial_step(rhs, rows, f, tau, everyone)
@@ -79,14 +83,14 @@ class EmbeddedRK:
         """One step attempt for the rows idx (scipy's RungeKutta._step_impl, one pass of its loop); updates the
         per-row arrays in place and returns the rows that have not reached tau."""
         tableau = TABLEAUS[self.method]
-        t0, y0, f0 = t[idx], y[idx], f[idx]
+        t0, y0, f0, tau = t[idx], y[idx], f[idx], tau[idx]
         min_step = 10 * np.abs(np.nextafter(t0, np.inf) - t0)
         h = np.where(rejected[idx], h_abs[idx], np.maximum(h_abs[idx], min_step))
         if np.any(h < min_step):
             bad = idx[h < min_step]
             raise StepperError(
                 f"{self}: required step size is less than spacing between numbers at rows {bad.tolist()} "
-                f"(t = {t[bad].tolist()} of a segment of {tau} s)"
+                f"(t = {t[bad].tolist()} of segments of {tau[h < min_step].tolist()} s)"
             )
         t_new = np.minimum(t0 + h, tau)
         h = t_new - t0
@@ -122,6 +126,20 @@ class EmbeddedRK:
 
 
 @dataclass(frozen=True)
+class ColumnTau:
+    """A fixed-step stepper (RK4, ...) given one segment length per row: tau as a column (..., 1), so that it
+    broadcasts against the states (..., n) as a scalar does."""
+
+    stepper: object
+
+    def __call__(self, system, y, u, u_dot, tau):
+        return self.stepper(system, y, u, u_dot, tau if np.ndim(tau) == 0 else np.asarray(tau)[..., None])
+
+    def __repr__(self):
+        return repr(self.stepper)
+
+
+@dataclass(frozen=True)
 class RowByRow:
     """A stepper applied to one row of the batch at a time (for LSODA and Radau, whose step control is not
     rewritten here): slow, but row i is exactly the single state's step."""
@@ -132,9 +150,10 @@ class RowByRow:
         y = np.asarray(y, float)
         u = np.broadcast_to(u, (*y.shape[:-1], np.shape(u)[-1]))
         u_dot = np.broadcast_to(u_dot, u.shape)
+        tau = np.broadcast_to(tau, y.shape[:-1])
         out = np.empty_like(y)
         for i in np.ndindex(y.shape[:-1]):
-            out[i] = self.stepper(system, y[i], u[i], u_dot[i], tau)
+            out[i] = self.stepper(system, y[i], u[i], u_dot[i], float(tau[i]))
         return out
 
 
@@ -146,7 +165,7 @@ def batched(stepper):
         return RowByRow(stepper)
     if isinstance(stepper, Exact):
         return dataclasses.replace(stepper, fallback=batched(stepper.fallback))
-    return stepper
+    return ColumnTau(stepper)
 
 
 def _rms(x):

@@ -86,6 +86,7 @@ class Exact:
             y = np.asarray(y, float)
             u, u_dot = (np.broadcast_to(a, (*y.shape[:-1], np.shape(a)[-1])) for a in (u, u_dot))
             flow = np.array(flow)
+            tau = tau if np.ndim(tau) == 0 else np.broadcast_to(tau, outside.shape)[outside]  # one per row
             flow[outside] = self.fallback(system, y[outside], u[outside], u_dot[outside], tau)
         return _finite(flow, self)
 

@@ -11,7 +11,8 @@ from gymnasium import spaces
 from connenv.core.steppers import make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
-from connenv.systems.kapitza import KapitzaPendulum, pivot_segments
+from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
+from connenv.systems.kapitza import KapitzaPendulum, pivot_segments, pivot_segments_batch
 
 PIVOTS = {"vertical": (1,), "horizontal": (0,), "planar": (0, 1)}  # actuated axes of u = (u₁, u₂)
 SPEED_BOUND = 5.0  # |observed θ̇| in units of 2√(g/l) is clipped here
@@ -163,8 +164,8 @@ class KapitzaPendulumEnv(RenderedEnv):
         self.u, self.u_dot, self.t = np.zeros(2), np.zeros(2), 0.0
         if "state" in options:
             self._set_state(options["state"])
-        self._start_task()
-        return self._obs(), self._info()
+        self._start_task(self)
+        return self._obs(self), self._info(self)
 
     def step(self, action):
         u_dot_cmd = np.zeros(2)
@@ -173,12 +174,12 @@ class KapitzaPendulumEnv(RenderedEnv):
         for u, u_dot, tau in segments:
             self.y = self.stepper(self.system, self.y, u, u_dot, tau)
         self.t += self.dt
-        self._track()
-        info = self._info()
-        reward, terminated = self._task(info)
+        self._track(self)
+        info = self._info(self)
+        reward, terminated = self._task(self, info)
         if self.render_mode == "human":
             self.render()
-        return self._obs(), reward, terminated, False, info
+        return self._obs(self), reward, terminated, False, info
 
     def _make_renderer(self):
         from connenv.envs.rendering import KapitzaRenderer
@@ -189,27 +190,29 @@ class KapitzaPendulumEnv(RenderedEnv):
         return renderer.draw(self.y[0], self.u, self.t)
 
     # -- the task ------------------------------------------------------------
+    # s is the state: the env itself (Python floats), or a vector env's batch with ops=BATCH. Both carry y, u,
+    # u_dot, t and the task's record (max_deviation; upright_steps, lift and lift_before for the swing-up).
 
     def _start_angle(self):
         return math.pi + self.np_random.uniform(-HOLD_START, HOLD_START)
 
-    def _start_task(self):
-        self.max_deviation = self._deviation()
+    def _start_task(self, s):
+        s.max_deviation = self._deviation(s)
 
-    def _track(self):
+    def _track(self, s, ops=SCALAR):
         """Update the task's record of the episode after a step."""
-        self.max_deviation = max(self.max_deviation, self._deviation())
+        s.max_deviation = ops.maximum(s.max_deviation, self._deviation(s, ops))
 
-    def _task_info(self):
-        return {"max_deviation": self.max_deviation}
+    def _task_info(self, s):
+        return {"max_deviation": s.max_deviation}
 
-    def _task(self, info):
+    def _task(self, s, info, ops=SCALAR):
         """(reward, terminated): hold inverted; the episode ends when the pendulum falls."""
         reward = 1.0 - (info["deviation"] / self.tolerance) ** 2
-        return reward, not info["is_success"]
+        return reward, info["deviation"] > self.tolerance
 
-    def _success(self):
-        return self._deviation() <= self.tolerance
+    def _success(self, s, ops=SCALAR):
+        return self._deviation(s, ops) <= self.tolerance
 
     # -- internals -----------------------------------------------------------
 
@@ -240,35 +243,35 @@ class KapitzaPendulumEnv(RenderedEnv):
             check_number(f"state {name}[{i}] (pivot={self.pivot!r})", v, -limit, limit)
         return vector
 
-    def _theta_dot(self):
-        return float(self.system.theta_dot(self.y, self.u_dot))
+    def _theta_dot(self, s, ops=SCALAR):
+        return ops.real(self.system.theta_dot(s.y, s.u_dot))
 
-    def _deviation(self):
+    def _deviation(self, s, ops=SCALAR):
         """|θ − π| with θ wrapped to (−π, π]: 0 inverted, π hanging."""
-        return math.pi - abs(math.atan2(math.sin(self.y[0]), math.cos(self.y[0])))
+        theta = s.y[..., 0]
+        return math.pi - abs(ops.atan2(ops.sin(theta), ops.cos(theta)))
 
-    def _obs(self):
-        theta = self.y[0]
-        speed = min(max(self._theta_dot() / self.theta_dot_scale, -SPEED_BOUND), SPEED_BOUND)
-        pivot = [*(self.u[self.axes] / self.a_max), *(self.u_dot[self.axes] / self.v_max)]
-        return np.array([math.cos(theta), math.sin(theta), speed, *pivot], np.float32)
+    def _obs(self, s, ops=SCALAR):
+        theta = s.y[..., 0]
+        speed = ops.clip(self._theta_dot(s, ops) / self.theta_dot_scale, -SPEED_BOUND, SPEED_BOUND)
+        pivot = [s.u[..., i] / self.a_max for i in self.axes] + [s.u_dot[..., i] / self.v_max for i in self.axes]
+        return ops.pack([ops.cos(theta), ops.sin(theta), speed, *pivot])
 
-    def _info(self):
-        theta, p = self.y
+    def _info(self, s, ops=SCALAR):
         state = {
-            "theta": float(theta),
-            "theta_dot": self._theta_dot(),
-            "p": float(p),
-            "u": tuple(map(float, self.u)),
-            "u_dot": tuple(map(float, self.u_dot)),
-            "t": self.t,
+            "theta": ops.real(s.y[..., 0]),
+            "theta_dot": self._theta_dot(s, ops),
+            "p": ops.real(s.y[..., 1]),
+            "u": ops.vector(s.u),
+            "u_dot": ops.vector(s.u_dot),
+            "t": s.t,
         }
         return {
             "state": state,
-            "energy": float(self.system.energy(self.y, self.u_dot)),
-            "deviation": self._deviation(),
-            **self._task_info(),
-            "is_success": self._success(),
+            "energy": ops.real(self.system.energy(s.y, s.u_dot)),
+            "deviation": self._deviation(s, ops),
+            **self._task_info(s),
+            "is_success": ops.flag(self._success(s, ops)),
         }
 
 
@@ -320,25 +323,77 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     def _start_angle(self):
         return self.np_random.uniform(*HANG_START) * self.np_random.choice([-1.0, 1.0])
 
-    def _start_task(self):
-        self.upright_steps = 0
-        self.lift = self._lift()
+    def _start_task(self, s):
+        s.upright_steps = 0
+        s.lift = self._lift(s)
 
-    def _track(self):
-        self.upright_steps = self.upright_steps + 1 if self._deviation() <= self.tolerance else 0
-        self.lift_before, self.lift = self.lift, self._lift()
+    def _track(self, s, ops=SCALAR):
+        s.upright_steps = (s.upright_steps + 1) * (self._deviation(s, ops) <= self.tolerance)
+        s.lift_before, s.lift = s.lift, self._lift(s, ops)
 
-    def _lift(self):
+    def _lift(self, s, ops=SCALAR):
         """ℓ = (E/(m g l) + 1)/2 in [LIFT_FLOOR, 1]."""
         system = self.system
-        lift = 0.5 * (float(system.energy(self.y, self.u_dot)) / (system.mass * system.g * system.length) + 1.0)
-        return min(max(lift, LIFT_FLOOR), 1.0)
+        lift = 0.5 * (ops.real(system.energy(s.y, s.u_dot)) / (system.mass * system.g * system.length) + 1.0)
+        return ops.clip(lift, LIFT_FLOOR, 1.0)
 
-    def _task_info(self):
-        return {"upright_time": self.upright_steps * self.dt}
+    def _task_info(self, s):
+        return {"upright_time": s.upright_steps * self.dt}
 
-    def _task(self, info):
-        return math.log(self.lift / self.lift_before) - TIME_COST * self.dt, info["is_success"]
+    def _task(self, s, info, ops=SCALAR):
+        return ops.log(s.lift / s.lift_before) - TIME_COST * self.dt, info["is_success"]
 
-    def _success(self):
-        return self.upright_steps >= self.hold_steps
+    def _success(self, s, ops=SCALAR):
+        return s.upright_steps >= self.hold_steps
+
+
+class KapitzaPendulumVectorEnv(TaskVectorEnv):
+    """KapitzaPendulum-v0 over a batch (``gym.make_vec("connenv/KapitzaPendulum-v0", num_envs=N)``; see
+    ``connenv.envs.vector``). Each row's step is cut at its own end stops (``pivot_segments_batch``), so the
+    steppers get one segment length per row."""
+
+    single_env = KapitzaPendulumEnv
+    RECORD = ("max_deviation",)  # the task's record of the episode, per row
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
+        super().__init__(num_envs, max_episode_steps, **kwargs)
+        self.y, self.u, self.u_dot = np.zeros((num_envs, 2)), np.zeros((num_envs, 2)), np.zeros((num_envs, 2))
+        self.t = np.zeros(num_envs)
+        for name in self.RECORD:
+            setattr(self, name, np.zeros(num_envs, type(getattr(self.env, name))))
+
+    def _capture(self, i):
+        for name in ("y", "u", "u_dot", "t", *self.RECORD):
+            getattr(self, name)[i] = getattr(self.env, name)
+
+    def _advance(self, actions):
+        env = self.env
+        u_dot_cmd = np.zeros((self.num_envs, 2))
+        u_dot_cmd[:, env.axes] = actions * env.v_max
+        starts, velocities, durations, self.u, self.u_dot = pivot_segments_batch(self.u, u_dot_cmd, env.a_max, env.dt)
+        self.y = self.y.copy()
+        for u, u_dot, tau in zip(starts, velocities, durations):
+            rows = tau > 0.0
+            if rows.all():
+                self.y = self.stepper(env.system, self.y, u, u_dot, tau)
+            elif rows.any():
+                self.y[rows] = self.stepper(env.system, self.y[rows], u[rows], u_dot[rows], tau[rows])
+        self.t = self.t + env.dt
+        env._track(self, BATCH)
+        return env._task(self, env._info(self, BATCH), BATCH)[0]
+
+    def _terminated(self, info):
+        return self.env._task(self, info, BATCH)[1]
+
+    def _observe(self):
+        return self.env._obs(self, BATCH)
+
+    def _describe(self):
+        return self.env._info(self, BATCH)
+
+
+class KapitzaSwingUpVectorEnv(KapitzaPendulumVectorEnv):
+    """KapitzaSwingUp-v0 over a batch; as KapitzaPendulumVectorEnv."""
+
+    single_env = KapitzaSwingUpEnv
+    RECORD = ("upright_steps", "lift", "lift_before")

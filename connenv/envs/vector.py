@@ -42,6 +42,7 @@ from connenv.core.validation import check_action, finite_action
 SCALAR = SimpleNamespace(
     sin=math.sin,
     cos=math.cos,
+    atan2=math.atan2,
     sqrt=math.sqrt,
     log=math.log,
     acos=math.acos,
@@ -60,6 +61,7 @@ SCALAR = SimpleNamespace(
 BATCH = SimpleNamespace(
     sin=np.sin,
     cos=np.cos,
+    atan2=np.arctan2,
     sqrt=np.sqrt,
     log=np.log,
     acos=np.arccos,
@@ -145,7 +147,7 @@ class TaskVectorEnv(VectorEnv):
             self._reset_row(i)
         self.steps[restart] = 0
         info = self._describe()
-        terminated = np.array(info["is_success"], bool)
+        terminated = np.array(self._terminated(info), bool)
         limit = math.inf if self.max_episode_steps is None else self.max_episode_steps
         truncated = self.steps >= limit
         reward[restart], terminated[restart], truncated[restart] = 0.0, False, False
@@ -168,6 +170,10 @@ class TaskVectorEnv(VectorEnv):
             masked[key] = self._with_masks(value, mask) if isinstance(value, dict) else value
             masked[f"_{key}"] = mask
         return masked
+
+    def _terminated(self, info):
+        """Which rows' episodes end by the task: success, unless the task says otherwise."""
+        return info["is_success"]
 
     def _capture(self, i):
         raise NotImplementedError
