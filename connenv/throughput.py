@@ -40,7 +40,8 @@ VECTOR_TARGETS = {
     "connenv/Skier-v0": 5e6,
     "connenv/RollingBall-v0": 1e6,
     "connenv/KozlovShell-v0": 1e6,
-    "connenv/Kapitza-v0": 1e6,
+    "connenv/KapitzaPendulum-v0": 1e6,
+    "connenv/KapitzaSwingUp-v0": 1e6,
 }
 
 

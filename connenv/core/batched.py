@@ -45,20 +45,23 @@ class EmbeddedRK:
         u_dot = np.broadcast_to(u_dot, u.shape[:-1] + (np.shape(u_dot)[-1],)).reshape(len(rows), -1)
 
         def rhs(s, states, idx):
-            f = system.vector_field(states, u[idx] + s[:, None] * u_dot[idx], u_dot[idx])
+            """ẏ at times s of the rows idx (a slice or an index array)."""
+            u_rows, u_dot_rows = u[idx], u_dot[idx]
+            f = system.vector_field(states, u_rows + s[:, None] * u_dot_rows, u_dot_rows)
             if not np.all(np.isfinite(f)):
                 raise StepperError(f"{self} produced a non-finite derivative {f[~np.isfinite(f).all(-1)]}")
             return f
 
-        everyone = np.arange(len(rows))
+        everyone = slice(None)
         tau = np.broadcast_to(np.reshape(tau, (-1,) if np.ndim(tau) else ()), (len(rows),))  # one per row
         t = np.zeros(len(rows))
         f = rhs(t, rows, everyone)
         h_abs = self._initial_step(rhs, rows, f, tau, everyone)
         rejected = np.zeros(len(rows), bool)
-        active = everyone
+        active = np.arange(len(rows))
         while active.size:
-            active = self._attempt(rhs, active, t, rows, f, h_abs, rejected, tau)
+            idx = everyone if active.size == len(rows) else active  # a slice, cheaper than fancy indexing
+            active = active[self._attempt(rhs, idx, t, rows, f, h_abs, rejected, tau)]
         return rows.reshape(y.shape)
 
     def _initial_step(self, rhs, y0, f0, tau, idx):
@@ -81,26 +84,25 @@ class EmbeddedRK:
 
     def _attempt(self, rhs, idx, t, y, f, h_abs, rejected, tau):
         """One step attempt for the rows idx (scipy's RungeKutta._step_impl, one pass of its loop); updates the
-        per-row arrays in place and returns the rows that have not reached tau."""
+        per-row arrays in place and returns the mask, over idx, of the rows that have not reached tau."""
         tableau = TABLEAUS[self.method]
         t0, y0, f0, tau = t[idx], y[idx], f[idx], tau[idx]
         min_step = 10 * np.abs(np.nextafter(t0, np.inf) - t0)
         h = np.where(rejected[idx], h_abs[idx], np.maximum(h_abs[idx], min_step))
         if np.any(h < min_step):
-            bad = idx[h < min_step]
+            bad = np.arange(len(t))[idx][h < min_step]
             raise StepperError(
                 f"{self}: required step size is less than spacing between numbers at rows {bad.tolist()} "
                 f"(t = {t[bad].tolist()} of segments of {tau[h < min_step].tolist()} s)"
             )
         t_new = np.minimum(t0 + h, tau)
         h = t_new - t0
-        K = np.empty((tableau.n_stages + 1, *y0.shape))
-        K[0] = f0
+        K = [f0]
         for s in range(1, tableau.n_stages):
-            dy = np.tensordot(tableau.A[s, :s], K[:s], axes=1) * h[:, None]
-            K[s] = rhs(t0 + tableau.C[s] * h, y0 + dy, idx)
-        y_new = y0 + h[:, None] * np.tensordot(tableau.B, K[:-1], axes=1)
-        f_new = K[-1] = rhs(t0 + h, y_new, idx)
+            K.append(rhs(t0 + tableau.C[s] * h, y0 + _combine(tableau.A[s, :s], K) * h[:, None], idx))
+        y_new = y0 + h[:, None] * _combine(tableau.B, K)
+        f_new = rhs(t0 + h, y_new, idx)
+        K.append(f_new)
         scale = self.atol + np.maximum(np.abs(y0), np.abs(y_new)) * self.rtol
         error = self._error_norm(tableau, K, h, scale)
         with np.errstate(divide="ignore"):
@@ -110,16 +112,17 @@ class EmbeddedRK:
         factor = np.where(rejected[idx], np.minimum(1.0, factor), factor)
         h_abs[idx] = np.where(accept, h * factor, h * np.maximum(MIN_FACTOR, growth))
         rejected[idx] = ~accept
-        done = idx[accept]
-        t[done], y[done], f[done] = t_new[accept], y_new[accept], f_new[accept]
-        return idx[~accept | (t_new < tau)]
+        t[idx] = np.where(accept, t_new, t0)
+        y[idx] = np.where(accept[:, None], y_new, y0)
+        f[idx] = np.where(accept[:, None], f_new, f0)
+        return ~accept | (t_new < tau)
 
     def _error_norm(self, tableau, K, h, scale):
         n = scale.shape[-1]
         if self.method == "RK45":
-            return np.sqrt(np.sum((np.tensordot(tableau.E, K, axes=1) * h[:, None] / scale) ** 2, axis=-1) / n)
-        err5 = np.sum((np.tensordot(tableau.E5, K, axes=1) / scale) ** 2, axis=-1)
-        err3 = np.sum((np.tensordot(tableau.E3, K, axes=1) / scale) ** 2, axis=-1)
+            return np.sqrt(np.sum((_combine(tableau.E, K) * h[:, None] / scale) ** 2, axis=-1) / n)
+        err5 = np.sum((_combine(tableau.E5, K) / scale) ** 2, axis=-1)
+        err3 = np.sum((_combine(tableau.E3, K) / scale) ** 2, axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):
             error = np.abs(h) * err5 / np.sqrt((err5 + 0.01 * err3) * n)
         return np.where((err5 == 0) & (err3 == 0), 0.0, error)
@@ -166,6 +169,16 @@ def batched(stepper):
     if isinstance(stepper, Exact):
         return dataclasses.replace(stepper, fallback=batched(stepper.fallback))
     return ColumnTau(stepper)
+
+
+def _combine(weights, K):
+    """Σ_j weights[j] K[j] over the nonzero weights, elementwise: no BLAS call, whose threads stall on a busy
+    machine, and the same arithmetic for a row whatever the batch around it."""
+    terms = [w * k for w, k in zip(weights, K) if w != 0.0]
+    total = terms[0]
+    for term in terms[1:]:
+        total = total + term
+    return total
 
 
 def _rms(x):

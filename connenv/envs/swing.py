@@ -143,7 +143,7 @@ class SwingEnv(RenderedEnv):
 
         self.y = np.zeros(2)  # (θ, p)
         self.r = self.r_max
-        self.t = 0.0
+        self.t, self.lift = 0.0, 0.0
 
     # -- Gymnasium API -------------------------------------------------------
 
@@ -159,7 +159,7 @@ class SwingEnv(RenderedEnv):
 
     def step(self, action):
         r_cmd = self.command(check_action(action, self.action_space)[0])
-        lift_before = self.system.lift(self.y, self.r)
+        lift_before = self.lift
         for r, r_dot, tau in control_segments(self.r, r_cmd, self.dt, self.max_radial_speed):
             self.y = self.stepper(self.system, self.y, np.array([r]), np.array([r_dot]), tau)
         self.r = r + r_dot * tau
@@ -198,7 +198,9 @@ class SwingEnv(RenderedEnv):
         return self.observe(self.y[0], self.y[1], self.r)
 
     def _info(self):
-        return self.describe(self.y, self.r, self.t)
+        info = self.describe(self.y, self.r, self.t)
+        self.lift = info["lift"]  # h of the current state, the next step's h before
+        return info
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
@@ -217,10 +219,11 @@ class SwingEnv(RenderedEnv):
 
     def describe(self, y, r, t, ops=SCALAR):
         theta, p = y[..., 0], y[..., 1]
-        lift = ops.real(self.system.lift(y, r))
+        energy, weight = ops.real(self.system.energy(y, r)), self.system.mass * self.system.g * r
+        lift = (energy + weight) / weight  # Swing.lift, from the energy at hand
         return {
             "state": {"theta": theta, "theta_dot": p / (self.system.mass * r**2), "p": p, "r": r, "t": t},
-            "energy": ops.real(self.system.energy(y, r)),
+            "energy": energy,
             "lift": lift,
             "amplitude": ops.acos(ops.clip(1.0 - lift, -1.0, 1.0)),
             "is_success": ops.flag(lift >= self.target_lift),
