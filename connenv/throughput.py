@@ -2,6 +2,7 @@
 Gymnasium's SyncVectorEnv of the same env.
 
     python -m connenv.throughput [--envs ID ...] [--sizes 1 64 1024 4096] [--sync-max 1024] [--seconds 0.5]
+                                 [--breakdown]
 
 Single envs: each env from ``gym.make(id)`` (its registered wrappers included) and Pendulum-v1 from
 ``gym.make("Pendulum-v1")`` are stepped alternately with random actions, each step timed alone, resets left out
@@ -13,7 +14,11 @@ Vector envs: ``gym.make_vec(id, N, vectorization_mode="vector_entry_point")`` (n
 alternating blocks of about ``seconds / ROUNDS`` each; autoresets are part of the steps, as in training. The
 figure is N × steps / time, the median over the blocks. SyncVectorEnv's cost per env hardly depends on N, and its
 first reset at N = 4096 takes minutes on the envs whose reset solves for an optimal arc, so it runs only up to
-``--sync-max`` (default 1024). Targets (issue 7): single-env step ≤ 1.0× Pendulum-v1; native vector ≥ 5 M
+``--sync-max`` (default 1024). The timed blocks are short beside an episode, so few rows end in them: the
+autoresets' share in a long run is printed by ``--breakdown``, which adds, at the largest N, where a native step's
+time goes: the stepper and the rest (task code: observation, reward, info), the vector-field evaluations per step
+of the adaptive steppers, and the cost of a row's reset (the single env's reset, run with the row's generator)
+with its share per step when every episode runs to the time limit. Targets (issue 7): single-env step ≤ 1.0× Pendulum-v1; native vector ≥ 5 M
 env-steps/s at N = 4096 for Swing and Skier, ≥ 1 M for RollingBall, KozlovShell and the Kapitza pendulum.
 """
 
@@ -87,6 +92,55 @@ def vector_rates(env_id: str, n: int, seconds: float, sync: bool, seed: int = 0)
     return medians[0], (medians[1] if sync else None)
 
 
+class Counted:
+    """A system whose vector_field calls are counted (the adaptive steppers' right-hand-side evaluations)."""
+
+    def __init__(self, system):
+        self.system, self.calls = system, 0
+
+    def vector_field(self, y, u, u_dot):
+        self.calls += 1
+        return self.system.vector_field(y, u, u_dot)
+
+    def __getattr__(self, name):
+        return getattr(self.system, name)
+
+
+def step_breakdown(env_id: str, n: int, steps: int, seed: int = 0):
+    """Where a native vector step goes at N = n: (ms per step, ms in the stepper, vector-field evaluations per
+    step, µs per row reset, ms per step of autoresets in the steady state of episodes at the time limit)."""
+    venv = gym.make_vec(env_id, n, vectorization_mode="vector_entry_point")
+    prototype = venv.unwrapped.env
+    for name in ("system", "reduced_system", "full_system"):
+        if hasattr(prototype, name):
+            setattr(prototype, name, Counted(getattr(prototype, name)))
+    counted = {name: getattr(prototype, name, None) for name in ("system", "reduced_system", "full_system")}
+    counters = list({id(c): c for c in counted.values() if isinstance(c, Counted)}.values())
+    stepper, in_stepper = venv.unwrapped.stepper, [0.0]
+
+    def timed_stepper(*args):
+        start = time.perf_counter()
+        result = stepper(*args)
+        in_stepper[0] += time.perf_counter() - start
+        return result
+
+    rng = np.random.default_rng(seed)
+    actions = rng.uniform(-1.0, 1.0, (16, *venv.action_space.shape)).astype(np.float32)
+    start = time.perf_counter()
+    venv.reset(seed=seed)
+    reset_per_row = (time.perf_counter() - start) / n
+    venv.step(actions[0])
+    venv.unwrapped.stepper = timed_stepper
+    calls_before = sum(c.calls for c in counters)
+    start = time.perf_counter()
+    for i in range(steps):
+        venv.step(actions[i % len(actions)])
+    elapsed = time.perf_counter() - start
+    calls = sum(c.calls for c in counters) - calls_before
+    amortized = n / venv.unwrapped.max_episode_steps * reset_per_row
+    return elapsed / steps, in_stepper[0] / steps, calls / steps, reset_per_row, amortized
+
+
 def main(argv=None):
     ids = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -97,6 +151,7 @@ def main(argv=None):
     parser.add_argument("--single-steps", type=int, default=SINGLE_STEPS)
     parser.add_argument("--skip-single", action="store_true")
     parser.add_argument("--skip-vector", action="store_true")
+    parser.add_argument("--breakdown", action="store_true", help="also where a native step goes at the largest N")
     args = parser.parse_args(argv)
     print(
         f"# {datetime.datetime.now():%Y-%m-%d %H:%M}, {platform.machine()}, {os.cpu_count()} cores, "
@@ -129,7 +184,22 @@ def main(argv=None):
                 sync_text = f"{sync / 1e6:9.4f}" if sync else f"{'-':>9}"
                 ratio_text = f"{native / sync:12.1f}" if sync else f"{'-':>12}"
                 print(f"{env_id:28} {n:5} {native / 1e6:9.4f} {sync_text} {ratio_text}  {verdict}")
-    print("\nmissed: " + ("; ".join(misses) if misses else "none"))
+    if args.breakdown:
+        n = max(args.sizes)
+        print(
+            f"\nwhere a native vector step goes at N={n}, random actions: ms per step in all, in the stepper and in the"
+            "\nrest (task code); vector-field calls per step (adaptive steppers); a row's reset, µs, and the autoresets'"
+            "\nms per step when every episode runs to the time limit (N / max_episode_steps resets a step)"
+        )
+        print(f"{'env':28} {'step':>7} {'stepper':>8} {'rest':>7} {'rhs':>6} {'reset µs':>9} {'autoreset ms':>13}")
+        for env_id in args.envs:
+            step, stepper, calls, reset, amortized = step_breakdown(env_id, n, max(3, int(args.seconds * 20)))
+            print(
+                f"{env_id:28} {step * 1e3:7.2f} {stepper * 1e3:8.2f} {(step - stepper) * 1e3:7.2f} {calls:6.1f} "
+                f"{reset * 1e6:9.1f} {amortized * 1e3:13.2f}"
+            )
+    if not (args.skip_single and args.skip_vector):
+        print("\nmissed: " + ("; ".join(misses) if misses else "none"))
 
 
 if __name__ == "__main__":

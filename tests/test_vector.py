@@ -121,6 +121,12 @@ def test_other_steppers_keep_rows_on_the_single_path(integrator):
     run_both("connenv/Swing-v0", 3, 20, 1, kwargs)
 
 
+def test_ball_rows_on_dop853_match():
+    """The ball's matrix ODE on per-row DOP853 (at a loose tolerance, where one step size for all rows would show)."""
+    kwargs = {**CASES["connenv/RollingBall-v0"], "integrator": "dop853", "rtol": 1e-5, "atol": 1e-7}
+    assert run_both("connenv/RollingBall-v0", 3, 40, 2, kwargs, VECTOR_ONLY["connenv/RollingBall-v0"]).sum() > 0
+
+
 @pytest.mark.parametrize(
     "kwargs",
     [

@@ -161,7 +161,7 @@ class RollingBallEnv(RenderedEnv):
     def step(self, action):
         v = self.velocity(finite_action(action, self.action_space))
         before = self.progress(self)
-        self.R = self.roll(self, v)
+        self.R = self.roll(self, v, self.stepper)
         self.position = self.position + v * self.dt
         self.update_error(self)
         self.t += self.dt
@@ -192,13 +192,13 @@ class RollingBallEnv(RenderedEnv):
         """v = v_max a, with a projected radially onto the unit disk."""
         return self.v_max * a / ops.column(ops.maximum(1.0, ops.hypot(a[..., 0], a[..., 1])))
 
-    def roll(self, s, v):
+    def roll(self, s, v, stepper):
         """R after a step at velocity v, or StepperError where the stepper has left SO(3)."""
-        R = self.stepper(self.system, s.R.reshape(*s.R.shape[:-2], 9), s.position, v, self.dt).reshape(s.R.shape)
+        R = stepper(self.system, s.R.reshape(*s.R.shape[:-2], 9), s.position, v, self.dt).reshape(s.R.shape)
         drift = np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1))
         if np.any(drift > DRIFT_LIMIT):
             raise StepperError(
-                f"{self.stepper} left SO(3) at t = {np.max(s.t) + self.dt:.6g} s with dt = {self.dt}, "
+                f"{stepper} left SO(3) at t = {np.max(s.t) + self.dt:.6g} s with dt = {self.dt}, "
                 f"radius = {self.system.radius}: ‖RᵀR − I‖ = {np.max(drift):.3g} > {DRIFT_LIMIT}"
             )
         return R
@@ -397,7 +397,7 @@ class RollingBallVectorEnv(TaskVectorEnv):
         env = self.env
         v = env.velocity(actions, BATCH)
         before = env.progress(self, BATCH)
-        self.R = env.roll(self, v)
+        self.R = env.roll(self, v, self.stepper)
         self.position = self.position + v * env.dt
         env.update_error(self, BATCH)
         self.t = self.t + env.dt
