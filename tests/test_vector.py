@@ -121,6 +121,18 @@ def test_other_steppers_keep_rows_on_the_single_path(integrator):
     run_both("connenv/Swing-v0", 3, 20, 1, kwargs)
 
 
+@pytest.mark.parametrize(
+    ("env_id", "kwargs"),
+    [
+        ("connenv/Swing-v0", {"max_radial_speed": 2.0}),  # the ramp on the exact stepper's per-row DOP853 fallback
+        ("connenv/Swing-v0", {"max_radial_speed": 2.0, "integrator": "rk4", "substeps": 3}),
+        ("connenv/Skier-v0", {"max_height_speed": 3.0}),
+    ],
+)
+def test_ramped_controls_match_with_a_ramp_time_per_row(env_id, kwargs):
+    assert run_both(env_id, 3, 50, 6, {**CASES[env_id], **kwargs}).sum() > 0
+
+
 def test_ball_rows_on_dop853_match():
     """The ball's matrix ODE on per-row DOP853 (at a loose tolerance, where one step size for all rows would show)."""
     kwargs = {**CASES["connenv/RollingBall-v0"], "integrator": "dop853", "rtol": 1e-5, "atol": 1e-7}
@@ -220,7 +232,6 @@ def test_bad_actions_are_refused(action, message):
     [
         (dict(num_envs=0), "num_envs=0 must be an integer ≥ 1"),
         (dict(num_envs=2, max_episode_steps=0), "max_episode_steps=0"),
-        (dict(num_envs=2, max_radial_speed=1.0), "max_radial_speed=1.0: the vector env takes only None"),
         (dict(num_envs=2, r_min=3.0), "r_max"),  # the single env's checks
         (dict(num_envs=2, render_mode="human"), "does not render"),
     ],

@@ -108,6 +108,19 @@ def control_segments(u: float, u_cmd: float, dt: float, max_speed: float | None 
     return [s for s in [(u, u_dot, ramp), (u_after, 0.0, dt - ramp)] if s[2] > 0.0]
 
 
+def control_segments_batch(u, u_cmd, dt: float, max_speed: float | None = None):
+    """control_segments over a batch of commands (arrays of one shape): the ramp and the hold, each as
+    (u at the start, u̇, duration) with arrays of that shape, a duration 0 where a row has no such segment; and u at
+    the end of the step. Without max_speed, one segment held at the command for dt."""
+    if max_speed is None:
+        return [(u_cmd, np.zeros_like(u_cmd), dt)], u_cmd
+    distance = u_cmd - u
+    ramp = np.minimum(dt, np.abs(distance) / max_speed)
+    u_dot = np.copysign(max_speed, distance)
+    u_after = np.where(ramp < dt, u_cmd, u + u_dot * ramp)  # where the step ends, the hold or not
+    return [(u, u_dot, ramp), (u_after, np.zeros_like(u_dot), dt - ramp)], u_after
+
+
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
 INTEGRATORS = ("exact", "rk4", *SCIPY_METHODS)
 STEPPER_OPTIONS = ("substeps", "rtol", "atol")

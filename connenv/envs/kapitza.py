@@ -371,13 +371,7 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
         u_dot_cmd = np.zeros((self.num_envs, 2))
         u_dot_cmd[:, env.axes] = actions * env.v_max
         starts, velocities, durations, self.u, self.u_dot = pivot_segments_batch(self.u, u_dot_cmd, env.a_max, env.dt)
-        self.y = self.y.copy()
-        for u, u_dot, tau in zip(starts, velocities, durations):
-            rows = tau > 0.0
-            if rows.all():
-                self.y = self.stepper(env.system, self.y, u, u_dot, tau)
-            elif rows.any():
-                self.y[rows] = self.stepper(env.system, self.y[rows], u[rows], u_dot[rows], tau[rows])
+        self.y = self._run_segments(env.system, self.y, zip(starts, velocities, durations))
         self.t = self.t + env.dt
         env._track(self, BATCH)
         return env._task(self, env._info(self, BATCH), BATCH)[0]

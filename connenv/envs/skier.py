@@ -7,7 +7,7 @@ import math
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import control_segments, make_stepper
+from connenv.core.steppers import control_segments, control_segments_batch, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
 from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
@@ -298,17 +298,16 @@ class SkierEnv(RenderedEnv):
 class SkierVectorEnv(TaskVectorEnv):
     """Skier-v0 over a batch (``gym.make_vec("connenv/Skier-v0", num_envs=N)``; see ``connenv.envs.vector``).
 
-    Takes Skier-v0's make kwargs except ``max_height_speed`` (see ``TaskVectorEnv.jump_only``).
+    Takes Skier-v0's make kwargs; with ``max_height_speed`` each row ramps for its own time, so
+    the steppers get one segment length per row.
     """
 
     single_env = SkierEnv
-    jump_only = "max_height_speed"
 
     def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
         super().__init__(num_envs, max_episode_steps, **kwargs)
         self.y, self.h = np.zeros((num_envs, 2)), np.full(num_envs, self.env.h_min)
         self.t, self.side = np.zeros(num_envs), np.zeros(num_envs)
-        self.hold = np.zeros((num_envs, 1))  # ḣ = 0: h jumps to the command and is held over the step
 
     def _capture(self, i):
         env = self.env
@@ -318,8 +317,9 @@ class SkierVectorEnv(TaskVectorEnv):
         env = self.env
         h_cmd = env.command(actions[:, 0])
         progress_before = env._progress(env.system.energy(self.y, self.h))
-        self.y = self.stepper(env.system, self.y, h_cmd[:, None], self.hold, env.dt)
-        self.h, self.t = h_cmd, self.t + env.dt
+        segments, h_end = control_segments_batch(self.h, h_cmd, env.dt, env.max_height_speed)
+        self.y = self._run_segments(env.system, self.y, [(h[:, None], h_dot[:, None], tau) for h, h_dot, tau in segments])
+        self.h, self.t = h_end, self.t + env.dt
         return env.reward(progress_before, env._progress(env.system.energy(self.y, self.h)), BATCH)
 
     def _observe(self):

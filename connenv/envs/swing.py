@@ -7,7 +7,7 @@ import math
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import control_segments, make_stepper
+from connenv.core.steppers import control_segments, control_segments_batch, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
 from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
@@ -233,16 +233,15 @@ class SwingEnv(RenderedEnv):
 class SwingVectorEnv(TaskVectorEnv):
     """Swing-v0 over a batch (``gym.make_vec("connenv/Swing-v0", num_envs=N)``; see ``connenv.envs.vector``).
 
-    Takes Swing-v0's make kwargs except ``max_radial_speed`` (see ``TaskVectorEnv.jump_only``).
+    Takes Swing-v0's make kwargs; with ``max_radial_speed`` each row ramps for its own time, so
+    the steppers get one segment length per row.
     """
 
     single_env = SwingEnv
-    jump_only = "max_radial_speed"
 
     def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
         super().__init__(num_envs, max_episode_steps, **kwargs)
         self.y, self.r, self.t = np.zeros((num_envs, 2)), np.full(num_envs, self.env.r_max), np.zeros(num_envs)
-        self.hold = np.zeros((num_envs, 1))  # ṙ = 0: r jumps to the command and is held over the step
 
     def _capture(self, i):
         self.y[i], self.r[i], self.t[i] = self.env.y, self.env.r, self.env.t
@@ -251,8 +250,9 @@ class SwingVectorEnv(TaskVectorEnv):
         env = self.env
         r_cmd = env.command(actions[:, 0])
         lift_before = env.system.lift(self.y, self.r)
-        self.y = self.stepper(env.system, self.y, r_cmd[:, None], self.hold, env.dt)
-        self.r, self.t = r_cmd, self.t + env.dt
+        segments, r_end = control_segments_batch(self.r, r_cmd, env.dt, env.max_radial_speed)
+        self.y = self._run_segments(env.system, self.y, [(r[:, None], r_dot[:, None], tau) for r, r_dot, tau in segments])
+        self.r, self.t = r_end, self.t + env.dt
         return env.reward(lift_before, env.system.lift(self.y, self.r), BATCH)
 
     def _observe(self):

@@ -89,14 +89,8 @@ class TaskVectorEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
     single_env: type
     clips_actions = True  # actions are clipped into the space, as check_action does; else only checked
-    jump_only: str | None = None  # the make kwarg of a ramp speed, refused: a ramp gives each row its own segments
 
     def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
-        if self.jump_only is not None and kwargs.get(self.jump_only) is not None:
-            raise ValueError(
-                f"{self.jump_only}={kwargs[self.jump_only]!r}: the vector env takes only None, since a ramp gives each "
-                "row its own segment lengths; use gym.make_vec(..., vectorization_mode='sync') for it"
-            )
         for name, value, low in (("num_envs", num_envs, 1), ("max_episode_steps", max_episode_steps, 1)):
             if not (value is None and name == "max_episode_steps") and (
                 isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low
@@ -170,6 +164,17 @@ class TaskVectorEnv(VectorEnv):
             masked[key] = self._with_masks(value, mask) if isinstance(value, dict) else value
             masked[f"_{key}"] = mask
         return masked
+
+    def _run_segments(self, system, y, segments):
+        """y after control segments (u, u̇, duration) given per row, each row skipping its segments of length 0."""
+        for u, u_dot, tau in segments:
+            rows = tau > 0.0
+            if np.all(rows):
+                y = self.stepper(system, y, u, u_dot, tau)
+            elif np.any(rows):
+                y = y.copy()
+                y[rows] = self.stepper(system, y[rows], u[rows], u_dot[rows], tau[rows])
+        return y
 
     def _terminated(self, info):
         """Which rows' episodes end by the task: success, unless the task says otherwise."""
