@@ -358,13 +358,14 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
     def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
         super().__init__(num_envs, max_episode_steps, **kwargs)
         self.y, self.u, self.u_dot = np.zeros((num_envs, 2)), np.zeros((num_envs, 2)), np.zeros((num_envs, 2))
-        self.t = np.zeros(num_envs)
+        self.t, self.step_info = np.zeros(num_envs), None
         for name in self.RECORD:
             setattr(self, name, np.zeros(num_envs, type(getattr(self.env, name))))
 
     def _capture(self, i):
         for name in ("y", "u", "u_dot", "t", *self.RECORD):
             getattr(self, name)[i] = getattr(self.env, name)
+        self.step_info = None  # a row has changed since the step's info
 
     def _advance(self, actions):
         env = self.env
@@ -374,16 +375,20 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
         self.y = self._run_segments(env.system, self.y, zip(starts, velocities, durations))
         self.t = self.t + env.dt
         env._track(self, BATCH)
-        return env._task(self, env._info(self, BATCH), BATCH)[0]
+        self.step_info = env._info(self, BATCH)  # the reward needs it; kept for _describe unless a row resets
+        reward, self.task_terminated = env._task(self, self.step_info, BATCH)
+        return reward
 
     def _terminated(self, info):
-        return self.env._task(self, info, BATCH)[1]
+        return self.task_terminated
 
     def _observe(self):
         return self.env._obs(self, BATCH)
 
     def _describe(self):
-        return self.env._info(self, BATCH)
+        info = self.step_info if self.step_info is not None else self.env._info(self, BATCH)
+        self.step_info = None
+        return info
 
 
 class KapitzaSwingUpVectorEnv(KapitzaPendulumVectorEnv):

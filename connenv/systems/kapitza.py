@@ -121,14 +121,27 @@ def pivot_segments(u, u_dot_cmd, travel: float, dt: float):
     u_end = u + u_dot * dt
     if np.all(np.abs(u_end) <= travel):  # no stop within the step
         return [(u, u_dot, dt)], u_end, u_dot
-    starts, velocities, durations, u, u_dot = pivot_segments_batch(u, u_dot, travel, dt)
-    return [(s, v, float(d)) for s, v, d in zip(starts, velocities, durations) if d > 0.0], u, u_dot
+    end_stops = np.copysign(travel, u_dot)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = np.where(u_dot != 0.0, np.maximum((end_stops - u) / u_dot, 0.0), math.inf)
+    segments, start = [], 0.0
+    for end in sorted({float(s) for s in reach if s < dt} | {dt}):
+        if end > start:
+            segments.append((u.copy(), u_dot.copy(), end - start))
+            u = u + u_dot * (end - start)
+        stopped = reach <= end
+        u[stopped], u_dot[stopped] = end_stops[stopped], 0.0
+        start = end
+    return segments, u, u_dot
 
 
 def pivot_segments_batch(u, u_dot_cmd, travel: float, dt: float):
     """pivot_segments over a batch of pivots (..., 2): the starts (3, ..., 2), velocities (3, ..., 2) and
     durations (3, ...) of each row's segments in order, a duration 0 where a row has fewer than three, and
-    (u, u̇) at the end of the step. A segment ends where an axis reaches its stop (at most two) or at dt."""
+    (u, u̇) at the end of the step. A segment ends where an axis reaches its stop (at most two) or at dt.
+
+    The same arithmetic as pivot_segments, row by row (tests/test_vector.py compares them), written over arrays;
+    pivot_segments keeps its loop, faster on one pivot."""
     u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
     free = np.all(np.abs(u + u_dot * dt) <= travel, axis=-1, keepdims=True)  # no stop within the step
     end_stops = np.copysign(travel, u_dot)
