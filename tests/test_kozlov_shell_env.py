@@ -194,7 +194,7 @@ def test_gait_planner_predicts_a_batch_like_sb3():
         ({"success_radius": 0.0}, "success_radius=0.0"),
         ({"success_radius": 0.6}, "success_radius=0.6"),
         ({"integrator": "exact"}, "needs a closed-form flow"),
-        ({"integrator": "euler"}, "integrator='euler'"),
+        ({"integrator": "leapfrog"}, "integrator='leapfrog'"),
         ({"integrator": "rk4", "substeps": 0}, "substeps=0"),
         ({"integrator": "dop853", "rtol": -1e-9}, "rtol=-1e-09"),
         ({"bogus": 1}, "bogus"),

@@ -146,7 +146,7 @@ def test_bounded_height_speed_moves_h_at_that_speed():
         ({"mass": -70.0}, "mass=-70.0"),
         ({"dt": 0.0}, "dt=0.0"),
         ({"max_height_speed": -1.0}, "max_height_speed=-1.0"),
-        ({"integrator": "euler"}, "integrator='euler'"),
+        ({"integrator": "leapfrog"}, "integrator='leapfrog'"),
         ({"integrator": "exact"}, "exact"),
         ({"trail": "moguls"}, "trail='moguls'"),
         ({"trail": 3.0}, "trail=3.0"),

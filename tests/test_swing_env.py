@@ -122,7 +122,7 @@ def test_controller_predict_handles_a_batch_like_sb3():
         ({"target_amplitude": 3.5}, "target_amplitude=3.5"),
         ({"target_amplitude": 0.0}, "target_amplitude=0.0"),
         ({"max_radial_speed": 0.0}, "max_radial_speed=0.0"),
-        ({"integrator": "euler"}, "integrator='euler'"),
+        ({"integrator": "leapfrog"}, "integrator='leapfrog'"),
         ({"integrator": "rk4", "substeps": 0}, "substeps=0"),
         ({"integrator": "dop853", "rtol": -1e-9}, "rtol=-1e-09"),
         ({"bogus": 1}, "bogus"),

@@ -8,7 +8,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import make_stepper
+from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
@@ -17,6 +17,7 @@ TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform directi
 TARGET_BOUND = 3.0  # m: the observed target is clipped here
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 TIME_COST = 0.01  # reward paid per step until success
+MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
 DEFAULT_INTEGRATOR = "dop853"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # the fastest passing stepper, measured: see the class docstring
 STATE_KEYS = ("x", "y", "theta", "u", "momentum")
@@ -114,8 +115,13 @@ class KozlovShellEnv(RenderedEnv):
     | u2_max | 0.25 | (0, ∞), likewise |
     | dt | 0.1 | (0, ∞) |
     | success_radius | 0.05 | (0, 0.5) |
-    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters
+    (among them the mass ratio m/(M + λ₁)): a non-finite state, or, in the full model, a spatial momentum that
+    has moved by more than 0.1 of its norm since reset. Semi-implicit Euler updates μ, then the pose with the
+    new μ; in the reduced model μ = 0 and it is explicit Euler.
 
     The default stepper is the fastest that keeps, over 300 steps of random mass motions, the pose within 1e-8
     of a reference (DOP853 at rtol 1e-13) in the reduced and the full model and the spatial momentum within
@@ -189,13 +195,24 @@ class KozlovShellEnv(RenderedEnv):
             self.target = _check_vector("target", options["target"], 2)
         self._set_state(options.get("state", {}))
         self.t = 0.0
+        self.momentum0 = self.full_system.spatial_momentum(np.concatenate([self.y[:3], self._momentum()]))
         self.path = [tuple(self.y[:2])]
         return self._obs(), self._info()
 
     def step(self, action):
         u_cmd = check_action(action, self.action_space) * self.u_max
         distance_before = self._distance()
-        self.y = self.stepper(self.system, self.y, self.u, (u_cmd - self.u) / self.dt, self.dt)
+        try:
+            self.y = self.stepper(self.system, self.y, self.u, (u_cmd - self.u) / self.dt, self.dt)
+            if self.system is self.full_system:
+                drift = np.linalg.norm(self.full_system.spatial_momentum(self.y) - self.momentum0)
+                if not drift <= MOMENTUM_ERROR_BOUND * np.linalg.norm(self.momentum0):
+                    raise StepperError(
+                        f"{self.stepper} diverged: the spatial momentum moved by {drift:.3g}, more than "
+                        f"{MOMENTUM_ERROR_BOUND} of its norm {np.linalg.norm(self.momentum0):.3g}"
+                    )
+        except StepperError as error:
+            raise self._stepper_error(error) from error
         self.u, self.t = u_cmd, self.t + self.dt
         self.path.append(tuple(self.y[:2]))
         info = self._info()
@@ -231,6 +248,18 @@ class KozlovShellEnv(RenderedEnv):
             self.system, self.y = self.full_system, np.array([*pose, *momentum])
         else:
             self.system, self.y = self.reduced_system, np.array(pose)
+
+    def parameters(self):
+        system = self.full_system
+        return {
+            "mass": system.mass,
+            "shell_mass": system.shell_mass,
+            "m/(M + λ₁)": round(system.mass / (system.shell_mass + system.added_masses[0]), 12),
+            "a": system.a,
+            "b": system.b,
+            "rho": system.rho,
+            "model": "full" if self.system is system else "reduced",
+        }
 
     def _momentum(self):
         return self.y[3:] if self.system is self.full_system else np.zeros(3)

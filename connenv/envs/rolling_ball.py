@@ -101,10 +101,12 @@ class RollingBallEnv(RenderedEnv):
     | v_max | 1.0 | (0, ∞) m/s |
     | dt | 0.1 | (0, ∞) s |
     | tolerance | 0.05 | (0, π) rad |
-    | integrator | "exact" | "exact" (Rodrigues), "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
-    | substeps (rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
+    | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
 
-    A stepper whose R drifts more than 1e-6 off SO(3) (‖RᵀR − I‖) raises `connenv.core.StepperError`.
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
+    non-finite state, or R more than 1e-6 off SO(3) (‖RᵀR − I‖, the invariant of Ṙ = ω̂R). Semi-implicit Euler
+    is refused (ValueError): the model is kinematic, R is no (q, p) pair, and the method would be explicit Euler.
 
     Every `info` has `"state"` (`x`, `y`, `R` (3×3), `t`), `"angle_error"` (e, rad), `"path_length"` (m rolled
     since reset), `"distance"` (the optimal arc's length from the start attitude, m), `"path_ratio"` (path
@@ -158,13 +160,13 @@ class RollingBallEnv(RenderedEnv):
         a = finite_action(action, self.action_space)
         v = self.v_max * a / max(1.0, float(np.hypot(*a)))
         before = self._progress()
-        R = self.stepper(self.system, self.R.ravel(), self.position, v, self.dt).reshape(3, 3)
-        drift = float(np.linalg.norm(R.T @ R - np.eye(3)))
-        if drift > DRIFT_LIMIT:
-            raise StepperError(
-                f"{self.stepper} left SO(3) at t = {self.t + self.dt:.6g} s with dt = {self.dt}, "
-                f"radius = {self.system.radius}: ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}"
-            )
+        try:
+            R = self.stepper(self.system, self.R.ravel(), self.position, v, self.dt).reshape(3, 3)
+            drift = float(np.linalg.norm(R.T @ R - np.eye(3)))
+            if not drift <= DRIFT_LIMIT:
+                raise StepperError(f"{self.stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")
+        except StepperError as error:
+            raise self._stepper_error(error) from error
         self.R, self.position = R, self.position + v * self.dt
         self._update_error()
         self.t += self.dt
@@ -211,6 +213,9 @@ class RollingBallEnv(RenderedEnv):
         self.position = np.array([x, y])
         if "R" in state:
             self.R = check_rotation("state R", state["R"])
+
+    def parameters(self):
+        return {"radius": self.system.radius, "v_max": self.v_max}
 
     def _update_error(self):
         self.error = attitude_error(self.R, self.R_target)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import control_segments, make_stepper
+from connenv.core.steppers import StepperError, control_segments, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
 from connenv.systems.skier import Skier, check_curvature
@@ -15,6 +15,7 @@ from connenv.systems.trails import make_trail
 
 PROGRESS_FLOOR = 1e-4  # floor of the progress in the reward's logarithm
 TIME_COST = 0.01  # reward paid per step until success
+ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g Δz) past which it has diverged: StepperError
 SPEED_BOUND = 3.0  # |observed speed| is clipped here
 START_OFFSETS = (0.5, 2.0)  # m from the trail's lowest point, either side
 DEFAULT_INTEGRATOR = "dop853"
@@ -106,8 +107,12 @@ class SkierEnv(RenderedEnv):
     | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; user trails: domain=(lo, hi) and the expression's other symbols |
     | target_x | None | required for a trail without rims: a point of the domain above the bottom |
     | max_height_speed | None | None or (0, ∞) m/s |
-    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
+    non-finite state, or an energy error past 0.1 m g Δz (Δz as in the observation). The energy error is the
+    change of E over the segments where h is held, where E is conserved, summed since reset.
 
     Beyond its domain a trail continues as its osculating parabola, so the step
     that crosses a rim stays finite. Every `info` has `"state"` (`x`, `x_dot`,
@@ -161,6 +166,7 @@ class SkierEnv(RenderedEnv):
             raise ValueError(f"target_x={target_x!r} is at the bottom of the trail; nothing to climb")
         self.speed_scale = math.sqrt(2.0 * self.system.g * (self.z_goal - self.z_floor))
         self.kappa_bound = float(np.max(np.abs(f2 / sigma**3))) * self.h_max
+        self.min_lever = float(np.min(1.0 - f2 / sigma**3 * self.h_max))  # min of 1 − κ h_max on the trail
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         high = np.array([1.0, 1.0, 1.0, SPEED_BOUND, 1.0, self.kappa_bound], np.float32)
         low = -high
@@ -169,6 +175,7 @@ class SkierEnv(RenderedEnv):
 
         self.y = np.zeros(2)  # (x, p)
         self.h, self.t, self.side = self.h_min, 0.0, 1.0
+        self.energy_error = 0.0  # the stepper's: the change of E on held segments since reset
 
     # -- Gymnasium API -------------------------------------------------------
 
@@ -178,7 +185,7 @@ class SkierEnv(RenderedEnv):
         check_keys("reset options", options, {"state"})
         offset = self.np_random.uniform(*START_OFFSETS) * self.np_random.choice([-1.0, 1.0])
         x0 = min(max(self.x_bottom + offset, self.trail.lo), self.trail.hi)
-        self.y, self.h, self.t = np.array([x0, 0.0]), self.h_min, 0.0
+        self.y, self.h, self.t, self.energy_error = np.array([x0, 0.0]), self.h_min, 0.0, 0.0
         if "state" in options:
             self._set_state(options["state"])
         self.side = math.copysign(1.0, self.y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
@@ -188,8 +195,17 @@ class SkierEnv(RenderedEnv):
         a = check_action(action, self.action_space)[0]
         h_cmd = self.h_min + 0.5 * (a + 1.0) * (self.h_max - self.h_min)
         progress_before = self._progress(self._energy())
-        for h, h_dot, tau in control_segments(self.h, h_cmd, self.dt, self.max_height_speed):
-            self.y = self.stepper(self.system, self.y, np.array([h]), np.array([h_dot]), tau)
+        try:
+            for h, h_dot, tau in control_segments(self.h, h_cmd, self.dt, self.max_height_speed):
+                energy = float(self.system.energy(self.y, h)) if h_dot == 0.0 else None
+                self.y = self.stepper(self.system, self.y, np.array([h]), np.array([h_dot]), tau)
+                if energy is not None:
+                    self.energy_error += float(self.system.energy(self.y, h)) - energy
+            bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * (self.z_goal - self.z_floor)
+            if not abs(self.energy_error) <= bound:
+                raise StepperError(f"{self.stepper} diverged: |energy error| = {abs(self.energy_error):.3g} J > {bound:.3g} J")
+        except StepperError as error:
+            raise self._stepper_error(error) from error
         self.h = h + h_dot * tau
         self.t += self.dt
         info = self._info()
@@ -233,6 +249,15 @@ class SkierEnv(RenderedEnv):
             w = self.system.geometry(x, h)[5]
             p = self.system.mass * w * w * check_number("state x_dot", state.get("x_dot", 0.0))
         self.y, self.h = np.array([x, p]), h
+
+    def parameters(self):
+        return {
+            "h_min": self.h_min,
+            "h_max": self.h_max,
+            "min 1 − κ h_max": round(self.min_lever, 12),
+            "mass": self.system.mass,
+            "g": self.system.g,
+        }
 
     def _energy(self):
         return float(self.system.energy(self.y, self.h))
