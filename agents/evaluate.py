@@ -138,9 +138,9 @@ def make_policy(spec: str, env_id: str, seed: int, algo: str | None = None) -> t
 def run_episode(env: gym.Env, policy, seed: int) -> Episode:
     """One episode from reset(seed=seed), deterministic actions."""
     obs, _ = env.reset(seed=seed)
-    ret, length, done = 0.0, 0, False
-    while not done:
-        action, _ = policy.predict(obs, deterministic=True)
+    ret, length, done, state = 0.0, 0, False, None
+    while not done:  # state and episode_start as SB3's evaluate_policy passes them, for recurrent policies
+        action, state = policy.predict(obs, state=state, episode_start=np.array([length == 0]), deterministic=True)
         obs, reward, terminated, truncated, info = env.step(action)
         ret, length, done = ret + float(reward), length + 1, terminated or truncated
     measures = {key: float(info[key]) for key in env.unwrapped.metadata.get("measures", ())}

@@ -10,3 +10,5 @@ register(id="connenv/RollingBall-v0", entry_point="connenv.envs.rolling_ball:Rol
 register(id="connenv/RollingBallPose-v0", entry_point="connenv.envs.rolling_ball:RollingBallPoseEnv", max_episode_steps=300)
 register(id="connenv/RollingBallGoal-v0", entry_point="connenv.envs.rolling_ball:RollingBallGoalEnv", max_episode_steps=200)
 register(id="connenv/KozlovShell-v0", entry_point="connenv.envs.kozlov_shell:KozlovShellEnv", max_episode_steps=300)
+register(id="connenv/KapitzaPendulum-v0", entry_point="connenv.envs.kapitza:KapitzaPendulumEnv", max_episode_steps=2000)
+register(id="connenv/KapitzaSwingUp-v0", entry_point="connenv.envs.kapitza:KapitzaSwingUpEnv", max_episode_steps=6000)

@@ -110,23 +110,24 @@ class Scipy:
 @dataclass(frozen=True)
 class Exact:
     """The system's closed-form step: ``exact_segment`` on every segment where the system has one; else
-    ``exact_flow`` on segments where u is held, and ``fallback`` where it moves and for the states where
-    ``exact_flow`` answers NaN (outside the closed form's accurate domain)."""
+    ``exact_flow`` on segments where u is held, and ``fallback`` where it moves. States for which the closed
+    form answers NaN (outside its accurate domain) go to ``fallback`` too."""
 
     fallback: Scipy = Scipy()
 
     def __call__(self, system, y, u, u_dot, tau):
         if hasattr(system, "exact_segment"):
-            return _finite(system.exact_segment(y, u, u_dot, tau), self)
-        if np.any(u_dot != 0.0):
+            flow = system.exact_segment(y, u, u_dot, tau)
+        elif np.any(u_dot != 0.0):
             return self.fallback(system, y, u, u_dot, tau)
-        flow = system.exact_flow(y, u, tau)
+        else:
+            flow = system.exact_flow(y, u, tau)
         outside = np.isnan(flow).any(axis=-1)
         if np.any(outside):
             y = np.asarray(y, float)
-            u = np.broadcast_to(u, (*y.shape[:-1], np.shape(u)[-1]))
+            u, u_dot = (np.broadcast_to(a, (*y.shape[:-1], np.shape(a)[-1])) for a in (u, u_dot))
             flow = np.array(flow)
-            flow[outside] = self.fallback(system, y[outside], u[outside], np.zeros_like(u[outside]), tau)
+            flow[outside] = self.fallback(system, y[outside], u[outside], u_dot[outside], tau)
         return _finite(flow, self)
 
 

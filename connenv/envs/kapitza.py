@@ -1,0 +1,328 @@
+"""KapitzaPendulum-v0 and KapitzaSwingUp-v0: hold a pendulum inverted, or swing it up, by moving its pivot."""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.steppers import make_stepper
+from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
+from connenv.envs.base import RenderedEnv
+from connenv.systems.kapitza import KapitzaPendulum, pivot_segments
+
+PIVOTS = {"vertical": (1,), "horizontal": (0,), "planar": (0, 1)}  # actuated axes of u = (u₁, u₂)
+SPEED_BOUND = 5.0  # |observed θ̇| in units of 2√(g/l) is clipped here
+HOLD_START = 0.2  # rad: KapitzaPendulum-v0 starts within this of inverted, at rest
+HANG_START = (0.05, 0.1)  # rad: KapitzaSwingUp-v0 starts this far from hanging, either side, at rest
+STATE_KEYS = ("theta", "theta_dot", "p", "u", "u_dot")
+
+
+class KapitzaPendulumEnv(RenderedEnv):
+    r"""
+    ## Description
+
+    A pendulum, rod length l and bob mass m, whose pivot the controller moves: the pivot's position
+    u = (u₁, u₂) is an *active constraint* (Bressan). θ is the rod's angle from the downward vertical and
+    p = m l² θ̇ + m l u̇·(cos θ, sin θ) its conjugate momentum:
+
+        θ̇ = (p − m l u̇·n) / (m l²),    ṗ = m l θ̇ u̇·n′ − m g l sin θ,    n = (cos θ, sin θ), n′ = (−sin θ, cos θ)
+
+    The system is *general* in Bressan's classification: u̇ enters quadratically, so fast vibrations of the
+    pivot act as a force. Vibrated vertically, u₂ = a cos ωt with a ≪ l, the inverted pendulum is stable when
+    a²ω² > 2 g l (Kapitza 1951): the averaged motion feels U = −m g l cos θ + ¼ m a²ω² sin²θ. The goal is to
+    hold the pendulum inverted, |θ − π| ≤ `tolerance`, for the whole episode.
+
+    ## Action Space
+
+    `Box(-1, 1, (k,), float32)`, k = 1 for a vertical or horizontal pivot and 2 for a planar one; actions
+    outside are clipped, a wrong shape or a non-finite value raises ValueError.
+
+    | Num | Action | Min | Max |
+    |-----|--------|-----|-----|
+    | 0 | pivot velocity along the actuated axis (u̇₂ vertical, u̇₁ horizontal, u̇₁ planar) = v_max · a | -1 | 1 |
+    | 1 | planar only: u̇₂ = v_max · a | -1 | 1 |
+
+    The pivot moves at the commanded velocity, constant over the step. Its travel is bounded, |uᵢ| ≤ a_max:
+    an axis that meets its end stop rests there for the rest of the step. Both the start of a motion and the
+    stop are jumps of u̇, which the equations admit (only u̇ enters them): p is continuous, θ̇ jumps by
+    −Δu̇·n/l, and the pivot never jumps in position nor leaves its travel.
+
+    ## Observation Space
+
+    `Box(3 + 2k,) float32`:
+
+    | Num | Observation | Min | Max |
+    |-----|-------------|-----|-----|
+    | 0 | cos θ | -1 | 1 |
+    | 1 | sin θ | -1 | 1 |
+    | 2 | θ̇ / (2√(g/l)), 1 at the bottom for a pendulum that just reaches the top | -5 | 5 |
+    | 3 (3, 4) | pivot position along the actuated axes, uᵢ / a_max | -1 | 1 |
+    | 4 (5, 6) | pivot velocity along the actuated axes at the end of the step, u̇ᵢ / v_max | -1 | 1 |
+
+    θ̇ is clipped to its bound (reached only when spinning fast). There is no clock: the pivot's own state
+    (u, u̇) is the phase of a vibration, and the reference controllers read it there (`agents.kapitza`).
+
+    ## Rewards
+
+    With δ = |θ − π| (θ wrapped) after the step: `reward = 1 − (δ/tolerance)²` while held, in [0, 1].
+
+    ## Starting State
+
+    θ₀ = π + uniform(−0.2, 0.2) rad (np_random), at rest, pivot at rest at the centre, t = 0.
+    `reset(options={"state": {...}})` sets any of `theta`, `theta_dot` or `p`, `u` (2), `u_dot` (2) exactly;
+    u and u̇ are zero along unactuated axes, |uᵢ| ≤ a_max and |u̇ᵢ| ≤ v_max.
+
+    ## Episode End
+
+    Terminated when the pendulum falls, δ > tolerance (`info["is_success"]` turns False). Truncated after 2000
+    steps (10 s at the default dt) by the registration's time limit; an episode that reaches it has held the
+    pendulum inverted throughout.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | pivot | "vertical" | "vertical", "horizontal", "planar" |
+    | length | 1.0 | (0, ∞), l |
+    | mass | 1.0 | (0, ∞) |
+    | g | 9.81 | (0, ∞) |
+    | v_max | 10.0 | (0, ∞) m/s |
+    | a_max | 0.1 | (0, length) m |
+    | dt | 0.005 | (0, ∞) |
+    | tolerance | 0.3 | (0, π) rad |
+    | damping | 0.0 | [0, ∞) N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
+    | integrator | "exact" | "exact", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (rk4) / rtol, atol (scipy, and exact's fallback) | | see `connenv.core.steppers` |
+
+    The default integrator is exact: while u̇ is constant the pivot moves uniformly, so in its frame the rod
+    swings as a plain pendulum, whose flow is closed-form (Jacobi elliptic functions). Near the separatrix,
+    and with damping, which has no closed form, the exact stepper hands the step to DOP853.
+
+    Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"`
+    (E = ½ m l² θ̇² − m g l cos θ, J, the pendulum's energy in the frame of the pivot's velocity, conserved
+    while u̇ is constant), `"deviation"` (δ, rad), `"max_deviation"` (its largest value this episode) and
+    `"is_success"`.
+    """
+
+    metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ("max_deviation",)}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        pivot: str = "vertical",
+        length: float = 1.0,
+        mass: float = 1.0,
+        g: float = 9.81,
+        v_max: float = 10.0,
+        a_max: float = 0.1,
+        dt: float = 0.005,
+        tolerance: float = 0.3,
+        damping: float = 0.0,
+        integrator: str = "exact",
+        **stepper_options,
+    ):
+        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        if pivot not in PIVOTS:
+            raise ValueError(f"pivot={pivot!r} is not one of {list(PIVOTS)}")
+        self.pivot, self.axes = pivot, list(PIVOTS[pivot])
+        length = check_number("length", length, 0.0, open_low=True)
+        self.system = KapitzaPendulum(
+            length=length,
+            mass=check_number("mass", mass, 0.0, open_low=True),
+            g=check_number("g", g, 0.0, open_low=True),
+            damping=check_number("damping", damping, 0.0),
+        )
+        self.v_max = check_number("v_max", v_max, 0.0, open_low=True)
+        self.a_max = check_number("a_max", a_max, 0.0, length, open_low=True, open_high=True)
+        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
+        check_stepper_options(type(self).__name__, stepper_options, KapitzaPendulumEnv)
+        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+
+        self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / length)
+        k = len(self.axes)
+        self.action_space = spaces.Box(-1.0, 1.0, (k,), np.float32)
+        high = np.array([1.0, 1.0, SPEED_BOUND] + [1.0] * 2 * k, np.float32)
+        self.observation_space = spaces.Box(-high, high, dtype=np.float32)
+
+        self.y = np.array([math.pi, 0.0])  # (θ, p)
+        self.u, self.u_dot, self.t, self.max_deviation = np.zeros(2), np.zeros(2), 0.0, 0.0
+
+    # -- Gymnasium API -------------------------------------------------------
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        options = dict(options or {})
+        check_keys("reset options", options, {"state"})
+        self.y = np.array([self._start_angle(), 0.0])
+        self.u, self.u_dot, self.t = np.zeros(2), np.zeros(2), 0.0
+        if "state" in options:
+            self._set_state(options["state"])
+        self._start_task()
+        return self._obs(), self._info()
+
+    def step(self, action):
+        u_dot_cmd = np.zeros(2)
+        u_dot_cmd[self.axes] = check_action(action, self.action_space) * self.v_max
+        segments, self.u, self.u_dot = pivot_segments(self.u, u_dot_cmd, self.a_max, self.dt)
+        for u, u_dot, tau in segments:
+            self.y = self.stepper(self.system, self.y, u, u_dot, tau)
+        self.t += self.dt
+        self._track()
+        info = self._info()
+        reward, terminated = self._task(info)
+        if self.render_mode == "human":
+            self.render()
+        return self._obs(), reward, terminated, False, info
+
+    def _make_renderer(self):
+        from connenv.envs.rendering import KapitzaRenderer
+
+        return KapitzaRenderer(self.system.length, self.a_max, self.render_mode, self.metadata["render_fps"])
+
+    def _draw(self, renderer):
+        return renderer.draw(self.y[0], self.u, self.t)
+
+    # -- the task ------------------------------------------------------------
+
+    def _start_angle(self):
+        return math.pi + self.np_random.uniform(-HOLD_START, HOLD_START)
+
+    def _start_task(self):
+        self.max_deviation = self._deviation()
+
+    def _track(self):
+        """Update the task's record of the episode after a step."""
+        self.max_deviation = max(self.max_deviation, self._deviation())
+
+    def _task_info(self):
+        return {"max_deviation": self.max_deviation}
+
+    def _task(self, info):
+        """(reward, terminated): hold inverted; the episode ends when the pendulum falls."""
+        reward = 1.0 - (info["deviation"] / self.tolerance) ** 2
+        return reward, not info["is_success"]
+
+    def _success(self):
+        return self._deviation() <= self.tolerance
+
+    # -- internals -----------------------------------------------------------
+
+    def _set_state(self, state):
+        check_keys("options['state']", state, STATE_KEYS)
+        if "theta_dot" in state and "p" in state:
+            raise ValueError("options['state'] gives both theta_dot and p; give one of them")
+        self.u = self._pivot_vector("u", state.get("u", (0.0, 0.0)), self.a_max)
+        self.u_dot = self._pivot_vector("u_dot", state.get("u_dot", (0.0, 0.0)), self.v_max)
+        theta = check_number("state theta", state.get("theta", self.y[0]))
+        if "p" in state:
+            p = check_number("state p", state["p"])
+        else:
+            theta_dot = check_number("state theta_dot", state.get("theta_dot", 0.0))
+            p = float(self.system.momentum(np.float64(theta), theta_dot, self.u_dot))
+        self.y = np.array([theta, p])
+
+    def _pivot_vector(self, name, value, bound):
+        """A pivot position or velocity: 2 finite numbers, zero on unactuated axes, within ±bound."""
+        try:
+            vector = np.array(value, dtype=float)
+        except (TypeError, ValueError):
+            vector = None
+        if vector is None or vector.shape != (2,):
+            raise ValueError(f"state {name}={value!r} must be a sequence of 2 real numbers (horizontal, vertical)")
+        for i, v in enumerate(vector):
+            limit = bound if i in self.axes else 0.0
+            check_number(f"state {name}[{i}] (pivot={self.pivot!r})", v, -limit, limit)
+        return vector
+
+    def _theta_dot(self):
+        return float(self.system.theta_dot(self.y, self.u_dot))
+
+    def _deviation(self):
+        """|θ − π| with θ wrapped to (−π, π]: 0 inverted, π hanging."""
+        return math.pi - abs(math.atan2(math.sin(self.y[0]), math.cos(self.y[0])))
+
+    def _obs(self):
+        theta = self.y[0]
+        speed = min(max(self._theta_dot() / self.theta_dot_scale, -SPEED_BOUND), SPEED_BOUND)
+        pivot = [*(self.u[self.axes] / self.a_max), *(self.u_dot[self.axes] / self.v_max)]
+        return np.array([math.cos(theta), math.sin(theta), speed, *pivot], np.float32)
+
+    def _info(self):
+        theta, p = self.y
+        state = {
+            "theta": float(theta),
+            "theta_dot": self._theta_dot(),
+            "p": float(p),
+            "u": tuple(map(float, self.u)),
+            "u_dot": tuple(map(float, self.u_dot)),
+            "t": self.t,
+        }
+        return {
+            "state": state,
+            "energy": float(self.system.energy(self.y, self.u_dot)),
+            "deviation": self._deviation(),
+            **self._task_info(),
+            "is_success": self._success(),
+        }
+
+
+class KapitzaSwingUpEnv(KapitzaPendulumEnv):
+    r"""
+    ## Description
+
+    KapitzaPendulum-v0's pendulum and pivot, started hanging near rest: swing it up by moving the pivot,
+    then hold it inverted. Vertical pivot motion pumps energy in by parametric resonance, near twice the
+    pendulum's natural frequency √(g/l); fast vertical vibration then holds it inverted (Kapitza).
+
+    ## Action Space, Observation Space, Arguments
+
+    As KapitzaPendulum-v0, with one more argument, `hold_time` (default 2.0 s, range (0, ∞)).
+
+    ## Rewards
+
+    `reward = −(1 + cos θ)/2` after the step: −1 hanging, 0 inverted. Summed to success it pays for the time
+    spent below the top.
+
+    ## Starting State
+
+    θ₀ uniform on ±[0.05, 0.1] rad from hanging (np_random), at rest, pivot at rest at the centre, t = 0.
+    A pendulum exactly at rest hanging cannot be pumped by vertical motion. Reset options as KapitzaPendulum-v0.
+
+    ## Episode End
+
+    Terminated on success (`info["is_success"]`): the pendulum has stayed within `tolerance` of inverted for
+    the last `hold_time` seconds (rounded up to whole steps). Truncated after 6000 steps (30 s at the default dt).
+
+    Every `info` has KapitzaPendulum-v0's keys, with `"upright_time"`, the time it has been held within
+    `tolerance` of inverted without a break (s), in place of `"max_deviation"`.
+    """
+
+    metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ()}
+
+    def __init__(self, render_mode: str | None = None, *, hold_time: float = 2.0, **kwargs):
+        self.hold_time = check_number("hold_time", hold_time, 0.0, open_low=True)
+        self.upright_steps = 0
+        super().__init__(render_mode, **kwargs)
+        self.hold_steps = math.ceil(self.hold_time / self.dt - 1e-9)  # hold_time in whole steps
+
+    def _start_angle(self):
+        return self.np_random.uniform(*HANG_START) * self.np_random.choice([-1.0, 1.0])
+
+    def _start_task(self):
+        self.upright_steps = 0
+
+    def _track(self):
+        self.upright_steps = self.upright_steps + 1 if self._deviation() <= self.tolerance else 0
+
+    def _task_info(self):
+        return {"upright_time": self.upright_steps * self.dt}
+
+    def _task(self, info):
+        return -0.5 * (1.0 + math.cos(self.y[0])), info["is_success"]
+
+    def _success(self):
+        return self.upright_steps >= self.hold_steps

@@ -1,0 +1,122 @@
+"""A pendulum whose pivot is assigned: Kapitza's pendulum, the general (quadratic in u̇) class of active constraints.
+
+θ is the angle of the rod from the downward vertical (free, q = θ); the pivot's position u = (u₁, u₂),
+horizontal and vertical, is assigned. The bob of mass m sits at u + l (sin θ, −cos θ), so with
+n(θ) = (cos θ, sin θ) the direction in which the bob moves as θ grows,
+
+    T = ½ m (|u̇|² + 2 l θ̇ u̇·n + l² θ̇²),    V = m g (u₂ − l cos θ)
+    G11 = m l²,   G12 = m l nᵀ,   G22 = m I,    p = m l² θ̇ + m l u̇·n
+
+Bressan's B = G22 − G21 A G12 = m (I − n nᵀ) depends on θ: the system is *general*, u̇ enters the (θ, p)
+equations quadratically and fast vibrations of the pivot act as an effective force (Kapitza). Hamilton's
+equations of H_u = (p − m l u̇·n)²/(2 m l²) − ½ m |u̇|² + V are
+
+    θ̇ = (p − m l u̇·n) / (m l²),    ṗ = m l θ̇ u̇·n′ − m g l sin θ − c θ̇
+
+with n′ = (−sin θ, cos θ) and c an optional viscous damping at the pivot (torque −c θ̇). Only u̇ appears, not
+ü: a pivot velocity that is piecewise constant is admissible, and p is continuous across its jumps while θ̇
+jumps by −Δu̇·n/l. Eliminating p gives Newton's θ̈ = −(g sin θ + ü·n)/l − c θ̇/(m l²).
+
+While u̇ is constant the pivot moves uniformly, a Galilean frame: the rod swings as a plain pendulum, and its
+energy in that frame, E = ½ m l² θ̇² − m g l cos θ, is conserved. So a segment at constant u̇ has a closed form,
+the pendulum's elliptic-function flow (`exact_segment`).
+
+States are y = (θ, p) on the last axis, controls u and u̇ = (u̇₁, u̇₂); everything broadcasts over leading axes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from connenv.systems.swing import Swing
+
+
+@dataclass(frozen=True)
+class KapitzaPendulum:
+    length: float = 1.0
+    mass: float = 1.0
+    g: float = 9.81
+    damping: float = 0.0  # c, N·m·s: torque −c θ̇ at the pivot; 0 for the envs' tasks
+
+    n = 1
+    m = 2
+
+    def metric(self, q, u):
+        theta = q[..., 0] + 0.0 * u[..., 0]
+        ml = self.mass * self.length
+        G11 = np.full(theta.shape + (1, 1), ml * self.length)
+        G12 = ml * np.stack([np.cos(theta), np.sin(theta)], axis=-1)[..., None, :]
+        G22 = self.mass * np.broadcast_to(np.eye(2), theta.shape + (2, 2))
+        return G11, G12, G22
+
+    def potential(self, q, u):
+        return self.mass * self.g * (u[..., 1] - self.length * np.cos(q[..., 0]))
+
+    def theta_dot(self, y, u_dot):
+        """θ̇ = (p − m l u̇·n) / (m l²)."""
+        theta, p = y[..., 0], y[..., 1]
+        along = u_dot[..., 0] * np.cos(theta) + u_dot[..., 1] * np.sin(theta)
+        return (p - self.mass * self.length * along) / (self.mass * self.length**2)
+
+    def momentum(self, theta, theta_dot, u_dot):
+        """p = m l² θ̇ + m l u̇·n."""
+        along = u_dot[..., 0] * np.cos(theta) + u_dot[..., 1] * np.sin(theta)
+        return self.mass * self.length * (self.length * theta_dot + along)
+
+    def vector_field(self, y, u, u_dot):
+        """Hand-derived (θ̇, ṗ); u enters only through u̇ (the potential's slope in θ does not depend on u)."""
+        theta = y[..., 0]
+        theta_dot = self.theta_dot(y, u_dot)
+        across = -u_dot[..., 0] * np.sin(theta) + u_dot[..., 1] * np.cos(theta)  # u̇·n′
+        ml = self.mass * self.length
+        p_dot = ml * theta_dot * across - ml * self.g * np.sin(theta) - self.damping * theta_dot
+        return np.stack([theta_dot, p_dot], axis=-1)
+
+    def energy(self, y, u_dot):
+        """E = ½ m l² θ̇² − m g l cos θ, the pendulum's energy in the frame moving with the pivot's velocity u̇
+        (zero at pivot height); conserved while u̇ is constant and there is no damping."""
+        theta_dot = self.theta_dot(y, u_dot)
+        return 0.5 * self.mass * self.length**2 * theta_dot**2 - self.mass * self.g * self.length * np.cos(y[..., 0])
+
+    def exact_segment(self, y, u, u_dot, tau):
+        """The state after a segment of length tau at constant pivot velocity u̇, in closed form.
+
+        In the frame moving with u̇ the rod swings as a plain pendulum: θ̇ is read off p, the pendulum flows by
+        `Swing.exact_flow` (Jacobi elliptic functions) at radius l, and p is rebuilt from the new (θ, θ̇). Where
+        that flow declines (NaN near the separatrix) and with damping, which has no closed form, the answer is
+        NaN and the exact stepper hands the state to its numerical fallback.
+        """
+        if self.damping != 0.0:
+            return np.full(np.broadcast_shapes(np.shape(y), np.shape(u_dot)[:-1] + (2,)), math.nan)
+        pendulum = Swing(mass=self.mass, g=self.g)
+        theta_dot = self.theta_dot(y, u_dot)
+        rotation = np.stack([y[..., 0], self.mass * self.length**2 * theta_dot], axis=-1)  # (θ, m l² θ̇)
+        radius = np.full(np.shape(rotation)[:-1] + (1,), self.length)
+        theta, spin = np.moveaxis(pendulum.exact_flow(rotation, radius, tau), -1, 0)
+        return np.stack([theta, self.momentum(theta, spin / (self.mass * self.length**2), u_dot)], axis=-1)
+
+
+def pivot_segments(u, u_dot_cmd, travel: float, dt: float):
+    """Control segments (u at the start, u̇, duration) covering a step of length dt in which the pivot moves at
+    the commanded velocity until an axis meets its end stop at ±travel, where that axis rests for the rest
+    of the step; and (u, u̇) at the end of the step.
+
+    Stopping is a jump of u̇, admissible since only u̇ enters the equations: p is continuous across it and the
+    pivot never leaves [−travel, travel] nor jumps in position.
+    """
+    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
+    end_stops = np.copysign(travel, u_dot)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = np.where(u_dot != 0.0, np.maximum((end_stops - u) / u_dot, 0.0), math.inf)
+    segments, start = [], 0.0
+    for end in sorted({float(s) for s in reach if s < dt} | {dt}):
+        if end > start:
+            segments.append((u.copy(), u_dot.copy(), end - start))
+            u = u + u_dot * (end - start)
+        stopped = reach <= end
+        u[stopped], u_dot[stopped] = end_stops[stopped], 0.0
+        start = end
+    return segments, u, u_dot
