@@ -1,7 +1,7 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball shell] [--quick]
+    python -m connenv.bench precision [--env swing skier ball kapitza shell] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -13,6 +13,11 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
 - ball: RollingBall-v0 from R = I, 200 steps (one episode) of seeded random velocities; reference: the exact
   step, exact for every piecewise-constant velocity. State error: the angle between R and R_ref at the end
   (rad). Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
+- kapitza: KapitzaPendulum-v0 (dt = 0.005 s) from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt
+  with a = 0.05 m, ω = 150 rad/s (inverted is stable: a²ω² > 2 g l), each step's velocity the chord between
+  samples, 400 steps (2 s); reference: the exact step. State error: |θ − θ_ref| at the end (rad). Invariant:
+  the env's energy error, the change of E in the pivot's frame over the segments of constant u̇, max over the
+  episode in units of m g l.
 - shell: KozlovShell-v0, 300 steps of seeded random mass positions, from rest (the reduced model, the default
   episode) and from the body momentum (0.3, 0.1, 0.05) (the full Kirchhoff model); reference: DOP853 at rtol
   1e-13, atol 1e-15. State error: max-norm of the pose (x, y, θ) error at the end (m, rad), for each model.
@@ -71,6 +76,19 @@ def uniform(size):
     return lambda steps, rng: rng.uniform(-1.0, 1.0, (steps, size)).astype(np.float32)
 
 
+def vibration(amplitude, omega, dt, v_max):
+    """Actions that move the pivot along u₂ = a cos ωt: each step's velocity is the chord between samples."""
+
+    def actions(steps, rng):
+        t = dt * np.arange(steps + 1)
+        return (amplitude * np.diff(np.cos(omega * t)) / (dt * v_max)).astype(np.float32)[:, None]
+
+    return actions
+
+
+KAPITZA_VIBRATION = (0.05, 150.0)  # a (m), ω (rad/s): a²ω² = 56 m²/s² > 2 g l = 19.6, so inverted is stable
+
+
 def energy_drift(scale):
     def drift(env, info, start):
         return abs(info["energy"] - start["energy"]) / scale(env)
@@ -111,6 +129,22 @@ CASES = {
         lambda env, ref: float(rotation_angle(env.R @ ref.R.T)),
         "max ‖RᵀR − I‖",
         lambda env, info, start: float(np.linalg.norm(env.R.T @ env.R - np.eye(3))),
+        "rad",
+    ),
+    "kapitza": Case(
+        "connenv/KapitzaPendulum-v0",
+        EXACT,
+        (
+            Episode(
+                "θ₀=π+0.1",
+                {"state": {"theta": math.pi + 0.1, "u": (0.0, KAPITZA_VIBRATION[0])}},
+                vibration(*KAPITZA_VIBRATION, dt=0.005, v_max=10.0),
+                400,
+            ),
+        ),
+        lambda env, ref: abs(env.y[0] - ref.y[0]),
+        "max |energy error| / (m g l)",
+        lambda env, info, start: abs(env.energy_error) / (env.system.mass * env.system.g * env.system.length),
         "rad",
     ),
     "shell": Case(

@@ -1,7 +1,7 @@
 """Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
-    python -m connenv.bench stability [--env swing skier ball shell] [--quick]
+    python -m connenv.bench stability [--env swing skier ball kapitza shell] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode stays bounded is the method's largest stable dt: the env raised no
@@ -13,6 +13,10 @@ StepperError and the invariant's error stayed within the bound below at every st
   min(1 − κ h_max) over the trail, set by h_max = (1 − λ)/κ_max; bounded: |E − E(0)| ≤ 0.1 m g H.
 - ball: seeded random velocities for N steps whatever dt; parameter N, the horizon; bounded: ‖RᵀR − I‖ ≤ 1e-6
   (the env's own bound: past it the env raises).
+- kapitza: KapitzaPendulum-v0 from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt, a = 0.05 m,
+  each step's velocity the chord between samples (v_max = a ω), 2 s; parameter ω; bounded: the env's energy
+  error (in the pivot's frame, on segments of constant u̇) within 0.1 m g l (the env's own bound). The grid starts at π/(2ω), 4 steps
+  per period: a coarser dt samples another control. Inverted is stable for a²ω² > 2 g l, ω > 89 rad/s.
 - shell: full model from the body momentum (0.3, 0.1, 0.05), the mass circling its box, u* = (u1_max cos 2πt/T,
   u2_max sin 2πt/T), T = 2 s, for 10 s; parameter the mass ratio m/(M + λ₁), set by m; bounded: the spatial
   momentum within 0.1 of its norm (the env's own bound). The reduced model is not mapped: its motion is
@@ -44,16 +48,16 @@ class StabilityMap:
     values: tuple
     make: object  # value -> make kwargs
     reset: object  # value -> reset options
-    action: object  # (t, dt, rng) -> action
+    action: object  # (value, t, dt, rng) -> action
     steps: object  # (value, dt) -> number of steps
     unbounded: object  # (env, info, start) -> True once the invariant has left its bound
     methods: tuple  # (integrator, options)
-    largest: float = 1.0  # the top of the dt grid, s
+    largest: object = lambda value: 1.0  # the top of the dt grid, s
 
 
 def held(action):
     a = np.asarray(action, np.float32)
-    return lambda t, dt, rng: a
+    return lambda value, t, dt, rng: a
 
 
 def energy_unbounded(scale):
@@ -65,17 +69,25 @@ def momentum_unbounded(env, info, start):
     return np.linalg.norm(np.asarray(info["spatial_momentum"]) - s0) > BOUND * np.linalg.norm(s0)
 
 
-def so3_unbounded(env, info, start):
-    return False  # the env raises past its own bound, 1e-6
+def env_bound(env, info, start):
+    return False  # the env raises StepperError past its own bound
 
 
-def loop_gait(t, dt, rng):
+def loop_gait(value, t, dt, rng):
     phase = 2 * math.pi * (t + dt) / 2.0
     return np.array([math.cos(phase), math.sin(phase)], np.float32)
 
 
-def random_velocity(t, dt, rng):
+def random_velocity(value, t, dt, rng):
     return rng.uniform(-1.0, 1.0, 2).astype(np.float32)
+
+
+KAPITZA_AMPLITUDE = 0.05  # a, m: the pivot's vibration u₂ = a cos ωt
+
+
+def pivot_vibration(omega, t, dt, rng):
+    """The chord velocity from a cos ωt to a cos ω(t + dt), as an action of v_max = a ω."""
+    return np.array([(math.cos(omega * (t + dt)) - math.cos(omega * t)) / (omega * dt)], np.float32)
 
 
 VALLEY_KAPPA_MAX = 3.0 / 2 * (2 * math.pi / 12.0) ** 2  # κ at the bottom of f = H(1 − cos 2πx/L)/2, H = 3, L = 12
@@ -111,7 +123,7 @@ MAPS = {
         lambda n: {"state": {}},
         random_velocity,
         lambda n, dt: n,
-        so3_unbounded,
+        env_bound,
         (
             ("euler", {}),
             ("rk4", {}),
@@ -120,6 +132,18 @@ MAPS = {
             ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
             ("exact", {}),
         ),
+    ),
+    "kapitza": StabilityMap(
+        "connenv/KapitzaPendulum-v0",
+        "vibration frequency ω (rad/s)",
+        (100.0, 200.0, 400.0, 800.0, 1600.0),
+        lambda omega: {"v_max": KAPITZA_AMPLITUDE * omega},
+        lambda omega: {"state": {"theta": math.pi + 0.1, "u": (0.0, KAPITZA_AMPLITUDE)}},
+        pivot_vibration,
+        lambda omega, dt: math.ceil(2.0 / dt),
+        env_bound,
+        (*FIXED, ("exact", {})),
+        largest=lambda omega: math.pi / (2 * omega),  # 4 steps per period: a coarser dt would sample another control
     ),
     "shell": StabilityMap(
         "connenv/KozlovShell-v0",
@@ -131,7 +155,7 @@ MAPS = {
         lambda value, dt: math.ceil(10.0 / dt),
         momentum_unbounded,
         (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10})),
-        largest=0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
+        largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
     ),
 }
 
@@ -145,7 +169,7 @@ def stays_bounded(stability_map, value, integrator, options, dt):
     rng = np.random.default_rng(0)
     try:
         for k in range(stability_map.steps(value, dt)):
-            info = env.step(stability_map.action(k * dt, dt, rng))[4]
+            info = env.step(stability_map.action(value, k * dt, dt, rng))[4]
             if stability_map.unbounded(env, info, start):
                 return False
     except StepperError:
@@ -154,8 +178,9 @@ def stays_bounded(stability_map, value, integrator, options, dt):
 
 
 def largest_stable_dt(stability_map, value, integrator, options, grid):
-    """The first dt of the grid (largest first) that stays bounded; 0 if none does; None if the env refuses."""
-    for dt in grid:
+    """The first dt of the grid (largest first, from the map's top for this value) that stays bounded; 0 if none
+    does; None if the env refuses."""
+    for dt in (dt for dt in grid if dt <= stability_map.largest(value)):
         bounded = stays_bounded(stability_map, value, integrator, options, dt)
         if bounded is None:
             return None
@@ -199,7 +224,6 @@ def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
     stability_map = MAPS[name]
     values = values or stability_map.values
     grid = [10 ** (-k / 4) for k in range(0, 1 + round(-4 * math.log10(smallest)))]
-    grid = [dt for dt in grid if dt <= stability_map.largest]
     print(f"\n{stability_map.env_id}: largest stable dt (s) against {stability_map.parameter}")
     print("| method | " + " | ".join(f"{v:g}" for v in values) + " |")
     print("|---|" + "---|" * len(values))

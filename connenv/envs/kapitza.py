@@ -8,7 +8,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import make_stepper
+from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
 from connenv.systems.kapitza import KapitzaPendulum, pivot_segments
@@ -18,6 +18,7 @@ SPEED_BOUND = 5.0  # |observed θ̇| in units of 2√(g/l) is clipped here
 HOLD_START = 0.2  # rad: KapitzaPendulum-v0 starts within this of inverted, at rest
 HANG_START = (0.05, 0.1)  # rad: KapitzaSwingUp-v0 starts this far from hanging, either side, at rest
 STATE_KEYS = ("theta", "theta_dot", "p", "u", "u_dot")
+ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g l) past which it has diverged: StepperError
 
 
 class KapitzaPendulumEnv(RenderedEnv):
@@ -94,12 +95,17 @@ class KapitzaPendulumEnv(RenderedEnv):
     | dt | 0.005 | (0, ∞) |
     | tolerance | 0.3 | (0, π) rad |
     | damping | 0.0 | [0, ∞) N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
-    | integrator | "exact" | "exact", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (rk4) / rtol, atol (scipy, and exact's fallback) | | see `connenv.core.steppers` |
+    | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, and exact's fallback) | | see `connenv.core.steppers` |
 
     The default integrator is exact: while u̇ is constant the pivot moves uniformly, so in its frame the rod
     swings as a plain pendulum, whose flow is closed-form (Jacobi elliptic functions). Near the separatrix,
     and with damping, which has no closed form, the exact stepper hands the step to DOP853.
+
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
+    non-finite state, or, without damping, an energy error past 0.1 m g l. The energy error is the change of E
+    (in the pivot's frame) over each segment of constant u̇, where E is conserved, summed since reset; the jumps
+    of u̇ between segments do exact work and are not counted.
 
     Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"`
     (E = ½ m l² θ̇² − m g l cos θ, J, the pendulum's energy in the frame of the pivot's velocity, conserved
@@ -150,6 +156,7 @@ class KapitzaPendulumEnv(RenderedEnv):
 
         self.y = np.array([math.pi, 0.0])  # (θ, p)
         self.u, self.u_dot, self.t, self.max_deviation = np.zeros(2), np.zeros(2), 0.0, 0.0
+        self.energy_error = 0.0  # the stepper's: the change of E on segments of constant u̇ since reset
 
     # -- Gymnasium API -------------------------------------------------------
 
@@ -158,7 +165,7 @@ class KapitzaPendulumEnv(RenderedEnv):
         options = dict(options or {})
         check_keys("reset options", options, {"state"})
         self.y = np.array([self._start_angle(), 0.0])
-        self.u, self.u_dot, self.t = np.zeros(2), np.zeros(2), 0.0
+        self.u, self.u_dot, self.t, self.energy_error = np.zeros(2), np.zeros(2), 0.0, 0.0
         if "state" in options:
             self._set_state(options["state"])
         self._start_task()
@@ -167,9 +174,18 @@ class KapitzaPendulumEnv(RenderedEnv):
     def step(self, action):
         u_dot_cmd = np.zeros(2)
         u_dot_cmd[self.axes] = check_action(action, self.action_space) * self.v_max
-        segments, self.u, self.u_dot = pivot_segments(self.u, u_dot_cmd, self.a_max, self.dt)
-        for u, u_dot, tau in segments:
-            self.y = self.stepper(self.system, self.y, u, u_dot, tau)
+        segments, u_end, u_dot_end = pivot_segments(self.u, u_dot_cmd, self.a_max, self.dt)
+        try:
+            for u, u_dot, tau in segments:
+                energy = self._energy(u_dot)
+                self.y = self.stepper(self.system, self.y, u, u_dot, tau)
+                self.energy_error += self._energy(u_dot) - energy
+            bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.system.length
+            if self.system.damping == 0.0 and not abs(self.energy_error) <= bound:
+                raise StepperError(f"{self.stepper} diverged: |energy error| = {abs(self.energy_error):.3g} J > {bound:.3g} J")
+        except StepperError as error:
+            raise self._stepper_error(error) from error
+        self.u, self.u_dot = u_end, u_dot_end
         self.t += self.dt
         self._track()
         info = self._info()
@@ -237,6 +253,22 @@ class KapitzaPendulumEnv(RenderedEnv):
             limit = bound if i in self.axes else 0.0
             check_number(f"state {name}[{i}] (pivot={self.pivot!r})", v, -limit, limit)
         return vector
+
+    def parameters(self):
+        return {
+            "pivot": self.pivot,
+            "length": self.system.length,
+            "v_max": self.v_max,
+            "a_max": self.a_max,
+            "damping": self.system.damping,
+        }
+
+    def _energy(self, u_dot):
+        """The system's E at the state, in the frame of u̇, on Python floats (without numpy's overhead)."""
+        theta, p = float(self.y[0]), float(self.y[1])
+        m, l, c, s = self.system.mass, self.system.length, math.cos(theta), math.sin(theta)
+        theta_dot = (p - m * l * (float(u_dot[0]) * c + float(u_dot[1]) * s)) / (m * l * l)
+        return 0.5 * m * l * l * theta_dot * theta_dot - m * self.system.g * l * c
 
     def _theta_dot(self):
         return float(self.system.theta_dot(self.y, self.u_dot))
