@@ -94,6 +94,16 @@ def test_ball_exact_step_rolls_the_closed_form_at_every_radius_and_step(radius, 
     np.testing.assert_allclose(env.R, [[c, 0, s], [0, 1, 0], [-s, 0, c]], atol=1e-12)
 
 
+@pytest.mark.parametrize("v_max", [1.0, 10.0, 100.0])
+@pytest.mark.parametrize("dt", [0.001, 0.005, 0.05])
+def test_kapitza_exact_step_conserves_the_pivot_frame_energy_on_every_segment(v_max, dt):
+    """Random pivot velocities up to v_max (100 m/s reaches the end stops within a step, so steps split into
+    segments): the exact step keeps E in the frame of each segment's u̇ to 1e-9 of m g l over 200 steps."""
+    env = make("connenv/KapitzaPendulum-v0", v_max=v_max, dt=dt, tolerance=3.1)
+    random_steps(env, 200)
+    assert abs(env.energy_error) <= 1e-9 * env.system.mass * env.system.g * env.system.length
+
+
 @pytest.mark.parametrize("ratio, dt", [(0.1, 0.25), (1.0, 0.1), (30.0, 0.02)])
 def test_shell_default_follows_the_reference_at_every_mass_ratio(ratio, dt):
     """The full Kirchhoff model at mass ratios m/(M + λ₁) from 0.1 to 30: DOP853 (rtol 1e-8) stays within 2e-8
@@ -137,6 +147,13 @@ def test_shell_default_follows_the_reference_at_every_mass_ratio(ratio, dt):
             r"Euler\(substeps=1\) left SO\(3\).* dt = 0.1, radius = 0.5",
         ),
         (
+            "connenv/KapitzaPendulum-v0",
+            {"integrator": "euler", "v_max": 100.0, "dt": 0.02},
+            {"theta": math.pi + 0.1},
+            [1.0],
+            r"Euler\(substeps=1\) diverged: \|energy error\| .* dt = 0.02, .*v_max = 100.0, a_max = 0.1",
+        ),
+        (
             "connenv/KozlovShell-v0",
             {"integrator": "semi_implicit_euler", "mass": 10.0 * (1.0 + math.pi / 4)},
             {"momentum": (0.3, 0.1, 0.05)},
@@ -151,5 +168,6 @@ def test_a_diverging_stepper_raises_naming_stepper_dt_and_parameter_never_nan(en
     sign = np.asarray(action, np.float32)
     with pytest.raises(StepperError, match=message):
         for k in range(2000):
-            obs = env.step(sign if env_id != "connenv/KozlovShell-v0" else sign * (-1) ** k)[0]
+            alternating = env_id in ("connenv/KozlovShell-v0", "connenv/KapitzaPendulum-v0")
+            obs = env.step(sign * (-1) ** k if alternating else sign)[0]
             assert np.all(np.isfinite(obs))

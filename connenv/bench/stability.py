@@ -22,7 +22,8 @@ StepperError and the invariant's error stayed within the bound below at every st
   momentum within 0.1 of its norm (the env's own bound). The reduced model is not mapped: its motion is
   geometric, so a step's error depends on the path of u over the step and not on dt.
 
-A curve at the top of the chart found no limit on the grid; "< 10^-4" (at the bottom) means none on the grid held.
+A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
+grid held.
 """
 
 from __future__ import annotations
@@ -189,6 +190,17 @@ def largest_stable_dt(stability_map, value, integrator, options, grid):
     return 0.0
 
 
+def top_of(stability_map, value, grid):
+    """The largest dt tried at this parameter value."""
+    return next(dt for dt in grid if dt <= stability_map.largest(value))
+
+
+def cell(dt, top, grid):
+    if dt == top:
+        return f"≥ {dt:.2g}"
+    return f"{dt:.2g}" if dt > 0 else f"< {grid[-1]:.0e}"
+
+
 def plot(name, stability_map, rows, grid, folder):
     import matplotlib
 
@@ -197,20 +209,22 @@ def plot(name, stability_map, rows, grid, folder):
 
     fig, ax = plt.subplots(figsize=(7, 4.8))
     markers = "vo^sDP*"
-    for (method, by_value), marker in zip(rows.items(), markers):
+    for k, ((method, by_value), marker) in enumerate(zip(rows.items(), markers)):
         xs = list(by_value)
         ys = [dt if dt > 0 else grid[-1] / 2 for dt in by_value.values()]
-        ax.plot(xs, ys, marker=marker, label=method)
-    ax.axhline(grid[0], color="grey", lw=0.5, ls=":")
+        ax.plot(xs, ys, marker=marker, ms=13 - 2 * k, mfc="none", mew=1.5, lw=1.5, label=method)  # overlaps show
+    values = list(next(iter(rows.values())))
+    ax.plot(values, [top_of(stability_map, v, grid) for v in values], color="grey", lw=3, alpha=0.3, label="top of the dt grid")
     ax.axhline(grid[-1] / 2, color="red", lw=0.5, ls=":")
-    ax.text(ax.get_xlim()[0], grid[-1] / 2, f" none stable ≥ {grid[-1]:.0e} s", color="red", va="bottom", fontsize=8)
+    ax.text(0.01, grid[-1] / 2, f"none stable ≥ {grid[-1]:.0e} s", color="red", va="bottom", fontsize=8,
+            transform=ax.get_yaxis_transform())
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(stability_map.parameter)
     ax.set_ylabel("largest stable dt (s)")
     ax.grid(True, which="major", alpha=0.3)
     ax.legend(fontsize=8)
-    ax.set_title(f"{stability_map.env_id}: stability map; python -m connenv.bench stability", fontsize=10)
+    ax.set_title(f"{stability_map.env_id}: stability map\npython -m connenv.bench stability", fontsize=10)
     fig.tight_layout()
     path = folder / f"{name}_stability.png"
     fig.savefig(path, dpi=90)
@@ -239,15 +253,15 @@ def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
         if not by_value:
             continue
         rows[method] = by_value
-        cells = [f"≥ {dt:.2g}" if dt == grid[0] else (f"{dt:.2g}" if dt > 0 else f"< {grid[-1]:.0e}") for dt in by_value.values()]
+        cells = [cell(dt, top_of(stability_map, value, grid), grid) for value, dt in by_value.items()]
         print(f"| {method} | " + " | ".join(cells) + " |", flush=True)
     path = folder / f"{name}_stability.csv"
     with open(path, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["method", stability_map.parameter, "largest_stable_dt_s (0: none on the grid)", "grid"])
+        writer.writerow(["method", stability_map.parameter, "largest_stable_dt_s (0: none on the grid)", "top_of_grid_s", "smallest_s"])
         for method, by_value in rows.items():
             for value, dt in by_value.items():
-                writer.writerow([method, value, f"{dt:.4g}", f"{grid[-1]:.0e}..{grid[0]:g}"])
+                writer.writerow([method, value, f"{dt:.4g}", f"{top_of(stability_map, value, grid):.4g}", f"{grid[-1]:.0e}"])
     return rows, path, plot(name, stability_map, rows, grid, folder)
 
 

@@ -123,10 +123,10 @@ class KozlovShellEnv(RenderedEnv):
     has moved by more than 0.1 of its norm since reset. Semi-implicit Euler updates μ, then the pose with the
     new μ; in the reduced model μ = 0 and it is explicit Euler.
 
-    The default stepper is the fastest that keeps, over 300 steps of random mass motions, the pose within 1e-8
-    of a reference (DOP853 at rtol 1e-13) in the reduced and the full model and the spatial momentum within
-    1e-8 relative in the full one: about 0.7 ms per step (RK4 needs 32 substeps and 2.5 ms; RK45 and LSODA
-    rtol 1e-10, 1.4 and 1.6 ms).
+    The default stepper is on the Pareto front of the work–precision chart (`python -m connenv.bench
+    precision`, docs/precision/shell_precision.csv): over 300 steps of random mass motions it keeps the pose
+    within 5e-9 of a reference (DOP853 at rtol 1e-13) in the reduced and the full model and the spatial
+    momentum within 2.2e-9 relative in the full one; RK4 with 8 substeps is faster and errs by 1.5e-6.
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `u` (2), `momentum` (P₁, P₂, Π, body frame), `t`, in SI),
     `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m),

@@ -19,7 +19,7 @@ ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g Δz) past which 
 SPEED_BOUND = 3.0  # |observed speed| is clipped here
 START_OFFSETS = (0.5, 2.0)  # m from the trail's lowest point, either side
 DEFAULT_INTEGRATOR = "dop853"
-DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # the fastest passing stepper: python -m connenv.bench --env skier
+DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # on the Pareto front: python -m connenv.bench precision
 
 
 class SkierEnv(RenderedEnv):
@@ -109,6 +109,10 @@ class SkierEnv(RenderedEnv):
     | max_height_speed | None | None or (0, ∞) m/s |
     | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    The default, DOP853 at rtol 1e-8, is on the Pareto front of the work–precision chart (`python -m
+    connenv.bench precision`); across 1 − κ h_max ≥ 0.01 and dt from 0.01 to 0.2 s it keeps the energy error
+    within 2e-6 of m g Δz over 100 random steps (tests/test_precision.py).
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or an energy error past 0.1 m g Δz (Δz as in the observation). The energy error is the
