@@ -44,7 +44,9 @@ def test_semi_implicit_euler_preserves_phase_space_area_and_euler_does_not(integ
     h, eps = 0.1, 1e-6
     stepper = make_stepper(integrator)
     y = np.array([0.7, 1.3])
-    columns = [(stepper(SWING, y + d, R, HELD, h) - stepper(SWING, y - d, R, HELD, h)) / (2 * eps) for d in np.eye(2) * eps]
+    columns = [
+        (stepper(SWING, y + d, R, HELD, h) - stepper(SWING, y - d, R, HELD, h)) / (2 * eps) for d in np.eye(2) * eps
+    ]
     det = np.linalg.det(np.stack(columns, axis=-1))
     expected = 1.0 if area else 1.0 + h**2 * OMEGA**2 * math.cos(0.7)
     assert det == pytest.approx(expected, abs=1e-8)

@@ -295,7 +295,9 @@ def plot(name, case, rows, folder, fraction=1.0):
         ax.set_ylabel(label)
         ax.grid(True, which="major", alpha=0.3)
     axes[0].axhline(top, color="red", lw=0.5, ls=":")
-    axes[0].text(axes[0].get_xlim()[1], top, "diverged (StepperError) × ", color="red", va="bottom", ha="right", fontsize=8)
+    axes[0].text(
+        axes[0].get_xlim()[1], top, "diverged (StepperError) × ", color="red", va="bottom", ha="right", fontsize=8
+    )
     axes[0].legend(fontsize=8, loc="lower left")
     episodes = "; ".join(f"{e.label}, {max(round(e.steps * fraction), 1)} steps" for e in case.episodes)
     fig.suptitle(f"{case.env_id}: work–precision ({episodes}); python -m connenv.bench precision", fontsize=10)
@@ -317,7 +319,8 @@ def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
     clock = pendulum()
     print(f"\n{case.env_id}: {', '.join(f'{e.label} ({steps_of(e)} steps)' for e in case.episodes)}")
     labels = [e.label for e in case.episodes]
-    print("| stepper | µs/step | × Pendulum-v1 | " + " | ".join(f"error {lab}" for lab in labels) + f" | {case.invariant} |")
+    errors = " | ".join(f"error {label}" for label in labels)
+    print(f"| stepper | µs/step | × Pendulum-v1 | {errors} | {case.invariant} |")
     print("|---|---|---|" + "---|" * len(labels) + "---|")
     rows, reference_envs = [], references(case, steps_of)
     for integrator, options in steppers or candidates():
@@ -328,7 +331,8 @@ def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
         rows.append(row)
         cells = [f"{row['errors'][lab]:.1e}" for lab in labels] + [f"{row['drift']:.1e}"]
         note = f"  (diverged: {row['diverged']})" if row["diverged"] else ""
-        print(f"| {row['options']} | {row['us_per_step']:.0f} | {row['ratio']:.1f} | " + " | ".join(cells) + f" |{note}", flush=True)
+        timing = f"{row['us_per_step']:.0f} | {row['ratio']:.1f}"
+        print(f"| {row['options']} | {timing} | " + " | ".join(cells) + f" |{note}", flush=True)
     pareto(rows)
     default = default_row(case, rows)
     for row in rows:

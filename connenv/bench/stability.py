@@ -4,7 +4,8 @@ breaks steppers, one curve per method (docs/precision/<env>_stability.png and .c
     python -m connenv.bench stability [--env swing skier ball kapitza shell] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
-from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode stays bounded is the method's largest stable dt: the env raised no
+from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
+stays bounded is the method's largest stable dt: the env raised no
 StepperError and the invariant's error stayed within the bound below at every step. At constant control:
 
 - swing: r held at r_min (action −1) from θ₀ = 1 rad at rest, 10 s; parameter r_min (ω = √(g/r_min));
@@ -15,8 +16,9 @@ StepperError and the invariant's error stayed within the bound below at every st
   (the env's own bound: past it the env raises).
 - kapitza: KapitzaPendulum-v0 from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt, a = 0.05 m,
   each step's velocity the chord between samples (v_max = a ω), 2 s; parameter ω; bounded: the env's energy
-  error (in the pivot's frame, on segments of constant u̇) within 0.1 m g l (the env's own bound). The grid starts at π/(2ω), 4 steps
-  per period: a coarser dt samples another control. Inverted is stable for a²ω² > 2 g l, ω > 89 rad/s.
+  error (in the pivot's frame, on segments of constant u̇) within 0.1 m g l (the env's own bound). The grid
+  starts at π/(2ω), 4 steps per period: a coarser dt samples another control. Inverted is stable for
+  a²ω² > 2 g l, ω > 89 rad/s.
 - shell: full model from the body momentum (0.3, 0.1, 0.05), the mass circling its box, u* = (u1_max cos 2πt/T,
   u2_max sin 2πt/T), T = 2 s, for 10 s; parameter the mass ratio m/(M + λ₁), set by m; bounded: the spatial
   momentum within 0.1 of its norm (the env's own bound). The reduced model is not mapped: its motion is
@@ -214,7 +216,8 @@ def plot(name, stability_map, rows, grid, folder):
         ys = [dt if dt > 0 else grid[-1] / 2 for dt in by_value.values()]
         ax.plot(xs, ys, marker=marker, ms=13 - 2 * k, mfc="none", mew=1.5, lw=1.5, label=method)  # overlaps show
     values = list(next(iter(rows.values())))
-    ax.plot(values, [top_of(stability_map, v, grid) for v in values], color="grey", lw=3, alpha=0.3, label="top of the dt grid")
+    tops = [top_of(stability_map, v, grid) for v in values]
+    ax.plot(values, tops, color="grey", lw=3, alpha=0.3, label="top of the dt grid")
     ax.axhline(grid[-1] / 2, color="red", lw=0.5, ls=":")
     ax.text(0.01, grid[-1] / 2, f"none stable ≥ {grid[-1]:.0e} s", color="red", va="bottom", fontsize=8,
             transform=ax.get_yaxis_transform())
@@ -258,10 +261,12 @@ def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
     path = folder / f"{name}_stability.csv"
     with open(path, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["method", stability_map.parameter, "largest_stable_dt_s (0: none on the grid)", "top_of_grid_s", "smallest_s"])
+        header_row = ["method", stability_map.parameter, "largest_stable_dt_s (0: none on the grid)", "top_of_grid_s"]
+        writer.writerow([*header_row, "smallest_s"])
         for method, by_value in rows.items():
             for value, dt in by_value.items():
-                writer.writerow([method, value, f"{dt:.4g}", f"{top_of(stability_map, value, grid):.4g}", f"{grid[-1]:.0e}"])
+                top = top_of(stability_map, value, grid)
+                writer.writerow([method, value, f"{dt:.4g}", f"{top:.4g}", f"{grid[-1]:.0e}"])
     return rows, path, plot(name, stability_map, rows, grid, folder)
 
 

@@ -39,4 +39,5 @@ class RenderedEnv(gym.Env):
         """`error` (a stepper's, or the env's own invariant check) with the env, the time, dt and the physical
         parameters (the subclass's ``parameters()``) added: ``raise self._stepper_error(error) from error``."""
         values = ", ".join(f"{key} = {value!r}" for key, value in self.parameters().items())
-        return StepperError(f"{error} [{type(self).__name__} in the step from t = {self.t:.6g} s, dt = {self.dt}, {values}]")
+        where = f"{type(self).__name__} in the step from t = {self.t:.6g} s, dt = {self.dt}"
+        return StepperError(f"{error} [{where}, {values}]")

@@ -182,7 +182,8 @@ class KapitzaPendulumEnv(RenderedEnv):
                 self.energy_error += self._energy(u_dot) - energy
             bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.system.length
             if self.system.damping == 0.0 and not abs(self.energy_error) <= bound:
-                raise StepperError(f"{self.stepper} diverged: |energy error| = {abs(self.energy_error):.3g} J > {bound:.3g} J")
+                drift = abs(self.energy_error)
+                raise StepperError(f"{self.stepper} diverged: |energy error| = {drift:.3g} J > {bound:.3g} J")
         except StepperError as error:
             raise self._stepper_error(error) from error
         self.u, self.u_dot = u_end, u_dot_end

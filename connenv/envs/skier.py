@@ -207,7 +207,8 @@ class SkierEnv(RenderedEnv):
                     self.energy_error += float(self.system.energy(self.y, h)) - energy
             bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * (self.z_goal - self.z_floor)
             if not abs(self.energy_error) <= bound:
-                raise StepperError(f"{self.stepper} diverged: |energy error| = {abs(self.energy_error):.3g} J > {bound:.3g} J")
+                drift = abs(self.energy_error)
+                raise StepperError(f"{self.stepper} diverged: |energy error| = {drift:.3g} J > {bound:.3g} J")
         except StepperError as error:
             raise self._stepper_error(error) from error
         self.h = h + h_dot * tau

@@ -176,7 +176,8 @@ class SwingEnv(RenderedEnv):
                     self.energy_error += self._energy(r) - energy
             bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.r_max
             if not abs(self.energy_error) <= bound:
-                raise StepperError(f"{self.stepper} diverged: |energy error| = {abs(self.energy_error):.3g} J > {bound:.3g} J")
+                drift = abs(self.energy_error)
+                raise StepperError(f"{self.stepper} diverged: |energy error| = {drift:.3g} J > {bound:.3g} J")
         except StepperError as error:
             raise self._stepper_error(error) from error
         self.r = r + r_dot * tau
