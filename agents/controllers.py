@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from agents.gaits import GaitPlanner
-from agents.kapitza import KapitzaSwingUp, KapitzaVibration
+from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
 
 
@@ -62,7 +62,10 @@ CONTROLLERS = {
     "connenv/RollingBallPose-v0": {"holonomy": for_env(Holonomy, pose=True)},
     "connenv/RollingBallGoal-v0": {"arc": for_env(OptimalArc), "holonomy": for_env(Holonomy)},
     "connenv/KozlovShell-v0": {"gaits": lambda env: GaitPlanner(env)},
-    "connenv/KapitzaPendulum-v0": {"kapitza": KapitzaVibration},
+    "connenv/KapitzaPendulum-v0": {
+        "kapitza": KapitzaVibration,
+        "damped": lambda env: KapitzaVibration(env, modulation=DAMPING_MODULATION),
+    },
     "connenv/KapitzaSwingUp-v0": {"swingup": KapitzaSwingUp},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""

@@ -15,6 +15,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 import connenv  # noqa: F401
 from agents import evaluate
 from agents.controllers import controller
+from agents.kapitza import KapitzaVibration
 
 HOLD, SWING_UP = "connenv/KapitzaPendulum-v0", "connenv/KapitzaSwingUp-v0"
 
@@ -110,7 +111,22 @@ def test_swing_up_succeeds_only_after_holding_inverted_for_hold_time():
     env.reset(options={"state": {"theta": math.pi}})
     results = [env.step(np.array([0.0], np.float32)) for _ in range(4)]
     assert [r[2] for r in results] == [False, False, False, True]
-    assert results[-1][4]["upright_time"] == pytest.approx(0.02) and results[-1][1] == pytest.approx(0.0)
+    assert results[-1][4]["upright_time"] == pytest.approx(0.02)
+
+
+def test_swing_up_reward_is_the_log_lift_gain_less_time():
+    """ℓ = (E/(m g l) + 1)/2; at rest at θ, ℓ = (1 − cos θ)/2. Held still, the energy is conserved."""
+    env = gym.make(SWING_UP)
+    env.reset(options={"state": {"theta": 0.5, "u": (0.0, -0.1)}})
+    _, reward, *_ = env.step(np.array([0.0], np.float32))
+    assert reward == pytest.approx(-0.2 * 0.005, rel=1e-9)
+    # the pivot's velocity jumps from 0 to 4 m/s up at θ = π/2, θ̇ = −1 rad/s: ΔE = −m l θ̇ (4 sin θ) + ½ m (4 sin θ)²
+    env.reset(options={"state": {"theta": math.pi / 2, "theta_dot": -1.0}})
+    _, reward, *_, info = env.step(np.array([0.4], np.float32))
+    lift_before = 0.5 * (0.5 * 1.0 / 9.81 + 1.0)
+    along = 10.0 * float(np.float32(0.4))
+    lift_after = 0.5 * ((0.5 * 1.0 + along + 0.5 * along**2) / 9.81 + 1.0)
+    assert reward == pytest.approx(math.log(min(lift_after, 1.0) / lift_before) - 0.001, rel=1e-9)
 
 
 def test_kapitza_controller_holds_every_start_and_the_exact_stepper_matches_dop853():
@@ -127,6 +143,15 @@ def test_kapitza_controller_holds_every_start_and_the_exact_stepper_matches_dop8
         obs, *_, info = exact.step(action)
         info_dop853 = dop853.step(action)[4]
     assert info["state"]["theta"] == pytest.approx(info_dop853["state"]["theta"], abs=1e-8)
+
+
+def test_modulated_vibration_damps_the_slow_swing_that_open_loop_vibration_keeps():
+    env = gym.make(HOLD)
+    open_loop, damped = controller(HOLD, "kapitza", env), controller(HOLD, "damped", env)
+    for seed in range(3):
+        kept, damped_out = (evaluate.run_episode(env, policy, seed) for policy in (open_loop, damped))
+        assert damped_out.success and env.unwrapped._deviation() < 1e-3
+        assert damped_out.ret > kept.ret
 
 
 def test_swing_up_controller_swings_up_and_holds():
@@ -208,3 +233,5 @@ def test_controller_rejects_a_vibration_the_pivot_cannot_follow():
         controller(HOLD, "kapitza", env)
     with pytest.raises(ValueError, match="pivot='horizontal'"):
         controller(SWING_UP, "swingup", gym.make(SWING_UP, pivot="horizontal"))
+    with pytest.raises(ValueError, match="modulation=0.5"):
+        KapitzaVibration(gym.make(HOLD).unwrapped, modulation=0.5)  # 0.08 × 1.5 m: beyond the travel

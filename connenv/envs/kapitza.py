@@ -19,6 +19,8 @@ HOLD_START = 0.2  # rad: KapitzaPendulum-v0 starts within this of inverted, at r
 HANG_START = (0.05, 0.1)  # rad: KapitzaSwingUp-v0 starts this far from hanging, either side, at rest
 STATE_KEYS = ("theta", "theta_dot", "p", "u", "u_dot")
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g l) past which it has diverged: StepperError
+LIFT_FLOOR = 1e-4  # floor of the swing-up's lift in the reward's logarithm: amplitude ≈ 0.02 rad
+TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
 
 
 class KapitzaPendulumEnv(RenderedEnv):
@@ -317,8 +319,14 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     ## Rewards
 
-    `reward = −(1 + cos θ)/2` after the step: −1 hanging, 0 inverted. Summed to success it pays for the time
-    spent below the top.
+    With the lift ℓ = (E/(m g l) + 1)/2, E the energy in the pivot's frame (ℓ = 0 at rest hanging, 1 at rest
+    inverted, (1 − cos A)/2 for a swing of amplitude A), capped at 1 and floored at 1e-4:
+
+        reward = ln(ℓ′/ℓ) − 0.2 dt
+
+    ℓ before the step, ℓ′ after it. Parametric pumping multiplies ℓ by a factor per cycle, which the logarithm
+    pays alike at every amplitude (a potential-based shaping, Ng et al. 1999); the constant pays for time,
+    0.2 per simulated second. Summed to success: ln(ℓ_T/ℓ₀) − 0.2 t.
 
     ## Starting State
 
@@ -338,7 +346,7 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     def __init__(self, render_mode: str | None = None, *, hold_time: float = 2.0, **kwargs):
         self.hold_time = check_number("hold_time", hold_time, 0.0, open_low=True)
-        self.upright_steps = 0
+        self.upright_steps, self.lift, self.lift_before = 0, LIFT_FLOOR, LIFT_FLOOR
         super().__init__(render_mode, **kwargs)
         self.hold_steps = math.ceil(self.hold_time / self.dt - 1e-9)  # hold_time in whole steps
 
@@ -347,15 +355,23 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     def _start_task(self):
         self.upright_steps = 0
+        self.lift = self._lift()
 
     def _track(self):
         self.upright_steps = self.upright_steps + 1 if self._deviation() <= self.tolerance else 0
+        self.lift_before, self.lift = self.lift, self._lift()
+
+    def _lift(self):
+        """ℓ = (E/(m g l) + 1)/2 in [LIFT_FLOOR, 1]."""
+        system = self.system
+        lift = 0.5 * (float(system.energy(self.y, self.u_dot)) / (system.mass * system.g * system.length) + 1.0)
+        return min(max(lift, LIFT_FLOOR), 1.0)
 
     def _task_info(self):
         return {"upright_time": self.upright_steps * self.dt}
 
     def _task(self, info):
-        return -0.5 * (1.0 + math.cos(self.y[0])), info["is_success"]
+        return math.log(self.lift / self.lift_before) - TIME_COST * self.dt, info["is_success"]
 
     def _success(self):
         return self.upright_steps >= self.hold_steps

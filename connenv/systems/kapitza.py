@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -91,12 +92,21 @@ class KapitzaPendulum:
         """
         if self.damping != 0.0:
             return np.full(np.broadcast_shapes(np.shape(y), np.shape(u_dot)[:-1] + (2,)), math.nan)
-        pendulum = Swing(mass=self.mass, g=self.g)
-        theta_dot = self.theta_dot(y, u_dot)
-        rotation = np.stack([y[..., 0], self.mass * self.length**2 * theta_dot], axis=-1)  # (θ, m l² θ̇)
+        inertia = self.mass * self.length**2
+        if np.ndim(y) == 1 and np.ndim(u_dot) == 1:  # one state (the env's case): Python floats, 3x faster
+            (theta, p), (v1, v2), ml = map(float, y), map(float, u_dot), self.mass * self.length
+            spin = p - ml * (v1 * math.cos(theta) + v2 * math.sin(theta))  # m l² θ̇
+            theta, spin = self._pendulum.exact_flow(np.array([theta, spin]), np.array([self.length]), tau)
+            return np.array([theta, spin + ml * (v1 * math.cos(theta) + v2 * math.sin(theta))])
+        rotation = np.stack([y[..., 0] + 0.0 * u_dot[..., 0], inertia * self.theta_dot(y, u_dot)], axis=-1)
         radius = np.full(np.shape(rotation)[:-1] + (1,), self.length)
-        theta, spin = np.moveaxis(pendulum.exact_flow(rotation, radius, tau), -1, 0)
-        return np.stack([theta, self.momentum(theta, spin / (self.mass * self.length**2), u_dot)], axis=-1)
+        theta, spin = np.moveaxis(self._pendulum.exact_flow(rotation, radius, tau), -1, 0)
+        return np.stack([theta, self.momentum(theta, spin / inertia, u_dot)], axis=-1)
+
+    @cached_property
+    def _pendulum(self) -> Swing:
+        """The plain pendulum the rod is in the frame of a uniformly moving pivot."""
+        return Swing(mass=self.mass, g=self.g)
 
 
 def pivot_segments(u, u_dot_cmd, travel: float, dt: float):
@@ -108,6 +118,9 @@ def pivot_segments(u, u_dot_cmd, travel: float, dt: float):
     pivot never leaves [−travel, travel] nor jumps in position.
     """
     u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
+    u_end = u + u_dot * dt
+    if np.all(np.abs(u_end) <= travel):  # no stop within the step
+        return [(u, u_dot, dt)], u_end, u_dot
     end_stops = np.copysign(travel, u_dot)
     with np.errstate(divide="ignore", invalid="ignore"):
         reach = np.where(u_dot != 0.0, np.maximum((end_stops - u) / u_dot, 0.0), math.inf)
