@@ -26,7 +26,8 @@ from scipy.integrate import solve_ivp
 
 
 class StepperError(ArithmeticError):
-    """A stepper produced a non-finite state or could not meet its tolerance."""
+    """A stepper produced a non-finite state or could not meet its tolerance (or an env's invariant left its
+    documented bound)."""
 
 
 @dataclass(frozen=True)
@@ -87,18 +88,30 @@ class SemiImplicitEuler:
         return _finite(y, self)
 
 
+MAX_EVALUATIONS = 100_000  # of the vector field per segment: past it an adaptive stepper has failed (about 1 s)
+
+
 @dataclass(frozen=True)
 class Scipy:
-    """One of scipy.integrate.solve_ivp's methods (DOP853, RK45, LSODA, Radau), adaptive."""
+    """One of scipy.integrate.solve_ivp's methods (DOP853, RK45, LSODA, Radau), adaptive. It raises StepperError
+    when scipy gives up (a step below the spacing of floats) or after MAX_EVALUATIONS evaluations of the vector
+    field in one segment, which a segment needing ever smaller steps reaches."""
 
     method: str = "DOP853"
     rtol: float = 1e-10
     atol: float = 1e-12
 
     def __call__(self, system, y, u, u_dot, tau):
-        shape = np.shape(y)
+        shape, evaluations = np.shape(y), 0
 
         def rhs(s, flat):
+            nonlocal evaluations
+            evaluations += 1
+            if evaluations > MAX_EVALUATIONS:  # LSODA creeps on toward a singularity instead of failing
+                raise StepperError(
+                    f"{self} cannot meet its tolerance: {MAX_EVALUATIONS} evaluations of the vector field brought "
+                    f"it to s = {s:.9g} of a segment of {tau} s"
+                )
             return _finite(system.vector_field(flat.reshape(shape), u + s * u_dot, u_dot).ravel(), self)
 
         sol = solve_ivp(rhs, (0.0, tau), np.ravel(y), method=self.method, rtol=self.rtol, atol=self.atol)
