@@ -109,6 +109,10 @@ class KapitzaPendulumEnv(RenderedEnv):
     (in the pivot's frame) over each segment of constant u̇, where E is conserved, summed since reset; the jumps
     of u̇ between segments do exact work and are not counted.
 
+    Across v_max up to 100 m/s and dt from 1 ms to 50 ms the exact step keeps that energy error within
+    1e-9 m g l over 200 random steps (tests/test_precision.py); it is on the Pareto front of
+    `python -m connenv.bench precision`.
+
     Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"`
     (E = ½ m l² θ̇² − m g l cos θ, J, the pendulum's energy in the frame of the pivot's velocity, conserved
     while u̇ is constant), `"deviation"` (δ, rad), `"max_deviation"` (its largest value this episode) and

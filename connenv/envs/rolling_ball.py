@@ -104,6 +104,9 @@ class RollingBallEnv(RenderedEnv):
     | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
     | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
 
+    The default exact step is the closed form for any radius and dt: R stays on SO(3) to rounding, 1e-14 over
+    200 random steps (`python -m connenv.bench precision`), and straight rolls match Ry(vt/ρ) to 1e-12.
+
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or R more than 1e-6 off SO(3) (‖RᵀR − I‖, the invariant of Ṙ = ω̂R). Semi-implicit Euler
     is refused (ValueError): the model is kinematic, R is no (q, p) pair, and the method would be explicit Euler.

@@ -100,7 +100,9 @@ class SwingEnv(RenderedEnv):
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, and exact where r moves) | | see `connenv.core.steppers` |
 
     The default integrator, the closed-form pendulum flow, is the fastest and the
-    most accurate stepper (`python -m connenv.bench precision`, docs/precision/).
+    most accurate stepper (`python -m connenv.bench precision`, docs/precision/):
+    across r_min from 0.05 m and dt from 0.01 to 0.5 s its energy error stays
+    within 1e-9 m g r_max over 100 random steps (tests/test_precision.py).
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper,
     dt and the parameters: a non-finite state, or an energy error past
