@@ -26,14 +26,14 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+from functools import partial
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-
-import connenv  # noqa: F401
 from scipy.integrate import solve_ivp
 
+import connenv  # noqa: F401
 from connenv.core import StepperError
 
 CASES = [(0.05, margin) for margin in (1.5, 3.0, 10.0, 30.0, 100.0)] + [(0.08, 3.0)]  # (a in m, a²ω²/(2 g l))
@@ -139,11 +139,11 @@ def main(argv=None):
     print("|---|---|---|---|---|---|---|---|")
     for a, margin in cases:
         omega = math.sqrt(2 * margin * G * L) / a
-        methods = {name: (lambda h, s=stepper: run_env(s, a, omega, h)) for name, stepper in STEPPERS.items()}
-        methods |= {name: (lambda h, m=method: run_smooth(m, a, omega, h)) for name, method in SMOOTH.items()}
+        methods = {name: partial(run_env, stepper, a, omega) for name, stepper in STEPPERS.items()}
+        methods |= {name: partial(run_smooth, method, a, omega) for name, method in SMOOTH.items()}
         for name, method in methods.items():
             smooth = name.startswith("smooth")
-            reference = (lambda h: smooth_reference(a, omega, h)) if smooth else (lambda h: run_env({}, a, omega, h))
+            reference = partial(smooth_reference, a, omega) if smooth else partial(run_env, {}, a, omega)
             holds, agrees = largest_step(method, reference, omega)
             rows.append({"method": name, "a": a, "margin": margin, "omega": omega, "dt_holds": holds, "dt_agrees": agrees})
             print(

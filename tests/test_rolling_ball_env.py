@@ -10,6 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
+from rollouts import seeded_rollout
 from scipy.spatial.transform import Rotation
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 from test_training import import_train
@@ -39,15 +40,7 @@ def flat(obs):
 
 
 def rollout(env, seed, steps=250):
-    obs, _ = env.reset(seed=seed)
-    env.action_space.seed(seed)
-    trace = [flat(obs)]
-    for _ in range(steps):
-        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
-        trace.append(np.append(flat(obs), [reward, info["angle_error"], *info["state"]["R"].ravel()]))
-        if terminated or truncated:
-            trace.append(flat(env.reset()[0]))
-    return np.concatenate(trace)
+    return seeded_rollout(env, seed, steps, lambda info: [info["angle_error"], *info["state"]["R"].ravel()], flatten=flat)
 
 
 @pytest.mark.parametrize("env_id", IDS)
