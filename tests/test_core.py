@@ -145,7 +145,7 @@ def test_a_diverging_stepper_raises_instead_of_returning_garbage(integrator, opt
 @pytest.mark.parametrize(
     "integrator, options, message",
     [
-        ("euler", {}, "integrator='euler'"),
+        ("midpoint", {}, "integrator=.midpoint."),
         ("rk4", {"substeps": 0}, "substeps=0"),
         ("rk4", {"substeps": 2.5}, "substeps=2.5"),
         ("rk4", {"rtol": 1e-6}, "rtol"),

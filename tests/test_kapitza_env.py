@@ -10,6 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
+from rollouts import seeded_rollout
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import connenv  # noqa: F401
@@ -29,15 +30,7 @@ def test_gymnasium_and_sb3_checkers_are_clean(env_id, kwargs):
 
 
 def rollout(env, seed, steps=300):
-    obs, _ = env.reset(seed=seed)
-    env.action_space.seed(seed)
-    trace = [obs]
-    for _ in range(steps):
-        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
-        trace.append(np.append(obs, [reward, info["energy"]]))
-        if terminated or truncated:
-            trace.append(env.reset()[0])
-    return np.concatenate(trace)
+    return seeded_rollout(env, seed, steps, lambda info: [info["energy"]])
 
 
 @pytest.mark.parametrize("env_id", [HOLD, SWING_UP])
@@ -122,7 +115,7 @@ def test_swing_up_reward_is_the_log_lift_gain_less_time():
     assert reward == pytest.approx(-0.2 * 0.005, rel=1e-9)
     # the pivot's velocity jumps from 0 to 4 m/s up at θ = π/2, θ̇ = −1 rad/s: ΔE = −m l θ̇ (4 sin θ) + ½ m (4 sin θ)²
     env.reset(options={"state": {"theta": math.pi / 2, "theta_dot": -1.0}})
-    _, reward, *_, info = env.step(np.array([0.4], np.float32))
+    _, reward, *_ = env.step(np.array([0.4], np.float32))
     lift_before = 0.5 * (0.5 * 1.0 / 9.81 + 1.0)
     along = 10.0 * float(np.float32(0.4))
     lift_after = 0.5 * ((0.5 * 1.0 + along + 0.5 * along**2) / 9.81 + 1.0)

@@ -17,6 +17,7 @@ from connenv.core.batched import EmbeddedRK, RowByRow, batched
 from connenv.systems.kapitza import pivot_segments, pivot_segments_batch
 from connenv.systems.skier import Skier
 from connenv.systems.trails import make_trail
+from test_precision import DIVERGING
 
 RTOL = 1e-12  # |vector − single| ≤ RTOL · max(1, |single|), for every number of obs, reward and info
 
@@ -244,11 +245,26 @@ def test_bad_make_kwargs_are_refused(kwargs, message):
         SwingVectorEnv(**kwargs)
 
 
+@pytest.mark.parametrize(("env_id", "kwargs", "reset", "action", "message"), DIVERGING)
+def test_a_diverging_stepper_raises_in_the_batch_as_in_the_single_env(env_id, kwargs, reset, action, message):
+    """The single envs' divergence cases (tests/test_precision.py), on 3 rows: the same StepperError, never NaN.
+    The swing's bound is lowered (r_max = 0.2 m, bound 0.1 m g r_max): at 2 m its Euler run succeeds first, and the
+    vector env resets the row where the single env of that test steps on."""
+    kwargs = {**kwargs, "r_max": 0.2} if env_id == "connenv/Swing-v0" else kwargs
+    env = gym.make_vec(env_id, 3, vectorization_mode="vector_entry_point", **kwargs)
+    env.reset(seed=0, options={"state": reset})
+    sign = np.broadcast_to(np.asarray(action, np.float32), env.action_space.shape)
+    alternating = env_id in ("connenv/KozlovShell-v0", "connenv/KapitzaPendulum-v0")
+    with pytest.raises(StepperError, match=message):
+        for k in range(2000):
+            assert np.all(np.isfinite(env.step(sign * (-1) ** k if alternating else sign)[0]))
+
+
 def test_a_diverging_stepper_raises_in_the_batch():
     """RK4 with one substep at dt = 0.5 leaves SO(3): the vector env raises as the single env does."""
     env = gym.make_vec("connenv/RollingBall-v0", 4, vectorization_mode="vector_entry_point", dt=0.5, integrator="rk4")
     env.reset(seed=0)
-    with pytest.raises(StepperError, match=r"RK4\(substeps=1\) left SO\(3\) .* dt = 0.5"):
+    with pytest.raises(StepperError, match=r"RK4\(substeps=1\) left SO\(3\).* dt = 0.5, radius = 1.0"):
         for _ in range(20):
             env.step(np.ones((4, 2), np.float32))
 

@@ -9,8 +9,11 @@ or else its ``exact_flow(y, u, tau)`` where u̇ = 0. All of them broadcast over
 leading batch axes of y.
 
 Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
-flow), ``"rk4"`` with ``substeps``, or one of scipy's ``"dop853"``, ``"rk45"``,
-``"lsoda"``, ``"radau"`` with ``rtol`` and ``atol``.
+flow), ``"euler"``, ``"semi_implicit_euler"`` or ``"rk4"`` with ``substeps``, or
+one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol``
+and ``atol``. The two Euler methods are Gymnasium classic control's
+integrators (its ``kinematics_integrator``), there to compare against: they are
+first order, and written here because scipy has no fixed-step methods.
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ from scipy.integrate import solve_ivp
 
 
 class StepperError(ArithmeticError):
-    """A stepper produced a non-finite state or could not meet its tolerance."""
+    """A stepper produced a non-finite state or could not meet its tolerance (or an env's invariant left its
+    documented bound)."""
 
 
 @dataclass(frozen=True)
@@ -47,17 +51,67 @@ class RK4:
 
 
 @dataclass(frozen=True)
+class Euler:
+    """Explicit Euler with ``substeps`` equal steps per segment: y ← y + h f(y)."""
+
+    substeps: int = 1
+
+    def __call__(self, system, y, u, u_dot, tau):
+        h = tau / self.substeps
+        for i in range(self.substeps):
+            y = y + h * system.vector_field(y, u + i * h * u_dot, u_dot)
+        return _finite(y, self)
+
+
+@dataclass(frozen=True)
+class SemiImplicitEuler:
+    """Semi-implicit (symplectic) Euler with ``substeps`` equal steps per segment: with y = (q, p), q the first
+    ``system.n`` entries, p ← p + h ṗ(q, p), then q ← q + h q̇(q, p_new).
+
+    Symplectic where H separates (q̇ depends on p only, ṗ on q only: the swing), so the energy error stays
+    bounded; elsewhere (the skier, whose ṗ depends on p; the Kapitza pendulum, whose q̇ depends on q through the
+    pivot's velocity) it is Gymnasium's semi-implicit Euler, first order and not symplectic. A state with no p (y of n entries: the shell's reduced model, whose momentum is
+    identically 0) has no update of p, and the step is explicit Euler's, which is the method on the full model
+    restricted to p = 0. A system without ``n`` (the rolling ball, kinematic: R is neither q nor p) is refused
+    by make_stepper.
+    """
+
+    substeps: int = 1
+
+    def __call__(self, system, y, u, u_dot, tau):
+        h, n = tau / self.substeps, system.n
+        for i in range(self.substeps):
+            u_i = u + i * h * u_dot
+            p = y[..., n:] + h * system.vector_field(y, u_i, u_dot)[..., n:]
+            y = np.concatenate([y[..., :n], p], axis=-1)
+            y = np.concatenate([y[..., :n] + h * system.vector_field(y, u_i, u_dot)[..., :n], p], axis=-1)
+        return _finite(y, self)
+
+
+MAX_EVALUATIONS = 100_000  # of the vector field per segment: past it an adaptive stepper has failed (about 1 s)
+
+
+@dataclass(frozen=True)
 class Scipy:
-    """One of scipy.integrate.solve_ivp's methods (DOP853, RK45, LSODA, Radau), adaptive."""
+    """One of scipy.integrate.solve_ivp's methods (DOP853, RK45, LSODA, Radau), adaptive. It raises StepperError
+    when scipy gives up (a step below the spacing of floats) or after MAX_EVALUATIONS evaluations of the vector
+    field in one segment, which a segment needing ever smaller steps reaches."""
 
     method: str = "DOP853"
     rtol: float = 1e-10
     atol: float = 1e-12
 
     def __call__(self, system, y, u, u_dot, tau):
-        shape = np.shape(y)
+        shape, evaluations = np.shape(y), 0
 
         def rhs(s, flat):
+            nonlocal evaluations
+            evaluations += 1
+            if evaluations > MAX_EVALUATIONS:  # LSODA creeps on toward a singularity instead of failing
+                raise StepperError(
+                    f"{self} cannot meet its tolerance: {MAX_EVALUATIONS} evaluations of the vector field brought "
+                    f"it to s = {s:.9g} of a segment of {tau} s"
+                )
             return _finite(system.vector_field(flat.reshape(shape), u + s * u_dot, u_dot).ravel(), self)
 
         sol = solve_ivp(rhs, (0.0, tau), np.ravel(y), method=self.method, rtol=self.rtol, atol=self.atol)
@@ -122,29 +176,36 @@ def control_segments_batch(u, u_cmd, dt: float, max_speed: float | None = None):
 
 
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
-INTEGRATORS = ("exact", "rk4", *SCIPY_METHODS)
+FIXED_STEP = {"euler": Euler, "semi_implicit_euler": SemiImplicitEuler, "rk4": RK4}
+INTEGRATORS = ("exact", *FIXED_STEP, *SCIPY_METHODS)
 STEPPER_OPTIONS = ("substeps", "rtol", "atol")
 
 
 def make_stepper(integrator: str, system=None, **options):
     """Build a stepper by name, validating its options (and, for "exact", that the system has a flow).
 
-    rk4 takes ``substeps`` (int ≥ 1); the scipy methods take ``rtol`` and
-    ``atol`` (> 0); exact takes the scipy options for the segments where u moves.
+    euler, semi_implicit_euler and rk4 take ``substeps`` (int ≥ 1); the scipy
+    methods take ``rtol`` and ``atol`` (> 0); exact takes the scipy options for
+    the segments where u moves.
     """
     if integrator not in INTEGRATORS:
         raise ValueError(f"integrator={integrator!r} is not one of {INTEGRATORS}")
-    allowed = {"rk4": {"substeps"}}.get(integrator, {"rtol", "atol"})
+    allowed = {"substeps"} if integrator in FIXED_STEP else {"rtol", "atol"}
     unknown = set(options) - allowed
     if unknown:
         raise ValueError(
             f"unknown option(s) {sorted(unknown)} for integrator={integrator!r}; it takes {sorted(allowed)}"
         )
-    if integrator == "rk4":
+    if integrator in FIXED_STEP:
         substeps = options.get("substeps", 1)
         if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
             raise ValueError(f"substeps={substeps!r} must be an integer ≥ 1")
-        return RK4(int(substeps))
+        if integrator == "semi_implicit_euler" and system is not None and not hasattr(system, "n"):
+            raise ValueError(
+                f"integrator='semi_implicit_euler' needs a state (q, p) split by the system's n, which "
+                f"{type(system).__name__} has not (a kinematic model); 'euler' is what the method reduces to there"
+            )
+        return FIXED_STEP[integrator](int(substeps))
     for name in ("rtol", "atol"):
         value = options.get(name, 1.0)
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):

@@ -1,8 +1,11 @@
-"""What every connenv task shares: the render_mode check, lazy pygame rendering and closing, as in classic control."""
+"""What every connenv task shares: the render_mode check, lazy pygame rendering and closing, as in classic control;
+StepperErrors that name the env's dt and parameters."""
 
 from __future__ import annotations
 
 import gymnasium as gym
+
+from connenv.core.steppers import StepperError
 
 
 class RenderedEnv(gym.Env):
@@ -31,3 +34,10 @@ class RenderedEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+    def _stepper_error(self, error: StepperError) -> StepperError:
+        """`error` (a stepper's, or the env's own invariant check) with the env, the time, dt and the physical
+        parameters (the subclass's ``parameters()``) added: ``raise self._stepper_error(error) from error``."""
+        values = ", ".join(f"{key} = {value!r}" for key, value in self.parameters().items())
+        where = f"{type(self).__name__} in the step from t = {self.t:.6g} s, dt = {self.dt}"
+        return StepperError(f"{error} [{where}, {values}]")

@@ -8,7 +8,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import make_stepper
+from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
 from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
@@ -19,6 +19,7 @@ SPEED_BOUND = 5.0  # |observed θ̇| in units of 2√(g/l) is clipped here
 HOLD_START = 0.2  # rad: KapitzaPendulum-v0 starts within this of inverted, at rest
 HANG_START = (0.05, 0.1)  # rad: KapitzaSwingUp-v0 starts this far from hanging, either side, at rest
 STATE_KEYS = ("theta", "theta_dot", "p", "u", "u_dot")
+ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g l) past which it has diverged: StepperError
 LIFT_FLOOR = 1e-4  # floor of the swing-up's lift in the reward's logarithm: amplitude ≈ 0.02 rad
 TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
 
@@ -97,12 +98,21 @@ class KapitzaPendulumEnv(RenderedEnv):
     | dt | 0.005 | (0, ∞) |
     | tolerance | 0.3 | (0, π) rad |
     | damping | 0.0 | [0, ∞) N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
-    | integrator | "exact" | "exact", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (rk4) / rtol, atol (scipy, and exact's fallback) | | see `connenv.core.steppers` |
+    | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, and exact's fallback) | | see `connenv.core.steppers` |
 
     The default integrator is exact: while u̇ is constant the pivot moves uniformly, so in its frame the rod
     swings as a plain pendulum, whose flow is closed-form (Jacobi elliptic functions). Near the separatrix,
     and with damping, which has no closed form, the exact stepper hands the step to DOP853.
+
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
+    non-finite state, or, without damping, an energy error past 0.1 m g l. The energy error is the change of E
+    (in the pivot's frame) over each segment of constant u̇, where E is conserved, summed since reset; the jumps
+    of u̇ between segments do exact work and are not counted.
+
+    Across v_max up to 100 m/s and dt from 1 ms to 50 ms the exact step keeps that energy error within
+    1e-9 m g l over 200 random steps (tests/test_precision.py); it is on the Pareto front of
+    `python -m connenv.bench precision`.
 
     Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"`
     (E = ½ m l² θ̇² − m g l cos θ, J, the pendulum's energy in the frame of the pivot's velocity, conserved
@@ -153,6 +163,7 @@ class KapitzaPendulumEnv(RenderedEnv):
 
         self.y = np.array([math.pi, 0.0])  # (θ, p)
         self.u, self.u_dot, self.t, self.max_deviation = np.zeros(2), np.zeros(2), 0.0, 0.0
+        self.energy_error = 0.0  # the stepper's: the change of E on segments of constant u̇ since reset
 
     # -- Gymnasium API -------------------------------------------------------
 
@@ -161,7 +172,7 @@ class KapitzaPendulumEnv(RenderedEnv):
         options = dict(options or {})
         check_keys("reset options", options, {"state"})
         self.y = np.array([self._start_angle(), 0.0])
-        self.u, self.u_dot, self.t = np.zeros(2), np.zeros(2), 0.0
+        self.u, self.u_dot, self.t, self.energy_error = np.zeros(2), np.zeros(2), 0.0, 0.0
         if "state" in options:
             self._set_state(options["state"])
         self._start_task(self)
@@ -170,9 +181,16 @@ class KapitzaPendulumEnv(RenderedEnv):
     def step(self, action):
         u_dot_cmd = np.zeros(2)
         u_dot_cmd[self.axes] = check_action(action, self.action_space) * self.v_max
-        segments, self.u, self.u_dot = pivot_segments(self.u, u_dot_cmd, self.a_max, self.dt)
-        for u, u_dot, tau in segments:
-            self.y = self.stepper(self.system, self.y, u, u_dot, tau)
+        segments, u_end, u_dot_end = pivot_segments(self.u, u_dot_cmd, self.a_max, self.dt)
+        try:
+            for u, u_dot, tau in segments:
+                energy = self._energy(u_dot)
+                self.y = self.stepper(self.system, self.y, u, u_dot, tau)
+                self.energy_error += self._energy(u_dot) - energy
+            self.check_energy_error(self.energy_error)
+        except StepperError as error:
+            raise self._stepper_error(error) from error
+        self.u, self.u_dot = u_end, u_dot_end
         self.t += self.dt
         self._track(self)
         info = self._info(self)
@@ -242,6 +260,29 @@ class KapitzaPendulumEnv(RenderedEnv):
             limit = bound if i in self.axes else 0.0
             check_number(f"state {name}[{i}] (pivot={self.pivot!r})", v, -limit, limit)
         return vector
+
+    def parameters(self):
+        return {
+            "pivot": self.pivot,
+            "length": self.system.length,
+            "v_max": self.v_max,
+            "a_max": self.a_max,
+            "damping": self.system.damping,
+        }
+
+    def check_energy_error(self, energy_error):
+        """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound, without damping."""
+        bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.system.length
+        drift = abs(energy_error) if np.ndim(energy_error) == 0 else np.max(np.abs(energy_error))
+        if self.system.damping == 0.0 and not drift <= bound:
+            raise StepperError(f"{self.stepper} diverged: |energy error| = {drift:.3g} J > {bound:.3g} J")
+
+    def _energy(self, u_dot):
+        """The system's E at the state, in the frame of u̇, on Python floats (without numpy's overhead)."""
+        theta, p = float(self.y[0]), float(self.y[1])
+        m, l, c, s = self.system.mass, self.system.length, math.cos(theta), math.sin(theta)
+        theta_dot = (p - m * l * (float(u_dot[0]) * c + float(u_dot[1]) * s)) / (m * l * l)
+        return 0.5 * m * l * l * theta_dot * theta_dot - m * self.system.g * l * c
 
     def _theta_dot(self, s, ops=SCALAR):
         return ops.real(self.system.theta_dot(s.y, s.u_dot))
@@ -358,12 +399,12 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
     def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
         super().__init__(num_envs, max_episode_steps, **kwargs)
         self.y, self.u, self.u_dot = np.zeros((num_envs, 2)), np.zeros((num_envs, 2)), np.zeros((num_envs, 2))
-        self.t, self.step_info = np.zeros(num_envs), None
+        self.t, self.energy_error, self.step_info = np.zeros(num_envs), np.zeros(num_envs), None
         for name in self.RECORD:
             setattr(self, name, np.zeros(num_envs, type(getattr(self.env, name))))
 
     def _capture(self, i):
-        for name in ("y", "u", "u_dot", "t", *self.RECORD):
+        for name in ("y", "u", "u_dot", "t", "energy_error", *self.RECORD):
             getattr(self, name)[i] = getattr(self.env, name)
         self.step_info = None  # a row has changed since the step's info
 
@@ -372,7 +413,10 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
         u_dot_cmd = np.zeros((self.num_envs, 2))
         u_dot_cmd[:, env.axes] = actions * env.v_max
         starts, velocities, durations, self.u, self.u_dot = pivot_segments_batch(self.u, u_dot_cmd, env.a_max, env.dt)
-        self.y = self._run_segments(env.system, self.y, zip(starts, velocities, durations))
+        energy = lambda y, u, u_dot: env.system.energy(y, u_dot)  # noqa: E731  (in the frame of u̇, conserved)
+        self.y, change = self._run_segments(env.system, self.y, zip(starts, velocities, durations), energy)
+        self.energy_error = self.energy_error + change
+        env.check_energy_error(self.energy_error)
         self.t = self.t + env.dt
         env._track(self, BATCH)
         self.step_info = env._info(self, BATCH)  # the reward needs it; kept for _describe unless a row resets

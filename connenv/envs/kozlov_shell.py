@@ -8,7 +8,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import make_stepper
+from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
 from connenv.envs.base import RenderedEnv
 from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
@@ -18,6 +18,7 @@ TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform directi
 TARGET_BOUND = 3.0  # m: the observed target is clipped here
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 TIME_COST = 0.01  # reward paid per step until success
+MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
 DEFAULT_INTEGRATOR = "dop853"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # the fastest passing stepper, measured: see the class docstring
 STATE_KEYS = ("x", "y", "theta", "u", "momentum")
@@ -115,13 +116,18 @@ class KozlovShellEnv(RenderedEnv):
     | u2_max | 0.25 | (0, ∞), likewise |
     | dt | 0.1 | (0, ∞) |
     | success_radius | 0.05 | (0, 0.5) |
-    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
 
-    The default stepper is the fastest that keeps, over 300 steps of random mass motions, the pose within 1e-8
-    of a reference (DOP853 at rtol 1e-13) in the reduced and the full model and the spatial momentum within
-    1e-8 relative in the full one: about 0.7 ms per step (RK4 needs 32 substeps and 2.5 ms; RK45 and LSODA
-    rtol 1e-10, 1.4 and 1.6 ms).
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters
+    (among them the mass ratio m/(M + λ₁)): a non-finite state, or, in the full model, a spatial momentum that
+    has moved by more than 0.1 of its norm since reset. Semi-implicit Euler updates μ, then the pose with the
+    new μ; in the reduced model μ = 0 and it is explicit Euler.
+
+    The default stepper is on the Pareto front of the work–precision chart (`python -m connenv.bench
+    precision`, docs/precision/shell_precision.csv): over 300 steps of random mass motions it keeps the pose
+    within 5e-9 of a reference (DOP853 at rtol 1e-13) in the reduced and the full model and the spatial
+    momentum within 2.2e-9 relative in the full one; RK4 with 8 substeps is faster and errs by 1.5e-6.
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `u` (2), `momentum` (P₁, P₂, Π, body frame), `t`, in SI),
     `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m),
@@ -190,13 +196,19 @@ class KozlovShellEnv(RenderedEnv):
             self.target = _check_vector("target", options["target"], 2)
         self._set_state(options.get("state", {}))
         self.t = 0.0
+        self.momentum0 = self.full_system.spatial_momentum(np.concatenate([self.y[:3], self._momentum()]))
         self.path = [tuple(self.y[:2])]
         return self._obs(), self._info()
 
     def step(self, action):
         u_cmd = check_action(action, self.action_space) * self.u_max
         distance_before = self._distance()
-        self.y = self.stepper(self.system, self.y, self.u, (u_cmd - self.u) / self.dt, self.dt)
+        try:
+            self.y = self.stepper(self.system, self.y, self.u, (u_cmd - self.u) / self.dt, self.dt)
+            if self.system is self.full_system:
+                self.check_momentum(self.y, self.momentum0)
+        except StepperError as error:
+            raise self._stepper_error(error) from error
         self.u, self.t = u_cmd, self.t + self.dt
         self.path.append(tuple(self.y[:2]))
         info = self._info()
@@ -232,6 +244,31 @@ class KozlovShellEnv(RenderedEnv):
             self.system, self.y = self.full_system, np.array([*pose, *momentum])
         else:
             self.system, self.y = self.reduced_system, np.array(pose)
+
+    def parameters(self):
+        system = self.full_system
+        return {
+            "mass": system.mass,
+            "shell_mass": system.shell_mass,
+            "m/(M + λ₁)": round(system.mass / (system.shell_mass + system.added_masses[0]), 12),
+            "a": system.a,
+            "b": system.b,
+            "rho": system.rho,
+            "model": "full" if self.system is system else "reduced",
+        }
+
+    def check_momentum(self, y, momentum0):
+        """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
+        reset by more than MOMENTUM_ERROR_BOUND of its norm."""
+        drift = np.atleast_1d(np.linalg.norm(self.full_system.spatial_momentum(y) - momentum0, axis=-1))
+        norm = np.atleast_1d(np.linalg.norm(momentum0, axis=-1))
+        bad = np.flatnonzero(~(drift <= MOMENTUM_ERROR_BOUND * norm))
+        if bad.size:
+            i = bad[0]
+            raise StepperError(
+                f"{self.stepper} diverged: the spatial momentum moved by {drift[i]:.3g}, more than "
+                f"{MOMENTUM_ERROR_BOUND} of its norm {norm[i]:.3g}"
+            )
 
     def _momentum(self):
         return self.y[3:] if self.system is self.full_system else np.zeros(3)
@@ -290,10 +327,11 @@ class KozlovShellVectorEnv(TaskVectorEnv):
         self.pose, self.momentum = np.zeros((num_envs, 3)), np.zeros((num_envs, 3))
         self.u, self.target, self.t = np.zeros((num_envs, 2)), np.zeros((num_envs, 2)), np.zeros(num_envs)
         self.full = np.zeros(num_envs, bool)  # the rows in the full (Kirchhoff) model
+        self.momentum0 = np.zeros((num_envs, 3))  # their spatial momentum at reset
 
     def _capture(self, i):
         env = self.env
-        self.pose[i], self.momentum[i], self.u[i] = env.y[:3], env._momentum(), env.u
+        self.pose[i], self.momentum[i], self.u[i], self.momentum0[i] = env.y[:3], env._momentum(), env.u, env.momentum0
         self.target[i], self.t[i], self.full[i] = env.target, env.t, env.system is env.full_system
 
     def _advance(self, actions):
@@ -306,6 +344,7 @@ class KozlovShellVectorEnv(TaskVectorEnv):
         else:
             y, full = np.concatenate([self.pose, self.momentum], axis=-1), self.full
             y[full] = self.stepper(env.full_system, y[full], self.u[full], u_dot[full], env.dt)
+            env.check_momentum(y[full], self.momentum0[full])
             if not full.all():
                 rest = ~full
                 y[rest, :3] = self.stepper(env.reduced_system, self.pose[rest], self.u[rest], u_dot[rest], env.dt)

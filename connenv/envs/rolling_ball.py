@@ -102,10 +102,15 @@ class RollingBallEnv(RenderedEnv):
     | v_max | 1.0 | (0, ∞) m/s |
     | dt | 0.1 | (0, ∞) s |
     | tolerance | 0.05 | (0, π) rad |
-    | integrator | "exact" | "exact" (Rodrigues), "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
-    | substeps (rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
+    | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
 
-    A stepper whose R drifts more than 1e-6 off SO(3) (‖RᵀR − I‖) raises `connenv.core.StepperError`.
+    The default exact step is the closed form for any radius and dt: R stays on SO(3) to rounding, 1e-14 over
+    200 random steps (`python -m connenv.bench precision`), and straight rolls match Ry(vt/ρ) to 1e-12.
+
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
+    non-finite state, or R more than 1e-6 off SO(3) (‖RᵀR − I‖, the invariant of Ṙ = ω̂R). Semi-implicit Euler
+    is refused (ValueError): the model is kinematic, R is no (q, p) pair, and the method would be explicit Euler.
 
     Every `info` has `"state"` (`x`, `y`, `R` (3×3), `t`), `"angle_error"` (e, rad), `"path_length"` (m rolled
     since reset), `"distance"` (the optimal arc's length from the start attitude, m), `"path_ratio"` (path
@@ -161,7 +166,10 @@ class RollingBallEnv(RenderedEnv):
     def step(self, action):
         v = self.velocity(finite_action(action, self.action_space))
         before = self.progress(self)
-        self.R = self.roll(self, v, self.stepper)
+        try:
+            self.R = self.roll(self, v, self.stepper)
+        except StepperError as error:
+            raise self._stepper_error(error) from error
         self.position = self.position + v * self.dt
         self.update_error(self)
         self.t += self.dt
@@ -195,12 +203,9 @@ class RollingBallEnv(RenderedEnv):
     def roll(self, s, v, stepper):
         """R after a step at velocity v, or StepperError where the stepper has left SO(3)."""
         R = stepper(self.system, s.R.reshape(*s.R.shape[:-2], 9), s.position, v, self.dt).reshape(s.R.shape)
-        drift = np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1))
-        if np.any(drift > DRIFT_LIMIT):
-            raise StepperError(
-                f"{stepper} left SO(3) at t = {np.max(s.t) + self.dt:.6g} s with dt = {self.dt}, "
-                f"radius = {self.system.radius}: ‖RᵀR − I‖ = {np.max(drift):.3g} > {DRIFT_LIMIT}"
-            )
+        drift = np.max(np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1)))
+        if not drift <= DRIFT_LIMIT:
+            raise StepperError(f"{stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")
         return R
 
     def update_error(self, s, ops=SCALAR):
@@ -241,6 +246,9 @@ class RollingBallEnv(RenderedEnv):
         self.position = np.array([x, y])
         if "R" in state:
             self.R = check_rotation("state R", state["R"])
+
+    def parameters(self):
+        return {"radius": self.system.radius, "v_max": self.v_max}
 
 
 

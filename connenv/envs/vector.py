@@ -37,6 +37,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from connenv.core.batched import batched
+from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, finite_action
 
 SCALAR = SimpleNamespace(
@@ -134,7 +135,12 @@ class TaskVectorEnv(VectorEnv):
 
     def step(self, actions):
         actions = (check_action if self.clips_actions else finite_action)(actions, self.action_space)
-        reward = np.asarray(self._advance(actions), float)
+        try:
+            reward = np.asarray(self._advance(actions), float)
+        except StepperError as error:
+            values = ", ".join(f"{key} = {value!r}" for key, value in self.env.parameters().items())
+            where = f"{type(self).__name__} in the step from t = {np.min(self.t):.6g}..{np.max(self.t):.6g} s"
+            raise StepperError(f"{error} [{where}, dt = {self.env.dt}, {values}]") from error
         self.steps += 1
         restart = np.flatnonzero(self.prev_done)
         for i in restart:
@@ -165,16 +171,23 @@ class TaskVectorEnv(VectorEnv):
             masked[f"_{key}"] = mask
         return masked
 
-    def _run_segments(self, system, y, segments):
-        """y after control segments (u, u̇, duration) given per row, each row skipping its segments of length 0."""
+    def _run_segments(self, system, y, segments, conserved):
+        """y after control segments (u, u̇, duration) given per row, each row skipping its segments of length 0; and
+        the change, summed over the segments, of conserved(y, u, u̇), a quantity each segment conserves (the
+        stepper's error on it)."""
+        change = np.zeros(len(y))
         for u, u_dot, tau in segments:
-            rows = tau > 0.0
+            rows = np.broadcast_to(tau > 0.0, change.shape)
             if np.all(rows):
+                before = conserved(y, u, u_dot)
                 y = self.stepper(system, y, u, u_dot, tau)
+                change = change + (conserved(y, u, u_dot) - before)
             elif np.any(rows):
-                y = y.copy()
-                y[rows] = self.stepper(system, y[rows], u[rows], u_dot[rows], tau[rows])
-        return y
+                y, u, u_dot, tau = y.copy(), u[rows], u_dot[rows], tau[rows]
+                before = conserved(y[rows], u, u_dot)
+                y[rows] = self.stepper(system, y[rows], u, u_dot, tau)
+                change[rows] += conserved(y[rows], u, u_dot) - before
+        return y, change
 
     def _terminated(self, info):
         """Which rows' episodes end by the task: success, unless the task says otherwise."""

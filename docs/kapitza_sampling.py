@@ -1,7 +1,7 @@
-"""Stability of the steppers on the Kapitza pendulum: the largest step that still holds the pendulum inverted
-and agrees with the exact motion, against the vibration frequency ω.
+"""The Kapitza pendulum's step limit: the largest step that still holds the pendulum inverted and agrees with
+the exact motion, against the vibration frequency ω, in the env and for a smooth vibration.
 
-    python docs/kapitza_stability.py [--quick]
+    python docs/kapitza_sampling.py [--quick]
 
 The pivot vibrates vertically, u₂ = a cos ωt, a = 0.05 l (the amplitude of the issue's threshold test), at
 a²ω² = r × 2 g l for several margins r. From θ = π + 0.1 at rest, each method runs T = 2 s at each step of
@@ -16,11 +16,9 @@ throughout, finite) and that *agrees* (holds, and θ stays within 0.01 rad of th
    the step, by the explicit Euler, semi-implicit Euler (the classic-control integrators) and RK4 steps, written
    here because the core's steppers take u̇ constant over a segment; the reference is DOP853 at rtol 1e-10.
 
-First, the cost of each env stepper in the reference controller's regime: the median time of env.step over
-a 10 s episode of KapitzaPendulum-v0 under the Kapitza controller (seed 0), each step timed right after a step
-of Gymnasium's Pendulum-v1 for the ratio, and the largest |θ − θ_exact| over the episode.
-
-Writes docs/kapitza_stability.csv and docs/kapitza_stability.png.
+`python -m connenv.bench stability --env kapitza` maps the env's steppers up to 4 steps a vibration period;
+this script goes on to the sampling limit itself, sets it beside the smooth vibration, and measures the
+reference controller's regime. Writes docs/kapitza_sampling.csv and docs/kapitza_sampling.png.
 """
 
 from __future__ import annotations
@@ -28,16 +26,14 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import time
+from functools import partial
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-
-import connenv  # noqa: F401
-from agents.kapitza import KapitzaVibration
 from scipy.integrate import solve_ivp
 
+import connenv  # noqa: F401
 from connenv.core import StepperError
 
 CASES = [(0.05, margin) for margin in (1.5, 3.0, 10.0, 30.0, 100.0)] + [(0.08, 3.0)]  # (a in m, a²ω²/(2 g l))
@@ -51,41 +47,6 @@ STEPPERS = {
 }
 G, L = 9.81, 1.0
 OUT = Path(__file__).parent
-
-
-TIMED = {
-    "exact": {},
-    "rk4 ×1": {"integrator": "rk4", "substeps": 1},
-    "rk4 ×2": {"integrator": "rk4", "substeps": 2},
-    "dop853 1e-8": {"integrator": "dop853", "rtol": 1e-8, "atol": 1e-10},
-    "lsoda 1e-8": {"integrator": "lsoda", "rtol": 1e-8, "atol": 1e-10},
-}
-
-
-def timing():
-    """Print µs per env step, the ratio to Pendulum-v1 and the error against the exact stepper."""
-    pendulum = gym.make("Pendulum-v1").unwrapped
-    pendulum.reset(seed=0)
-    hold, clock, reference = np.array([0.0], np.float32), time.perf_counter, None
-    print("| integrator | µs/step | × Pendulum-v1 | max |θ − θ_exact| over 10 s |")
-    print("|---|---|---|---|")
-    for name, stepper in TIMED.items():
-        env = gym.make("connenv/KapitzaPendulum-v0", **stepper).unwrapped
-        policy = KapitzaVibration(env)
-        obs, _ = env.reset(seed=0)
-        times, thetas = np.empty((2000, 2)), np.empty(2000)
-        for k in range(2000):
-            action = policy.predict(obs)[0]
-            start = clock()
-            pendulum.step(hold)
-            middle = clock()
-            obs, *_ = env.step(action)
-            times[k] = middle - start, clock() - middle
-            thetas[k] = env.y[0]
-        reference = thetas if reference is None else reference
-        pend, step = np.median(times, axis=0)
-        print(f"| {name} | {step * 1e6:.0f} | {step / pend:.1f} | {np.max(np.abs(thetas - reference)):.1e} |", flush=True)
-    print()
 
 
 def run_env(stepper: dict, a: float, omega: float, dt: float) -> np.ndarray | None:
@@ -171,7 +132,6 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="two margins only")
     args = parser.parse_args(argv)
-    timing()
     cases = CASES[:2] if args.quick else CASES
     rows = []
     print(f"l = {L} m, T = {DURATION} s; step grid {DT_GRID[0]:.2g}..{DT_GRID[-1]:.2g} s ({len(DT_GRID)} steps)")
@@ -179,11 +139,11 @@ def main(argv=None):
     print("|---|---|---|---|---|---|---|---|")
     for a, margin in cases:
         omega = math.sqrt(2 * margin * G * L) / a
-        methods = {name: (lambda h, s=stepper: run_env(s, a, omega, h)) for name, stepper in STEPPERS.items()}
-        methods |= {name: (lambda h, m=method: run_smooth(m, a, omega, h)) for name, method in SMOOTH.items()}
+        methods = {name: partial(run_env, stepper, a, omega) for name, stepper in STEPPERS.items()}
+        methods |= {name: partial(run_smooth, method, a, omega) for name, method in SMOOTH.items()}
         for name, method in methods.items():
             smooth = name.startswith("smooth")
-            reference = (lambda h: smooth_reference(a, omega, h)) if smooth else (lambda h: run_env({}, a, omega, h))
+            reference = partial(smooth_reference, a, omega) if smooth else partial(run_env, {}, a, omega)
             holds, agrees = largest_step(method, reference, omega)
             rows.append({"method": name, "a": a, "margin": margin, "omega": omega, "dt_holds": holds, "dt_agrees": agrees})
             print(
@@ -191,7 +151,7 @@ def main(argv=None):
                 f"| {omega * agrees:.2f} |",
                 flush=True,
             )
-    with open(OUT / "kapitza_stability.csv", "w", newline="") as f:
+    with open(OUT / "kapitza_sampling.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
@@ -222,7 +182,7 @@ def plot(rows):
     ax.set_title("Kapitza pendulum: largest step within 0.01 rad (o) / still inverted (x)", fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(OUT / "kapitza_stability.png", dpi=120)
+    fig.savefig(OUT / "kapitza_sampling.png", dpi=120)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,9 @@
-"""Benchmark of the steppers on an env: energy drift and speed, to choose its default.
+"""Benchmark of the steppers on an env: energy drift and speed, the table that chose the defaults.
 
-    python -m connenv.bench [--env swing|skier|ball] [--quick] [--integrators exact rk4 ...]
+    python -m connenv.bench steppers [--env swing|skier|ball] [--quick] [--integrators exact rk4 ...]
+
+(also as `python -m connenv.bench [--env ...]`). The work–precision charts of `python -m connenv.bench precision`
+supersede it for choosing; it stays for the tables in docs/steppers.md.
 
 Every candidate runs a 1000-step episode at constant control (action +1 held)
 from two starts (the first only with --quick):
@@ -140,7 +143,7 @@ def describe(options):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m connenv.bench", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m connenv.bench steppers", description=__doc__.split("\n")[0])
     parser.add_argument("--env", choices=sorted(BENCHES), default="swing")
     parser.add_argument("--quick", action="store_true", help="only the first start (half the time)")
     parser.add_argument("--integrators", nargs="+", choices=INTEGRATORS, metavar="NAME", help="only these integrators")

@@ -1,0 +1,3 @@
+from connenv.bench import main
+
+main()

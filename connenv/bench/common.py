@@ -1,0 +1,99 @@
+"""What the benchmarks share: the header line, timed episodes beside Pendulum-v1, the stepper candidates, and the
+output folder."""
+
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import scipy
+
+import connenv  # noqa: F401  (registers the envs)
+
+OUTPUT = Path(__file__).resolve().parents[2] / "docs" / "precision"
+ATOL_PER_RTOL = 1e-2  # atol = rtol · 1e-2 for the scipy methods
+
+
+def header(name: str):
+    print(f"connenv.bench {name}  {datetime.datetime.now().isoformat(timespec='seconds')}")
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, "
+        f"gymnasium {gym.__version__}, {os.cpu_count()} cores, {platform.machine()}, "
+        f"load average {os.getloadavg()[0]:.2f}",
+        flush=True,
+    )
+
+
+def pendulum():
+    """Gymnasium's Pendulum-v1, unwrapped and reset: the reference step timed beside every env step."""
+    env = gym.make("Pendulum-v1").unwrapped
+    env.reset(seed=0)
+    return env
+
+
+def describe(integrator: str, options: dict) -> str:
+    if "substeps" in options:
+        return f"{integrator} ×{options['substeps']}"
+    if "rtol" in options:
+        return f"{integrator} rtol {options['rtol']:.0e}"
+    return integrator
+
+
+def candidates(rtols=(1e-4, 1e-6, 1e-8, 1e-10, 1e-12)):
+    """(integrator, make kwargs) of every stepper charted: the exact step, the two Euler methods of Gymnasium's
+    classic control, RK4, and scipy's DOP853, LSODA and Radau (Radau, implicit and slow on these non-stiff
+    problems, at its three loosest tolerances only)."""
+    yield "exact", {}
+    for integrator in ("euler", "semi_implicit_euler"):
+        for substeps in (1, 4, 16):
+            yield integrator, {"substeps": substeps}
+    for substeps in (1, 2, 4, 8):
+        yield "rk4", {"substeps": substeps}
+    for integrator, tolerances in (("dop853", rtols), ("lsoda", rtols[1:]), ("radau", rtols[1:4])):
+        for rtol in tolerances:
+            yield integrator, {"rtol": rtol, "atol": rtol * ATOL_PER_RTOL}
+
+
+def make_env(env_id: str, integrator: str | None, options: dict, **kwargs):
+    """The unwrapped env with that stepper (None: its default), or None where the env refuses the stepper."""
+    try:
+        stepper = {} if integrator is None else {"integrator": integrator, **options}
+        return gym.make(env_id, **kwargs, **stepper).unwrapped
+    except ValueError:
+        return None
+
+
+def run(env, reset_options, actions, reference=None, measure=None, clock_against=None):
+    """Reset env and step it through `actions`; with `clock_against` (Pendulum-v1) each env step is timed right
+    after one of its steps. `measure(env, info)` is called after every step. Returns (step times, Pendulum
+    times, error message or None); a StepperError ends the episode (its step is timed too) and its message is
+    returned."""
+    from connenv.core import StepperError
+
+    env.reset(seed=0, options=reset_options)
+    times, reference_times = [], []
+    clock, still = time.perf_counter, np.array([0.0], np.float32)
+    failure = None
+    for action in actions:
+        if clock_against is not None:
+            start = clock()
+            clock_against.step(still)
+        middle = clock()
+        try:
+            info = env.step(action)[4]
+        except StepperError as error:
+            failure = str(error)
+        end = clock()
+        times.append(end - middle)
+        if clock_against is not None:
+            reference_times.append(middle - start)
+        if failure:
+            break
+        if measure is not None:
+            measure(env, info)
+    return np.array(times), np.array(reference_times), failure

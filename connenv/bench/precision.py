@@ -1,0 +1,362 @@
+"""Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
+and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
+
+    python -m connenv.bench precision [--env swing skier ball kapitza shell] [--quick]
+
+Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
+
+- swing: Swing-v0 from rest at θ₀ = π/2, 500 steps (25 s) at action +1 (r = r_max); reference: the closed-form
+  flow. State error: |θ − θ_ref| at the end (rad). Invariant: max |E(t) − E(0)| / (m g r), E conserved at held r.
+- skier: Skier-v0 from rest at x₀ = 5.5 m, near the rim, standing (h = h_max), 500 steps at action +1;
+  reference: DOP853 at rtol 1e-13, atol 1e-15. State error: |x − x_ref| at the end (m). Invariant:
+  max |E(t) − E(0)| / (m g H), H = 3 m the valley's depth.
+- ball: RollingBall-v0 from R = I, 200 steps (one episode) of seeded random velocities; reference: the exact
+  step, exact for every piecewise-constant velocity. State error: the angle between R and R_ref at the end
+  (rad). Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
+- kapitza: KapitzaPendulum-v0 (dt = 0.005 s) from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt
+  with a = 0.05 m, ω = 150 rad/s (inverted is stable: a²ω² > 2 g l), each step's velocity the chord between
+  samples, 400 steps (2 s); reference: the exact step. State error: |θ − θ_ref| at the end (rad). Invariant:
+  the env's energy error, the change of E in the pivot's frame over the segments of constant u̇, max over the
+  episode in units of m g l.
+- shell: KozlovShell-v0, 300 steps of seeded random mass positions, from rest (the reduced model, the default
+  episode) and from the body momentum (0.3, 0.1, 0.05) (the full Kirchhoff model); reference: DOP853 at rtol
+  1e-13, atol 1e-15. State error: max-norm of the pose (x, y, θ) error at the end (m, rad), for each model.
+  Invariant: max |S(t) − S(0)| / |S(0)| of the spatial momentum S in the full model.
+
+Time: median µs of env.step over the first episode (the reduced one for the shell), and its ratio to the median
+Pendulum-v1 step timed beside it. A stepper that raises StepperError (non-finite, or the env's invariant bound)
+is charted as diverged (a red ×, at the top), with the message in the CSV. The Pareto front is taken over
+(time ratio, largest state error) among the steppers that did not diverge; the printout says whether each env's
+default stepper is on it. The reference's own row has error 0 (charted at 1e-17). --quick runs a fifth of every
+episode.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import math
+import time
+
+import numpy as np
+
+from connenv.bench.common import OUTPUT, candidates, describe, header, make_env, pendulum, run
+from connenv.systems.rolling_ball import rotation_angle
+
+TIGHT = ("dop853", {"rtol": 1e-13, "atol": 1e-15})
+EXACT = ("exact", {})
+DIVERGED = math.inf
+
+
+@dataclasses.dataclass(frozen=True)
+class Episode:
+    label: str
+    reset: dict  # reset options
+    actions: object  # (steps, rng) -> array of actions
+    steps: int
+
+
+@dataclasses.dataclass(frozen=True)
+class Case:
+    env_id: str
+    reference: tuple  # (integrator, options) of the reference stepper
+    episodes: tuple  # the first one is timed
+    error: object  # (env, reference env) -> state error at the end
+    invariant: str  # what the drift measures, as printed
+    drift: object  # (env, info, start) -> the invariant's drift at this step; start: the env's state at reset
+    error_unit: str
+
+
+def held(action):
+    return lambda steps, rng: np.tile(np.asarray(action, np.float32), (steps, 1))
+
+
+def uniform(size):
+    return lambda steps, rng: rng.uniform(-1.0, 1.0, (steps, size)).astype(np.float32)
+
+
+def vibration(amplitude, omega, dt, v_max):
+    """Actions that move the pivot along u₂ = a cos ωt: each step's velocity is the chord between samples."""
+
+    def actions(steps, rng):
+        t = dt * np.arange(steps + 1)
+        return (amplitude * np.diff(np.cos(omega * t)) / (dt * v_max)).astype(np.float32)[:, None]
+
+    return actions
+
+
+KAPITZA_VIBRATION = (0.05, 150.0)  # a (m), ω (rad/s): a²ω² = 56 m²/s² > 2 g l = 19.6, so inverted is stable
+
+
+def energy_drift(scale):
+    def drift(env, info, start):
+        return abs(info["energy"] - start["energy"]) / scale(env)
+
+    return drift
+
+
+def momentum_drift(env, info, start):
+    if info["model"] != "full":
+        return math.nan
+    s0 = np.asarray(start["spatial_momentum"])
+    return float(np.linalg.norm(np.asarray(info["spatial_momentum"]) - s0) / np.linalg.norm(s0))
+
+
+CASES = {
+    "swing": Case(
+        "connenv/Swing-v0",
+        EXACT,
+        (Episode("θ₀=π/2", {"state": {"theta": math.pi / 2, "theta_dot": 0.0}}, held([1.0]), 500),),
+        lambda env, ref: abs(env.y[0] - ref.y[0]),
+        "max |E − E(0)| / (m g r)",
+        energy_drift(lambda env: env.system.mass * env.system.g * env.r),
+        "rad",
+    ),
+    "skier": Case(
+        "connenv/Skier-v0",
+        TIGHT,
+        (Episode("x₀=5.5", {"state": {"x": 5.5, "h": 1.0}}, held([1.0]), 500),),
+        lambda env, ref: abs(env.y[0] - ref.y[0]),
+        "max |E − E(0)| / (m g H)",
+        energy_drift(lambda env: env.system.mass * env.system.g * env.trail.H),
+        "m",
+    ),
+    "ball": Case(
+        "connenv/RollingBall-v0",
+        EXACT,
+        (Episode("random v", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
+        lambda env, ref: float(rotation_angle(env.R @ ref.R.T)),
+        "max ‖RᵀR − I‖",
+        lambda env, info, start: float(np.linalg.norm(env.R.T @ env.R - np.eye(3))),
+        "rad",
+    ),
+    "kapitza": Case(
+        "connenv/KapitzaPendulum-v0",
+        EXACT,
+        (
+            Episode(
+                "θ₀=π+0.1",
+                {"state": {"theta": math.pi + 0.1, "u": (0.0, KAPITZA_VIBRATION[0])}},
+                vibration(*KAPITZA_VIBRATION, dt=0.005, v_max=10.0),
+                400,
+            ),
+        ),
+        lambda env, ref: abs(env.y[0] - ref.y[0]),
+        "max |energy error| / (m g l)",
+        lambda env, info, start: abs(env.energy_error) / (env.system.mass * env.system.g * env.system.length),
+        "rad",
+    ),
+    "shell": Case(
+        "connenv/KozlovShell-v0",
+        TIGHT,
+        (
+            Episode("reduced", {"state": {}}, uniform(2), 300),
+            Episode("full", {"state": {"momentum": (0.3, 0.1, 0.05)}}, uniform(2), 300),
+        ),
+        lambda env, ref: float(np.max(np.abs(env.y[:3] - ref.y[:3]))),
+        "max |S − S(0)| / |S(0)| (full model)",
+        momentum_drift,
+        "m, rad",
+    ),
+}
+
+
+def actions_of(episode, steps):
+    return episode.actions(steps, np.random.default_rng(0))
+
+
+def references(case, steps_of):
+    """The reference env at the end of each episode."""
+    envs = []
+    for episode in case.episodes:
+        env = make_env(case.env_id, *case.reference)
+        run(env, episode.reset, actions_of(episode, steps_of(episode)))
+        envs.append(env)
+    return envs
+
+
+def measure_stepper(case, integrator, options, steps_of, clock, reference_envs):
+    """One row: time, error per episode and drift, or None where the env refuses the stepper."""
+    row = {"integrator": integrator, "options": describe(integrator, options), "diverged": ""}
+    drift, errors = 0.0, {}
+    for k, (episode, reference) in enumerate(zip(case.episodes, reference_envs)):
+        env = make_env(case.env_id, integrator, options)
+        if env is None:
+            return None
+        actions = actions_of(episode, steps_of(episode))
+        start = env.reset(seed=0, options=episode.reset)[1]
+        worst = [0.0]
+
+        def measure(env, info, start=start, worst=worst):
+            value = case.drift(env, info, start)
+            if not math.isnan(value):
+                worst[0] = max(worst[0], value)
+
+        times, pendulum_times, failure = run(env, episode.reset, actions, measure=measure, clock_against=clock)
+        if k == 0:
+            row["us_per_step"] = float(np.median(times) * 1e6)
+            row["ratio"] = float(np.median(times) / np.median(pendulum_times))
+            row["pendulum_us"] = float(np.median(pendulum_times) * 1e6)
+        if failure:
+            row["diverged"] = f"{episode.label}: {failure}"
+            errors[episode.label] = DIVERGED
+            drift = DIVERGED
+        else:
+            errors[episode.label] = case.error(env, reference)
+            drift = max(drift, worst[0])
+    row["errors"] = errors
+    row["drift"] = drift
+    row["error"] = max(errors.values())
+    return row
+
+
+def pareto(rows):
+    """Mark each row on the front of (ratio, error): it did not diverge, and no other row is at least as fast and
+    at least as accurate, and strictly better in one."""
+    for row in rows:
+        row["pareto"] = not row["diverged"] and not any(
+            o is not row
+            and o["ratio"] <= row["ratio"]
+            and o["error"] <= row["error"]
+            and (o["ratio"] < row["ratio"] or o["error"] < row["error"])
+            for o in rows
+        )
+
+
+def default_row(case, rows):
+    """The row whose stepper is the env's default (the stepper of the env made without kwargs)."""
+    default = make_env(case.env_id, None, {}).stepper
+    for row in rows:
+        env = make_env(case.env_id, row["integrator"], row["stepper_options"])
+        if env is not None and env.stepper == default:
+            return row
+    return None
+
+
+def write_csv(name, case, rows, folder):
+    path = folder / f"{name}_precision.csv"
+    labels = [e.label for e in case.episodes]
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(
+            ["integrator", "options", "us_per_step", "ratio_to_pendulum"]
+            + [f"state_error_{label} ({case.error_unit})" for label in labels]
+            + [f"drift ({case.invariant})", "pareto", "default", "diverged"]
+        )
+        for row in rows:
+            writer.writerow(
+                [row["integrator"], row["options"], f"{row['us_per_step']:.1f}", f"{row['ratio']:.2f}"]
+                + [f"{row['errors'][label]:.3e}" for label in labels]
+                + [f"{row['drift']:.3e}", row["pareto"], row["default"], row["diverged"]]
+            )
+    return path
+
+
+STYLE = {
+    "exact": ("k", "*"),
+    "euler": ("tab:red", "v"),
+    "semi_implicit_euler": ("tab:orange", "^"),
+    "rk4": ("tab:blue", "o"),
+    "dop853": ("tab:green", "s"),
+    "lsoda": ("tab:purple", "D"),
+    "radau": ("tab:brown", "P"),
+}
+
+
+def plot(name, case, rows, folder, fraction=1.0):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    finite = [r[key] for r in rows for key in ("error", "drift") if 0 < r[key] < math.inf]
+    top = 10 ** math.ceil(math.log10(max(finite))) * 10 if finite else 1.0
+    floor = 1e-17
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
+    panels = [("error", f"state error at the end of the episode ({case.error_unit})"), ("drift", case.invariant)]
+    for ax, (key, label) in zip(axes, panels):
+        for integrator, (color, marker) in STYLE.items():
+            family = [r for r in rows if r["integrator"] == integrator]
+            if not family:
+                continue
+            xs = [r["ratio"] for r in family]
+            ys = [min(max(r[key], floor), top) for r in family]
+            ax.plot(xs, ys, color=color, marker=marker, ls="-", lw=0.8, label=integrator)
+            for r, x, y in zip(family, xs, ys):
+                if r["diverged"]:
+                    ax.plot(x, y, color="red", marker="x", ms=12, mew=2, ls="")
+        default = next(r for r in rows if r["default"])
+        ax.plot(default["ratio"], max(default[key], floor), "o", ms=16, mfc="none", mec="k", mew=1.5)
+        ax.annotate("default", (default["ratio"], max(default[key], floor)), textcoords="offset points", xytext=(8, 8))
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("time per env step / Pendulum-v1's (same run)")
+        ax.set_ylabel(label)
+        ax.grid(True, which="major", alpha=0.3)
+    axes[0].axhline(top, color="red", lw=0.5, ls=":")
+    axes[0].text(
+        axes[0].get_xlim()[1], top, "diverged (StepperError) × ", color="red", va="bottom", ha="right", fontsize=8
+    )
+    axes[0].legend(fontsize=8, loc="lower left")
+    episodes = "; ".join(f"{e.label}, {max(round(e.steps * fraction), 1)} steps" for e in case.episodes)
+    fig.suptitle(f"{case.env_id}: work–precision ({episodes}); python -m connenv.bench precision", fontsize=10)
+    fig.tight_layout()
+    path = folder / f"{name}_precision.png"
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
+    """Measure, print, and write <name>_precision.csv and .png into folder; episodes shortened by `fraction`,
+    `steppers` (integrator, options) instead of every candidate."""
+    case = CASES[name]
+
+    def steps_of(episode):
+        return max(round(episode.steps * fraction), 1)
+
+    clock = pendulum()
+    print(f"\n{case.env_id}: {', '.join(f'{e.label} ({steps_of(e)} steps)' for e in case.episodes)}")
+    labels = [e.label for e in case.episodes]
+    errors = " | ".join(f"error {label}" for label in labels)
+    print(f"| stepper | µs/step | × Pendulum-v1 | {errors} | {case.invariant} |")
+    print("|---|---|---|" + "---|" * len(labels) + "---|")
+    rows, reference_envs = [], references(case, steps_of)
+    for integrator, options in steppers or candidates():
+        row = measure_stepper(case, integrator, options, steps_of, clock, reference_envs)
+        if row is None:
+            continue
+        row["stepper_options"] = options
+        rows.append(row)
+        cells = [f"{row['errors'][lab]:.1e}" for lab in labels] + [f"{row['drift']:.1e}"]
+        note = f"  (diverged: {row['diverged']})" if row["diverged"] else ""
+        timing = f"{row['us_per_step']:.0f} | {row['ratio']:.1f}"
+        print(f"| {row['options']} | {timing} | " + " | ".join(cells) + f" |{note}", flush=True)
+    pareto(rows)
+    default = default_row(case, rows)
+    for row in rows:
+        row["default"] = row is default
+    print(f"Pendulum-v1: median {np.median([r['pendulum_us'] for r in rows]):.1f} µs/step over the rows' medians")
+    front = sorted((r for r in rows if r["pareto"]), key=lambda r: r["ratio"])
+    print("Pareto front: " + ", ".join(r["options"] for r in front))
+    verdict = "on the Pareto front" if default["pareto"] else "NOT on the Pareto front"
+    print(
+        f"default: {default['options']}: error {default['error']:.2e} {case.error_unit}, drift {default['drift']:.2e}, "
+        f"{default['us_per_step']:.0f} µs/step, {default['ratio']:.1f}× Pendulum-v1: {verdict}"
+    )
+    return rows, write_csv(name, case, rows, folder), plot(name, case, rows, folder, fraction)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python -m connenv.bench precision", description=__doc__.split("\n")[0])
+    parser.add_argument("--env", nargs="+", choices=sorted(CASES), default=list(CASES))
+    parser.add_argument("--quick", action="store_true", help="a fifth of every episode")
+    args = parser.parse_args(argv)
+    header("precision")
+    OUTPUT.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    for name in args.env:
+        _, csv_path, png_path = chart(name, fraction=0.2 if args.quick else 1.0)
+        print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")
+    print(f"\nwall time: {time.perf_counter() - start:.0f} s")

@@ -1,0 +1,284 @@
+"""Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
+breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
+
+    python -m connenv.bench stability [--env swing skier ball kapitza shell] [--quick]
+
+For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
+from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
+stays bounded is the method's largest stable dt: the env raised no
+StepperError and the invariant's error stayed within the bound below at every step. At constant control:
+
+- swing: r held at r_min (action −1) from θ₀ = 1 rad at rest, 10 s; parameter r_min (ω = √(g/r_min));
+  bounded: |E − E(0)| ≤ 0.1 m g r_min.
+- skier: standing, h held at h_max (action +1) on the valley from x₀ = 2 m at rest, 10 s; parameter
+  min(1 − κ h_max) over the trail, set by h_max = (1 − λ)/κ_max; bounded: |E − E(0)| ≤ 0.1 m g H.
+- ball: seeded random velocities for N steps whatever dt; parameter N, the horizon; bounded: ‖RᵀR − I‖ ≤ 1e-6
+  (the env's own bound: past it the env raises).
+- kapitza: KapitzaPendulum-v0 from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt, a = 0.05 m,
+  each step's velocity the chord between samples (v_max = a ω), 2 s; parameter ω; bounded: the env's energy
+  error (in the pivot's frame, on segments of constant u̇) within 0.1 m g l (the env's own bound). The grid
+  starts at π/(2ω), 4 steps per period: a coarser dt samples another control. Inverted is stable for
+  a²ω² > 2 g l, ω > 89 rad/s.
+- shell: full model from the body momentum (0.3, 0.1, 0.05), the mass circling its box, u* = (u1_max cos 2πt/T,
+  u2_max sin 2πt/T), T = 2 s, for 10 s; parameter the mass ratio m/(M + λ₁), set by m; bounded: the spatial
+  momentum within 0.1 of its norm (the env's own bound). The reduced model is not mapped: its motion is
+  geometric, so a step's error depends on the path of u over the step and not on dt.
+
+A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
+grid held.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import math
+import time
+
+import numpy as np
+
+from connenv.bench.common import OUTPUT, describe, header, make_env
+from connenv.core import StepperError
+
+BOUND = 0.1  # relative invariant error that counts as bounded (the ball: the env's 1e-6 off SO(3))
+
+
+@dataclasses.dataclass(frozen=True)
+class StabilityMap:
+    env_id: str
+    parameter: str  # as labelled
+    values: tuple
+    make: object  # value -> make kwargs
+    reset: object  # value -> reset options
+    action: object  # (value, t, dt, rng) -> action
+    steps: object  # (value, dt) -> number of steps
+    unbounded: object  # (env, info, start) -> True once the invariant has left its bound
+    methods: tuple  # (integrator, options)
+    largest: object = lambda value: 1.0  # the top of the dt grid, s
+
+
+def held(action):
+    a = np.asarray(action, np.float32)
+    return lambda value, t, dt, rng: a
+
+
+def energy_unbounded(scale):
+    return lambda env, info, start: abs(info["energy"] - start["energy"]) > BOUND * scale(env)
+
+
+def momentum_unbounded(env, info, start):
+    s0 = np.asarray(start["spatial_momentum"])
+    return np.linalg.norm(np.asarray(info["spatial_momentum"]) - s0) > BOUND * np.linalg.norm(s0)
+
+
+def env_bound(env, info, start):
+    return False  # the env raises StepperError past its own bound
+
+
+def loop_gait(value, t, dt, rng):
+    phase = 2 * math.pi * (t + dt) / 2.0
+    return np.array([math.cos(phase), math.sin(phase)], np.float32)
+
+
+def random_velocity(value, t, dt, rng):
+    return rng.uniform(-1.0, 1.0, 2).astype(np.float32)
+
+
+KAPITZA_AMPLITUDE = 0.05  # a, m: the pivot's vibration u₂ = a cos ωt
+
+
+def pivot_vibration(omega, t, dt, rng):
+    """The chord velocity from a cos ωt to a cos ω(t + dt), as an action of v_max = a ω."""
+    return np.array([(math.cos(omega * (t + dt)) - math.cos(omega * t)) / (omega * dt)], np.float32)
+
+
+VALLEY_KAPPA_MAX = 3.0 / 2 * (2 * math.pi / 12.0) ** 2  # κ at the bottom of f = H(1 − cos 2πx/L)/2, H = 3, L = 12
+FIXED = (("euler", {}), ("semi_implicit_euler", {}), ("rk4", {}))
+MAPS = {
+    "swing": StabilityMap(
+        "connenv/Swing-v0",
+        "r_min (m)",
+        (0.01, 0.03, 0.1, 0.3, 1.0, 1.6),
+        lambda r: {"r_min": r, "r_max": 2.0},
+        lambda r: {"state": {"theta": 1.0, "theta_dot": 0.0, "r": r}},
+        held([-1.0]),
+        lambda value, dt: math.ceil(10.0 / dt),
+        energy_unbounded(lambda env: env.system.mass * env.system.g * env.r_min),
+        (*FIXED, ("exact", {})),
+    ),
+    "skier": StabilityMap(
+        "connenv/Skier-v0",
+        "min (1 − κ h_max) on the trail",
+        (0.6, 0.3, 0.1, 0.03, 0.01),
+        lambda lever: {"h_max": (1.0 - lever) / VALLEY_KAPPA_MAX},
+        lambda lever: {"state": {"x": 2.0, "h": (1.0 - lever) / VALLEY_KAPPA_MAX}},
+        held([1.0]),
+        lambda value, dt: math.ceil(10.0 / dt),
+        energy_unbounded(lambda env: env.system.mass * env.system.g * env.trail.H),
+        (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10})),
+    ),
+    "ball": StabilityMap(
+        "connenv/RollingBall-v0",
+        "horizon N (steps)",
+        (10, 100, 1000, 10000),
+        lambda n: {},
+        lambda n: {"state": {}},
+        random_velocity,
+        lambda n, dt: n,
+        env_bound,
+        (
+            ("euler", {}),
+            ("rk4", {}),
+            ("rk4", {"substeps": 4}),
+            ("lsoda", {"rtol": 1e-8, "atol": 1e-10}),
+            ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
+            ("exact", {}),
+        ),
+    ),
+    "kapitza": StabilityMap(
+        "connenv/KapitzaPendulum-v0",
+        "vibration frequency ω (rad/s)",
+        (100.0, 200.0, 400.0, 800.0, 1600.0),
+        lambda omega: {"v_max": KAPITZA_AMPLITUDE * omega},
+        lambda omega: {"state": {"theta": math.pi + 0.1, "u": (0.0, KAPITZA_AMPLITUDE)}},
+        pivot_vibration,
+        lambda omega, dt: math.ceil(2.0 / dt),
+        env_bound,
+        (*FIXED, ("exact", {})),
+        largest=lambda omega: math.pi / (2 * omega),  # 4 steps per period: a coarser dt would sample another control
+    ),
+    "shell": StabilityMap(
+        "connenv/KozlovShell-v0",
+        "mass ratio m/(M + λ₁)",
+        (0.1, 0.3, 1.0, 3.0, 10.0, 30.0),
+        lambda ratio: {"mass": ratio * (1.0 + math.pi * 0.25)},  # M = 1, λ₁ = ρπb² = π/4
+        lambda ratio: {"state": {"u": (0.5, 0.0), "momentum": (0.3, 0.1, 0.05)}},
+        loop_gait,
+        lambda value, dt: math.ceil(10.0 / dt),
+        momentum_unbounded,
+        (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10})),
+        largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
+    ),
+}
+
+
+def stays_bounded(stability_map, value, integrator, options, dt):
+    """True if the episode at this dt runs to its end with the invariant bounded; None if the env refuses."""
+    env = make_env(stability_map.env_id, integrator, options, dt=dt, **stability_map.make(value))
+    if env is None:
+        return None
+    start = env.reset(seed=0, options=stability_map.reset(value))[1]
+    rng = np.random.default_rng(0)
+    try:
+        for k in range(stability_map.steps(value, dt)):
+            info = env.step(stability_map.action(value, k * dt, dt, rng))[4]
+            if stability_map.unbounded(env, info, start):
+                return False
+    except StepperError:
+        return False
+    return True
+
+
+def largest_stable_dt(stability_map, value, integrator, options, grid):
+    """The first dt of the grid (largest first, from the map's top for this value) that stays bounded; 0 if none
+    does; None if the env refuses."""
+    for dt in (dt for dt in grid if dt <= stability_map.largest(value)):
+        bounded = stays_bounded(stability_map, value, integrator, options, dt)
+        if bounded is None:
+            return None
+        if bounded:
+            return dt
+    return 0.0
+
+
+def top_of(stability_map, value, grid):
+    """The largest dt tried at this parameter value."""
+    return next(dt for dt in grid if dt <= stability_map.largest(value))
+
+
+def cell(dt, top, grid):
+    if dt == top:
+        return f"≥ {dt:.2g}"
+    return f"{dt:.2g}" if dt > 0 else f"< {grid[-1]:.0e}"
+
+
+def plot(name, stability_map, rows, grid, folder):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.8))
+    markers = "vo^sDP*"
+    for k, ((method, by_value), marker) in enumerate(zip(rows.items(), markers)):
+        xs = list(by_value)
+        ys = [dt if dt > 0 else grid[-1] / 2 for dt in by_value.values()]
+        ax.plot(xs, ys, marker=marker, ms=13 - 2 * k, mfc="none", mew=1.5, lw=1.5, label=method)  # overlaps show
+    values = list(next(iter(rows.values())))
+    tops = [top_of(stability_map, v, grid) for v in values]
+    ax.plot(values, tops, color="grey", lw=3, alpha=0.3, label="top of the dt grid")
+    ax.axhline(grid[-1] / 2, color="red", lw=0.5, ls=":")
+    ax.text(0.01, grid[-1] / 2, f"none stable ≥ {grid[-1]:.0e} s", color="red", va="bottom", fontsize=8,
+            transform=ax.get_yaxis_transform())
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(stability_map.parameter)
+    ax.set_ylabel("largest stable dt (s)")
+    ax.grid(True, which="major", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(f"{stability_map.env_id}: stability map\npython -m connenv.bench stability", fontsize=10)
+    fig.tight_layout()
+    path = folder / f"{name}_stability.png"
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
+    """Measure, print, and write <name>_stability.csv and .png into folder; dt down to `smallest`, only `values`
+    of the parameter and `methods` (integrator, options) if given."""
+    stability_map = MAPS[name]
+    values = values or stability_map.values
+    grid = [10 ** (-k / 4) for k in range(0, 1 + round(-4 * math.log10(smallest)))]
+    print(f"\n{stability_map.env_id}: largest stable dt (s) against {stability_map.parameter}")
+    print("| method | " + " | ".join(f"{v:g}" for v in values) + " |")
+    print("|---|" + "---|" * len(values))
+    rows = {}
+    for integrator, options in methods or stability_map.methods:
+        method = describe(integrator, options)
+        by_value = {}
+        for value in values:
+            dt = largest_stable_dt(stability_map, value, integrator, options, grid)
+            if dt is None:
+                break
+            by_value[value] = dt
+        if not by_value:
+            continue
+        rows[method] = by_value
+        cells = [cell(dt, top_of(stability_map, value, grid), grid) for value, dt in by_value.items()]
+        print(f"| {method} | " + " | ".join(cells) + " |", flush=True)
+    path = folder / f"{name}_stability.csv"
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f)
+        header_row = ["method", stability_map.parameter, "largest_stable_dt_s (0: none on the grid)", "top_of_grid_s"]
+        writer.writerow([*header_row, "smallest_s"])
+        for method, by_value in rows.items():
+            for value, dt in by_value.items():
+                top = top_of(stability_map, value, grid)
+                writer.writerow([method, value, f"{dt:.4g}", f"{top:.4g}", f"{grid[-1]:.0e}"])
+    return rows, path, plot(name, stability_map, rows, grid, folder)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python -m connenv.bench stability", description=__doc__.split("\n")[0])
+    parser.add_argument("--env", nargs="+", choices=sorted(MAPS), default=list(MAPS))
+    parser.add_argument("--quick", action="store_true", help="dt down to 1e-3 only")
+    args = parser.parse_args(argv)
+    header("stability")
+    OUTPUT.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    for name in args.env:
+        _, csv_path, png_path = chart(name, smallest=1e-3 if args.quick else 1e-4)
+        print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")
+    print(f"\nwall time: {time.perf_counter() - start:.0f} s")
