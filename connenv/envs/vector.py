@@ -20,10 +20,12 @@ SyncVectorEnv made from the same id and kwargs follow the same episodes (to roun
   (``agents.vec_env`` uses it to give SB3 its same-step autoreset).
 
 Steppers are the prototype's through ``connenv.core.batched.batched``, which keeps row i on the single state's
-path (adaptive scipy methods get per-row step control). Infos are Gymnasium's vector convention, a dict of
-arrays over the batch (nested for ``"state"``), each key ``k`` with its mask ``"_k"`` (all True: every row has
-every key). Actions are an array (N, *single action shape); a wrong shape or a non-finite entry raises
-ValueError. Rendering is the single env's.
+path (adaptive scipy methods get per-row step control); where rows cut their steps differently (ramps, end
+stops) each row runs its own control segments. The single envs' divergence checks (the stepper's error on an
+invariant, the drift off SO(3)) run on every row, and a StepperError names the env, dt and the parameters.
+Infos are Gymnasium's vector convention, a dict of arrays over the batch (nested for ``"state"``), each key ``k``
+with its mask ``"_k"`` (the rows it is about: all of them, but for a partial reset). Actions are an array
+(N, *single action shape); a wrong shape or a non-finite entry raises ValueError. Rendering is the single env's.
 """
 
 from __future__ import annotations
@@ -84,7 +86,9 @@ class TaskVectorEnv(VectorEnv):
 
     - ``_capture(i)``: copy the prototype's state, just reset, into row i;
     - ``_advance(actions)``: step every row; return the rewards;
-    - ``_observe()`` and ``_describe()``: the observations and the info dict over the batch.
+    - ``_observe()`` and ``_describe()``: the observations and the info dict over the batch;
+
+    and keep the rows' clocks in ``t``.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
