@@ -299,3 +299,14 @@ def test_pivot_segments_of_a_batch_are_each_rows_own():
         for (s, v, d), (s_alone, v_alone, d_alone) in zip(mine, segments):
             assert np.array_equal(s, s_alone) and np.array_equal(v, v_alone) and d == d_alone
         assert np.array_equal(u_end[i], u_alone) and np.array_equal(u_dot_end[i], u_dot_alone)
+
+
+def test_per_row_stepper_keeps_scipys_evaluation_budget(monkeypatch):
+    """As Scipy's stepper, EmbeddedRK gives up on a row after MAX_EVALUATIONS vector-field evaluations in a segment
+    (lowered here to 50, which a long segment of the skier needs more than), naming the rows."""
+    import connenv.core.batched as batched_module
+
+    monkeypatch.setattr(batched_module, "MAX_EVALUATIONS", 50)
+    y, h, hold = np.array([[2.0, 0.0], [-4.0, 200.0]]), np.full((2, 1), 0.8), np.zeros((2, 1))
+    with pytest.raises(StepperError, match=r"cannot meet its tolerance: 50 evaluations .* rows \[0, 1\]"):
+        EmbeddedRK("DOP853", 1e-10, 1e-12)(skier_system(), y, h, hold, 5.0)

@@ -7,11 +7,13 @@ alone. ``EmbeddedRK`` is scipy's explicit Runge–Kutta driver (``scipy.integrat
 Hairer, Nørsett & Wanner II.4, the error norm and the step-size control with its SAFETY, MIN_FACTOR and
 MAX_FACTOR) rewritten over a batch with one step size, accept/reject decision and clock per row, using scipy's own
 DOP853 and RK45 tableaus: for a single row it makes the decisions solve_ivp makes, and agrees with it to
-rounding (tests). The implicit and multistep methods (LSODA, Radau) are not rewritten; ``batched`` runs them one
-row at a time.
+rounding (tests). Like the Scipy stepper, it raises StepperError for a row whose step size falls below the
+spacing of floats or that exceeds MAX_EVALUATIONS evaluations of the vector field in one segment. The implicit
+and multistep methods (LSODA, Radau) are not rewritten; ``batched`` runs them one row at a time.
 
 A batch may take one segment length tau per row (shape of the batch), where the rows' control segments differ
-(the Kapitza pivot's end stops); the steppers here take it, and ``batched`` hands it to the others as a column.
+(ramps, the Kapitza pivot's end stops); the steppers here take it, and ``batched`` hands it to the others (RK4,
+the Euler steppers) as a column.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import DOP853, RK45
 
-from connenv.core.steppers import Exact, Scipy, StepperError
+from connenv.core.steppers import MAX_EVALUATIONS, Exact, Scipy, StepperError
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # scipy.integrate._ivp.rk's step-size control
 TABLEAUS = {"DOP853": DOP853, "RK45": RK45}
@@ -44,8 +46,17 @@ class EmbeddedRK:
         u = np.broadcast_to(u, (*lead, np.shape(u)[-1])).reshape(len(rows), -1)
         u_dot = np.broadcast_to(u_dot, u.shape[:-1] + (np.shape(u_dot)[-1],)).reshape(len(rows), -1)
 
+        evaluations = np.zeros(len(rows), int)  # per row, with Scipy's budget of MAX_EVALUATIONS per segment
+
         def rhs(s, states, idx):
             """ẏ at times s of the rows idx (a slice or an index array)."""
+            evaluations[idx] += 1
+            if evaluations.max() > MAX_EVALUATIONS:
+                over = np.flatnonzero(evaluations > MAX_EVALUATIONS)
+                raise StepperError(
+                    f"{self} cannot meet its tolerance: {MAX_EVALUATIONS} evaluations of the vector field brought "
+                    f"rows {over.tolist()} to s = {np.atleast_1d(s)[0]:.9g} of segments of {tau[over].tolist()} s"
+                )
             u_rows, u_dot_rows = u[idx], u_dot[idx]
             f = system.vector_field(states, u_rows + s[:, None] * u_dot_rows, u_dot_rows)
             if not np.all(np.isfinite(f)):
