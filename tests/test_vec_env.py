@@ -20,8 +20,8 @@ train = import_train()
 @pytest.mark.parametrize(
     ("env_id", "kwargs"),
     [
-        ("connenv/Skier-v0", dict(max_episode_steps=15, target_x=0.3)),
-        ("connenv/RollingBallGoal-v0", dict(max_episode_steps=20, tolerance=2.0)),
+        ("connenv/Skier-v0", {"max_episode_steps": 15, "target_x": 0.3}),
+        ("connenv/RollingBallGoal-v0", {"max_episode_steps": 20, "tolerance": 2.0}),
     ],
 )
 def test_native_vec_env_steps_as_sb3s_dummy_vec_env(env_id, kwargs):

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode
 from scipy.integrate import solve_ivp
+from test_precision import DIVERGING
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv.core import StepperError, make_stepper
@@ -17,20 +18,19 @@ from connenv.core.batched import EmbeddedRK, RowByRow, batched
 from connenv.systems.kapitza import pivot_segments, pivot_segments_batch
 from connenv.systems.skier import Skier
 from connenv.systems.trails import make_trail
-from test_precision import DIVERGING
 
 RTOL = 1e-12  # |vector − single| ≤ RTOL · max(1, |single|), for every number of obs, reward and info
 
 # kwargs that make episodes short, so that a run holds terminations, truncations and autoresets
 CASES = {
-    "connenv/Swing-v0": dict(max_episode_steps=40, target_amplitude=0.12),
-    "connenv/Skier-v0": dict(max_episode_steps=15, target_x=0.3),  # one goal, reached from the side of the start
-    "connenv/RollingBall-v0": dict(max_episode_steps=30, tolerance=2.0),
-    "connenv/RollingBallPose-v0": dict(max_episode_steps=30, tolerance=2.5, position_tolerance=0.2),
-    "connenv/RollingBallGoal-v0": dict(max_episode_steps=30, tolerance=2.0),
-    "connenv/KozlovShell-v0": dict(max_episode_steps=30, success_radius=0.45),
-    "connenv/KapitzaPendulum-v0": dict(max_episode_steps=60, tolerance=0.21, pivot="horizontal"),  # it falls
-    "connenv/KapitzaSwingUp-v0": dict(max_episode_steps=40, hold_time=0.05, tolerance=3.07),
+    "connenv/Swing-v0": {"max_episode_steps": 40, "target_amplitude": 0.12},
+    "connenv/Skier-v0": {"max_episode_steps": 15, "target_x": 0.3},  # one goal, reached from the side of the start
+    "connenv/RollingBall-v0": {"max_episode_steps": 30, "tolerance": 2.0},
+    "connenv/RollingBallPose-v0": {"max_episode_steps": 30, "tolerance": 2.5, "position_tolerance": 0.2},
+    "connenv/RollingBallGoal-v0": {"max_episode_steps": 30, "tolerance": 2.0},
+    "connenv/KozlovShell-v0": {"max_episode_steps": 30, "success_radius": 0.45},
+    "connenv/KapitzaPendulum-v0": {"max_episode_steps": 60, "tolerance": 0.21, "pivot": "horizontal"},  # it falls
+    "connenv/KapitzaSwingUp-v0": {"max_episode_steps": 40, "hold_time": 0.05, "tolerance": 3.07},
 }
 BALLS = ("connenv/RollingBall-v0", "connenv/RollingBallPose-v0", "connenv/RollingBallGoal-v0")
 VECTOR_ONLY = {env_id: {"measure_distance": True} for env_id in BALLS}  # the single envs always measure it
@@ -113,7 +113,7 @@ def test_shell_rows_in_the_full_model_match_and_mix_with_reduced_rows():
     """Reset with a momentum puts every row in the full (Kirchhoff) model; autoresets put rows back at rest in the
     reduced one, so the batch steps both models at once."""
     options = {"state": {"momentum": (0.3, -0.2, 0.1), "u": (0.1, 0.05)}}
-    kwargs = dict(max_episode_steps=25, success_radius=0.45)
+    kwargs = {"max_episode_steps": 25, "success_radius": 0.45}
     assert run_both("connenv/KozlovShell-v0", 3, 60, 3, kwargs, options=options).sum() > 0
 
 
@@ -166,7 +166,7 @@ def test_per_row_dop853_is_scipys_dop853_on_each_row():
     h, hold = rng.uniform(0.5, 1.0, (6, 1)), np.zeros((6, 1))
     batch = EmbeddedRK("DOP853", rtol, atol)(system, y, h, hold, tau)
     for i in range(6):
-        field = lambda s, yi, i=i: system.vector_field(yi, h[i], hold[i])  # noqa: E731
+        field = lambda s, yi, i=i: system.vector_field(yi, h[i], hold[i])
         alone = solve_ivp(field, (0, tau), y[i], "DOP853", rtol=rtol, atol=atol)
         assert np.allclose(batch[i], alone.y[:, -1], rtol=1e-14, atol=1e-13)
     coupled = make_stepper("dop853", rtol=rtol, atol=atol)(system, y, h, hold, tau)
@@ -232,10 +232,10 @@ def test_bad_actions_are_refused(action, message):
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        (dict(num_envs=0), "num_envs=0 must be an integer ≥ 1"),
-        (dict(num_envs=2, max_episode_steps=0), "max_episode_steps=0"),
-        (dict(num_envs=2, r_min=3.0), "r_max"),  # the single env's checks
-        (dict(num_envs=2, render_mode="human"), "does not render"),
+        ({"num_envs": 0}, "num_envs=0 must be an integer ≥ 1"),
+        ({"num_envs": 2, "max_episode_steps": 0}, "max_episode_steps=0"),
+        ({"num_envs": 2, "r_min": 3.0}, "r_max"),  # the single env's checks
+        ({"num_envs": 2, "render_mode": "human"}, "does not render"),
     ],
 )
 def test_bad_make_kwargs_are_refused(kwargs, message):

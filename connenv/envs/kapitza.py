@@ -413,8 +413,8 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
         u_dot_cmd = np.zeros((self.num_envs, 2))
         u_dot_cmd[:, env.axes] = actions * env.v_max
         starts, velocities, durations, self.u, self.u_dot = pivot_segments_batch(self.u, u_dot_cmd, env.a_max, env.dt)
-        energy = lambda y, u, u_dot: env.system.energy(y, u_dot)  # noqa: E731  (in the frame of u̇, conserved)
-        self.y, change = self._run_segments(env.system, self.y, zip(starts, velocities, durations), energy)
+        segments = zip(starts, velocities, durations)
+        self.y, change = self._run_segments(env.system, self.y, segments, self._frame_energy)
         self.energy_error = self.energy_error + change
         env.check_energy_error(self.energy_error)
         self.t = self.t + env.dt
@@ -422,6 +422,10 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
         self.step_info = env._info(self, BATCH)  # the reward needs it; kept for _describe unless a row resets
         reward, self.task_terminated = env._task(self, self.step_info, BATCH)
         return reward
+
+    def _frame_energy(self, y, u, u_dot):
+        """E in the frame of the pivot's velocity, conserved on each segment (the single env's energy check)."""
+        return self.env.system.energy(y, u_dot)
 
     def _terminated(self, info):
         return self.task_terminated

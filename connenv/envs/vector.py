@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from types import SimpleNamespace
+from typing import ClassVar
 
 import numpy as np
 from gymnasium.utils import seeding
@@ -91,7 +92,7 @@ class TaskVectorEnv(VectorEnv):
     and keep the rows' clocks in ``t``.
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+    metadata: ClassVar[dict] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
     single_env: type
     clips_actions = True  # actions are clipped into the space, as check_action does; else only checked
 
