@@ -12,9 +12,9 @@ measured in the same loop, so that it holds on a machine busy with other work, w
 Vector envs: ``gym.make_vec(id, N, vectorization_mode="vector_entry_point")`` (native) and the same with
 ``"sync"`` (Gymnasium's SyncVectorEnv of N single envs), reset once (untimed), then stepped with random actions in
 alternating blocks of about ``seconds / ROUNDS`` each; autoresets are part of the steps, as in training. The
-figure is N × steps / time, the median over the blocks. SyncVectorEnv's cost per env hardly depends on N, and its
-first reset at N = 4096 takes minutes on the envs whose reset solves for an optimal arc, so it runs only up to
-``--sync-max`` (default 1024). The timed blocks are short beside an episode, so few rows end in them: the
+figure is N × steps / time, the median over the blocks. SyncVectorEnv's cost per env hardly depends on N, and at
+N = 4096 its first reset alone takes tens of seconds on the envs whose reset solves for an optimal arc, so it runs
+only up to ``--sync-max`` (default 1024). The timed blocks are short beside an episode, so few rows end in them: the
 autoresets' share in a long run is printed by ``--breakdown``, which adds, at the largest N, where a native step's
 time goes: the stepper and the rest (task code: observation, reward, info), the vector-field evaluations per step
 of the adaptive steppers, and the cost of a row's reset (the single env's reset, run with the row's generator)
