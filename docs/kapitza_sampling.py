@@ -145,7 +145,8 @@ def main(argv=None):
             smooth = name.startswith("smooth")
             reference = partial(smooth_reference, a, omega) if smooth else partial(run_env, {}, a, omega)
             holds, agrees = largest_step(method, reference, omega)
-            rows.append({"method": name, "a": a, "margin": margin, "omega": omega, "dt_holds": holds, "dt_agrees": agrees})
+            row = {"method": name, "a": a, "margin": margin, "omega": omega, "dt_holds": holds, "dt_agrees": agrees}
+            rows.append(row)
             print(
                 f"| {name} | {a:g} | {margin:g} | {omega:.1f} | {holds:.2g} | {omega * holds:.2f} | {agrees:.2g} "
                 f"| {omega * agrees:.2f} |",

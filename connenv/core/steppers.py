@@ -70,10 +70,10 @@ class SemiImplicitEuler:
 
     Symplectic where H separates (q̇ depends on p only, ṗ on q only: the swing), so the energy error stays
     bounded; elsewhere (the skier, whose ṗ depends on p; the Kapitza pendulum, whose q̇ depends on q through the
-    pivot's velocity) it is Gymnasium's semi-implicit Euler, first order and not symplectic. A state with no p (y of n entries: the shell's reduced model, whose momentum is
-    identically 0) has no update of p, and the step is explicit Euler's, which is the method on the full model
-    restricted to p = 0. A system without ``n`` (the rolling ball, kinematic: R is neither q nor p) is refused
-    by make_stepper.
+    pivot's velocity) it is Gymnasium's semi-implicit Euler, first order and not symplectic. A state with no p
+    (y of n entries: the shell's reduced model, whose momentum is identically 0) has no update of p, and the step
+    is explicit Euler's, which is the method on the full model restricted to p = 0. A system without ``n`` (the
+    rolling ball, kinematic: R is neither q nor p) is refused by make_stepper.
     """
 
     substeps: int = 1
