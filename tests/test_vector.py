@@ -260,6 +260,15 @@ def test_a_diverging_stepper_raises_in_the_batch_as_in_the_single_env(env_id, kw
             assert np.all(np.isfinite(env.step(sign * (-1) ** k if alternating else sign)[0]))
 
 
+def test_vector_ball_infos_are_finite_and_leave_out_the_unmeasured_distance():
+    env = gym.make_vec("connenv/RollingBall-v0", 4, vectorization_mode="vector_entry_point")
+    _, info = env.reset(seed=0)
+    _, _, _, _, stepped = env.step(np.ones((4, 2), np.float32))
+    for info in (info, stepped):
+        assert "distance" not in info and "path_ratio" not in info
+        assert all(np.all(np.isfinite(info[key])) for key in ("angle_error", "path_length"))
+
+
 def test_a_diverging_stepper_raises_in_the_batch():
     """RK4 with one substep at dt = 0.5 leaves SO(3): the vector env raises as the single env does."""
     env = gym.make_vec("connenv/RollingBall-v0", 4, vectorization_mode="vector_entry_point", dt=0.5, integrator="rk4")

@@ -226,16 +226,16 @@ class RollingBallEnv(RenderedEnv):
         return s.angle_error <= self.tolerance
 
     def describe(self, s, ops=SCALAR):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
-        return {
+        info = {
             "state": {"x": s.position[..., 0], "y": s.position[..., 1], "R": s.R.copy(), "t": s.t},
             "angle_error": s.angle_error,
             "path_length": s.path_length,
-            "distance": s.distance,
-            "path_ratio": ratio,
-            "is_success": ops.flag(self.success(s, ops)),
         }
+        if self.measures_distance:  # else not known: left out rather than NaN
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
+            info |= {"distance": s.distance, "path_ratio": ratio}
+        return {**info, "is_success": ops.flag(self.success(s, ops))}
 
     # -- internals -----------------------------------------------------------
 
@@ -380,7 +380,7 @@ class RollingBallVectorEnv(TaskVectorEnv):
 
     Takes the single env's make kwargs and ``measure_distance`` (default False): the optimal arc from each start
     (info ``"distance"``, and ``"path_ratio"``) costs a root search of about 5 ms per reset, which would dominate
-    the batch; without it both are NaN.
+    the batch; without it both keys are left out of the infos.
     """
 
     single_env = RollingBallEnv
