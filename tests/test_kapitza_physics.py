@@ -65,6 +65,18 @@ def test_exact_segment_is_the_flow_at_constant_pivot_velocity():
         np.testing.assert_allclose(SYSTEM.energy(flowed, u_dot), SYSTEM.energy(y, u_dot), rtol=1e-11, atol=1e-11)
 
 
+def test_exact_segment_holds_its_accuracy_at_the_inverted_state_where_the_elliptic_flow_declines():
+    """Within 2e-3 rad of inverted at near rest, |k² − 1| < 1e-6: the task's own state, stepped by RK4 at ω₀h ≤ 0.01."""
+    n = 50
+    theta = math.pi + rng.uniform(-2e-3, 2e-3, n)
+    u_dot = np.column_stack([np.zeros(n), rng.uniform(-10.0, 10.0, n)])
+    y = np.column_stack([theta, SYSTEM.momentum(theta, rng.uniform(-1e-3, 1e-3, n), u_dot)])
+    reference = make_stepper("dop853", SYSTEM, rtol=1e-13, atol=1e-14)
+    one_by_one = np.array([reference(SYSTEM, y[i], np.zeros(2), u_dot[i], 0.005) for i in range(n)])
+    np.testing.assert_allclose(SYSTEM.exact_segment(y, np.zeros((n, 2)), u_dot, 0.005), one_by_one, atol=1e-12)
+    np.testing.assert_allclose(SYSTEM.exact_segment(y[0], np.zeros(2), u_dot[0], 0.005), one_by_one[0], atol=1e-12)
+
+
 def test_a_jump_of_pivot_velocity_keeps_p_and_kicks_theta_dot():
     """p is continuous; θ̇ jumps by −Δu̇·n/l and the frame energy by −m l θ̇ Δu̇·n + ½ m (Δu̇·n)²."""
     theta, theta_dot, before, after = 2.5, 0.7, np.array([1.0, -2.0]), np.array([-3.0, 4.0])
