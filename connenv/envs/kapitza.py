@@ -165,6 +165,7 @@ class KapitzaPendulumEnv(RenderedEnv):
 
         self.y = np.array([math.pi, 0.0])  # (θ, p)
         self.u, self.u_dot, self.t, self.max_deviation = np.zeros(2), np.zeros(2), 0.0, 0.0
+        self.energy = 0.0  # E in the frame of u̇, for the info and the swing-up's lift
         self.energy_error = 0.0  # the stepper's: the change of E on segments of constant u̇ since reset
 
     # -- Gymnasium API -------------------------------------------------------
@@ -177,6 +178,7 @@ class KapitzaPendulumEnv(RenderedEnv):
         self.u, self.u_dot, self.t, self.energy_error = np.zeros(2), np.zeros(2), 0.0, 0.0
         if "state" in options:
             self._set_state(options["state"])
+        self.energy = self._energy(self.u_dot)
         self._start_task(self)
         return self._obs(self), self._info(self)
 
@@ -186,9 +188,10 @@ class KapitzaPendulumEnv(RenderedEnv):
         segments, u_end, u_dot_end = pivot_segments(self.u, u_dot_cmd, self.a_max, self.dt)
         try:
             for u, u_dot, tau in segments:
-                energy = self._energy(u_dot)
+                before = self._energy(u_dot)
                 self.y = self.stepper(self.system, self.y, u, u_dot, tau)
-                self.energy_error += self._energy(u_dot) - energy
+                self.energy = self._energy(u_dot)  # the last segment's u̇ is the step's final one
+                self.energy_error += self.energy - before
             self.check_energy_error(self.energy_error)
         except StepperError as error:
             raise self._stepper_error(error) from error
@@ -211,7 +214,8 @@ class KapitzaPendulumEnv(RenderedEnv):
 
     # -- the task ------------------------------------------------------------
     # s is the state: the env itself (Python floats), or a vector env's batch with ops=BATCH. Both carry y, u,
-    # u_dot, t and the task's record (max_deviation; upright_steps, lift and lift_before for the swing-up).
+    # u_dot, t, energy and the task's record (max_deviation; upright_steps, lift and lift_before for the
+    # swing-up).
 
     def _start_angle(self):
         return math.pi + self.np_random.uniform(-HOLD_START, HOLD_START)
@@ -311,7 +315,7 @@ class KapitzaPendulumEnv(RenderedEnv):
         }
         return {
             "state": state,
-            "energy": ops.real(self.system.energy(s.y, s.u_dot)),
+            "energy": ops.real(s.energy),
             "deviation": self._deviation(s, ops),
             **self._task_info(s),
             "is_success": ops.flag(self._success(s, ops)),
@@ -377,7 +381,7 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     def _lift(self, s, ops=SCALAR):
         """ℓ = (E/(m g l) + 1)/2 in [LIFT_FLOOR, 1]."""
         system = self.system
-        lift = 0.5 * (ops.real(system.energy(s.y, s.u_dot)) / (system.mass * system.g * system.length) + 1.0)
+        lift = 0.5 * (ops.real(s.energy) / (system.mass * system.g * system.length) + 1.0)
         return ops.clip(lift, LIFT_FLOOR, 1.0)
 
     def _task_info(self, s):
@@ -402,11 +406,12 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
         super().__init__(num_envs, max_episode_steps, **kwargs)
         self.y, self.u, self.u_dot = np.zeros((num_envs, 2)), np.zeros((num_envs, 2)), np.zeros((num_envs, 2))
         self.t, self.energy_error, self.step_info = np.zeros(num_envs), np.zeros(num_envs), None
+        self.energy = np.zeros(num_envs)
         for name in self.RECORD:
             setattr(self, name, np.zeros(num_envs, type(getattr(self.env, name))))
 
     def _capture(self, i):
-        for name in ("y", "u", "u_dot", "t", "energy_error", *self.RECORD):
+        for name in ("y", "u", "u_dot", "t", "energy", "energy_error", *self.RECORD):
             getattr(self, name)[i] = getattr(self.env, name)
         self.step_info = None  # a row has changed since the step's info
 
@@ -419,6 +424,7 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
         self.y, change = self._run_segments(env.system, self.y, segments, self._frame_energy)
         self.energy_error = self.energy_error + change
         env.check_energy_error(self.energy_error)
+        self.energy = env.system.energy(self.y, self.u_dot)
         self.t = self.t + env.dt
         env._track(self, BATCH)
         self.step_info = env._info(self, BATCH)  # the reward needs it; kept for _describe unless a row resets
