@@ -7,7 +7,9 @@ Hyperparameters come from agents/hyperparams/{algo}.yml (rl-zoo3's layout, the e
 envs, shows a progress bar and evaluates periodically on a separate env. The run folder, runs/{env}_{algo}_s{seed}/,
 is laid out as rl-zoo3's: the model {env}.zip, best_model.zip and evaluations.npz of the periodic evaluation,
 {env}/config.yml (the hyperparameters used), {env}/args.yml and {env}/vecnormalize.pkl if normalized; train.py adds
-results.json, the final evaluation of agents.evaluate on the same episodes for every policy.
+{env}/best_vecnormalize.pkl, the statistics best_model.zip was evaluated with (rl-zoo3 overwrites vecnormalize.pkl
+with the final ones), and results.json, the final evaluation of agents.evaluate on the same episodes for every
+policy.
 
 With --vector-env the training and periodic-evaluation envs are the env's native vector env (gym.make_vec with its
 vector_entry_point, through agents.vec_env.NativeVecEnv) instead of SB3's DummyVecEnv of single envs; the final
@@ -24,6 +26,7 @@ from pathlib import Path
 import torch as th
 from rl_zoo3.exp_manager import ExperimentManager
 from rl_zoo3.utils import ALGOS
+from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 from stable_baselines3.common.utils import set_random_seed
 from tqdm import TqdmExperimentalWarning
 
@@ -56,7 +59,31 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
-class VectorExperimentManager(ExperimentManager):
+class SaveBestVecNormalize(BaseCallback):
+    """On a new best periodic evaluation, save the VecNormalize statistics beside best_model.zip's run folder."""
+
+    def __init__(self, path: Path):
+        super().__init__()
+        self.path = path
+
+    def _on_step(self) -> bool:
+        if self.model.get_vec_normalize_env() is not None:
+            self.model.get_vec_normalize_env().save(str(self.path))
+        return True
+
+
+class RunManager(ExperimentManager):
+    """rl-zoo3's ExperimentManager, keeping the VecNormalize statistics of the best model as well as the final."""
+
+    def create_callbacks(self):
+        super().create_callbacks()
+        for callback in self.callbacks:
+            if isinstance(callback, EvalCallback):
+                callback.callback_on_new_best = SaveBestVecNormalize(Path(self.params_path) / "best_vecnormalize.pkl")
+                callback.callback_on_new_best.parent = callback
+
+
+class VectorExperimentManager(RunManager):
     """rl-zoo3's ExperimentManager on the native vector env: create_envs is the one hook that builds the training
     and periodic-evaluation envs. Both are native, so that SB3 finds the same wrappers around them when it copies
     the VecNormalize statistics from one to the other."""
@@ -81,7 +108,7 @@ def train(args: argparse.Namespace):
     """Train with rl-zoo3's ExperimentManager into the run folder; return the model and the path of its zip."""
     set_random_seed(args.seed)
     th.set_num_threads(args.num_threads)
-    manager = (VectorExperimentManager if args.vector_env else ExperimentManager)(
+    manager = (VectorExperimentManager if args.vector_env else RunManager)(
         args,
         args.algo,
         args.env,

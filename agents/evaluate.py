@@ -4,7 +4,8 @@
 
 Episode i of every policy starts from ``reset(seed=seed + i)``, so the rows compare like with like. A policy is
 ``analytic`` (the env's first controller in agents.controllers), the name of one of its controllers (``arc``,
-``holonomy``, ...), ``random`` (uniform actions, seeded) or the zip of a trained SB3 model. Columns beyond return,
+``holonomy``, ...), ``random`` (uniform actions, seeded), the zip of a trained SB3 model or ``pretrained``: the
+models committed under agents/pretrained/ for the env, one per algorithm (``python -m agents.baselines``). Columns beyond return,
 success, time and length are the env's own measures, the info keys named by its ``metadata["measures"]``,
 averaged over the episodes' final infos. The rl-zoo3 run folder around a zip, as ``train.py`` and ``python -m rl_zoo3.train`` write it,
 tells the algorithm (``{env}/args.yml``) and the observation statistics of VecNormalize (``{env}/vecnormalize.pkl``).
@@ -26,6 +27,7 @@ from gymnasium.wrappers import RenderCollection
 import connenv  # noqa: F401  (registers the envs)
 from agents.controllers import CONTROLLERS, controller, controller_names
 
+PRETRAINED = Path(__file__).parent / "pretrained"
 ENV_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
 CONTROLLER_NAMES = sorted({name for env_id in CONTROLLERS for name in controller_names(env_id)})
 GIF_SIZE = 200  # pixels
@@ -77,10 +79,18 @@ def positive_int(text: str) -> int:
 
 
 def policy_spec(text: str) -> str:
-    """argparse type: a controller name, 'random' or an existing model zip."""
-    if text in (*CONTROLLER_NAMES, "random") or (text.endswith(".zip") and Path(text).is_file()):
+    """argparse type: a controller name, 'random', 'pretrained' or an existing model zip."""
+    if text in (*CONTROLLER_NAMES, "random", "pretrained") or (text.endswith(".zip") and Path(text).is_file()):
         return text
-    raise argparse.ArgumentTypeError(f"{text!r} is not one of {CONTROLLER_NAMES}, 'random' or an existing PATH.zip")
+    raise argparse.ArgumentTypeError(f"{text!r} is not one of {CONTROLLER_NAMES}, 'random', 'pretrained' or an existing PATH.zip")
+
+
+def pretrained_models(env_id: str) -> list[Path]:
+    """The env's models under agents/pretrained/ ({env}_{algo}/best_model.zip), by algorithm."""
+    models = sorted(PRETRAINED.glob(f"{env_id.split('/')[-1]}_*/best_model.zip"))
+    if not models:
+        raise ValueError(f"policy 'pretrained': no model for {env_id} under {PRETRAINED}")
+    return models
 
 
 def run_file(model_path: Path, name: str) -> Path | None:
@@ -115,7 +125,8 @@ def load_model(model_path: str | Path, env_id: str, algo: str | None = None):
             raise ValueError(
                 f"{model_path} was trained with {space} {getattr(model, space)}, but {env_id} has {getattr(env, space)}"
             )
-    stats = run_file(model_path, "vecnormalize.pkl")
+    stats = run_file(model_path, "best_vecnormalize.pkl") if model_path.stem == "best_model" else None
+    stats = stats or run_file(model_path, "vecnormalize.pkl")
     if stats is None:
         return model
     vec_normalize = VecNormalize.load(str(stats), DummyVecEnv([lambda: env]))
@@ -191,6 +202,7 @@ def compare(
     env_id: str, specs: list[str], episodes: int = 100, seed: int = 0, algo: str | None = None, video=None
 ) -> dict:
     """Evaluate each policy spec on the same episodes; `video` films the first policy's first episode."""
+    specs = [str(model) for spec in specs for model in (pretrained_models(env_id) if spec == "pretrained" else [spec])]
     rows = []
     for i, spec in enumerate(specs):
         label, policy = make_policy(spec, env_id, seed, algo)
@@ -233,7 +245,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         nargs="+",
         type=policy_spec,
         default=["analytic", "random"],
-        help=f"one of {CONTROLLER_NAMES} (the env's controllers; analytic is its first), random or PATH.zip",
+        help=f"one of {CONTROLLER_NAMES} (the env's controllers; analytic is its first), random, pretrained or PATH.zip",
     )
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import pickle
 import subprocess
 import sys
 from pathlib import Path
@@ -66,6 +67,12 @@ def test_ppo_run_folder_holds_normalized_model_and_periodic_evaluations(ppo_run)
     periodic = np.load(Path(ppo_run["model"]).parent / "evaluations.npz")
     assert list(periodic["timesteps"]) == [1024, 2048]
     assert periodic["results"].shape == (2, train.PERIODIC_EVAL_EPISODES)
+    # best_model.zip is evaluated with the observation statistics it had when it scored best, not the final ones
+    best = evaluate.load_model(Path(ppo_run["model"]).parent / "best_model.zip", ENV_ID)
+    saved = pickle.loads((Path(ppo_run["model"]).parent / "connenv-Swing-v0" / "best_vecnormalize.pkl").read_bytes())
+    np.testing.assert_array_equal(best.vec_normalize.obs_rms.mean, saved.obs_rms.mean)
+    if periodic["results"].mean(axis=1).argmax() == 0:  # best at 1024 steps, before the second rollout's statistics
+        assert not np.array_equal(best.vec_normalize.obs_rms.mean, policy.vec_normalize.obs_rms.mean)
 
 
 @pytest.mark.parametrize("algo", ["sac", "td3"])

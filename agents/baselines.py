@@ -1,0 +1,292 @@
+"""Reference results: SB3 baselines beside the analytic controllers, for every env (README, "Reference results").
+
+    python -m agents.baselines train     # 3 seeds per (env, algo) with train.py into runs/baselines/, 2 at a time
+    python -m agents.baselines collect   # best model per (env, algo) into agents/pretrained/, curves into docs/
+    python -m agents.baselines table     # the README table, from agents/pretrained/ alone (offline, minutes)
+
+``train`` runs ``python train.py`` once per (env, algo, seed) with the hyperparameters of agents/hyperparams/ and
+skips runs that finished (their results.json exists). PPO trains on the native vector envs (``--vector-env``), SAC
+on one env. ``collect`` picks, for each (env, algo), the seed whose periodic evaluation scored best, copies its
+best_model.zip with the VecNormalize statistics it was evaluated with to agents/pretrained/{env}_{algo}/, records
+the training steps and wall time of every seed in agents/pretrained/runs.json and writes the periodic evaluations
+of all seeds to docs/baselines/curves.csv. ``table`` evaluates random, each analytic controller and each pretrained
+model on the same 100 episodes (seeds 0..99) with agents.evaluate, writes docs/baselines/results.{json,md} and
+draws docs/baselines/{env}.png: the learning curves (mean and range over seeds) with the analytic controller's mean
+return as a horizontal line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import shutil
+import subprocess
+import sys
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from operator import attrgetter
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+REPO = Path(__file__).resolve().parent.parent
+PRETRAINED = REPO / "agents" / "pretrained"
+DOCS = REPO / "docs" / "baselines"
+RUNS = REPO / "runs" / "baselines"
+SEEDS = (0, 1, 2)
+ENVS = (
+    "connenv/Swing-v0",
+    "connenv/KapitzaPendulum-v0",
+    "connenv/Skier-v0",
+    "connenv/KozlovShell-v0",
+    "connenv/RollingBall-v0",
+    "connenv/RollingBallPose-v0",
+    "connenv/RollingBallGoal-v0",
+    "connenv/KapitzaSwingUp-v0",
+)
+ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
+EVALUATIONS = 10  # periodic evaluations per run, 10 episodes each (train.py)
+EPISODES = 100
+
+
+def short(env_id: str) -> str:
+    return env_id.split("/")[-1]
+
+
+def hyperparams(algo: str, env_id: str) -> dict:
+    return yaml.safe_load((REPO / "agents" / "hyperparams" / f"{algo}.yml").read_text())[env_id]
+
+
+def run_folder(env_id: str, algo: str, seed: int) -> Path:
+    return RUNS / f"{short(env_id)}_{algo}_s{seed}"
+
+
+def train_command(env_id: str, algo: str, seed: int) -> list[str]:
+    timesteps = int(float(hyperparams(algo, env_id)["n_timesteps"]))
+    command = [sys.executable, "train.py", "--env", env_id, "--algo", algo, "--seed", str(seed), "--runs", str(RUNS)]
+    command += ["--eval-freq", str(timesteps // EVALUATIONS), "--eval-episodes", "10"]
+    return command + (["--vector-env"] if algo == "ppo" else [])
+
+
+def train_one(env_id: str, algo: str, seed: int) -> str:
+    folder = run_folder(env_id, algo, seed)
+    if (folder / "results.json").is_file():
+        return f"{folder.name}: done before"
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "train.log", "w") as log:
+        code = subprocess.call(train_command(env_id, algo, seed), cwd=REPO, stdout=log, stderr=subprocess.STDOUT)
+    return f"{folder.name}: exit {code}"
+
+
+def train_all(jobs: int, envs: list[str], algos: list[str]):
+    runs = [(env_id, algo, seed) for env_id in envs for algo in algos for seed in SEEDS]
+    with ThreadPoolExecutor(jobs) as pool:
+        for message in pool.map(lambda run: train_one(*run), runs):
+            print(message, flush=True)
+
+
+def evaluations(folder: Path) -> dict[str, np.ndarray]:
+    """A run's periodic evaluations (10 episodes each): timesteps, mean return and success rate."""
+    data = np.load(folder / "evaluations.npz")
+    return {"timesteps": data["timesteps"], "return": data["results"].mean(axis=1), "success": data["successes"].mean(axis=1)}
+
+
+def copy_small(folder: Path, target: Path, env_id: str, algo: str):
+    """Copy a run's best model, without its optimizers' moment estimates (only further training reads them; the
+    policy is unchanged and a SAC zip halves), with the run files agents.evaluate reads beside it."""
+    from agents.evaluate import load_model
+
+    params = target / f"connenv-{short(env_id)}"
+    params.mkdir(parents=True, exist_ok=True)
+    for name in ("args.yml", "config.yml", "best_vecnormalize.pkl"):
+        if (folder / params.name / name).is_file():
+            shutil.copy(folder / params.name / name, params / name)
+    policy = load_model(folder / "best_model.zip", env_id, algo)
+    model = getattr(policy, "model", policy)  # the SB3 model behind its VecNormalize statistics
+    for name in model._get_torch_save_params()[0]:
+        if name.endswith("optimizer"):
+            attrgetter(name)(model).state.clear()
+    model.save(target / "best_model.zip")
+
+
+def collect(envs: list[str], algos: list[str]):
+    """Best seed's best model per (env, algo) into agents/pretrained/, the training steps and wall time of every
+    seed into agents/pretrained/runs.json, every seed's periodic evaluations into docs/baselines/curves.csv."""
+    record_path = PRETRAINED / "runs.json"
+    record = json.loads(record_path.read_text()) if record_path.is_file() else {}
+    curves_path = DOCS / "curves.csv"
+    rows = list(csv.DictReader(curves_path.open())) if curves_path.is_file() else []
+    for env_id in envs:
+        for algo in algos:
+            folders = [run_folder(env_id, algo, seed) for seed in SEEDS]
+            folders = [folder for folder in folders if (folder / "results.json").is_file()]
+            if not folders:
+                continue
+            seeds = {}
+            for folder in folders:
+                results = json.loads((folder / "results.json").read_text())
+                curve = evaluations(folder)
+                seeds[results["seed"]] = {
+                    "timesteps": results["timesteps"],
+                    "train_seconds": round(results["train_seconds"], 1),
+                    "best_periodic_return": float(curve["return"].max()),
+                }
+                rows = [r for r in rows if (r["env"], r["algo"], int(r["seed"])) != (env_id, algo, results["seed"])]
+                rows += [
+                    {"env": env_id, "algo": algo, "seed": results["seed"], "timesteps": int(t), "return": f"{r:.6g}",
+                     "success": f"{s:.2f}"}
+                    for t, r, s in zip(curve["timesteps"], curve["return"], curve["success"], strict=True)
+                ]
+            best = max(seeds, key=lambda seed: seeds[seed]["best_periodic_return"])
+            copy_small(run_folder(env_id, algo, best), PRETRAINED / f"{short(env_id)}_{algo}", env_id, algo)
+            record.setdefault(env_id, {})[algo] = {"pretrained_seed": best, "seeds": seeds}
+            print(f"{short(env_id)} {algo}: seeds {sorted(seeds)}, pretrained seed {best}", flush=True)
+    record_path.write_text(json.dumps(record, indent=1, sort_keys=True))
+    DOCS.mkdir(parents=True, exist_ok=True)
+    with curves_path.open("w", newline="") as file:
+        writer = csv.DictWriter(file, ["env", "algo", "seed", "timesteps", "return", "success"])
+        writer.writeheader()
+        writer.writerows(sorted(rows, key=lambda r: (r["env"], r["algo"], int(r["seed"]), int(r["timesteps"]))))
+
+
+def steps_to_target(row: dict) -> float | None:
+    lengths = [episode["length"] for episode in row["episodes"] if episode["success"]]
+    return float(np.mean(lengths)) if lengths else None
+
+
+# The physical measure of each env's row: its name and unit, and how to read it off an agents.evaluate summary.
+MEASURES = {
+    "connenv/Swing-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
+    "connenv/Skier-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
+    "connenv/KapitzaSwingUp-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
+    "connenv/RollingBall-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
+    "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
+    "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),
+    "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
+    "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
+}
+
+
+def pretrained_label(env_id: str, algo: str) -> str:
+    return "SAC + HER" if algo == "sac" and "HerReplayBuffer" in str(hyperparams(algo, env_id)) else algo.upper()
+
+
+def evaluate_env(env_id: str) -> dict:
+    """agents.evaluate's report for random, the env's controllers and its pretrained models, on EPISODES episodes
+    (seeds 0..99), each row with its physical measure, the episodes themselves left out."""
+    import torch
+
+    from agents.controllers import CONTROLLERS
+    from agents.evaluate import compare, pretrained_models
+
+    torch.set_num_threads(1)
+    models = pretrained_models(env_id)
+    controllers = list(CONTROLLERS[env_id])  # the first is the analytic reference
+    report = compare(env_id, ["random", *controllers, *map(str, models)], EPISODES, 0)
+    name, unit, measure = MEASURES[env_id]
+    labels = ["random", *(f"{c} (analytic)" if i == 0 else c for i, c in enumerate(controllers))]
+    labels += [pretrained_label(env_id, model.parent.name.rsplit("_", 1)[1]) for model in models]
+    for label, row in zip(labels, report["policies"], strict=True):
+        row.update(label=label, measure=measure(row), measure_name=name, measure_unit=unit)
+        del row["episodes"]
+    return report
+
+
+def training_cell(env_id: str, algo: str, record: dict) -> str:
+    seeds = record[env_id][algo]["seeds"]
+    steps = {run["timesteps"] for run in seeds.values()}
+    seconds = [run["train_seconds"] for run in seeds.values()]
+    return f"{max(steps) / 1000:.0f}k steps, {np.mean(seconds) / 60:.1f} min × {len(seeds)} seeds"
+
+
+def format_results(reports: list[dict], record: dict) -> str:
+    """One markdown table: per env, random, the analytic controllers and the pretrained models."""
+    lines = [
+        "| env | policy | training (per seed) | success | return | physical measure |",
+        "|---|---|---|---|---|---|",
+    ]
+    for report in reports:
+        env_id = report["env"]
+        for i, row in enumerate(report["policies"]):
+            algo = row["policy"].split(":")[0]
+            training = training_cell(env_id, algo, record) if algo in ALGOS else "–"
+            value = row["measure"]
+            measure = "–" if value is None else f"{value:.4g} {row['measure_unit']}".strip()
+            env = f"{short(env_id)}: {row['measure_name']}" if i == 0 else ""
+            lines.append(
+                f"| {env} | {row['label']} | {training} | {100 * row['success_rate']:.0f}% "
+                f"| {row['return_mean']:.3f} ± {row['return_std']:.3f} | {measure} |"
+            )
+    return "\n".join(lines)
+
+
+def plot_curves(report: dict, path: Path):
+    """Periodic-evaluation return against training steps, mean and range over seeds for each algorithm, with the
+    analytic controller's and the random policy's mean returns on the table's episodes as horizontal lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    env_id = report["env"]
+    rows = [r for r in csv.DictReader((DOCS / "curves.csv").open()) if r["env"] == env_id]
+    fig, ax = plt.subplots(figsize=(6, 3.6))
+    for algo in ALGOS:
+        runs = {}
+        for r in rows:
+            if r["algo"] == algo:
+                runs.setdefault(int(r["seed"]), []).append((int(r["timesteps"]), float(r["return"])))
+        if not runs:
+            continue
+        n = min(len(points) for points in runs.values())
+        steps = np.array([t for t, _ in next(iter(runs.values()))[:n]])
+        returns = np.array([[ret for _, ret in points[:n]] for points in runs.values()])
+        label = f"{pretrained_label(env_id, algo)} ({len(runs)} seeds)"
+        (line,) = ax.plot(steps, returns.mean(axis=0), label=label)
+        ax.fill_between(steps, returns.min(axis=0), returns.max(axis=0), color=line.get_color(), alpha=0.25)
+    for row, style in ((report["policies"][1], "--"), (report["policies"][0], ":")):
+        ax.axhline(row["return_mean"], ls=style, color="k", lw=1, label=row["label"])
+    ax.set(xlabel="training steps", ylabel="return (10 evaluation episodes)", title=short(env_id))
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def table(jobs: int, envs: list[str]) -> str:
+    """Evaluate every env's policies (one env per process), write docs/baselines/results.{json,md} and the
+    learning-curve PNGs, return the markdown table."""
+    with ProcessPoolExecutor(jobs) as pool:
+        reports = list(pool.map(evaluate_env, envs))
+    record = json.loads((PRETRAINED / "runs.json").read_text())
+    text = format_results(reports, record)
+    DOCS.mkdir(parents=True, exist_ok=True)
+    (DOCS / "results.json").write_text(json.dumps(reports, indent=1))
+    (DOCS / "results.md").write_text(text + "\n")
+    for report in reports:
+        plot_curves(report, DOCS / f"{short(report['env'])}.png")
+    return text
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("command", choices=("train", "collect", "table"))
+    parser.add_argument("--jobs", type=int, default=2, help="runs or envs at a time (one core each)")
+    parser.add_argument("--env", nargs="+", default=list(ENVS), choices=ENVS)
+    parser.add_argument("--algo", nargs="+", default=list(ALGOS), choices=ALGOS)
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None):
+    args = parse_args(argv)
+    if args.command == "train":
+        train_all(args.jobs, args.env, args.algo)
+    elif args.command == "collect":
+        collect(args.env, args.algo)
+    else:
+        print(table(args.jobs, args.env))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,35 @@
+"""Reference results: the pretrained models load offline, one per (env, algorithm), and reproduce the committed
+table (README, "Reference results")."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from agents import baselines, evaluate
+
+
+@pytest.mark.parametrize("env_id", baselines.ENVS)
+def test_every_env_has_a_pretrained_model_per_algorithm_that_loads_offline(env_id):
+    models = evaluate.pretrained_models(env_id)
+    assert [model.parent.name for model in models] == [f"{baselines.short(env_id)}_{algo}" for algo in baselines.ALGOS]
+    for model in models:
+        evaluate.load_model(model, env_id)  # the algorithm from its args.yml, its spaces checked against the env's
+
+
+def test_pretrained_models_reproduce_the_committed_swing_rows():
+    """Seeded episodes are bit-identical, so the regenerated rows equal the committed ones."""
+    (committed,) = [r for r in json.loads((baselines.DOCS / "results.json").read_text()) if r["env"] == "connenv/Swing-v0"]
+    report = baselines.evaluate_env("connenv/Swing-v0")
+    assert [row["label"] for row in report["policies"]] == ["random", "pumping (analytic)", "PPO", "SAC"]
+    for row, expected in zip(report["policies"], committed["policies"], strict=True):
+        assert row["success_rate"] == expected["success_rate"]
+        assert row["return_mean"] == pytest.approx(expected["return_mean"], rel=1e-9, abs=1e-12)
+        assert row["measure"] == pytest.approx(expected["measure"], rel=1e-9)
+
+
+def test_pretrained_policy_without_models_names_the_env_and_folder(monkeypatch, tmp_path):
+    monkeypatch.setattr(evaluate, "PRETRAINED", tmp_path)
+    with pytest.raises(ValueError, match=f"no model for connenv/Swing-v0 under {tmp_path}"):
+        evaluate.compare("connenv/Swing-v0", ["pretrained"], episodes=1)
