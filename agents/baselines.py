@@ -246,7 +246,7 @@ def plot_curves(report: dict, path: Path):
         (line,) = ax.plot(steps, returns.mean(axis=0), label=label)
         ax.fill_between(steps, returns.min(axis=0), returns.max(axis=0), color=line.get_color(), alpha=0.25)
     for row, style in ((report["policies"][1], "--"), (report["policies"][0], ":")):
-        ax.axhline(row["return_mean"], ls=style, color="k", lw=1, label=row["label"])
+        ax.axhline(row["return_mean"], ls=style, color="k", lw=1, label=f"{row['label']}, {EPISODES} episodes")
     ax.set(xlabel="training steps", ylabel="return (10 evaluation episodes)", title=short(env_id))
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -255,16 +255,19 @@ def plot_curves(report: dict, path: Path):
 
 
 def table(jobs: int, envs: list[str]) -> str:
-    """Evaluate every env's policies (one env per process), write docs/baselines/results.{json,md} and the
-    learning-curve PNGs, return the markdown table."""
+    """Evaluate the envs' policies (one env per process), update docs/baselines/results.{json,md} with them, draw
+    their learning curves, return the markdown table of all envs evaluated so far."""
     with ProcessPoolExecutor(jobs) as pool:
-        reports = list(pool.map(evaluate_env, envs))
-    record = json.loads((PRETRAINED / "runs.json").read_text())
-    text = format_results(reports, record)
+        fresh = list(pool.map(evaluate_env, envs))
     DOCS.mkdir(parents=True, exist_ok=True)
-    (DOCS / "results.json").write_text(json.dumps(reports, indent=1))
+    results_path = DOCS / "results.json"
+    reports = {report["env"]: report for report in json.loads(results_path.read_text())} if results_path.is_file() else {}
+    reports.update((report["env"], report) for report in fresh)  # the other envs' rows stay as they were
+    reports = [reports[env_id] for env_id in ENVS if env_id in reports]
+    text = format_results(reports, json.loads((PRETRAINED / "runs.json").read_text()))
+    results_path.write_text(json.dumps(reports, indent=1))
     (DOCS / "results.md").write_text(text + "\n")
-    for report in reports:
+    for report in fresh:
         plot_curves(report, DOCS / f"{short(report['env'])}.png")
     return text
 
