@@ -30,8 +30,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from agents.controllers import CONTROLLERS
+from agents.evaluate import PRETRAINED, compare, load_model, pretrained_models
+
 REPO = Path(__file__).resolve().parent.parent
-PRETRAINED = REPO / "agents" / "pretrained"
 DOCS = REPO / "docs" / "baselines"
 RUNS = REPO / "runs" / "baselines"
 SEEDS = (0, 1, 2)
@@ -89,14 +91,16 @@ def train_all(jobs: int, envs: list[str], algos: list[str]):
 def evaluations(folder: Path) -> dict[str, np.ndarray]:
     """A run's periodic evaluations (10 episodes each): timesteps, mean return and success rate."""
     data = np.load(folder / "evaluations.npz")
-    return {"timesteps": data["timesteps"], "return": data["results"].mean(axis=1), "success": data["successes"].mean(axis=1)}
+    return {
+        "timesteps": data["timesteps"],
+        "return": data["results"].mean(axis=1),
+        "success": data["successes"].mean(axis=1),
+    }
 
 
 def copy_small(folder: Path, target: Path, env_id: str, algo: str):
     """Copy a run's best model, without its optimizers' moment estimates (only further training reads them; the
     policy is unchanged and a SAC zip halves), with the run files agents.evaluate reads beside it."""
-    from agents.evaluate import load_model
-
     params = target / f"connenv-{short(env_id)}"
     params.mkdir(parents=True, exist_ok=True)
     for name in ("args.yml", "config.yml", "best_vecnormalize.pkl"):
@@ -134,8 +138,14 @@ def collect(envs: list[str], algos: list[str]):
                 }
                 rows = [r for r in rows if (r["env"], r["algo"], int(r["seed"])) != (env_id, algo, results["seed"])]
                 rows += [
-                    {"env": env_id, "algo": algo, "seed": results["seed"], "timesteps": int(t), "return": f"{r:.6g}",
-                     "success": f"{s:.2f}"}
+                    {
+                        "env": env_id,
+                        "algo": algo,
+                        "seed": results["seed"],
+                        "timesteps": int(t),
+                        "return": f"{r:.6g}",
+                        "success": f"{s:.2f}",
+                    }
                     for t, r, s in zip(curve["timesteps"], curve["return"], curve["success"], strict=True)
                 ]
             best = max(seeds, key=lambda seed: seeds[seed]["best_periodic_return"])
@@ -176,9 +186,6 @@ def evaluate_env(env_id: str) -> dict:
     """agents.evaluate's report for random, the env's controllers and its pretrained models, on EPISODES episodes
     (seeds 0..99), each row with its physical measure, the episodes themselves left out."""
     import torch
-
-    from agents.controllers import CONTROLLERS
-    from agents.evaluate import compare, pretrained_models
 
     torch.set_num_threads(1)
     models = pretrained_models(env_id)
@@ -261,7 +268,9 @@ def table(jobs: int, envs: list[str]) -> str:
         fresh = list(pool.map(evaluate_env, envs))
     DOCS.mkdir(parents=True, exist_ok=True)
     results_path = DOCS / "results.json"
-    reports = {report["env"]: report for report in json.loads(results_path.read_text())} if results_path.is_file() else {}
+    reports = (
+        {report["env"]: report for report in json.loads(results_path.read_text())} if results_path.is_file() else {}
+    )
     reports.update((report["env"], report) for report in fresh)  # the other envs' rows stay as they were
     reports = [reports[env_id] for env_id in ENVS if env_id in reports]
     text = format_results(reports, json.loads((PRETRAINED / "runs.json").read_text()))

@@ -82,7 +82,9 @@ def policy_spec(text: str) -> str:
     """argparse type: a controller name, 'random', 'pretrained' or an existing model zip."""
     if text in (*CONTROLLER_NAMES, "random", "pretrained") or (text.endswith(".zip") and Path(text).is_file()):
         return text
-    raise argparse.ArgumentTypeError(f"{text!r} is not one of {CONTROLLER_NAMES}, 'random', 'pretrained' or an existing PATH.zip")
+    raise argparse.ArgumentTypeError(
+        f"{text!r} is not one of {CONTROLLER_NAMES}, 'random', 'pretrained' or an existing PATH.zip"
+    )
 
 
 def pretrained_models(env_id: str) -> list[Path]:

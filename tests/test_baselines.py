@@ -20,7 +20,9 @@ def test_every_env_has_a_pretrained_model_per_algorithm_that_loads_offline(env_i
 
 def test_pretrained_models_reproduce_the_committed_swing_rows():
     """Seeded episodes are bit-identical, so the regenerated rows equal the committed ones."""
-    (committed,) = [r for r in json.loads((baselines.DOCS / "results.json").read_text()) if r["env"] == "connenv/Swing-v0"]
+    (committed,) = [
+        r for r in json.loads((baselines.DOCS / "results.json").read_text()) if r["env"] == "connenv/Swing-v0"
+    ]
     report = baselines.evaluate_env("connenv/Swing-v0")
     assert [row["label"] for row in report["policies"]] == ["random", "pumping (analytic)", "PPO", "SAC"]
     for row, expected in zip(report["policies"], committed["policies"], strict=True):
