@@ -60,7 +60,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 
 class SaveBestVecNormalize(BaseCallback):
-    """On a new best periodic evaluation, save the VecNormalize statistics beside best_model.zip's run folder."""
+    """On a new best periodic evaluation, save the VecNormalize statistics it was evaluated with to `path`."""
 
     def __init__(self, path: Path):
         super().__init__()
@@ -72,7 +72,7 @@ class SaveBestVecNormalize(BaseCallback):
         return True
 
 
-class RunManager(ExperimentManager):
+class BestStatsExperimentManager(ExperimentManager):
     """rl-zoo3's ExperimentManager, keeping the VecNormalize statistics of the best model as well as the final."""
 
     def create_callbacks(self):
@@ -83,7 +83,7 @@ class RunManager(ExperimentManager):
                 callback.callback_on_new_best.parent = callback
 
 
-class VectorExperimentManager(RunManager):
+class VectorExperimentManager(BestStatsExperimentManager):
     """rl-zoo3's ExperimentManager on the native vector env: create_envs is the one hook that builds the training
     and periodic-evaluation envs. Both are native, so that SB3 finds the same wrappers around them when it copies
     the VecNormalize statistics from one to the other."""
@@ -108,7 +108,7 @@ def train(args: argparse.Namespace):
     """Train with rl-zoo3's ExperimentManager into the run folder; return the model and the path of its zip."""
     set_random_seed(args.seed)
     th.set_num_threads(args.num_threads)
-    manager = (VectorExperimentManager if args.vector_env else RunManager)(
+    manager = (VectorExperimentManager if args.vector_env else BestStatsExperimentManager)(
         args,
         args.algo,
         args.env,

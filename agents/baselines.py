@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import hashlib
 import json
 import shutil
 import subprocess
@@ -31,9 +32,10 @@ import numpy as np
 import yaml
 
 from agents.controllers import CONTROLLERS
-from agents.evaluate import PRETRAINED, compare, load_model, pretrained_models
+from agents.evaluate import PRETRAINED, compare, load_model, positive_int, pretrained_models
 
 REPO = Path(__file__).resolve().parent.parent
+HYPERPARAMS = Path(__file__).resolve().parent / "hyperparams"
 DOCS = REPO / "docs" / "baselines"
 RUNS = REPO / "runs" / "baselines"
 SEEDS = (0, 1, 2)
@@ -48,7 +50,8 @@ ENVS = (
     "connenv/KapitzaSwingUp-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
-EVALUATIONS = 10  # periodic evaluations per run, 10 episodes each (train.py)
+EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
+FINAL_EPISODES = 10  # train.py's own table at the end of a run; the results table is evaluated on EPISODES
 EPISODES = 100
 
 
@@ -57,7 +60,13 @@ def short(env_id: str) -> str:
 
 
 def hyperparams(algo: str, env_id: str) -> dict:
-    return yaml.safe_load((REPO / "agents" / "hyperparams" / f"{algo}.yml").read_text())[env_id]
+    return yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())[env_id]
+
+
+def run_config(folder: Path, env_id: str) -> dict | None:
+    """The hyperparameters a run folder was trained with (rl-zoo3's {env}/config.yml), or None."""
+    path = folder / f"connenv-{short(env_id)}" / "config.yml"
+    return dict(yaml.load(path.read_text(), Loader=yaml.UnsafeLoader)) if path.is_file() else None  # OrderedDict
 
 
 def run_folder(env_id: str, algo: str, seed: int) -> Path:
@@ -67,15 +76,17 @@ def run_folder(env_id: str, algo: str, seed: int) -> Path:
 def train_command(env_id: str, algo: str, seed: int) -> list[str]:
     timesteps = int(float(hyperparams(algo, env_id)["n_timesteps"]))
     command = [sys.executable, "train.py", "--env", env_id, "--algo", algo, "--seed", str(seed), "--runs", str(RUNS)]
-    command += ["--eval-freq", str(timesteps // EVALUATIONS), "--eval-episodes", "10"]
+    command += ["--eval-freq", str(timesteps // EVALUATIONS), "--eval-episodes", str(FINAL_EPISODES)]
     return command + (["--vector-env"] if algo == "ppo" else [])
 
 
 def train_one(env_id: str, algo: str, seed: int) -> str:
+    """Train one run unless it finished with the current hyperparameters; a run with others is trained anew."""
     folder = run_folder(env_id, algo, seed)
-    if (folder / "results.json").is_file():
+    if (folder / "results.json").is_file() and run_config(folder, env_id) == hyperparams(algo, env_id):
         return f"{folder.name}: done before"
-    folder.mkdir(parents=True, exist_ok=True)
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True)
     with open(folder / "train.log", "w") as log:
         code = subprocess.call(train_command(env_id, algo, seed), cwd=REPO, stdout=log, stderr=subprocess.STDOUT)
     return f"{folder.name}: exit {code}"
@@ -89,7 +100,7 @@ def train_all(jobs: int, envs: list[str], algos: list[str]):
 
 
 def evaluations(folder: Path) -> dict[str, np.ndarray]:
-    """A run's periodic evaluations (10 episodes each): timesteps, mean return and success rate."""
+    """A run's periodic evaluations: timesteps, mean return and success rate."""
     data = np.load(folder / "evaluations.npz")
     return {
         "timesteps": data["timesteps"],
@@ -98,11 +109,14 @@ def evaluations(folder: Path) -> dict[str, np.ndarray]:
     }
 
 
-def copy_small(folder: Path, target: Path, env_id: str, algo: str):
+def copy_best_model(folder: Path, target: Path, env_id: str, algo: str):
     """Copy a run's best model, without its optimizers' moment estimates (only further training reads them; the
     policy is unchanged and a SAC zip halves), with the run files agents.evaluate reads beside it."""
     params = target / f"connenv-{short(env_id)}"
-    params.mkdir(parents=True, exist_ok=True)
+    if run_config(folder, env_id).get("normalize") and not (folder / params.name / "best_vecnormalize.pkl").is_file():
+        raise FileNotFoundError(f"{folder}: normalized, but no {params.name}/best_vecnormalize.pkl; retrain it")
+    shutil.rmtree(target, ignore_errors=True)
+    params.mkdir(parents=True)
     for name in ("args.yml", "config.yml", "best_vecnormalize.pkl"):
         if (folder / params.name / name).is_file():
             shutil.copy(folder / params.name / name, params / name)
@@ -114,44 +128,56 @@ def copy_small(folder: Path, target: Path, env_id: str, algo: str):
     model.save(target / "best_model.zip")
 
 
+def seed_record(folder: Path) -> tuple[dict, list[dict]]:
+    """A finished run's steps, wall time and best periodic return, and its curve as CSV rows."""
+    results = json.loads((folder / "results.json").read_text())
+    curve = evaluations(folder)
+    record = {
+        "timesteps": results["timesteps"],
+        "train_seconds": round(results["train_seconds"], 1),
+        "best_periodic_return": float(curve["return"].max()),
+    }
+    rows = [
+        {"seed": results["seed"], "timesteps": int(t), "return": f"{r:.6g}", "success": f"{s:.2f}"}
+        for t, r, s in zip(curve["timesteps"], curve["return"], curve["success"], strict=True)
+    ]
+    return record, rows
+
+
+def collect_pair(env_id: str, algo: str, entry: dict | None) -> tuple[dict, list[dict]]:
+    """The runs.json entry and curve rows of an (env, algo) whose 3 seeds finished with the current
+    hyperparameters; its best model copied to agents/pretrained/ unless the same file is there already."""
+    folders = [run_folder(env_id, algo, seed) for seed in SEEDS]
+    for folder in folders:
+        if not (folder / "results.json").is_file() or run_config(folder, env_id) != hyperparams(algo, env_id):
+            raise FileNotFoundError(f"{folder}: not finished with the current hyperparameters; run train first")
+    seeds, rows = {}, []
+    for seed, folder in zip(SEEDS, folders, strict=True):
+        seeds[seed], seed_rows = seed_record(folder)
+        rows += [{"env": env_id, "algo": algo, **row} for row in seed_rows]
+    best = max(seeds, key=lambda seed: seeds[seed]["best_periodic_return"])
+    digest = hashlib.sha256((run_folder(env_id, algo, best) / "best_model.zip").read_bytes()).hexdigest()
+    target = PRETRAINED / f"{short(env_id)}_{algo}"
+    if entry is None or entry.get("source_sha256") != digest or not (target / "best_model.zip").is_file():
+        copy_best_model(run_folder(env_id, algo, best), target, env_id, algo)
+    return {"pretrained_seed": best, "source_sha256": digest, "seeds": seeds}, rows
+
+
 def collect(envs: list[str], algos: list[str]):
     """Best seed's best model per (env, algo) into agents/pretrained/, the training steps and wall time of every
     seed into agents/pretrained/runs.json, every seed's periodic evaluations into docs/baselines/curves.csv."""
-    record_path = PRETRAINED / "runs.json"
+    record_path, curves_path = PRETRAINED / "runs.json", DOCS / "curves.csv"
     record = json.loads(record_path.read_text()) if record_path.is_file() else {}
-    curves_path = DOCS / "curves.csv"
-    rows = list(csv.DictReader(curves_path.open())) if curves_path.is_file() else []
+    rows = []
+    if curves_path.is_file():
+        with curves_path.open() as file:
+            rows = list(csv.DictReader(file))
     for env_id in envs:
         for algo in algos:
-            folders = [run_folder(env_id, algo, seed) for seed in SEEDS]
-            folders = [folder for folder in folders if (folder / "results.json").is_file()]
-            if not folders:
-                continue
-            seeds = {}
-            for folder in folders:
-                results = json.loads((folder / "results.json").read_text())
-                curve = evaluations(folder)
-                seeds[results["seed"]] = {
-                    "timesteps": results["timesteps"],
-                    "train_seconds": round(results["train_seconds"], 1),
-                    "best_periodic_return": float(curve["return"].max()),
-                }
-                rows = [r for r in rows if (r["env"], r["algo"], int(r["seed"])) != (env_id, algo, results["seed"])]
-                rows += [
-                    {
-                        "env": env_id,
-                        "algo": algo,
-                        "seed": results["seed"],
-                        "timesteps": int(t),
-                        "return": f"{r:.6g}",
-                        "success": f"{s:.2f}",
-                    }
-                    for t, r, s in zip(curve["timesteps"], curve["return"], curve["success"], strict=True)
-                ]
-            best = max(seeds, key=lambda seed: seeds[seed]["best_periodic_return"])
-            copy_small(run_folder(env_id, algo, best), PRETRAINED / f"{short(env_id)}_{algo}", env_id, algo)
-            record.setdefault(env_id, {})[algo] = {"pretrained_seed": best, "seeds": seeds}
-            print(f"{short(env_id)} {algo}: seeds {sorted(seeds)}, pretrained seed {best}", flush=True)
+            entry, pair_rows = collect_pair(env_id, algo, record.get(env_id, {}).get(algo))
+            record.setdefault(env_id, {})[algo] = entry
+            rows = [row for row in rows if (row["env"], row["algo"]) != (env_id, algo)] + pair_rows
+            print(f"{short(env_id)} {algo}: pretrained seed {entry['pretrained_seed']}", flush=True)
     record_path.write_text(json.dumps(record, indent=1, sort_keys=True))
     DOCS.mkdir(parents=True, exist_ok=True)
     with curves_path.open("w", newline="") as file:
@@ -178,13 +204,16 @@ MEASURES = {
 }
 
 
-def pretrained_label(env_id: str, algo: str) -> str:
-    return "SAC + HER" if algo == "sac" and "HerReplayBuffer" in str(hyperparams(algo, env_id)) else algo.upper()
+def pretrained_label(model: Path) -> str:
+    """PPO, SAC or SAC + HER, from a pretrained model's folder ({env}_{algo}) and the config.yml beside it."""
+    config = next(model.parent.glob("*/config.yml")).read_text()
+    return model.parent.name.rsplit("_", 1)[1].upper() + (" + HER" if "HerReplayBuffer" in config else "")
 
 
 def evaluate_env(env_id: str) -> dict:
     """agents.evaluate's report for random, the env's controllers and its pretrained models, on EPISODES episodes
-    (seeds 0..99), each row with its physical measure, the episodes themselves left out."""
+    (seeds 0..99), each row with its physical measure, the episodes themselves left out, and the models' training
+    (their runs.json entries)."""
     import torch
 
     torch.set_num_threads(1)
@@ -193,21 +222,22 @@ def evaluate_env(env_id: str) -> dict:
     report = compare(env_id, ["random", *controllers, *map(str, models)], EPISODES, 0)
     name, unit, measure = MEASURES[env_id]
     labels = ["random", *(f"{c} (analytic)" if i == 0 else c for i, c in enumerate(controllers))]
-    labels += [pretrained_label(env_id, model.parent.name.rsplit("_", 1)[1]) for model in models]
+    labels += [pretrained_label(model) for model in models]
     for label, row in zip(labels, report["policies"], strict=True):
         row.update(label=label, measure=measure(row), measure_name=name, measure_unit=unit)
         del row["episodes"]
+    report["training"] = json.loads((PRETRAINED / "runs.json").read_text())[env_id]
     return report
 
 
-def training_cell(env_id: str, algo: str, record: dict) -> str:
-    seeds = record[env_id][algo]["seeds"]
-    steps = {run["timesteps"] for run in seeds.values()}
-    seconds = [run["train_seconds"] for run in seeds.values()]
-    return f"{max(steps) / 1000:.0f}k steps, {np.mean(seconds) / 60:.1f} min × {len(seeds)} seeds"
+def training_cell(entry: dict) -> str:
+    """Steps and mean wall time of a seed, from a runs.json entry."""
+    (steps,) = {run["timesteps"] for run in entry["seeds"].values()}  # every seed trains the same budget
+    minutes = np.mean([run["train_seconds"] for run in entry["seeds"].values()]) / 60
+    return f"{steps / 1000:.0f}k steps, {minutes:.1f} min × {len(entry['seeds'])} seeds"
 
 
-def format_results(reports: list[dict], record: dict) -> str:
+def format_results(reports: list[dict]) -> str:
     """One markdown table: per env, random, the analytic controllers and the pretrained models."""
     lines = [
         "| env | policy | training (per seed) | success | return | physical measure |",
@@ -217,7 +247,7 @@ def format_results(reports: list[dict], record: dict) -> str:
         env_id = report["env"]
         for i, row in enumerate(report["policies"]):
             algo = row["policy"].split(":")[0]
-            training = training_cell(env_id, algo, record) if algo in ALGOS else "–"
+            training = training_cell(report["training"][algo]) if algo in ALGOS else "–"
             value = row["measure"]
             measure = "–" if value is None else f"{value:.4g} {row['measure_unit']}".strip()
             env = f"{short(env_id)}: {row['measure_name']}" if i == 0 else ""
@@ -237,22 +267,24 @@ def plot_curves(report: dict, path: Path):
     import matplotlib.pyplot as plt
 
     env_id = report["env"]
-    rows = [r for r in csv.DictReader((DOCS / "curves.csv").open()) if r["env"] == env_id]
+    with (DOCS / "curves.csv").open() as file:
+        rows = [row for row in csv.DictReader(file) if row["env"] == env_id]
     fig, ax = plt.subplots(figsize=(6, 3.6))
-    for algo in ALGOS:
+    for row in report["policies"]:
+        algo = row["policy"].split(":")[0]
+        if algo not in ALGOS:
+            continue
         runs = {}
         for r in rows:
             if r["algo"] == algo:
                 runs.setdefault(int(r["seed"]), []).append((int(r["timesteps"]), float(r["return"])))
-        if not runs:
-            continue
-        n = min(len(points) for points in runs.values())
-        steps = np.array([t for t, _ in next(iter(runs.values()))[:n]])
-        returns = np.array([[ret for _, ret in points[:n]] for points in runs.values()])
-        label = f"{pretrained_label(env_id, algo)} ({len(runs)} seeds)"
-        (line,) = ax.plot(steps, returns.mean(axis=0), label=label)
+        (steps,) = {tuple(t for t, _ in points) for points in runs.values()}  # every seed evaluated at the same steps
+        returns = np.array([[ret for _, ret in points] for points in runs.values()])
+        (line,) = ax.plot(steps, returns.mean(axis=0), label=f"{row['label']} ({len(runs)} seeds)")
         ax.fill_between(steps, returns.min(axis=0), returns.max(axis=0), color=line.get_color(), alpha=0.25)
-    for row, style in ((report["policies"][1], "--"), (report["policies"][0], ":")):
+    analytic = next(row for row in report["policies"] if row["label"].endswith("(analytic)"))
+    random = next(row for row in report["policies"] if row["label"] == "random")
+    for row, style in ((analytic, "--"), (random, ":")):
         ax.axhline(row["return_mean"], ls=style, color="k", lw=1, label=f"{row['label']}, {EPISODES} episodes")
     ax.set(xlabel="training steps", ylabel="return (10 evaluation episodes)", title=short(env_id))
     ax.legend(fontsize=8)
@@ -273,10 +305,10 @@ def table(jobs: int, envs: list[str]) -> str:
     )
     reports.update((report["env"], report) for report in fresh)  # the other envs' rows stay as they were
     reports = [reports[env_id] for env_id in ENVS if env_id in reports]
-    text = format_results(reports, json.loads((PRETRAINED / "runs.json").read_text()))
+    text = format_results(reports)
     results_path.write_text(json.dumps(reports, indent=1))
     (DOCS / "results.md").write_text(text + "\n")
-    for report in fresh:
+    for report in reports:
         plot_curves(report, DOCS / f"{short(report['env'])}.png")
     return text
 
@@ -284,7 +316,7 @@ def table(jobs: int, envs: list[str]) -> str:
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("command", choices=("train", "collect", "table"))
-    parser.add_argument("--jobs", type=int, default=2, help="runs or envs at a time (one core each)")
+    parser.add_argument("--jobs", type=positive_int, default=2, help="runs or envs at a time (one core each)")
     parser.add_argument("--env", nargs="+", default=list(ENVS), choices=ENVS)
     parser.add_argument("--algo", nargs="+", default=list(ALGOS), choices=ALGOS)
     return parser.parse_args(argv)
@@ -292,6 +324,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None):
     args = parse_args(argv)
+    if not (REPO / "train.py").is_file():
+        raise SystemExit(f"python -m agents.baselines works in a clone of the repository; {REPO} is not one")
     if args.command == "train":
         train_all(args.jobs, args.env, args.algo)
     elif args.command == "collect":

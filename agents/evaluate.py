@@ -4,11 +4,13 @@
 
 Episode i of every policy starts from ``reset(seed=seed + i)``, so the rows compare like with like. A policy is
 ``analytic`` (the env's first controller in agents.controllers), the name of one of its controllers (``arc``,
-``holonomy``, ...), ``random`` (uniform actions, seeded), the zip of a trained SB3 model or ``pretrained``: the
-models committed under agents/pretrained/ for the env, one per algorithm (``python -m agents.baselines``). Columns beyond return,
-success, time and length are the env's own measures, the info keys named by its ``metadata["measures"]``,
-averaged over the episodes' final infos. The rl-zoo3 run folder around a zip, as ``train.py`` and ``python -m rl_zoo3.train`` write it,
-tells the algorithm (``{env}/args.yml``) and the observation statistics of VecNormalize (``{env}/vecnormalize.pkl``).
+``holonomy``, ...), ``random`` (uniform actions, seeded), the zip of a trained SB3 model, or ``pretrained``: the
+env's models committed under agents/pretrained/, one per algorithm (``python -m agents.baselines``). Columns
+beyond return, success, time and length are the env's own measures, the info keys named by its
+``metadata["measures"]``, averaged over the episodes' final infos. The rl-zoo3 run folder around a zip, as
+``train.py`` and ``python -m rl_zoo3.train`` write it, tells the algorithm (``{env}/args.yml``) and the observation
+statistics of VecNormalize (``{env}/vecnormalize.pkl``; for a best_model.zip, ``{env}/best_vecnormalize.pkl`` if
+train.py kept it).
 """
 
 from __future__ import annotations
@@ -143,7 +145,9 @@ def make_policy(spec: str, env_id: str, seed: int, algo: str | None = None) -> t
     if spec == "random":
         return spec, RandomPolicy(gym.make(env_id).action_space, seed)
     if not spec.endswith(".zip"):
-        raise ValueError(f"policy {spec!r} is not one of {controller_names(env_id)}, 'random' or a model PATH.zip")
+        raise ValueError(
+            f"policy {spec!r} is not one of {controller_names(env_id)}, 'random', 'pretrained' or a model PATH.zip"
+        )
     algo = algo or algo_of(Path(spec))
     return f"{algo}:{Path(spec).parent.name}", load_model(spec, env_id, algo)
 
@@ -200,14 +204,22 @@ def summarize(label: str, episodes: list[Episode]) -> dict:
     }
 
 
+def expand_pretrained(specs: list[str], env_id: str, algo: str | None) -> list[tuple[str, str | None]]:
+    """(spec, algo) pairs, 'pretrained' replaced by the env's pretrained zips with their own algorithms."""
+    pairs = []
+    for spec in specs:
+        pairs += [(str(model), None) for model in pretrained_models(env_id)] if spec == "pretrained" else [(spec, algo)]
+    return pairs
+
+
 def compare(
     env_id: str, specs: list[str], episodes: int = 100, seed: int = 0, algo: str | None = None, video=None
 ) -> dict:
-    """Evaluate each policy spec on the same episodes; `video` films the first policy's first episode."""
-    specs = [str(model) for spec in specs for model in (pretrained_models(env_id) if spec == "pretrained" else [spec])]
+    """Evaluate each policy spec on the same episodes; `video` films the first policy's first episode. `algo`
+    applies to the zips given by path; a pretrained model's is read from its folder."""
     rows = []
-    for i, spec in enumerate(specs):
-        label, policy = make_policy(spec, env_id, seed, algo)
+    for i, (spec, spec_algo) in enumerate(expand_pretrained(specs, env_id, algo)):
+        label, policy = make_policy(spec, env_id, seed, spec_algo)
         rows.append(summarize(label, evaluate(env_id, policy, episodes, seed, video if i == 0 else None)))
     return {"env": env_id, "seed": seed, "episodes": episodes, "policies": rows}
 
@@ -247,7 +259,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         nargs="+",
         type=policy_spec,
         default=["analytic", "random"],
-        help=f"one of {CONTROLLER_NAMES} (the env's controllers; analytic is its first), random, pretrained or PATH.zip",
+        help=f"one of {CONTROLLER_NAMES} (the env's controllers; analytic is its first), random, pretrained"
+        " (agents/pretrained/) or PATH.zip",
     )
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)

@@ -4,6 +4,7 @@ table (README, "Reference results")."""
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -33,5 +34,23 @@ def test_pretrained_models_reproduce_the_committed_swing_rows():
 
 def test_pretrained_policy_without_models_names_the_env_and_folder(monkeypatch, tmp_path):
     monkeypatch.setattr(evaluate, "PRETRAINED", tmp_path)
-    with pytest.raises(ValueError, match=f"no model for connenv/Swing-v0 under {tmp_path}"):
+    with pytest.raises(ValueError, match=re.escape(f"no model for connenv/Swing-v0 under {tmp_path}")):
         evaluate.compare("connenv/Swing-v0", ["pretrained"], episodes=1)
+
+
+def test_readme_table_is_the_committed_results_formatted():
+    reports = json.loads((baselines.DOCS / "results.json").read_text())
+    assert [report["env"] for report in reports] == list(baselines.ENVS)
+    table = baselines.format_results(reports)
+    assert (baselines.DOCS / "results.md").read_text() == table + "\n"
+    assert table in (baselines.REPO / "README.md").read_text()
+
+
+def test_pretrained_zips_keep_their_own_algorithm_when_algo_is_given():
+    """--algo applies to zips given by path; 'pretrained' reads each model's algorithm from its folder."""
+    pairs = evaluate.expand_pretrained(["analytic", "pretrained"], "connenv/Swing-v0", "ppo")
+    assert [(spec.split("/")[-2] if spec.endswith(".zip") else spec, algo) for spec, algo in pairs] == [
+        ("analytic", "ppo"),
+        ("Swing-v0_ppo", None),
+        ("Swing-v0_sac", None),
+    ]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import pickle
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import yaml
 from stable_baselines3 import PPO
+from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
 from agents import evaluate
 
@@ -67,12 +68,23 @@ def test_ppo_run_folder_holds_normalized_model_and_periodic_evaluations(ppo_run)
     periodic = np.load(Path(ppo_run["model"]).parent / "evaluations.npz")
     assert list(periodic["timesteps"]) == [1024, 2048]
     assert periodic["results"].shape == (2, train.PERIODIC_EVAL_EPISODES)
-    # best_model.zip is evaluated with the observation statistics it had when it scored best, not the final ones
+    # best_model.zip comes with the statistics it was evaluated with: those after the best evaluation's steps and
+    # the 8 first observations (VecNormalize's running count starts at 1e-4)
     best = evaluate.load_model(Path(ppo_run["model"]).parent / "best_model.zip", ENV_ID)
-    saved = pickle.loads((Path(ppo_run["model"]).parent / "connenv-Swing-v0" / "best_vecnormalize.pkl").read_bytes())
-    np.testing.assert_array_equal(best.vec_normalize.obs_rms.mean, saved.obs_rms.mean)
-    if periodic["results"].mean(axis=1).argmax() == 0:  # best at 1024 steps, before the second rollout's statistics
-        assert not np.array_equal(best.vec_normalize.obs_rms.mean, policy.vec_normalize.obs_rms.mean)
+    steps = periodic["timesteps"][periodic["results"].mean(axis=1).argmax()]
+    assert best.vec_normalize.obs_rms.count == pytest.approx(steps + 8 + 1e-4, rel=1e-12)
+
+
+def test_best_model_is_loaded_with_its_own_statistics_and_the_final_model_with_the_final(ppo_run, tmp_path):
+    run = shutil.copytree(Path(ppo_run["model"]).parent, tmp_path / "run")
+    stats = VecNormalize.load(
+        str(run / "connenv-Swing-v0" / "vecnormalize.pkl"), DummyVecEnv([lambda: gym.make(ENV_ID)])
+    )
+    stats.obs_rms.mean = stats.obs_rms.mean + 1.0  # best statistics told apart from the final ones
+    stats.save(str(run / "connenv-Swing-v0" / "best_vecnormalize.pkl"))
+    best = evaluate.load_model(run / "best_model.zip", ENV_ID).vec_normalize.obs_rms.mean
+    final = evaluate.load_model(run / "connenv-Swing-v0.zip", ENV_ID).vec_normalize.obs_rms.mean
+    np.testing.assert_allclose(best - final, 1.0, rtol=1e-12)
 
 
 @pytest.mark.parametrize("algo", ["sac", "td3"])
