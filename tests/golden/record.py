@@ -1,0 +1,113 @@
+"""Golden trajectories: every registered id, single and native vector env, on seeded random actions with resets.
+
+``python tests/golden/record.py`` writes tests/golden/trajectories.json: the SHA-256 of every recorded array
+(float64 bytes and shape), so that a refactor can be checked to the bit without keeping megabytes of numbers.
+tests/test_golden.py replays the same runs and names every array whose digest moved. Re-record only on a change of
+behaviour that is meant, and say which trajectory changed and why.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import connenv  # noqa: F401  (registers the envs)
+
+PATH = Path(__file__).with_name("trajectories.json")
+SEEDS = (0, 1)
+STEPS = 300
+ROWS = 3
+
+# (name, id, make kwargs, reset options); short episodes so that a run holds terminations and resets
+CASES = [
+    ("swing", "connenv/Swing-v0", {"max_episode_steps": 60, "target_amplitude": 0.3}, None),
+    ("swing_ramp", "connenv/Swing-v0", {"max_episode_steps": 60, "max_radial_speed": 2.0}, None),
+    ("skier", "connenv/Skier-v0", {"max_episode_steps": 80}, None),
+    ("skier_ramp", "connenv/Skier-v0", {"max_episode_steps": 40, "max_height_speed": 3.0, "target_x": 0.3}, None),
+    ("ball", "connenv/RollingBall-v0", {"max_episode_steps": 50, "tolerance": 1.5}, None),
+    ("ball_pose", "connenv/RollingBallPose-v0", {"max_episode_steps": 50, "tolerance": 2.5,
+                                                 "position_tolerance": 0.3}, None),
+    ("ball_goal", "connenv/RollingBallGoal-v0", {"max_episode_steps": 50, "tolerance": 1.5}, None),
+    ("shell", "connenv/KozlovShell-v0", {"max_episode_steps": 60, "success_radius": 0.3}, None),
+    ("shell_dop853", "connenv/KozlovShell-v0", {"max_episode_steps": 60, "success_radius": 0.3,
+                                                "integrator": "dop853", "rtol": 1e-8, "atol": 1e-10}, None),
+    ("shell_full", "connenv/KozlovShell-v0", {"max_episode_steps": 60},
+     {"state": {"momentum": (0.3, -0.2, 0.1)}}),
+    ("kapitza", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "planar"}, None),
+    ("kapitza_fall", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "horizontal"}, None),
+    ("swingup", "connenv/KapitzaSwingUp-v0", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),
+]
+
+
+def flatten(value, prefix, out):
+    """{dotted key: float array} of an observation or info, strings and masks left out."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if not str(key).startswith("_"):
+                flatten(item, f"{prefix}.{key}", out)
+        return
+    array = np.asarray(value)
+    if array.dtype.kind in "biuf":
+        out.setdefault(prefix, []).append(array.astype(np.float64))
+
+
+def split(kwargs):
+    kwargs = dict(kwargs)
+    return kwargs.pop("max_episode_steps"), kwargs
+
+
+def single_run(env_id, kwargs, options, seed):
+    """STEPS uniform random actions on gym.make(id), reset (with options) whenever an episode ends."""
+    limit, kwargs = split(kwargs)
+    env = gym.make(env_id, max_episode_steps=limit, **kwargs)
+    actions = np.random.default_rng(seed).uniform(-1, 1, (STEPS, *env.action_space.shape)).astype(np.float32)
+    out = {}
+    obs, info = env.reset(seed=seed, options=options)
+    flatten({"obs": obs, "info": info}, "reset", out)
+    for action in actions:
+        obs, reward, terminated, truncated, info = env.step(action)
+        flatten({"obs": obs, "reward": reward, "flags": [terminated, truncated], "info": info}, "step", out)
+        if terminated or truncated:
+            obs, info = env.reset(options=options)
+            flatten({"obs": obs, "info": info}, "reset", out)
+    return out
+
+
+def vector_run(env_id, kwargs, options, seed):
+    """STEPS uniform random actions on the native vector env of ROWS rows, autoresets included."""
+    limit, kwargs = split(kwargs)
+    env = gym.make_vec(env_id, ROWS, vectorization_mode="vector_entry_point", max_episode_steps=limit, **kwargs)
+    actions = np.random.default_rng(seed).uniform(-1, 1, (STEPS, *env.action_space.shape)).astype(np.float32)
+    out = {}
+    obs, info = env.reset(seed=seed, options=options)
+    flatten({"obs": obs, "info": info}, "reset", out)
+    for action in actions:
+        obs, reward, terminated, truncated, info = env.step(action)
+        flatten({"obs": obs, "reward": reward, "flags": [terminated, truncated], "info": info}, "step", out)
+    return out
+
+
+def digest(array):
+    array = np.ascontiguousarray(array, np.float64)
+    return hashlib.sha256(repr(array.shape).encode() + array.tobytes()).hexdigest()
+
+
+def runs(cases=CASES):
+    """{case/mode/seed/key: digest} of every run of the cases."""
+    digests = {}
+    for name, env_id, kwargs, options in cases:
+        for seed in SEEDS:
+            for mode, run in (("single", single_run), ("vector", vector_run)):
+                for key, values in run(env_id, kwargs, options, seed).items():
+                    digests[f"{name}/{mode}/{seed}/{key}"] = digest(np.stack(values))
+    return digests
+
+
+if __name__ == "__main__":
+    digests = runs()
+    PATH.write_text(json.dumps(digests, indent=0, sort_keys=True) + "\n")
+    print(f"{len(digests)} arrays -> {PATH}")
