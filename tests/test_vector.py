@@ -15,7 +15,7 @@ from test_precision import DIVERGING
 import connenv  # noqa: F401  (registers the envs)
 from connenv.core import StepperError, make_stepper
 from connenv.core.batched import EmbeddedRK, RowByRow, batched
-from connenv.systems.kapitza import pivot_segments, pivot_segments_batch
+from connenv.core.segments import pivot_segments, pivot_segments_batch
 from connenv.systems.skier import Skier
 from connenv.systems.trails import make_trail
 

@@ -18,11 +18,42 @@ first order, and written here because scipy has no fixed-step methods.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from scipy.integrate import solve_ivp
+
+
+@runtime_checkable
+class SteppedSystem(Protocol):
+    """What every stepper needs of a system: ẏ = vector_field(y, u, u̇), broadcasting over leading axes of y."""
+
+    def vector_field(self, y, u, u_dot): ...
+
+
+@runtime_checkable
+class ExactSegment(Protocol):
+    """A system with a closed-form step over any segment at constant u̇ (the Exact stepper uses it throughout)."""
+
+    def exact_segment(self, y, u, u_dot, tau): ...
+
+
+@runtime_checkable
+class ExactFlow(Protocol):
+    """A system with a closed-form flow where u is held (the Exact stepper falls back to scipy where u moves)."""
+
+    def exact_flow(self, y, u, tau): ...
+
+
+@runtime_checkable
+class CanonicalSystem(Protocol):
+    """A system whose state is y = (q, p) with n free coordinates q and their momenta p (semi-implicit Euler
+    splits it there); a kinematic model (no p) has no n."""
+
+    n: int
 
 
 class StepperError(ArithmeticError):
@@ -129,7 +160,7 @@ class Exact:
     fallback: Scipy = Scipy()
 
     def __call__(self, system, y, u, u_dot, tau):
-        if hasattr(system, "exact_segment"):
+        if _has_exact_segment(type(system)):
             flow = system.exact_segment(y, u, u_dot, tau)
         elif np.any(u_dot != 0.0):
             return self.fallback(system, y, u, u_dot, tau)
@@ -147,41 +178,13 @@ class Exact:
         return _finite(flow, self)
 
 
-def control_segments(u: float, u_cmd: float, dt: float, max_speed: float | None = None):
-    """Control segments (u at the start, u̇, duration) covering one step of length dt toward the command u_cmd.
-
-    Without max_speed, u jumps to the command: one segment held at u_cmd. With it,
-    u ramps toward the command at that speed, then holds where it got to.
-    """
-    if max_speed is None:
-        return [(u_cmd, 0.0, dt)]
-    distance = u_cmd - u
-    ramp = min(dt, abs(distance) / max_speed)
-    u_dot = math.copysign(max_speed, distance)
-    u_after = u_cmd if ramp < dt else u + u_dot * ramp
-    return [s for s in [(u, u_dot, ramp), (u_after, 0.0, dt - ramp)] if s[2] > 0.0]
-
-
-def control_segments_batch(u, u_cmd, dt: float, max_speed: float | None = None):
-    """control_segments over a batch of commands (arrays of one shape): the ramp and the hold, each as
-    (u at the start, u̇, duration) with arrays of that shape, a duration 0 where a row has no such segment; and u at
-    the end of the step. Without max_speed, one segment held at the command for dt."""
-    if max_speed is None:
-        return [(u_cmd, np.zeros_like(u_cmd), dt)], u_cmd
-    distance = u_cmd - u
-    ramp = np.minimum(dt, np.abs(distance) / max_speed)
-    u_dot = np.copysign(max_speed, distance)
-    u_after = np.where(ramp < dt, u_cmd, u + u_dot * ramp)  # where the step ends, the hold or not
-    return [(u, u_dot, ramp), (u_after, np.zeros_like(u_dot), dt - ramp)], u_after
-
-
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
 FIXED_STEP = {"euler": Euler, "semi_implicit_euler": SemiImplicitEuler, "rk4": RK4}
 INTEGRATORS = ("exact", *FIXED_STEP, *SCIPY_METHODS)
 STEPPER_OPTIONS = ("substeps", "rtol", "atol")
 
 
-def make_stepper(integrator: str, system=None, **options):
+def make_stepper(integrator: str, system: SteppedSystem | None = None, **options):
     """Build a stepper by name, validating its options (and, for "exact", that the system has a flow).
 
     euler, semi_implicit_euler and rk4 take ``substeps`` (int ≥ 1); the scipy
@@ -200,7 +203,7 @@ def make_stepper(integrator: str, system=None, **options):
         substeps = options.get("substeps", 1)
         if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
             raise ValueError(f"substeps={substeps!r} must be an integer ≥ 1")
-        if integrator == "semi_implicit_euler" and system is not None and not hasattr(system, "n"):
+        if integrator == "semi_implicit_euler" and system is not None and not isinstance(system, CanonicalSystem):
             raise ValueError(
                 f"integrator='semi_implicit_euler' needs a state (q, p) split by the system's n, which "
                 f"{type(system).__name__} has not (a kinematic model); 'euler' is what the method reduces to there"
@@ -211,10 +214,17 @@ def make_stepper(integrator: str, system=None, **options):
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
             raise ValueError(f"{name}={value!r} must be a finite number > 0")
     if integrator == "exact":
-        if system is not None and not (hasattr(system, "exact_flow") or hasattr(system, "exact_segment")):
+        if system is not None and not isinstance(system, (ExactFlow, ExactSegment)):
             raise ValueError(f"integrator='exact' needs a closed-form flow, which {type(system).__name__} has not")
         return Exact(Scipy(**options))
     return Scipy(SCIPY_METHODS[integrator], **options)
+
+
+@functools.cache
+def _has_exact_segment(system_type) -> bool:
+    """Whether a system type has ExactSegment's method, decided once per type (a Protocol's isinstance is slow for
+    a step's hot path)."""
+    return issubclass(system_type, ExactSegment)
 
 
 def _finite(y, stepper):

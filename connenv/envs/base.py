@@ -1,15 +1,95 @@
-"""What every connenv task shares: the render_mode check, lazy pygame rendering and closing, as in classic control;
-StepperErrors that name the env's dt and parameters."""
+"""The task layer every connenv env stands on: one explicit state, task code as functions of it, one step loop.
+
+A task has a *state*, a small dataclass (`State` subclass) holding what the step needs and nothing else: floats in
+the single env, arrays over rows in the native vector env (`connenv.envs.vector`), with the same field names.
+Its task code is functions of that state, written once for both with the operations ``ops`` (``SCALAR`` on
+Python floats, ``BATCH`` on numpy arrays):
+
+- ``command(action)``: what the action asks of the assigned coordinates;
+- ``advance(state, command)``: the next state, physics through ``connenv.core.segments.run_segments`` (the single
+  env's; the vector env has its batched twin, which steps every row as this one steps one state);
+- ``observe(state, ops)``, ``describe(state, ops)`` (the info), ``reward(before, after, info, ops)`` and
+  ``terminated(state, info, ops)`` (default: ``info["is_success"]``).
+
+``TaskEnv`` owns the Gymnasium API around them: ``reset`` calls ``start(options)`` for the state; ``step`` checks
+the action, advances, and reports. Nothing in a task sets attributes on the side: what a step changes is the state.
+"""
 
 from __future__ import annotations
 
+import dataclasses
+import math
+from types import SimpleNamespace
+
 import gymnasium as gym
+import numpy as np
 
 from connenv.core.steppers import StepperError
+from connenv.core.validation import check_action
+
+SCALAR = SimpleNamespace(
+    sin=math.sin,
+    cos=math.cos,
+    atan2=math.atan2,
+    sqrt=math.sqrt,
+    log=math.log,
+    acos=math.acos,
+    hypot=math.hypot,
+    maximum=max,
+    clip=lambda x, low, high: min(max(x, low), high),
+    column=lambda x: x,
+    where=lambda condition, a, b: a if condition else b,
+    pack=lambda parts: np.array(parts, np.float32),
+    real=float,
+    flag=bool,
+    vector=lambda a: tuple(map(float, a)),
+)
+"""Operations on one state, as Python floats (the single env's): several times faster than numpy on one state."""
+
+BATCH = SimpleNamespace(
+    sin=np.sin,
+    cos=np.cos,
+    atan2=np.arctan2,
+    sqrt=np.sqrt,
+    log=np.log,
+    acos=np.arccos,
+    hypot=np.hypot,
+    maximum=np.maximum,
+    clip=lambda x, low, high: np.minimum(np.maximum(x, low), high),
+    column=lambda x: x[..., None],
+    where=np.where,
+    pack=lambda parts: np.stack(np.broadcast_arrays(*parts), axis=-1).astype(np.float32),
+    real=lambda x: np.asarray(x, float),
+    flag=lambda x: np.asarray(x, bool),
+    vector=lambda a: np.array(a, float),
+)
+"""The same operations on arrays over a batch (the vector env's)."""
+
+
+@dataclasses.dataclass
+class State:
+    """Base of the task states: a dataclass of numbers (floats, ints, bools, small arrays) in the single env, the
+    same fields as arrays over rows in the vector env."""
+
+    def rows(self, n: int) -> State:
+        """A state of n rows shaped and typed like this one's fields, zeroed."""
+        return type(self)(**{k: np.zeros((n, *np.shape(v)), np.asarray(v).dtype) for k, v in self.fields().items()})
+
+    def set_row(self, i: int, state: State) -> None:
+        """Row i of this batch := the single state."""
+        for key, value in state.fields().items():
+            getattr(self, key)[i] = value
+
+    def fields(self) -> dict:
+        return {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
+
+    def replace(self, **changes) -> State:
+        return dataclasses.replace(self, **changes)
 
 
 class RenderedEnv(gym.Env):
-    """A Gymnasium env whose subclasses give ``_make_renderer()`` and ``_draw(renderer)``; pygame loads on first render."""
+    """A Gymnasium env whose subclasses give ``_make_renderer()`` and ``_draw(renderer)``; pygame loads on first
+    render, as in classic control."""
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
 
@@ -35,9 +115,61 @@ class RenderedEnv(gym.Env):
             self._renderer.close()
             self._renderer = None
 
-    def _stepper_error(self, error: StepperError) -> StepperError:
-        """`error` (a stepper's, or the env's own invariant check) with the env, the time, dt and the physical
-        parameters (the subclass's ``parameters()``) added: ``raise self._stepper_error(error) from error``."""
+    def _stepper_error(self, error: StepperError, t: float) -> StepperError:
+        """`error` (a stepper's, or the env's own invariant check) with the env, the time t, dt and the physical
+        parameters (the subclass's ``parameters()``) added."""
         values = ", ".join(f"{key} = {value!r}" for key, value in self.parameters().items())
-        where = f"{type(self).__name__} in the step from t = {self.t:.6g} s, dt = {self.dt}"
+        where = f"{type(self).__name__} in the step from t = {t:.6g} s, dt = {self.dt}"
         return StepperError(f"{error} [{where}, {values}]")
+
+
+class TaskEnv(RenderedEnv):
+    """A single env of the task layer (see the module): ``self.state`` is its State; subclasses give ``start``,
+    ``command``, ``advance``, ``observe``, ``describe``, ``reward`` and may override ``terminated``."""
+
+    state: State
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.state = self.start(dict(options or {}))
+        return self.observe(self.state), self.describe(self.state)
+
+    def step(self, action):
+        command = self.command(self.check_action(action))
+        before = self.state
+        try:
+            self.state = self.advance(before, command)
+        except StepperError as error:
+            raise self._stepper_error(error, before.t) from error
+        info = self.describe(self.state)
+        reward = self.reward(before, self.state, info)
+        terminated = self.terminated(self.state, info)
+        if self.render_mode == "human":
+            self.render()
+        return self.observe(self.state), reward, terminated, False, info
+
+    def check_action(self, action):
+        """The action as a finite float array of the space's shape, clipped into the space (else ValueError)."""
+        return check_action(action, self.action_space)
+
+    def terminated(self, state, info, ops=SCALAR):
+        """Whether the task ends the episode: on success, unless the task says otherwise."""
+        return info["is_success"]
+
+    def start(self, options: dict) -> State:
+        raise NotImplementedError
+
+    def command(self, action):
+        raise NotImplementedError
+
+    def advance(self, state, command) -> State:
+        raise NotImplementedError
+
+    def observe(self, state, ops=SCALAR):
+        raise NotImplementedError
+
+    def describe(self, state, ops=SCALAR) -> dict:
+        raise NotImplementedError
+
+    def reward(self, before, after, info, ops=SCALAR):
+        raise NotImplementedError

@@ -7,10 +7,13 @@ import math
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import StepperError, control_segments, control_segments_batch, make_stepper
-from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
-from connenv.envs.base import RenderedEnv
-from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
+from dataclasses import dataclass
+
+from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
+from connenv.core.steppers import make_stepper
+from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.swing import Swing
 
 LIFT_FLOOR = 1e-4  # floor of h in the reward's logarithm: amplitude ≈ 0.014 rad
@@ -18,7 +21,20 @@ TIME_COST = 0.01  # reward paid per step until success
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g r_max) past which it has diverged: StepperError
 
 
-class SwingEnv(RenderedEnv):
+@dataclass
+class SwingState(State):
+    """y = (θ, p); the radius r; the time t; the energy E and lift h at (y, r), which the reward compares; the
+    stepper's energy error (the change of E on held segments since reset)."""
+
+    y: np.ndarray
+    r: float
+    t: float
+    energy: float
+    lift: float
+    energy_error: float
+
+
+class SwingEnv(TaskEnv):
     r"""
     ## Description
 
@@ -149,43 +165,7 @@ class SwingEnv(RenderedEnv):
         self.obs_high = np.array([1.0, 1.0, (self.r_max / self.r_min) ** 2, 1.0])
         high = self.obs_high.astype(np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
-
-        self.y = np.zeros(2)  # (θ, p)
-        self.r = self.r_max
-        self.t, self.lift = 0.0, 0.0
-        self.energy_error = 0.0  # the stepper's: the change of E on held segments since reset
-
-    # -- Gymnasium API -------------------------------------------------------
-
-    def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        options = dict(options or {})
-        check_keys("reset options", options, {"state"})
-        theta = self.np_random.uniform(0.05, 0.1) * self.np_random.choice([-1.0, 1.0])
-        self.y, self.r, self.t, self.energy_error = np.array([theta, 0.0]), self.r_max, 0.0, 0.0
-        if "state" in options:
-            self._set_state(options["state"])
-        return self._obs(), self._info()
-
-    def step(self, action):
-        r_cmd = self.command(check_action(action, self.action_space)[0])
-        lift_before = self.lift
-        try:
-            for r, r_dot, tau in control_segments(self.r, r_cmd, self.dt, self.max_radial_speed):
-                energy = self._energy(r) if r_dot == 0.0 else None
-                self.y = self.stepper(self.system, self.y, np.array([r]), np.array([r_dot]), tau)
-                if energy is not None:
-                    self.energy_error += self._energy(r) - energy
-            self.check_energy_error(self.energy_error)
-        except StepperError as error:
-            raise self._stepper_error(error) from error
-        self.r = r + r_dot * tau
-        self.t += self.dt
-        info = self._info()
-        reward = self.reward(lift_before, info["lift"])
-        if self.render_mode == "human":
-            self.render()
-        return self._obs(), reward, info["is_success"], False, info
+        self.state = self.at(np.zeros(2), self.r_max, 0.0, 0.0)
 
     def _make_renderer(self):
         from connenv.envs.rendering import SwingRenderer
@@ -193,73 +173,86 @@ class SwingEnv(RenderedEnv):
         return SwingRenderer(self.r_max, self.render_mode, self.metadata["render_fps"])
 
     def _draw(self, renderer):
-        return renderer.draw(self.y[0], self.r, self.r_min, self.t)
+        return renderer.draw(self.state.y[0], self.state.r, self.r_min, self.state.t)
 
-    # -- internals -----------------------------------------------------------
+    def parameters(self):
+        return {"r_min": self.r_min, "r_max": self.r_max, "g": self.system.g, "mass": self.system.mass}
 
-    def _set_state(self, state):
+    # -- physics ---------------------------------------------------------------
+
+    def at(self, y, r, t, energy_error, ops=SCALAR):
+        """The state at (y, r, t), with its energy and lift."""
+        energy, weight = ops.real(self.system.energy(y, r)), self.system.mass * self.system.g * r
+        return SwingState(y, r, t, energy, (energy + weight) / weight, energy_error)  # lift as Swing.lift
+
+    def start(self, options):
+        check_keys("reset options", options, {"state"})
+        theta = self.np_random.uniform(0.05, 0.1) * self.np_random.choice([-1.0, 1.0])
+        y, r = np.array([theta, 0.0]), self.r_max
+        if "state" in options:
+            y, r = self._check_state(options["state"], theta)
+        return self.at(y, r, 0.0, 0.0)
+
+    def advance(self, s, r_cmd):
+        segments = control_segments(s.r, r_cmd, self.dt, self.max_radial_speed)
+        segments = [(np.array([r]), np.array([r_dot]), tau) for r, r_dot, tau in segments]
+        y, change = run_segments(self.stepper, self.system, s.y, segments, self._held_energy)
+        self.check_energy_error(s.energy_error + change)
+        r, r_dot, tau = segments[-1]
+        return self.at(y, float(r[0] + r_dot[0] * tau), s.t + self.dt, s.energy_error + change)
+
+    def _held_energy(self, y, r, r_dot):
+        """E = p²/(2 m r²) − m g r cos θ where the radius is held, 0 where it moves; on Python floats (the
+        system's, without numpy's overhead)."""
+        if r_dot[0] != 0.0:
+            return 0.0
+        theta, p, r, m = float(y[0]), float(y[1]), float(r[0]), self.system.mass
+        return p * p / (2 * m * r * r) - m * self.system.g * r * math.cos(theta)
+
+    def check_energy_error(self, energy_error):
+        """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
+        bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.r_max
+        check_drift(self.stepper, "energy error", energy_error, bound, " J")
+
+    def _check_state(self, state, theta):
         check_keys("options['state']", state, {"theta", "theta_dot", "p", "r"})
         if "theta_dot" in state and "p" in state:
             raise ValueError("options['state'] gives both theta_dot and p; give one of them")
         r = check_number("state r", state.get("r", self.r_max), self.r_min, self.r_max)
-        theta = check_number("state theta", state.get("theta", self.y[0]))
+        theta = check_number("state theta", state.get("theta", theta))
         if "p" in state:
             p = check_number("state p", state["p"])
         else:
             p = self.system.mass * r**2 * check_number("state theta_dot", state.get("theta_dot", 0.0))
         bound = self.obs_high[2] * self.theta_dot_scale
         check_number("state theta_dot", p / (self.system.mass * r**2), -bound, bound)
-        self.y, self.r = np.array([theta, p]), r
-
-    def parameters(self):
-        return {"r_min": self.r_min, "r_max": self.r_max, "g": self.system.g, "mass": self.system.mass}
-
-    def check_energy_error(self, energy_error):
-        """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
-        bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.r_max
-        drift = abs(energy_error) if np.ndim(energy_error) == 0 else np.max(np.abs(energy_error))
-        if not drift <= bound:
-            raise StepperError(f"{self.stepper} diverged: |energy error| = {drift:.3g} J > {bound:.3g} J")
-
-    def _energy(self, r):
-        """E = p²/(2 m r²) − m g r cos θ at radius r, on Python floats (the system's, without numpy's overhead)."""
-        theta, p = float(self.y[0]), float(self.y[1])
-        m = self.system.mass
-        return p * p / (2 * m * r * r) - m * self.system.g * r * math.cos(theta)
-
-    def _obs(self):
-        return self.observe(self.y[0], self.y[1], self.r)
-
-    def _info(self):
-        info = self.describe(self.y, self.r, self.t)
-        self.lift = info["lift"]  # h of the current state, the next step's h before
-        return info
+        return np.array([theta, p]), r
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def command(self, a):
         """The commanded radius of action a."""
-        return self.r_min + 0.5 * (a + 1.0) * (self.r_max - self.r_min)
+        return self.r_min + 0.5 * (a.T[0] + 1.0) * (self.r_max - self.r_min)
 
-    def reward(self, lift_before, lift_after, ops=SCALAR):
-        return ops.log(ops.maximum(lift_after, LIFT_FLOOR) / ops.maximum(lift_before, LIFT_FLOOR)) - TIME_COST
+    def reward(self, before, after, info, ops=SCALAR):
+        lift_before, lift_after = ops.maximum(before.lift, LIFT_FLOOR), ops.maximum(after.lift, LIFT_FLOOR)
+        return ops.log(lift_after / lift_before) - TIME_COST
 
-    def observe(self, theta, p, r, ops=SCALAR):
+    def observe(self, s, ops=SCALAR):
+        theta, p, r = s.y[..., 0], s.y[..., 1], s.r
         r_mid, r_half = 0.5 * (self.r_max + self.r_min), 0.5 * (self.r_max - self.r_min)
         bound = self.obs_high[2]
         speed = ops.clip(p / (self.system.mass * r**2) / self.theta_dot_scale, -bound, bound)
         return ops.pack([ops.cos(theta), ops.sin(theta), speed, (r - r_mid) / r_half])
 
-    def describe(self, y, r, t, ops=SCALAR):
-        theta, p = y[..., 0], y[..., 1]
-        energy, weight = ops.real(self.system.energy(y, r)), self.system.mass * self.system.g * r
-        lift = (energy + weight) / weight  # Swing.lift, from the energy at hand
+    def describe(self, s, ops=SCALAR):
+        theta, p = s.y[..., 0], s.y[..., 1]
         return {
-            "state": {"theta": theta, "theta_dot": p / (self.system.mass * r**2), "p": p, "r": r, "t": t},
-            "energy": energy,
-            "lift": lift,
-            "amplitude": ops.acos(ops.clip(1.0 - lift, -1.0, 1.0)),
-            "is_success": ops.flag(lift >= self.target_lift),
+            "state": {"theta": theta, "theta_dot": p / (self.system.mass * s.r**2), "p": p, "r": s.r, "t": s.t},
+            "energy": s.energy,
+            "lift": s.lift,
+            "amplitude": ops.acos(ops.clip(1.0 - s.lift, -1.0, 1.0)),
+            "is_success": ops.flag(s.lift >= self.target_lift),
         }
 
 
@@ -272,33 +265,14 @@ class SwingVectorEnv(TaskVectorEnv):
 
     single_env = SwingEnv
 
-    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
-        super().__init__(num_envs, max_episode_steps, **kwargs)
-        self.y, self.r, self.t = np.zeros((num_envs, 2)), np.full(num_envs, self.env.r_max), np.zeros(num_envs)
-        self.energy_error = np.zeros(num_envs)
+    def advance(self, s, r_cmd):
+        env = self.env
+        segments, r_end = control_segments_batch(s.r, r_cmd, env.dt, env.max_radial_speed)
+        segments = [(r[:, None], r_dot[:, None], tau) for r, r_dot, tau in segments]
+        y, change = run_segments(self.stepper, env.system, s.y, segments, self._held_energy)
+        env.check_energy_error(s.energy_error + change)
+        return env.at(y, r_end, s.t + env.dt, s.energy_error + change, BATCH)
 
     def _held_energy(self, y, r, r_dot):
         """E on the rows whose radius is held (the single env's energy check), 0 on the others."""
         return np.where(r_dot[:, 0] == 0.0, self.env.system.energy(y, r[:, 0]), 0.0)
-
-    def _capture(self, i):
-        env = self.env
-        self.y[i], self.r[i], self.t[i], self.energy_error[i] = env.y, env.r, env.t, env.energy_error
-
-    def _advance(self, actions):
-        env = self.env
-        r_cmd = env.command(actions[:, 0])
-        lift_before = env.system.lift(self.y, self.r)
-        segments, r_end = control_segments_batch(self.r, r_cmd, env.dt, env.max_radial_speed)
-        segments = [(r[:, None], r_dot[:, None], tau) for r, r_dot, tau in segments]
-        self.y, change = self._run_segments(env.system, self.y, segments, self._held_energy)
-        self.energy_error = self.energy_error + change
-        env.check_energy_error(self.energy_error)
-        self.r, self.t = r_end, self.t + env.dt
-        return env.reward(lift_before, env.system.lift(self.y, self.r), BATCH)
-
-    def _observe(self):
-        return self.env.observe(self.y[:, 0], self.y[:, 1], self.r, BATCH)
-
-    def _describe(self):
-        return self.env.describe(self.y, self.r, self.t, BATCH)

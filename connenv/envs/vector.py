@@ -1,9 +1,10 @@
 """Native vector envs: N copies of a connenv task stepped together over numpy arrays.
 
 Each vector env keeps one single env, its *prototype*: it checks the make kwargs, holds the spaces, the system
-and the constants, and its task methods (observation, reward, success, info) are the ones the vector env calls,
-on arrays over the batch, with the array operations of ``BATCH`` in place of the scalar ones of ``SCALAR``. A
-single env runs those methods on Python floats, which is several times faster than numpy on one state.
+and the constants, and its task functions (``connenv.envs.base``: command, observe, describe, reward,
+terminated) are the ones the vector env calls, on its state of arrays over the rows, with the array operations of
+``BATCH`` in place of the scalar ones of ``SCALAR``. A subclass gives only ``advance(state, command)``, the
+single env's physics over the batch, through the same ``run_segments``.
 
 Seeding, resets and autoreset are Gymnasium's SyncVectorEnv's, so that row i of a vector env and env i of a
 SyncVectorEnv made from the same id and kwargs follow the same episodes (to rounding; tests):
@@ -31,7 +32,6 @@ with its mask ``"_k"`` (the rows it is about: all of them, but for a partial res
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 from typing import ClassVar
 
 import numpy as np
@@ -41,60 +41,16 @@ from gymnasium.vector.utils import batch_space
 
 from connenv.core.batched import batched
 from connenv.core.steppers import StepperError
-from connenv.core.validation import check_action, finite_action
-
-SCALAR = SimpleNamespace(
-    sin=math.sin,
-    cos=math.cos,
-    atan2=math.atan2,
-    sqrt=math.sqrt,
-    log=math.log,
-    acos=math.acos,
-    hypot=math.hypot,
-    maximum=max,
-    clip=lambda x, low, high: min(max(x, low), high),
-    column=lambda x: x,
-    where=lambda condition, a, b: a if condition else b,
-    pack=lambda parts: np.array(parts, np.float32),
-    real=float,
-    flag=bool,
-    vector=lambda a: tuple(map(float, a)),
-)
-"""Operations on one state, as Python floats (the single env's)."""
-
-BATCH = SimpleNamespace(
-    sin=np.sin,
-    cos=np.cos,
-    atan2=np.arctan2,
-    sqrt=np.sqrt,
-    log=np.log,
-    acos=np.arccos,
-    hypot=np.hypot,
-    maximum=np.maximum,
-    clip=lambda x, low, high: np.minimum(np.maximum(x, low), high),
-    column=lambda x: x[..., None],
-    where=np.where,
-    pack=lambda parts: np.stack(np.broadcast_arrays(*parts), axis=-1).astype(np.float32),
-    real=lambda x: np.asarray(x, float),
-    flag=lambda x: np.asarray(x, bool),
-    vector=lambda a: np.array(a, float),
-)
-"""The same operations on arrays over a batch (the vector env's)."""
+from connenv.envs.base import BATCH
 
 
 class TaskVectorEnv(VectorEnv):
-    """Base of the native vector envs. Subclasses set ``single_env`` (the task class) and define:
-
-    - ``_capture(i)``: copy the prototype's state, just reset, into row i;
-    - ``_advance(actions)``: step every row; return the rewards;
-    - ``_observe()`` and ``_describe()``: the observations and the info dict over the batch;
-
-    and keep the rows' clocks in ``t``.
-    """
+    """Base of the native vector envs. Subclasses set ``single_env`` (the task class) and define
+    ``advance(state, command)``: the state of every row after a step (see the module). ``self.state`` is the
+    prototype's State over the rows."""
 
     metadata: ClassVar[dict] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
     single_env: type
-    clips_actions = True  # actions are clipped into the space, as check_action does; else only checked
 
     def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
         for name, value, low in (("num_envs", num_envs, 1), ("max_episode_steps", max_episode_steps, 1)):
@@ -117,6 +73,7 @@ class TaskVectorEnv(VectorEnv):
         self.steps = np.zeros(self.num_envs, np.int64)
         self.prev_done = np.zeros(self.num_envs, bool)
         self.all_rows = np.ones(self.num_envs, bool)  # the "_key" mask of every info key
+        self.state = self.env.state.rows(self.num_envs)
 
     def reset(self, *, seed=None, options=None):
         """Reset every row, or with ``options={"reset_mask": mask}`` (Gymnasium's partial reset, a bool array over
@@ -136,28 +93,37 @@ class TaskVectorEnv(VectorEnv):
             self._reset_row(i, seeds[i], options or None)
         self.steps[mask] = 0
         self.prev_done[mask] = False
-        return self._observe(), self._with_masks(self._describe(), mask)
+        return self.env.observe(self.state, BATCH), self._with_masks(self.env.describe(self.state, BATCH), mask)
 
     def step(self, actions):
-        actions = (check_action if self.clips_actions else finite_action)(actions, self.action_space)
+        env, before = self.env, self.state
+        command = env.command(self.check_action(actions))
         try:
-            reward = np.asarray(self._advance(actions), float)
+            self.state = self.advance(before, command)
         except StepperError as error:
-            values = ", ".join(f"{key} = {value!r}" for key, value in self.env.parameters().items())
-            where = f"{type(self).__name__} in the step from t = {np.min(self.t):.6g}..{np.max(self.t):.6g} s"
-            raise StepperError(f"{error} [{where}, dt = {self.env.dt}, {values}]") from error
+            values = ", ".join(f"{key} = {value!r}" for key, value in env.parameters().items())
+            where = f"{type(self).__name__} in the step from t = {np.min(before.t):.6g}..{np.max(before.t):.6g} s"
+            raise StepperError(f"{error} [{where}, dt = {env.dt}, {values}]") from error
+        info = env.describe(self.state, BATCH)
+        reward = np.asarray(env.reward(before, self.state, info, BATCH), float)
+        terminated = np.array(env.terminated(self.state, info, BATCH), bool)
         self.steps += 1
         restart = np.flatnonzero(self.prev_done)
         for i in restart:
             self._reset_row(i)
         self.steps[restart] = 0
-        info = self._describe()
-        terminated = np.array(self._terminated(info), bool)
+        if restart.size:
+            info = env.describe(self.state, BATCH)
         limit = math.inf if self.max_episode_steps is None else self.max_episode_steps
         truncated = self.steps >= limit
         reward[restart], terminated[restart], truncated[restart] = 0.0, False, False
         self.prev_done = terminated | truncated
-        return self._observe(), reward, terminated, truncated, self._with_masks(info)
+        return env.observe(self.state, BATCH), reward, terminated, truncated, self._with_masks(info)
+
+    def check_action(self, actions):
+        """The actions as the single env checks one: a finite array (N, *shape), clipped or projected into the
+        space, else ValueError."""
+        return type(self.env).check_action(self, actions)
 
     def _reset_row(self, i, seed=None, options=None):
         """Reset row i by the prototype's reset, with row i's generator (seeded anew if seed is given)."""
@@ -165,7 +131,7 @@ class TaskVectorEnv(VectorEnv):
             self.generators[i] = seeding.np_random(seed)[0]
         self.env.np_random = self.generators[i]
         self.env.reset(options=options)
-        self._capture(i)
+        self.state.set_row(i, self.env.state)
 
     def _with_masks(self, info, mask=None):
         """Gymnasium's vector info: each key k with the mask "_k" of the rows it is about (default: all)."""
@@ -176,36 +142,5 @@ class TaskVectorEnv(VectorEnv):
             masked[f"_{key}"] = mask
         return masked
 
-    def _run_segments(self, system, y, segments, conserved):
-        """y after control segments (u, u̇, duration) given per row, each row skipping its segments of length 0; and
-        the change, summed over the segments, of conserved(y, u, u̇), a quantity each segment conserves (the
-        stepper's error on it)."""
-        change = np.zeros(len(y))
-        for u, u_dot, tau in segments:
-            rows = np.broadcast_to(tau > 0.0, change.shape)
-            if np.all(rows):
-                before = conserved(y, u, u_dot)
-                y = self.stepper(system, y, u, u_dot, tau)
-                change = change + (conserved(y, u, u_dot) - before)
-            elif np.any(rows):
-                y, u, u_dot, tau = y.copy(), u[rows], u_dot[rows], tau[rows]
-                before = conserved(y[rows], u, u_dot)
-                y[rows] = self.stepper(system, y[rows], u, u_dot, tau)
-                change[rows] += conserved(y[rows], u, u_dot) - before
-        return y, change
-
-    def _terminated(self, info):
-        """Which rows' episodes end by the task: success, unless the task says otherwise."""
-        return info["is_success"]
-
-    def _capture(self, i):
-        raise NotImplementedError
-
-    def _advance(self, actions):
-        raise NotImplementedError
-
-    def _observe(self):
-        raise NotImplementedError
-
-    def _describe(self):
+    def advance(self, state, command):
         raise NotImplementedError

@@ -1,0 +1,134 @@
+"""Control paths cut into segments, and the one runner that steps a state across them.
+
+A control segment is (u at its start, u̇, duration τ): the assigned coordinates move at constant velocity,
+u(s) = u + s·u̇ for 0 ≤ s ≤ τ. A task's control over one step (a jump or a ramp to a commanded u; a commanded u̇
+stopped at the end of its travel) is a short list of segments; `run_segments` steps a state across them with a
+stepper and sums the change of a quantity each segment conserves, the stepper's error on it, which
+`check_drift` bounds. The same runner serves one state (τ a float) and a batch of rows (τ one per row, rows
+with τ = 0 skipped).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from connenv.core.steppers import StepperError
+
+
+def run_segments(stepper, system, y, segments, conserved=None):
+    """y after the control segments (u, u̇, τ), and the change of conserved(y, u, u̇) summed over them (0 without
+    it). One state: every segment is stepped. A batch (τ an array over the rows): each row skips its segments of
+    length 0."""
+    change = 0.0
+    for u, u_dot, tau in segments:
+        if np.ndim(tau) == 0:
+            before = None if conserved is None else conserved(y, u, u_dot)
+            y = stepper(system, y, u, u_dot, tau)
+            if conserved is not None:
+                change += conserved(y, u, u_dot) - before
+            continue
+        change = np.broadcast_to(change, np.shape(tau)) if np.ndim(change) == 0 else change
+        rows = tau > 0.0
+        if np.all(rows):
+            before = None if conserved is None else conserved(y, u, u_dot)
+            y = stepper(system, y, u, u_dot, tau)
+            if conserved is not None:
+                change = change + (conserved(y, u, u_dot) - before)
+        elif np.any(rows):
+            y, u, u_dot, tau = y.copy(), u[rows], u_dot[rows], tau[rows]
+            before = None if conserved is None else conserved(y[rows], u, u_dot)
+            y[rows] = stepper(system, y[rows], u, u_dot, tau)
+            if conserved is not None:
+                change = np.array(change)
+                change[rows] += conserved(y[rows], u, u_dot) - before
+    return y, change
+
+
+def check_drift(stepper, quantity: str, drift, bound: float, unit: str = ""):
+    """StepperError if |drift| (of any row of a batch) passes bound: the stepper has diverged on a quantity the
+    flow conserves (the energy at held u, the spatial momentum)."""
+    worst = abs(drift) if np.ndim(drift) == 0 else np.max(np.abs(drift))
+    if not worst <= bound:
+        raise StepperError(f"{stepper} diverged: |{quantity}| = {worst:.3g}{unit} > {bound:.3g}{unit}")
+
+
+def control_segments(u: float, u_cmd: float, dt: float, max_speed: float | None = None):
+    """Control segments (u at the start, u̇, duration) covering one step of length dt toward the command u_cmd.
+
+    Without max_speed, u jumps to the command: one segment held at u_cmd. With it,
+    u ramps toward the command at that speed, then holds where it got to.
+    """
+    if max_speed is None:
+        return [(u_cmd, 0.0, dt)]
+    distance = u_cmd - u
+    ramp = min(dt, abs(distance) / max_speed)
+    u_dot = math.copysign(max_speed, distance)
+    u_after = u_cmd if ramp < dt else u + u_dot * ramp
+    return [s for s in [(u, u_dot, ramp), (u_after, 0.0, dt - ramp)] if s[2] > 0.0]
+
+
+def control_segments_batch(u, u_cmd, dt: float, max_speed: float | None = None):
+    """control_segments over a batch of commands (arrays of one shape): the ramp and the hold, each as
+    (u at the start, u̇, duration) with arrays of that shape, a duration 0 where a row has no such segment; and u at
+    the end of the step. Without max_speed, one segment held at the command for dt."""
+    if max_speed is None:
+        return [(u_cmd, np.zeros_like(u_cmd), dt)], u_cmd
+    distance = u_cmd - u
+    ramp = np.minimum(dt, np.abs(distance) / max_speed)
+    u_dot = np.copysign(max_speed, distance)
+    u_after = np.where(ramp < dt, u_cmd, u + u_dot * ramp)  # where the step ends, the hold or not
+    return [(u, u_dot, ramp), (u_after, np.zeros_like(u_dot), dt - ramp)], u_after
+
+
+def pivot_segments(u, u_dot_cmd, travel: float, dt: float):
+    """Control segments (u at the start, u̇, duration) covering a step of length dt in which the pivot moves at
+    the commanded velocity until an axis meets its end stop at ±travel, where that axis rests for the rest
+    of the step; and (u, u̇) at the end of the step.
+
+    Stopping is a jump of u̇, admissible since only u̇ enters the equations: p is continuous across it and the
+    pivot never leaves [−travel, travel] nor jumps in position.
+    """
+    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
+    u_end = u + u_dot * dt
+    if np.all(np.abs(u_end) <= travel):  # no stop within the step
+        return [(u, u_dot, dt)], u_end, u_dot
+    end_stops = np.copysign(travel, u_dot)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = np.where(u_dot != 0.0, np.maximum((end_stops - u) / u_dot, 0.0), math.inf)
+    segments, start = [], 0.0
+    for end in sorted({float(s) for s in reach if s < dt} | {dt}):
+        if end > start:
+            segments.append((u.copy(), u_dot.copy(), end - start))
+            u = u + u_dot * (end - start)
+        stopped = reach <= end
+        u[stopped], u_dot[stopped] = end_stops[stopped], 0.0
+        start = end
+    return segments, u, u_dot
+
+
+def pivot_segments_batch(u, u_dot_cmd, travel: float, dt: float):
+    """pivot_segments over a batch of pivots (..., 2): the starts (3, ..., 2), velocities (3, ..., 2) and
+    durations (3, ...) of each row's segments in order, a duration 0 where a row has fewer than three, and
+    (u, u̇) at the end of the step. A segment ends where an axis reaches its stop (at most two) or at dt.
+
+    The same arithmetic as pivot_segments, row by row (tests/test_vector.py compares them), written over arrays;
+    pivot_segments keeps its loop, faster on one pivot."""
+    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
+    free = np.all(np.abs(u + u_dot * dt) <= travel, axis=-1, keepdims=True)  # no stop within the step
+    end_stops = np.copysign(travel, u_dot)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = np.where((u_dot != 0.0) & ~free, np.maximum((end_stops - u) / u_dot, 0.0), math.inf)
+    ends = np.concatenate([np.sort(np.minimum(reach, dt), axis=-1), np.full(free.shape, dt)], axis=-1)
+    starts, velocities, durations, start = [], [], [], 0.0
+    for end in np.moveaxis(ends, -1, 0):
+        duration = end - start
+        starts.append(u)
+        velocities.append(u_dot)
+        durations.append(duration)
+        u = np.where(duration[..., None] > 0.0, u + u_dot * duration[..., None], u)
+        stopped = reach <= end[..., None]
+        u, u_dot = np.where(stopped, end_stops, u), np.where(stopped, 0.0, u_dot)
+        start = end
+    return np.stack(starts), np.stack(velocities), np.stack(durations), u, u_dot
