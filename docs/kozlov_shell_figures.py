@@ -16,7 +16,7 @@ def net(env, actions, state=None):
     env.reset(options={"state": state or {}})
     for a in actions:
         env.step(np.array(a, np.float32))
-    return env.y[:3].copy()
+    return env.state.pose
 
 
 env = gym.make("connenv/KozlovShell-v0", **TIGHT).unwrapped

@@ -33,7 +33,7 @@ def net_motion(env, actions, state=None):
     env.reset(options={"state": state or {}})
     for action in actions:
         env.step(np.array(action, np.float32))
-    return env.y[:3].copy()
+    return env.state.pose
 
 
 def test_kinetic_energy_is_that_of_shell_fluid_and_mass():

@@ -114,7 +114,7 @@ def test_shell_default_follows_the_reference_at_every_mass_ratio(ratio, dt):
         env = make("connenv/KozlovShell-v0", mass=ratio * (1.0 + math.pi / 4), dt=dt, **options)
         start = env.reset(seed=0, options=momentum)[1]["spatial_momentum"]
         end = random_steps(env, 100, options=momentum)["spatial_momentum"]
-        poses.append(env.y[:3])
+        poses.append(env.state.pose)
     assert np.abs(poses[0] - poses[1]).max() <= 2e-8
     assert np.linalg.norm(np.subtract(end, start)) <= 1e-12 * np.linalg.norm(start)
 

@@ -154,7 +154,7 @@ CASES = {
             Episode("reduced", {"state": {}}, uniform(2), 300),
             Episode("full", {"state": {"momentum": (0.3, 0.1, 0.05)}}, uniform(2), 300),
         ),
-        lambda env, ref: float(np.max(np.abs(env.y[:3] - ref.y[:3]))),
+        lambda env, ref: float(np.max(np.abs(env.state.pose - ref.state.pose))),
         "max |S − S(0)| / |S(0)| (full model)",
         momentum_drift,
         "m, rad",

@@ -46,9 +46,20 @@ def run_segments(stepper, system, y, segments, conserved=None):
     return y, change
 
 
-def check_drift(stepper, quantity: str, drift, bound: float, unit: str = ""):
+def check_drift(stepper, quantity: str, drift, bound: float, unit: str = "", norm=None):
     """StepperError if |drift| (of any row of a batch) passes bound: the stepper has diverged on a quantity the
-    flow conserves (the energy at held u, the spatial momentum)."""
+    flow conserves (the energy at held u, the spatial momentum). With norm (the quantity's norm, per row), the
+    bound is relative: a row fails where |drift| > bound · norm, and the error names the first such row's."""
+    if norm is not None:
+        drift, norm = np.atleast_1d(np.abs(drift)), np.atleast_1d(norm)
+        failed = np.flatnonzero(~(drift <= bound * norm))
+        if failed.size:
+            i = failed[0]
+            raise StepperError(
+                f"{stepper} diverged: {quantity} moved by {drift[i]:.3g}{unit}, more than {bound} of its norm "
+                f"{norm[i]:.3g}{unit}"
+            )
+        return
     worst = abs(drift) if np.ndim(drift) == 0 else np.max(np.abs(drift))
     if not worst <= bound:
         raise StepperError(f"{stepper} diverged: |{quantity}| = {worst:.3g}{unit} > {bound:.3g}{unit}")

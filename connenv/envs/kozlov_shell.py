@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import StepperError, make_stepper
-from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
-from connenv.envs.base import RenderedEnv
-from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
+from connenv.core.segments import check_drift, run_segments
+from connenv.core.steppers import make_stepper
+from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform direction
@@ -24,7 +26,22 @@ DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # the fastest passing steppe
 STATE_KEYS = ("x", "y", "theta", "u", "momentum")
 
 
-class KozlovShellEnv(RenderedEnv):
+@dataclass
+class ShellState(State):
+    """The pose (x, y, θ); the body momentum (P₁, P₂, Π), 0 in the reduced model; the mass position u; the
+    target (x, y); the time t; full: whether the state steps the full model (else the reduced one); and the
+    spatial momentum at reset, which the full model conserves."""
+
+    pose: np.ndarray
+    momentum: np.ndarray
+    u: np.ndarray
+    target: np.ndarray
+    t: float
+    full: bool
+    momentum0: np.ndarray
+
+
+class KozlovShellEnv(TaskEnv):
     r"""
     ## Description
 
@@ -134,7 +151,7 @@ class KozlovShellEnv(RenderedEnv):
     `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
     """
 
-    metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ("distance",)}
+    metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
     def __init__(
         self,
@@ -178,44 +195,19 @@ class KozlovShellEnv(RenderedEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
+        self.state = ShellState(np.zeros(3), np.zeros(3), np.zeros(2), np.zeros(2), 0.0, False, np.zeros(3))
+        self.wake = []  # rendering history: the centre at the start of every step since reset (only when rendering)
 
-        self.system = self.reduced_system
-        self.y = np.zeros(3)  # (x, y, θ), and (P₁, P₂, Π) in the full model
-        self.u, self.target, self.t = np.zeros(2), np.zeros(2), 0.0
-        self.path = []  # the centre's positions over the episode, for rendering the wake
-
-    # -- Gymnasium API -------------------------------------------------------
+    # -- rendering: the wake is history, kept beside the state ----------------
 
     def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        options = dict(options or {})
-        check_keys("reset options", options, {"state", "target"})
-        distance, angle = self.np_random.uniform(*TARGET_DISTANCES), self.np_random.uniform(-math.pi, math.pi)
-        self.target = distance * np.array([math.cos(angle), math.sin(angle)])
-        if "target" in options:
-            self.target = _check_vector("target", options["target"], 2)
-        self._set_state(options.get("state", {}))
-        self.t = 0.0
-        self.momentum0 = self.full_system.spatial_momentum(np.concatenate([self.y[:3], self._momentum()]))
-        self.path = [tuple(self.y[:2])]
-        return self._obs(), self._info()
+        self.wake = []
+        return super().reset(seed=seed, options=options)
 
     def step(self, action):
-        u_cmd = check_action(action, self.action_space) * self.u_max
-        distance_before = self._distance()
-        try:
-            self.y = self.stepper(self.system, self.y, self.u, (u_cmd - self.u) / self.dt, self.dt)
-            if self.system is self.full_system:
-                self.check_momentum(self.y, self.momentum0)
-        except StepperError as error:
-            raise self._stepper_error(error) from error
-        self.u, self.t = u_cmd, self.t + self.dt
-        self.path.append(tuple(self.y[:2]))
-        info = self._info()
-        reward = self.reward(distance_before, info["distance"])
-        if self.render_mode == "human":
-            self.render()
-        return self._obs(), reward, info["is_success"], False, info
+        if self.render_mode is not None:
+            self.wake.append(tuple(self.state.pose[:2]))
+        return super().step(action)
 
     def _make_renderer(self):
         from connenv.envs.rendering_shell import KozlovShellRenderer
@@ -226,24 +218,9 @@ class KozlovShellEnv(RenderedEnv):
         )
 
     def _draw(self, renderer):
-        return renderer.draw(self.y[:3], self.u, self.target, self.path, self.success_radius, self.t)
-
-    # -- internals -----------------------------------------------------------
-
-    def _set_state(self, state):
-        """The pose, mass position and momentum from options['state'] (default: at rest at the origin);
-        the model follows the momentum: reduced at zero, full otherwise."""
-        check_keys("options['state']", state, STATE_KEYS)
-        pose = [check_number(f"state {key}", state.get(key, 0.0)) for key in ("x", "y", "theta")]
-        u = _check_vector("state u", state.get("u", (0.0, 0.0)), 2)
-        for i, (value, bound) in enumerate(zip(u, self.u_max)):
-            check_number(f"state u[{i}]", value, -bound, bound)
-        momentum = _check_vector("state momentum", state.get("momentum", (0.0, 0.0, 0.0)), 3)
-        self.u = u
-        if np.any(momentum != 0.0):
-            self.system, self.y = self.full_system, np.array([*pose, *momentum])
-        else:
-            self.system, self.y = self.reduced_system, np.array(pose)
+        s = self.state
+        path = [*self.wake, tuple(s.pose[:2])]
+        return renderer.draw(s.pose, s.u, s.target, path, self.success_radius, s.t)
 
     def parameters(self):
         system = self.full_system
@@ -254,63 +231,86 @@ class KozlovShellEnv(RenderedEnv):
             "a": system.a,
             "b": system.b,
             "rho": system.rho,
-            "model": "full" if self.system is system else "reduced",
+            "model": "full" if self.state.full else "reduced",
         }
+
+    # -- physics ---------------------------------------------------------------
+
+    def start(self, options):
+        """At rest at the origin, or options['state']; the target drawn by np_random, or options['target']. The
+        model follows the momentum: reduced at zero, full otherwise."""
+        check_keys("reset options", options, {"state", "target"})
+        distance, angle = self.np_random.uniform(*TARGET_DISTANCES), self.np_random.uniform(-math.pi, math.pi)
+        target = distance * np.array([math.cos(angle), math.sin(angle)])
+        if "target" in options:
+            target = _check_vector("target", options["target"], 2)
+        pose, u, momentum = self._check_state(options.get("state", {}))
+        full = bool(np.any(momentum != 0.0))
+        momentum = momentum if full else np.zeros(3)
+        momentum0 = self.full_system.spatial_momentum(np.concatenate([pose, momentum]))
+        return ShellState(pose, momentum, u, target, 0.0, full, momentum0)
+
+    def advance(self, s, u_cmd):
+        """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum."""
+        segments = [(s.u, (u_cmd - s.u) / self.dt, self.dt)]
+        if s.full:
+            y, _ = run_segments(self.stepper, self.full_system, np.concatenate([s.pose, s.momentum]), segments)
+            self.check_momentum(y, s.momentum0)
+            return s.replace(pose=y[:3], momentum=y[3:], u=u_cmd, t=s.t + self.dt)
+        pose, _ = run_segments(self.stepper, self.reduced_system, s.pose, segments)
+        return s.replace(pose=pose, u=u_cmd, t=s.t + self.dt)
 
     def check_momentum(self, y, momentum0):
         """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
         reset by more than MOMENTUM_ERROR_BOUND of its norm."""
-        drift = np.atleast_1d(np.linalg.norm(self.full_system.spatial_momentum(y) - momentum0, axis=-1))
-        norm = np.atleast_1d(np.linalg.norm(momentum0, axis=-1))
-        bad = np.flatnonzero(~(drift <= MOMENTUM_ERROR_BOUND * norm))
-        if bad.size:
-            i = bad[0]
-            raise StepperError(
-                f"{self.stepper} diverged: the spatial momentum moved by {drift[i]:.3g}, more than "
-                f"{MOMENTUM_ERROR_BOUND} of its norm {norm[i]:.3g}"
-            )
+        drift = np.linalg.norm(self.full_system.spatial_momentum(y) - momentum0, axis=-1)
+        norm = np.linalg.norm(momentum0, axis=-1)
+        check_drift(self.stepper, "the spatial momentum", drift, MOMENTUM_ERROR_BOUND, norm=norm)
 
-    def _momentum(self):
-        return self.y[3:] if self.system is self.full_system else np.zeros(3)
-
-    def _distance(self):
-        return self.distance(self.y[:2], self.target)
-
-    def _obs(self):
-        return self.observe(self.y[:3], self.u, self._momentum(), self.target)
-
-    def _info(self):
-        return self.describe(self.y[:3], self.u, self._momentum(), self.target, self.t, self.system is self.full_system)
+    def _check_state(self, state):
+        """(pose, u, momentum) from options['state'], default at rest at the origin with the mass at the centre."""
+        check_keys("options['state']", state, STATE_KEYS)
+        pose = np.array([check_number(f"state {key}", state.get(key, 0.0)) for key in ("x", "y", "theta")])
+        u = _check_vector("state u", state.get("u", (0.0, 0.0)), 2)
+        for i, (value, bound) in enumerate(zip(u, self.u_max)):
+            check_number(f"state u[{i}]", value, -bound, bound)
+        return pose, u, _check_vector("state momentum", state.get("momentum", (0.0, 0.0, 0.0)), 3)
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
-    def distance(self, xy, target, ops=SCALAR):
+    def command(self, a):
+        """The commanded mass position u* of action a."""
+        return a * self.u_max
+
+    def distance(self, s, ops=SCALAR):
         """From the shell's centre to the target, m."""
-        return ops.hypot(target[..., 0] - xy[..., 0], target[..., 1] - xy[..., 1])
+        return ops.hypot(s.target[..., 0] - s.pose[..., 0], s.target[..., 1] - s.pose[..., 1])
 
-    def reward(self, distance_before, distance_after):
-        return (distance_before - distance_after) / self.success_radius - TIME_COST
+    def reward(self, before, after, info, ops=SCALAR):
+        return (self.distance(before, ops) - info["distance"]) / self.success_radius - TIME_COST
 
-    def observe(self, pose, u, momentum, target, ops=SCALAR):
-        c, s = ops.cos(pose[..., 2]), ops.sin(pose[..., 2])
+    def observe(self, s, ops=SCALAR):
+        pose, target = s.pose, s.target
+        c, sin = ops.cos(pose[..., 2]), ops.sin(pose[..., 2])
         dx, dy = target[..., 0] - pose[..., 0], target[..., 1] - pose[..., 1]
-        body_target = [ops.clip(c * dx + s * dy, -TARGET_BOUND, TARGET_BOUND)]
-        body_target.append(ops.clip(-s * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
-        scaled_u = u / self.u_max
-        scaled_momentum = np.clip(momentum / self.momentum_scale, -MOMENTUM_BOUND, MOMENTUM_BOUND)
-        parts = [*body_target, c, s, scaled_u[..., 0], scaled_u[..., 1]]
+        body_target = [ops.clip(c * dx + sin * dy, -TARGET_BOUND, TARGET_BOUND)]
+        body_target.append(ops.clip(-sin * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
+        scaled_u = s.u / self.u_max
+        scaled_momentum = np.clip(s.momentum / self.momentum_scale, -MOMENTUM_BOUND, MOMENTUM_BOUND)
+        parts = [*body_target, c, sin, scaled_u[..., 0], scaled_u[..., 1]]
         return ops.pack(parts + [scaled_momentum[..., i] for i in range(3)])
 
-    def describe(self, pose, u, momentum, target, t, full, ops=SCALAR):
-        x, y, theta = (ops.real(pose[..., i]) for i in range(3))
-        distance = self.distance(pose, target, ops)
-        state = {"x": x, "y": y, "theta": theta, "u": ops.vector(u), "momentum": ops.vector(momentum), "t": t}
+    def describe(self, s, ops=SCALAR):
+        x, y, theta = (ops.real(s.pose[..., i]) for i in range(3))
+        distance = self.distance(s, ops)
+        state = {"x": x, "y": y, "theta": theta, "u": ops.vector(s.u), "momentum": ops.vector(s.momentum), "t": s.t}
+        spatial_momentum = self.full_system.spatial_momentum(np.concatenate([s.pose, s.momentum], -1))
         return {
             "state": state,
-            "spatial_momentum": ops.vector(self.full_system.spatial_momentum(np.concatenate([pose, momentum], -1))),
-            "target": ops.vector(target),
+            "spatial_momentum": ops.vector(spatial_momentum),
+            "target": ops.vector(s.target),
             "distance": distance,
-            "model": ops.where(full, "full", "reduced"),
+            "model": ops.where(s.full, "full", "reduced"),
             "is_success": ops.flag(distance <= self.success_radius),
         }
 
@@ -322,41 +322,19 @@ class KozlovShellVectorEnv(TaskVectorEnv):
 
     single_env = KozlovShellEnv
 
-    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
-        super().__init__(num_envs, max_episode_steps, **kwargs)
-        self.pose, self.momentum = np.zeros((num_envs, 3)), np.zeros((num_envs, 3))
-        self.u, self.target, self.t = np.zeros((num_envs, 2)), np.zeros((num_envs, 2)), np.zeros(num_envs)
-        self.full = np.zeros(num_envs, bool)  # the rows in the full (Kirchhoff) model
-        self.momentum0 = np.zeros((num_envs, 3))  # their spatial momentum at reset
-
-    def _capture(self, i):
+    def advance(self, s, u_cmd):
         env = self.env
-        self.pose[i], self.momentum[i], self.u[i], self.momentum0[i] = env.y[:3], env._momentum(), env.u, env.momentum0
-        self.target[i], self.t[i], self.full[i] = env.target, env.t, env.system is env.full_system
-
-    def _advance(self, actions):
-        env = self.env
-        u_cmd = actions * env.u_max
-        u_dot = (u_cmd - self.u) / env.dt
-        distance_before = env.distance(self.pose, self.target, BATCH)
-        if not self.full.any():
-            self.pose = self.stepper(env.reduced_system, self.pose, self.u, u_dot, env.dt)
-        else:
-            y, full = np.concatenate([self.pose, self.momentum], axis=-1), self.full
-            y[full] = self.stepper(env.full_system, y[full], self.u[full], u_dot[full], env.dt)
-            env.check_momentum(y[full], self.momentum0[full])
-            if not full.all():
-                rest = ~full
-                y[rest, :3] = self.stepper(env.reduced_system, self.pose[rest], self.u[rest], u_dot[rest], env.dt)
-            self.pose, self.momentum = y[:, :3], y[:, 3:]
-        self.u, self.t = u_cmd, self.t + env.dt
-        return env.reward(distance_before, env.distance(self.pose, self.target, BATCH))
-
-    def _observe(self):
-        return self.env.observe(self.pose, self.u, self.momentum, self.target, BATCH)
-
-    def _describe(self):
-        return self.env.describe(self.pose, self.u, self.momentum, self.target, self.t, self.full, BATCH)
+        u_dot = (u_cmd - s.u) / env.dt
+        if not s.full.any():
+            pose, _ = run_segments(self.stepper, env.reduced_system, s.pose, [(s.u, u_dot, env.dt)])
+            return s.replace(pose=pose, u=u_cmd, t=s.t + env.dt)
+        y, full, rest = np.concatenate([s.pose, s.momentum], axis=-1), s.full, ~s.full
+        y[full] = run_segments(self.stepper, env.full_system, y[full], [(s.u[full], u_dot[full], env.dt)])[0]
+        env.check_momentum(y[full], s.momentum0[full])
+        if rest.any():
+            segments = [(s.u[rest], u_dot[rest], env.dt)]
+            y[rest, :3] = run_segments(self.stepper, env.reduced_system, s.pose[rest], segments)[0]
+        return s.replace(pose=y[:, :3], momentum=y[:, 3:], u=u_cmd, t=s.t + env.dt)
 
 
 def _check_b(b, a):
