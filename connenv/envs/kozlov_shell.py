@@ -256,9 +256,9 @@ class KozlovShellEnv(TaskEnv):
         if s.full:
             y, _ = run_segments(self.stepper, self.full_system, np.concatenate([s.pose, s.momentum]), segments)
             self.check_momentum(y, s.momentum0)
-            return s.replace(pose=y[:3], momentum=y[3:], u=u_cmd, t=s.t + self.dt)
+            return ShellState(y[:3], y[3:], u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
         pose, _ = run_segments(self.stepper, self.reduced_system, s.pose, segments)
-        return s.replace(pose=pose, u=u_cmd, t=s.t + self.dt)
+        return ShellState(pose, s.momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
 
     def check_momentum(self, y, momentum0):
         """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
@@ -327,14 +327,14 @@ class KozlovShellVectorEnv(TaskVectorEnv):
         u_dot = (u_cmd - s.u) / env.dt
         if not s.full.any():
             pose, _ = run_segments(self.stepper, env.reduced_system, s.pose, [(s.u, u_dot, env.dt)])
-            return s.replace(pose=pose, u=u_cmd, t=s.t + env.dt)
+            return ShellState(pose, s.momentum, u_cmd, s.target, s.t + env.dt, s.full, s.momentum0)
         y, full, rest = np.concatenate([s.pose, s.momentum], axis=-1), s.full, ~s.full
         y[full] = run_segments(self.stepper, env.full_system, y[full], [(s.u[full], u_dot[full], env.dt)])[0]
         env.check_momentum(y[full], s.momentum0[full])
         if rest.any():
             segments = [(s.u[rest], u_dot[rest], env.dt)]
             y[rest, :3] = run_segments(self.stepper, env.reduced_system, s.pose[rest], segments)[0]
-        return s.replace(pose=y[:, :3], momentum=y[:, 3:], u=u_cmd, t=s.t + env.dt)
+        return ShellState(y[:, :3], y[:, 3:], u_cmd, s.target, s.t + env.dt, s.full, s.momentum0)
 
 
 def _check_b(b, a):
