@@ -69,7 +69,7 @@ def test_swing_closed_form_conserves_energy_across_radii_and_steps(r_min, dt):
     except within 1e-6 of the separatrix, where DOP853 at rtol 1e-10 takes the step)."""
     env = make("connenv/Swing-v0", r_min=r_min, dt=dt, target_amplitude=math.pi)
     random_steps(env, 100)
-    assert abs(env.energy_error) <= 1e-9 * env.system.mass * env.system.g * env.r_max
+    assert abs(env.state.energy_error) <= 1e-9 * env.system.mass * env.system.g * env.r_max
 
 
 @pytest.mark.parametrize("lever", [0.6, 0.1, 0.01])

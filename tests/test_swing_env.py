@@ -161,7 +161,7 @@ def test_actions_outside_the_box_are_clipped_to_the_radius_range():
     env = gym.make("connenv/Swing-v0").unwrapped
     env.reset(seed=0)
     env.step(np.array([-7.0], np.float32))
-    assert env.r == 1.6
+    assert env.state.r == 1.6
 
 
 def test_rgb_array_render_is_an_image():

@@ -72,8 +72,8 @@ def test_a_jump_is_the_limit_of_a_fast_continuous_move():
         env = make(max_radial_speed=speed)
         env.reset(options={"state": state})
         env.step(np.array([-1.0], np.float32))
-        assert env.r == R_MIN
-        errors.append(np.max(np.abs(env.y - jump.y)))
+        assert env.state.r == R_MIN
+        errors.append(np.max(np.abs(env.state.y - jump.state.y)))
     assert errors[0] > errors[1] > errors[2] and errors[2] < 1e-3
     assert errors[1] / errors[2] == pytest.approx(10.0, rel=0.2)
 
@@ -82,13 +82,13 @@ def test_bounded_radial_speed_moves_r_at_that_speed():
     env = make(max_radial_speed=2.0, dt=0.05)
     env.reset(options={"state": {"theta": 0.2, "r": R_MAX}})
     env.step(np.array([-1.0], np.float32))
-    assert env.r == pytest.approx(R_MAX - 0.1, abs=1e-12)
+    assert env.state.r == pytest.approx(R_MAX - 0.1, abs=1e-12)
     env.step(np.array([-1.0], np.float32))
     env.step(np.array([-1.0], np.float32))
-    assert env.r == pytest.approx(1.7, abs=1e-12)
+    assert env.state.r == pytest.approx(1.7, abs=1e-12)
     for _ in range(2):
         env.step(np.array([-1.0], np.float32))
-    assert env.r == R_MIN
+    assert env.state.r == R_MIN
 
 
 @pytest.mark.parametrize("integrator", ["exact", "dop853", "rk4"])

@@ -108,9 +108,9 @@ CASES = {
         "connenv/Swing-v0",
         EXACT,
         (Episode("θ₀=π/2", {"state": {"theta": math.pi / 2, "theta_dot": 0.0}}, held([1.0]), 500),),
-        lambda env, ref: abs(env.y[0] - ref.y[0]),
+        lambda env, ref: abs(env.state.y[0] - ref.state.y[0]),
         "max |E − E(0)| / (m g r)",
-        energy_drift(lambda env: env.system.mass * env.system.g * env.r),
+        energy_drift(lambda env: env.system.mass * env.system.g * env.state.r),
         "rad",
     ),
     "skier": Case(

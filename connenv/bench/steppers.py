@@ -81,7 +81,7 @@ BENCHES = {
         "connenv/Swing-v0",
         {"θ₀=π/2": {"theta": math.pi / 2, "theta_dot": 0.0}, "θ₀=3.0": {"theta": 3.0, "theta_dot": 0.0}},
         "|E(t) − E(0)| / (m g r)",
-        energy_drift(lambda env: env.system.mass * env.system.g * env.r),
+        energy_drift(lambda env: env.system.mass * env.system.g * env.state.r),
         "r = r_max = 2 m",
     ),
     "skier": Bench(
