@@ -176,6 +176,7 @@ class KapitzaPendulumEnv(TaskEnv):
         if pivot not in PIVOTS:
             raise ValueError(f"pivot={pivot!r} is not one of {list(PIVOTS)}")
         self.pivot, self.axes = pivot, list(PIVOTS[pivot])
+        self.actuated = slice(self.axes[0], self.axes[-1] + 1)  # the axes as a slice of u (they are contiguous)
         length = check_number("length", length, 0.0, open_low=True)
         self.system = KapitzaPendulum(
             length=length,
@@ -284,8 +285,8 @@ class KapitzaPendulumEnv(TaskEnv):
 
     def command(self, a):
         """The commanded pivot velocity u̇ (2) of action a: v_max · a along the actuated axes."""
-        u_dot = np.zeros((*a.shape[:-1], 2))
-        u_dot[..., self.axes] = a * self.v_max
+        u_dot = np.zeros(a.shape[:-1] + (2,))
+        u_dot[..., self.actuated] = a * self.v_max
         return u_dot
 
     def deviation(self, y, ops=SCALAR):
