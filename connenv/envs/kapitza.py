@@ -29,8 +29,10 @@ TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
 @dataclass
 class KapitzaState(State):
     """The pendulum and its pivot: y = (θ, p); the pivot's position u and velocity u̇ (2 each, u̇ as at the end of
-    the step); the time t; the energy E in the frame of the last segment's u̇; the stepper's energy error (the
-    change of E on each segment of constant u̇, summed since reset). Each task's state adds its record."""
+    the step); the time t; the energy E in the frame of the step's last segment's u̇ (the vector env's: of u̇ at the
+    end of the step, which differs only where an axis meets its stop exactly at the step's end); the stepper's
+    energy error (the change of E on each segment of constant u̇, summed since reset). Each task's state adds its
+    record."""
 
     y: np.ndarray
     u: np.ndarray
@@ -295,6 +297,7 @@ class KapitzaPendulumEnv(TaskEnv):
         return math.pi - abs(ops.atan2(ops.sin(theta), ops.cos(theta)))
 
     def theta_dot(self, s, ops=SCALAR):
+        """θ̇ = (p − m l u̇·n)/(m l²) of the state."""
         return ops.real(self.system.theta_dot(s.y, s.u_dot))
 
     def observe(self, s, ops=SCALAR):
@@ -401,6 +404,7 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
         return ops.log(after.lift / before.lift) - TIME_COST * self.dt
 
     def terminated(self, s, info, ops=SCALAR):
+        """Success: held inverted for hold_time."""
         return info["is_success"]
 
 

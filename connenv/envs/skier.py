@@ -245,8 +245,8 @@ class SkierEnv(TaskEnv):
 
     def advance(self, s, h_cmd):
         segments = control_segments(s.h, h_cmd, self.dt, self.max_height_speed)
-        h, h_dot, tau = segments[-1]
-        segments = [(np.array([h]), np.array([h_dot]), tau) for h, h_dot, tau in segments]
+        h, h_dot, tau = segments[-1]  # the step ends at h + ḣ τ
+        segments = [(np.array([v]), np.array([v_dot]), duration) for v, v_dot, duration in segments]
         y, change = run_segments(self.stepper, self.system, s.y, segments, self._held_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, h + h_dot * tau, s.t + self.dt, s.side, s.energy_error + change)
@@ -284,6 +284,7 @@ class SkierEnv(TaskEnv):
         return (energy / (self.system.mass * self.system.g) - self.z_floor) / (self.z_goal - self.z_floor)
 
     def reward(self, before, after, info, ops=SCALAR):
+        """ln(max(ε′, 1e-4)/max(ε, 1e-4)) − 0.01."""
         progress_before, progress_after = self.progress(before.energy), info["progress"]
         floor = PROGRESS_FLOOR
         return ops.log(ops.maximum(progress_after, floor) / ops.maximum(progress_before, floor)) - TIME_COST
