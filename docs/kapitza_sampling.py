@@ -61,7 +61,7 @@ def run_env(stepper: dict, a: float, omega: float, dt: float) -> np.ndarray | No
     try:
         for k in range(steps):
             env.step(np.array([(samples[k + 1] - samples[k]) / dt / env.v_max], np.float32))
-            thetas[k] = env.y[0]
+            thetas[k] = env.state.y[0]
     except StepperError:
         return None
     return thetas

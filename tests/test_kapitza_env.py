@@ -143,7 +143,7 @@ def test_modulated_vibration_damps_the_slow_swing_that_open_loop_vibration_keeps
     open_loop, damped = controller(HOLD, "kapitza", env), controller(HOLD, "damped", env)
     for seed in range(3):
         kept, damped_out = (evaluate.run_episode(env, policy, seed) for policy in (open_loop, damped))
-        assert damped_out.success and env.unwrapped._deviation(env.unwrapped) < 1e-3
+        assert damped_out.success and env.unwrapped.deviation(env.unwrapped.state.y) < 1e-3
         assert damped_out.ret > kept.ret
 
 

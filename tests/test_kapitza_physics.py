@@ -129,7 +129,7 @@ def test_horizontal_vibration_tilts_the_pendulum_to_kapitzas_angle():
     angles = []
     for _ in range(6000):
         obs, *_ = env.step(policy.predict(obs)[0])
-        angles.append(env.y[0])
+        angles.append(env.state.y[0])
     settled = np.mean(angles[-400:])  # the last 2 s, ~30 periods of the vibration
     sampled = 2.0 * 9.81 / (policy.amplitude * policy.omega * np.sinc(policy.phase_step / (2 * math.pi))) ** 2
     assert settled == pytest.approx(math.acos(sampled), abs=0.005)

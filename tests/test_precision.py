@@ -79,7 +79,7 @@ def test_skier_default_keeps_energy_as_the_barycentre_nears_the_centre_of_curvat
     stays within 2e-6 of m g Δz over 100 random steps (documented in SkierEnv)."""
     env = make("connenv/Skier-v0", h_max=(1.0 - lever) / VALLEY_KAPPA_MAX, dt=dt)
     random_steps(env, 100)
-    assert abs(env.energy_error) <= 2e-6 * env.system.mass * env.system.g * (env.z_goal - env.z_floor)
+    assert abs(env.state.energy_error) <= 2e-6 * env.system.mass * env.system.g * (env.z_goal - env.z_floor)
 
 
 @pytest.mark.parametrize("radius, dt", [(0.1, 0.01), (1.0, 0.1), (10.0, 1.0)])
@@ -101,7 +101,7 @@ def test_kapitza_exact_step_conserves_the_pivot_frame_energy_on_every_segment(v_
     segments): the exact step keeps E in the frame of each segment's u̇ to 1e-9 of m g l over 200 steps."""
     env = make("connenv/KapitzaPendulum-v0", v_max=v_max, dt=dt, tolerance=3.1)
     random_steps(env, 200)
-    assert abs(env.energy_error) <= 1e-9 * env.system.mass * env.system.g * env.system.length
+    assert abs(env.state.energy_error) <= 1e-9 * env.system.mass * env.system.g * env.system.length
 
 
 @pytest.mark.parametrize("ratio, dt", [(0.1, 0.25), (1.0, 0.1), (30.0, 0.02)])

@@ -124,10 +124,10 @@ def test_bounded_height_speed_moves_h_at_that_speed():
     env = gym.make(ID, max_height_speed=2.0).unwrapped
     env.reset(seed=0)
     env.step(np.array([1.0], np.float32))
-    assert env.h == pytest.approx(0.6)
+    assert env.state.h == pytest.approx(0.6)
     env.step(np.array([1.0], np.float32))
     env.step(np.array([1.0], np.float32))
-    assert env.h == pytest.approx(0.8)
+    assert env.state.h == pytest.approx(0.8)
 
 
 @pytest.mark.parametrize(

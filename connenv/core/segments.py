@@ -23,7 +23,7 @@ def run_segments(stepper, system, y, segments, conserved=None):
     length 0."""
     change = 0.0
     for u, u_dot, tau in segments:
-        if isinstance(tau, float) or np.ndim(tau) == 0:  # one state (the isinstance spares np.ndim's cost)
+        if not isinstance(tau, np.ndarray) or tau.ndim == 0:  # one state; np.ndim(float) raises inside numpy: slow
             before = None if conserved is None else conserved(y, u, u_dot)
             y = stepper(system, y, u, u_dot, tau)
             if conserved is not None:

@@ -3,16 +3,18 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import StepperError, make_stepper
-from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
-from connenv.envs.base import RenderedEnv
-from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
-from connenv.systems.kapitza import KapitzaPendulum, pivot_segments, pivot_segments_batch
+from connenv.core.segments import check_drift, pivot_segments, pivot_segments_batch, run_segments
+from connenv.core.steppers import make_stepper
+from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
+from connenv.systems.kapitza import KapitzaPendulum
 
 PIVOTS = {"vertical": (1,), "horizontal": (0,), "planar": (0, 1)}  # actuated axes of u = (u₁, u₂)
 SPEED_BOUND = 5.0  # |observed θ̇| in units of 2√(g/l) is clipped here
@@ -24,7 +26,39 @@ LIFT_FLOOR = 1e-4  # floor of the swing-up's lift in the reward's logarithm: amp
 TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
 
 
-class KapitzaPendulumEnv(RenderedEnv):
+@dataclass
+class KapitzaState(State):
+    """The pendulum and its pivot: y = (θ, p); the pivot's position u and velocity u̇ (2 each, u̇ as at the end of
+    the step); the time t; the energy E in the frame of the step's last segment's u̇ (the vector env's: of u̇ at the
+    end of the step, which differs only where an axis meets its stop exactly at the step's end); the stepper's
+    energy error (the change of E on each segment of constant u̇, summed since reset). Each task's state adds its
+    record."""
+
+    y: np.ndarray
+    u: np.ndarray
+    u_dot: np.ndarray
+    t: float
+    energy: float
+    energy_error: float
+
+
+@dataclass
+class HoldState(KapitzaState):
+    """KapitzaPendulum-v0's state: the largest deviation from inverted this episode."""
+
+    max_deviation: float
+
+
+@dataclass
+class SwingUpState(KapitzaState):
+    """KapitzaSwingUp-v0's state: the steps held within tolerance of inverted without a break, and the lift ℓ,
+    which the reward compares."""
+
+    upright_steps: int
+    lift: float
+
+
+class KapitzaPendulumEnv(TaskEnv):
     r"""
     ## Description
 
@@ -144,6 +178,7 @@ class KapitzaPendulumEnv(RenderedEnv):
         if pivot not in PIVOTS:
             raise ValueError(f"pivot={pivot!r} is not one of {list(PIVOTS)}")
         self.pivot, self.axes = pivot, list(PIVOTS[pivot])
+        self.actuated = slice(self.axes[0], self.axes[-1] + 1)  # the axes as a slice of u (they are contiguous)
         length = check_number("length", length, 0.0, open_low=True)
         self.system = KapitzaPendulum(
             length=length,
@@ -162,47 +197,8 @@ class KapitzaPendulumEnv(RenderedEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (k,), np.float32)
         high = np.array([1.0, 1.0, SPEED_BOUND] + [1.0] * 2 * k, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
-
-        self.y = np.array([math.pi, 0.0])  # (θ, p)
-        self.u, self.u_dot, self.t, self.max_deviation = np.zeros(2), np.zeros(2), 0.0, 0.0
-        self.energy = 0.0  # E in the frame of u̇, for the info and the swing-up's lift
-        self.energy_error = 0.0  # the stepper's: the change of E on segments of constant u̇ since reset
-
-    # -- Gymnasium API -------------------------------------------------------
-
-    def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        options = dict(options or {})
-        check_keys("reset options", options, {"state"})
-        self.y = np.array([self._start_angle(), 0.0])
-        self.u, self.u_dot, self.t, self.energy_error = np.zeros(2), np.zeros(2), 0.0, 0.0
-        if "state" in options:
-            self._set_state(options["state"])
-        self.energy = self._energy(self.u_dot)
-        self._start_task(self)
-        return self._obs(self), self._info(self)
-
-    def step(self, action):
-        u_dot_cmd = np.zeros(2)
-        u_dot_cmd[self.axes] = check_action(action, self.action_space) * self.v_max
-        segments, u_end, u_dot_end = pivot_segments(self.u, u_dot_cmd, self.a_max, self.dt)
-        try:
-            for u, u_dot, tau in segments:
-                before = self._energy(u_dot)
-                self.y = self.stepper(self.system, self.y, u, u_dot, tau)
-                self.energy = self._energy(u_dot)  # the last segment's u̇ is the step's final one
-                self.energy_error += self.energy - before
-            self.check_energy_error(self.energy_error)
-        except StepperError as error:
-            raise self._stepper_error(error) from error
-        self.u, self.u_dot = u_end, u_dot_end
-        self.t += self.dt
-        self._track(self)
-        info = self._info(self)
-        reward, terminated = self._task(self, info)
-        if self.render_mode == "human":
-            self.render()
-        return self._obs(self), reward, terminated, False, info
+        y, u, u_dot = np.array([math.pi, 0.0]), np.zeros(2), np.zeros(2)
+        self.state = self.at(y, u, u_dot, 0.0, self._frame_energy(y, u, u_dot), 0.0)
 
     def _make_renderer(self):
         from connenv.envs.rendering import KapitzaRenderer
@@ -210,49 +206,63 @@ class KapitzaPendulumEnv(RenderedEnv):
         return KapitzaRenderer(self.system.length, self.a_max, self.render_mode, self.metadata["render_fps"])
 
     def _draw(self, renderer):
-        return renderer.draw(self.y[0], self.u, self.t)
+        return renderer.draw(self.state.y[0], self.state.u, self.state.t)
 
-    # -- the task ------------------------------------------------------------
-    # s is the state: the env itself (Python floats), or a vector env's batch with ops=BATCH. Both carry y, u,
-    # u_dot, t, energy and the task's record (max_deviation; upright_steps, lift and lift_before for the
-    # swing-up).
+    def parameters(self):
+        return {
+            "pivot": self.pivot,
+            "length": self.system.length,
+            "v_max": self.v_max,
+            "a_max": self.a_max,
+            "damping": self.system.damping,
+        }
 
-    def _start_angle(self):
+    # -- physics ---------------------------------------------------------------
+
+    def start_angle(self):
+        """θ₀, drawn from np_random: near inverted."""
         return math.pi + self.np_random.uniform(-HOLD_START, HOLD_START)
 
-    def _start_task(self, s):
-        s.max_deviation = self._deviation(s)
+    def start(self, options):
+        check_keys("reset options", options, {"state"})
+        y, u, u_dot = np.array([self.start_angle(), 0.0]), np.zeros(2), np.zeros(2)
+        if "state" in options:
+            y, u, u_dot = self._check_state(options["state"], y[0])
+        return self.at(y, u, u_dot, 0.0, self._frame_energy(y, u, u_dot), 0.0)
 
-    def _track(self, s, ops=SCALAR):
-        """Update the task's record of the episode after a step."""
-        s.max_deviation = ops.maximum(s.max_deviation, self._deviation(s, ops))
+    def advance(self, s, u_dot_cmd):
+        segments, u, u_dot = pivot_segments(s.u, u_dot_cmd, self.a_max, self.dt)
+        y, change = run_segments(self.stepper, self.system, s.y, segments, self._frame_energy)
+        self.check_energy_error(s.energy_error + change)
+        energy = self._frame_energy(y, *segments[-1][:2])  # in the frame of the last segment's u̇
+        return self.at(y, u, u_dot, s.t + self.dt, energy, s.energy_error + change, s)
 
-    def _task_info(self, s):
-        return {"max_deviation": s.max_deviation}
+    def _frame_energy(self, y, u, u_dot):
+        """The system's E at y in the frame of u̇, on Python floats (without numpy's overhead)."""
+        theta, p = float(y[0]), float(y[1])
+        m, l, c, s = self.system.mass, self.system.length, math.cos(theta), math.sin(theta)
+        theta_dot = (p - m * l * (float(u_dot[0]) * c + float(u_dot[1]) * s)) / (m * l * l)
+        return 0.5 * m * l * l * theta_dot * theta_dot - m * self.system.g * l * c
 
-    def _task(self, s, info, ops=SCALAR):
-        """(reward, terminated): hold inverted; the episode ends when the pendulum falls."""
-        reward = 1.0 - (info["deviation"] / self.tolerance) ** 2
-        return reward, info["deviation"] > self.tolerance
+    def check_energy_error(self, energy_error):
+        """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound, without damping."""
+        if self.system.damping == 0.0:
+            bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.system.length
+            check_drift(self.stepper, "energy error", energy_error, bound, " J")
 
-    def _success(self, s, ops=SCALAR):
-        return self._deviation(s, ops) <= self.tolerance
-
-    # -- internals -----------------------------------------------------------
-
-    def _set_state(self, state):
+    def _check_state(self, state, theta):
         check_keys("options['state']", state, STATE_KEYS)
         if "theta_dot" in state and "p" in state:
             raise ValueError("options['state'] gives both theta_dot and p; give one of them")
-        self.u = self._pivot_vector("u", state.get("u", (0.0, 0.0)), self.a_max)
-        self.u_dot = self._pivot_vector("u_dot", state.get("u_dot", (0.0, 0.0)), self.v_max)
-        theta = check_number("state theta", state.get("theta", self.y[0]))
+        u = self._pivot_vector("u", state.get("u", (0.0, 0.0)), self.a_max)
+        u_dot = self._pivot_vector("u_dot", state.get("u_dot", (0.0, 0.0)), self.v_max)
+        theta = check_number("state theta", state.get("theta", theta))
         if "p" in state:
             p = check_number("state p", state["p"])
         else:
             theta_dot = check_number("state theta_dot", state.get("theta_dot", 0.0))
-            p = float(self.system.momentum(np.float64(theta), theta_dot, self.u_dot))
-        self.y = np.array([theta, p])
+            p = float(self.system.momentum(np.float64(theta), theta_dot, u_dot))
+        return np.array([theta, p]), u, u_dot
 
     def _pivot_vector(self, name, value, bound):
         """A pivot position or velocity: 2 finite numbers, zero on unactuated axes, within ±bound."""
@@ -267,59 +277,60 @@ class KapitzaPendulumEnv(RenderedEnv):
             check_number(f"state {name}[{i}] (pivot={self.pivot!r})", v, -limit, limit)
         return vector
 
-    def parameters(self):
-        return {
-            "pivot": self.pivot,
-            "length": self.system.length,
-            "v_max": self.v_max,
-            "a_max": self.a_max,
-            "damping": self.system.damping,
-        }
+    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
-    def check_energy_error(self, energy_error):
-        """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound, without damping."""
-        bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.system.length
-        drift = abs(energy_error) if np.ndim(energy_error) == 0 else np.max(np.abs(energy_error))
-        if self.system.damping == 0.0 and not drift <= bound:
-            raise StepperError(f"{self.stepper} diverged: |energy error| = {drift:.3g} J > {bound:.3g} J")
+    def at(self, y, u, u_dot, t, energy, energy_error, before=None, ops=SCALAR):
+        """The state at (y, u, u̇, t) with energy E, its record continued from the state before (or started)."""
+        deviation = self.deviation(y, ops)
+        record = deviation if before is None else ops.maximum(before.max_deviation, deviation)
+        return HoldState(y, u, u_dot, t, energy, energy_error, record)
 
-    def _energy(self, u_dot):
-        """The system's E at the state, in the frame of u̇, on Python floats (without numpy's overhead)."""
-        theta, p = float(self.y[0]), float(self.y[1])
-        m, l, c, s = self.system.mass, self.system.length, math.cos(theta), math.sin(theta)
-        theta_dot = (p - m * l * (float(u_dot[0]) * c + float(u_dot[1]) * s)) / (m * l * l)
-        return 0.5 * m * l * l * theta_dot * theta_dot - m * self.system.g * l * c
+    def command(self, a):
+        """The commanded pivot velocity u̇ (2) of action a: v_max · a along the actuated axes."""
+        u_dot = np.zeros(a.shape[:-1] + (2,))
+        u_dot[..., self.actuated] = a * self.v_max
+        return u_dot
 
-    def _theta_dot(self, s, ops=SCALAR):
-        return ops.real(self.system.theta_dot(s.y, s.u_dot))
-
-    def _deviation(self, s, ops=SCALAR):
+    def deviation(self, y, ops=SCALAR):
         """|θ − π| with θ wrapped to (−π, π]: 0 inverted, π hanging."""
-        theta = s.y[..., 0]
+        theta = y[..., 0]
         return math.pi - abs(ops.atan2(ops.sin(theta), ops.cos(theta)))
 
-    def _obs(self, s, ops=SCALAR):
+    def theta_dot(self, s, ops=SCALAR):
+        """θ̇ = (p − m l u̇·n)/(m l²) of the state."""
+        return ops.real(self.system.theta_dot(s.y, s.u_dot))
+
+    def observe(self, s, ops=SCALAR):
         theta = s.y[..., 0]
-        speed = ops.clip(self._theta_dot(s, ops) / self.theta_dot_scale, -SPEED_BOUND, SPEED_BOUND)
+        speed = ops.clip(self.theta_dot(s, ops) / self.theta_dot_scale, -SPEED_BOUND, SPEED_BOUND)
         pivot = [s.u[..., i] / self.a_max for i in self.axes] + [s.u_dot[..., i] / self.v_max for i in self.axes]
         return ops.pack([ops.cos(theta), ops.sin(theta), speed, *pivot])
 
-    def _info(self, s, ops=SCALAR):
+    def describe_pendulum(self, s, ops=SCALAR):
+        """The info both tasks give: the state, the energy and the deviation from inverted."""
         state = {
             "theta": ops.real(s.y[..., 0]),
-            "theta_dot": self._theta_dot(s, ops),
+            "theta_dot": self.theta_dot(s, ops),
             "p": ops.real(s.y[..., 1]),
             "u": ops.vector(s.u),
             "u_dot": ops.vector(s.u_dot),
             "t": s.t,
         }
-        return {
-            "state": state,
-            "energy": ops.real(s.energy),
-            "deviation": self._deviation(s, ops),
-            **self._task_info(s),
-            "is_success": ops.flag(self._success(s, ops)),
-        }
+        return {"state": state, "energy": ops.real(s.energy), "deviation": self.deviation(s.y, ops)}
+
+    def describe(self, s, ops=SCALAR):
+        info = self.describe_pendulum(s, ops)
+        info["max_deviation"] = s.max_deviation
+        info["is_success"] = ops.flag(info["deviation"] <= self.tolerance)
+        return info
+
+    def reward(self, before, after, info, ops=SCALAR):
+        """Hold inverted: 1 − (δ/tolerance)²."""
+        return 1.0 - (info["deviation"] / self.tolerance) ** 2
+
+    def terminated(self, s, info, ops=SCALAR):
+        """The pendulum has fallen."""
+        return info["deviation"] > self.tolerance
 
 
 class KapitzaSwingUpEnv(KapitzaPendulumEnv):
@@ -363,35 +374,38 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     def __init__(self, render_mode: str | None = None, *, hold_time: float = 2.0, **kwargs):
         self.hold_time = check_number("hold_time", hold_time, 0.0, open_low=True)
-        self.upright_steps, self.lift, self.lift_before = 0, LIFT_FLOOR, LIFT_FLOOR
         super().__init__(render_mode, **kwargs)
         self.hold_steps = math.ceil(self.hold_time / self.dt - 1e-9)  # hold_time in whole steps
 
-    def _start_angle(self):
+    def start_angle(self):
+        """θ₀, drawn from np_random: near hanging, either side."""
         return self.np_random.uniform(*HANG_START) * self.np_random.choice([-1.0, 1.0])
 
-    def _start_task(self, s):
-        s.upright_steps = 0
-        s.lift = self._lift(s)
+    def at(self, y, u, u_dot, t, energy, energy_error, before=None, ops=SCALAR):
+        """The state at (y, u, u̇, t) with energy E and its lift, the upright count continued from the state before
+        (or started at 0)."""
+        upright = 0 if before is None else (before.upright_steps + 1) * (self.deviation(y, ops) <= self.tolerance)
+        return SwingUpState(y, u, u_dot, t, energy, energy_error, upright, self.lift(energy, ops))
 
-    def _track(self, s, ops=SCALAR):
-        s.upright_steps = (s.upright_steps + 1) * (self._deviation(s, ops) <= self.tolerance)
-        s.lift_before, s.lift = s.lift, self._lift(s, ops)
-
-    def _lift(self, s, ops=SCALAR):
+    def lift(self, energy, ops=SCALAR):
         """ℓ = (E/(m g l) + 1)/2 in [LIFT_FLOOR, 1]."""
         system = self.system
-        lift = 0.5 * (ops.real(s.energy) / (system.mass * system.g * system.length) + 1.0)
+        lift = 0.5 * (ops.real(energy) / (system.mass * system.g * system.length) + 1.0)
         return ops.clip(lift, LIFT_FLOOR, 1.0)
 
-    def _task_info(self, s):
-        return {"upright_time": s.upright_steps * self.dt}
+    def describe(self, s, ops=SCALAR):
+        info = self.describe_pendulum(s, ops)
+        info["upright_time"] = s.upright_steps * self.dt
+        info["is_success"] = ops.flag(s.upright_steps >= self.hold_steps)
+        return info
 
-    def _task(self, s, info, ops=SCALAR):
-        return ops.log(s.lift / s.lift_before) - TIME_COST * self.dt, info["is_success"]
+    def reward(self, before, after, info, ops=SCALAR):
+        """ln(ℓ′/ℓ) − 0.2 dt."""
+        return ops.log(after.lift / before.lift) - TIME_COST * self.dt
 
-    def _success(self, s, ops=SCALAR):
-        return s.upright_steps >= self.hold_steps
+    def terminated(self, s, info, ops=SCALAR):
+        """Success: held inverted for hold_time."""
+        return info["is_success"]
 
 
 class KapitzaPendulumVectorEnv(TaskVectorEnv):
@@ -400,55 +414,22 @@ class KapitzaPendulumVectorEnv(TaskVectorEnv):
     steppers get one segment length per row."""
 
     single_env = KapitzaPendulumEnv
-    RECORD = ("max_deviation",)  # the task's record of the episode, per row
 
-    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
-        super().__init__(num_envs, max_episode_steps, **kwargs)
-        self.y, self.u, self.u_dot = np.zeros((num_envs, 2)), np.zeros((num_envs, 2)), np.zeros((num_envs, 2))
-        self.t, self.energy_error, self.step_info = np.zeros(num_envs), np.zeros(num_envs), None
-        self.energy = np.zeros(num_envs)
-        for name in self.RECORD:
-            setattr(self, name, np.zeros(num_envs, type(getattr(self.env, name))))
-
-    def _capture(self, i):
-        for name in ("y", "u", "u_dot", "t", "energy", "energy_error", *self.RECORD):
-            getattr(self, name)[i] = getattr(self.env, name)
-        self.step_info = None  # a row has changed since the step's info
-
-    def _advance(self, actions):
+    def advance(self, s, u_dot_cmd):
         env = self.env
-        u_dot_cmd = np.zeros((self.num_envs, 2))
-        u_dot_cmd[:, env.axes] = actions * env.v_max
-        starts, velocities, durations, self.u, self.u_dot = pivot_segments_batch(self.u, u_dot_cmd, env.a_max, env.dt)
+        starts, velocities, durations, u, u_dot = pivot_segments_batch(s.u, u_dot_cmd, env.a_max, env.dt)
         segments = zip(starts, velocities, durations)
-        self.y, change = self._run_segments(env.system, self.y, segments, self._frame_energy)
-        self.energy_error = self.energy_error + change
-        env.check_energy_error(self.energy_error)
-        self.energy = env.system.energy(self.y, self.u_dot)
-        self.t = self.t + env.dt
-        env._track(self, BATCH)
-        self.step_info = env._info(self, BATCH)  # the reward needs it; kept for _describe unless a row resets
-        reward, self.task_terminated = env._task(self, self.step_info, BATCH)
-        return reward
+        y, change = run_segments(self.stepper, env.system, s.y, segments, self._frame_energy)
+        env.check_energy_error(s.energy_error + change)
+        energy = env.system.energy(y, u_dot)
+        return env.at(y, u, u_dot, s.t + env.dt, energy, s.energy_error + change, s, BATCH)
 
     def _frame_energy(self, y, u, u_dot):
         """E in the frame of the pivot's velocity, conserved on each segment (the single env's energy check)."""
         return self.env.system.energy(y, u_dot)
-
-    def _terminated(self, info):
-        return self.task_terminated
-
-    def _observe(self):
-        return self.env._obs(self, BATCH)
-
-    def _describe(self):
-        info = self.step_info if self.step_info is not None else self.env._info(self, BATCH)
-        self.step_info = None
-        return info
 
 
 class KapitzaSwingUpVectorEnv(KapitzaPendulumVectorEnv):
     """KapitzaSwingUp-v0 over a batch; as KapitzaPendulumVectorEnv."""
 
     single_env = KapitzaSwingUpEnv
-    RECORD = ("upright_steps", "lift", "lift_before")

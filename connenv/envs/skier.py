@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.steppers import StepperError, control_segments, control_segments_batch, make_stepper
-from connenv.core.validation import check_action, check_keys, check_number, check_stepper_options
-from connenv.envs.base import RenderedEnv
-from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
+from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
+from connenv.core.steppers import make_stepper
+from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
 
@@ -23,7 +25,21 @@ DEFAULT_INTEGRATOR = "dop853"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # on the Pareto front: python -m connenv.bench precision
 
 
-class SkierEnv(RenderedEnv):
+@dataclass
+class SkierState(State):
+    """y = (x, p); the height h; the time t; side, the sign of x − target_x at reset (0 on a trail with two rims),
+    from which the one goal is reached; the energy E at (y, h), which the reward compares; the stepper's energy
+    error (the change of E on held segments since reset)."""
+
+    y: np.ndarray
+    h: float
+    t: float
+    side: float
+    energy: float
+    energy_error: float
+
+
+class SkierEnv(TaskEnv):
     r"""
     ## Description
 
@@ -177,44 +193,7 @@ class SkierEnv(RenderedEnv):
         low = -high
         low[2] = 0.0
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
-
-        self.y = np.zeros(2)  # (x, p)
-        self.h, self.t, self.side = self.h_min, 0.0, 1.0
-        self.energy_error = 0.0  # the stepper's: the change of E on held segments since reset
-
-    # -- Gymnasium API -------------------------------------------------------
-
-    def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        options = dict(options or {})
-        check_keys("reset options", options, {"state"})
-        offset = self.np_random.uniform(*START_OFFSETS) * self.np_random.choice([-1.0, 1.0])
-        x0 = min(max(self.x_bottom + offset, self.trail.lo), self.trail.hi)
-        self.y, self.h, self.t, self.energy_error = np.array([x0, 0.0]), self.h_min, 0.0, 0.0
-        if "state" in options:
-            self._set_state(options["state"])
-        self.side = math.copysign(1.0, self.y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
-        return self._obs(), self._info()
-
-    def step(self, action):
-        h_cmd = self.command(check_action(action, self.action_space)[0])
-        progress_before = self._progress(self._energy())
-        try:
-            for h, h_dot, tau in control_segments(self.h, h_cmd, self.dt, self.max_height_speed):
-                energy = float(self.system.energy(self.y, h)) if h_dot == 0.0 else None
-                self.y = self.stepper(self.system, self.y, np.array([h]), np.array([h_dot]), tau)
-                if energy is not None:
-                    self.energy_error += float(self.system.energy(self.y, h)) - energy
-            self.check_energy_error(self.energy_error)
-        except StepperError as error:
-            raise self._stepper_error(error) from error
-        self.h = h + h_dot * tau
-        self.t += self.dt
-        info = self._info()
-        reward = self.reward(progress_before, info["progress"])
-        if self.render_mode == "human":
-            self.render()
-        return self._obs(), reward, info["is_success"], False, info
+        self.state = self.at(np.array([self.x_bottom, 0.0]), self.h_min, 0.0, 0.0, 0.0)
 
     def _make_renderer(self):
         from connenv.envs.rendering import SkierRenderer
@@ -222,9 +201,18 @@ class SkierEnv(RenderedEnv):
         return SkierRenderer(self.trail, self.h_max, self.render_mode, self.metadata["render_fps"])
 
     def _draw(self, renderer):
-        return renderer.draw(self.y[0], self.h, self.h_min, self.t)
+        return renderer.draw(self.state.y[0], self.state.h, self.h_min, self.state.t)
 
-    # -- internals -----------------------------------------------------------
+    def parameters(self):
+        return {
+            "h_min": self.h_min,
+            "h_max": self.h_max,
+            "min 1 − κ h_max": round(self.min_lever, 12),
+            "mass": self.system.mass,
+            "g": self.system.g,
+        }
+
+    # -- construction ----------------------------------------------------------
 
     def _goals(self, target_x):
         """The points to reach: the rims, or target_x."""
@@ -239,64 +227,77 @@ class SkierEnv(RenderedEnv):
         f, f1, _, _ = self.trail.profile(np.array(x))
         return float(f + self.h_min / math.sqrt(1.0 + f1**2))
 
-    def _set_state(self, state):
+    # -- physics ---------------------------------------------------------------
+
+    def at(self, y, h, t, side, energy_error, ops=SCALAR):
+        """The state at (y, h, t), with its energy."""
+        return SkierState(y, h, t, side, ops.real(self.system.energy(y, h)), energy_error)
+
+    def start(self, options):
+        check_keys("reset options", options, {"state"})
+        offset = self.np_random.uniform(*START_OFFSETS) * self.np_random.choice([-1.0, 1.0])
+        x0 = min(max(self.x_bottom + offset, self.trail.lo), self.trail.hi)
+        y, h = np.array([x0, 0.0]), self.h_min
+        if "state" in options:
+            y, h = self._check_state(options["state"], x0)
+        side = math.copysign(1.0, y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
+        return self.at(y, h, 0.0, side, 0.0)
+
+    def advance(self, s, h_cmd):
+        segments = control_segments(s.h, h_cmd, self.dt, self.max_height_speed)
+        h, h_dot, tau = segments[-1]  # the step ends at h + ḣ τ
+        segments = [(np.array([v]), np.array([v_dot]), duration) for v, v_dot, duration in segments]
+        y, change = run_segments(self.stepper, self.system, s.y, segments, self._held_energy)
+        self.check_energy_error(s.energy_error + change)
+        return self.at(y, h + h_dot * tau, s.t + self.dt, s.side, s.energy_error + change)
+
+    def _held_energy(self, y, h, h_dot):
+        """E where the height is held, 0 where it moves."""
+        return float(self.system.energy(y, h[0])) if h_dot[0] == 0.0 else 0.0
+
+    def check_energy_error(self, energy_error):
+        """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
+        bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * (self.z_goal - self.z_floor)
+        check_drift(self.stepper, "energy error", energy_error, bound, " J")
+
+    def _check_state(self, state, x):
         check_keys("options['state']", state, {"x", "x_dot", "p", "h"})
         if "x_dot" in state and "p" in state:
             raise ValueError("options['state'] gives both x_dot and p; give one of them")
-        x = check_number("state x", state.get("x", self.y[0]), self.trail.lo, self.trail.hi)
+        x = check_number("state x", state.get("x", x), self.trail.lo, self.trail.hi)
         h = check_number("state h", state.get("h", self.h_min), self.h_min, self.h_max)
         if "p" in state:
             p = check_number("state p", state["p"])
         else:
             w = self.system.geometry(x, h)[5]
             p = self.system.mass * w * w * check_number("state x_dot", state.get("x_dot", 0.0))
-        self.y, self.h = np.array([x, p]), h
-
-    def parameters(self):
-        return {
-            "h_min": self.h_min,
-            "h_max": self.h_max,
-            "min 1 − κ h_max": round(self.min_lever, 12),
-            "mass": self.system.mass,
-            "g": self.system.g,
-        }
-
-    def _energy(self):
-        return float(self.system.energy(self.y, self.h))
-
-    def check_energy_error(self, energy_error):
-        """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
-        bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * (self.z_goal - self.z_floor)
-        drift = abs(energy_error) if np.ndim(energy_error) == 0 else np.max(np.abs(energy_error))
-        if not drift <= bound:
-            raise StepperError(f"{self.stepper} diverged: |energy error| = {drift:.3g} J > {bound:.3g} J")
-
-    def _progress(self, energy):
-        return (energy / (self.system.mass * self.system.g) - self.z_floor) / (self.z_goal - self.z_floor)
-
-    def _obs(self):
-        return self.observe(self.y, self.h)
-
-    def _info(self):
-        return self.describe(self.y, self.h, self.t, self.side)
+        return np.array([x, p]), h
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def command(self, a):
         """The commanded height of action a."""
-        return self.h_min + 0.5 * (a + 1.0) * (self.h_max - self.h_min)
+        return self.h_min + 0.5 * (a.T[0] + 1.0) * (self.h_max - self.h_min)
 
-    def reward(self, progress_before, progress_after, ops=SCALAR):
+    def progress(self, energy):
+        """ε = (E/(m g) − z₀)/(z* − z₀)."""
+        return (energy / (self.system.mass * self.system.g) - self.z_floor) / (self.z_goal - self.z_floor)
+
+    def reward(self, before, after, info, ops=SCALAR):
+        """ln(max(ε′, 1e-4)/max(ε, 1e-4)) − 0.01."""
+        progress_before, progress_after = self.progress(before.energy), info["progress"]
         floor = PROGRESS_FLOOR
         return ops.log(ops.maximum(progress_after, floor) / ops.maximum(progress_before, floor)) - TIME_COST
 
-    def success(self, x, side):
+    def success(self, s):
         """At or beyond a rim (side 0), or at or past the one goal from the side the episode started on."""
+        x = s.y[..., 0]
         if len(self.goals) == 2:
             return (x <= self.goals[0]) | (x >= self.goals[1])
-        return (x - self.goals[0]) * side <= 0.0
+        return (x - self.goals[0]) * s.side <= 0.0
 
-    def observe(self, y, h, ops=SCALAR):
+    def observe(self, s, ops=SCALAR):
+        y, h = s.y, s.h
         x = y[..., 0]
         _, f1, sigma, kappa, *_ = self.system.geometry(x, h)
         mid, half = 0.5 * (self.trail.hi + self.trail.lo), 0.5 * (self.trail.hi - self.trail.lo)
@@ -313,20 +314,24 @@ class SkierEnv(RenderedEnv):
             ]
         )
 
-    def describe(self, y, h, t, side, ops=SCALAR):
+    def describe(self, s, ops=SCALAR):
+        y, h = s.y, s.h
         x, p = y[..., 0], y[..., 1]
-        energy = ops.real(self.system.energy(y, h))
         state = {
             "x": x,
             "x_dot": ops.real(self.system.velocity(y, h)),
             "p": p,
             "h": h,
-            "t": t,
+            "t": s.t,
             "s": ops.real(self.trail.arc_length(x)),
             "kappa": ops.real(self.system.geometry(x, h)[3]),
         }
-        progress = self._progress(energy)
-        return {"state": state, "energy": energy, "progress": progress, "is_success": ops.flag(self.success(x, side))}
+        return {
+            "state": state,
+            "energy": s.energy,
+            "progress": self.progress(s.energy),
+            "is_success": ops.flag(self.success(s)),
+        }
 
 
 class SkierVectorEnv(TaskVectorEnv):
@@ -338,34 +343,14 @@ class SkierVectorEnv(TaskVectorEnv):
 
     single_env = SkierEnv
 
-    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
-        super().__init__(num_envs, max_episode_steps, **kwargs)
-        self.y, self.h = np.zeros((num_envs, 2)), np.full(num_envs, self.env.h_min)
-        self.t, self.side, self.energy_error = np.zeros(num_envs), np.zeros(num_envs), np.zeros(num_envs)
-
-    def _capture(self, i):
+    def advance(self, s, h_cmd):
         env = self.env
-        self.y[i], self.h[i], self.t[i], self.side[i] = env.y, env.h, env.t, env.side
-        self.energy_error[i] = env.energy_error
+        segments, h_end = control_segments_batch(s.h, h_cmd, env.dt, env.max_height_speed)
+        segments = [(h[:, None], h_dot[:, None], tau) for h, h_dot, tau in segments]
+        y, change = run_segments(self.stepper, env.system, s.y, segments, self._held_energy)
+        env.check_energy_error(s.energy_error + change)
+        return env.at(y, h_end, s.t + env.dt, s.side, s.energy_error + change, BATCH)
 
     def _held_energy(self, y, h, h_dot):
         """E on the rows whose height is held (the single env's energy check), 0 on the others."""
         return np.where(h_dot[:, 0] == 0.0, self.env.system.energy(y, h[:, 0]), 0.0)
-
-    def _advance(self, actions):
-        env = self.env
-        h_cmd = env.command(actions[:, 0])
-        progress_before = env._progress(env.system.energy(self.y, self.h))
-        segments, h_end = control_segments_batch(self.h, h_cmd, env.dt, env.max_height_speed)
-        segments = [(h[:, None], h_dot[:, None], tau) for h, h_dot, tau in segments]
-        self.y, change = self._run_segments(env.system, self.y, segments, self._held_energy)
-        self.energy_error = self.energy_error + change
-        env.check_energy_error(self.energy_error)
-        self.h, self.t = h_end, self.t + env.dt
-        return env.reward(progress_before, env._progress(env.system.energy(self.y, self.h)), BATCH)
-
-    def _observe(self):
-        return self.env.observe(self.y, self.h, BATCH)
-
-    def _describe(self):
-        return self.env.describe(self.y, self.h, self.t, self.side, BATCH)
