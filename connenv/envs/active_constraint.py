@@ -257,7 +257,10 @@ class ActiveConstraintEnv(TaskEnv):
         if control not in CONTROLS:
             raise ValueError(f"control={control!r} is not one of {CONTROLS}")
         if control == "velocity" and self.max_control_speed is None:
-            raise ValueError("control='velocity' needs max_control_speed: u̇ = action · max_control_speed")
+            raise ValueError(
+                f"control='velocity' (the default for a system of class {self.jump_class.value!r}) needs "
+                "max_control_speed: u̇ = action · max_control_speed"
+            )
         if control == "position":
             if self.jump_class is JumpClass.GENERAL and self.max_control_speed is None:
                 raise ValueError(
