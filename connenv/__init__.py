@@ -67,4 +67,5 @@ register(
     id="connenv/ActiveConstraint-v0",
     entry_point="connenv.envs.active_constraint:ActiveConstraintEnv",
     vector_entry_point="connenv.envs.active_constraint:ActiveConstraintVectorEnv",
+    max_episode_steps=1000,
 )

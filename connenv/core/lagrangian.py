@@ -132,13 +132,16 @@ def _lambdify(groups, outputs):
     sizes = [len(output) for output in flat]
 
     def call(*arrays):
+        if all(np.ndim(a) == 1 for a in arrays):  # one state: Python floats, without numpy's per-call overhead
+            values = np.array(f(*(float(x) for a in arrays for x in a)), float)
+            return np.split(values, np.cumsum(sizes)[:-1])
         arrays = [np.asarray(a, float) for a in arrays]
         shape = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
         columns = [a[..., j] for a in arrays for j in range(a.shape[-1])]
         values = [np.broadcast_to(v, shape) for v in f(*columns)]
         out, start = [], 0
         for size in sizes:
-            out.append(np.stack(values[start : start + size], axis=-1) if size else np.zeros(shape + (0,)))
+            out.append(np.stack(values[start : start + size], axis=-1))
             start += size
         return out
 

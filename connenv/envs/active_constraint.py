@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
 
 from connenv.core.batched import batched
-from connenv.core.mechanics import JumpClass, bressan_matrices, classify, hamiltonian, vector_field, _gradient
+from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import Scipy, make_stepper
 from connenv.core.validation import check_keys, check_number, check_stepper_options
@@ -58,12 +57,15 @@ class JumpFlow:
     def vector_field(self, y, u, delta_u):
         if hasattr(self.system, "jump_field"):
             return self.system.jump_field(y, u, delta_u)
-        n = self.system.n
+        n, delta_u = self.system.n, np.asarray(delta_u, float)
         q, p = y[..., :n], y[..., n:]
-        K = bressan_matrices(self.system, q, u)[1]
-        flux = _gradient(lambda qs, ps, us, du: np.sum(ps * (bressan_matrices(self.system, qs, us)[1] @ du[..., None])[
-            ..., 0], axis=-1), q, p, u, delta_u)
-        return np.concatenate([-(K @ np.asarray(delta_u)[..., None])[..., 0], flux], axis=-1)
+        K_delta = _matvec(bressan_matrices(self.system, q, u)[1], delta_u)
+        flux = _gradient(self._momentum_flux, q, p, u, delta_u)
+        return np.concatenate([-K_delta, flux], axis=-1)
+
+    def _momentum_flux(self, q, p, u, delta_u):
+        """pᵀ K(q, u) Δu."""
+        return np.sum(p * _matvec(bressan_matrices(self.system, q, u)[1], delta_u), axis=-1)
 
 
 class ActiveConstraintEnv(TaskEnv):
@@ -124,8 +126,9 @@ class ActiveConstraintEnv(TaskEnv):
 
     ## Episode End
 
-    Default: never terminates (wrap in a TimeLimit or pass `max_episode_steps` to `gym.make`). With `task`,
-    terminated when `task.terminated(state)` (also `info["is_success"]`).
+    Default: never terminates. With `task`, terminated when `task.terminated(state)` (also
+    `info["is_success"]`). `gym.make("connenv/ActiveConstraint-v0", ...)` truncates after 1000 steps (the
+    registration's time limit; `max_episode_steps=` to change it).
 
     ## Arguments
 
@@ -200,11 +203,13 @@ class ActiveConstraintEnv(TaskEnv):
         self.system, self.n, self.m = system, int(system.n), int(system.m)
         self.u_low, self.u_high = self._check_bounds(u_low, u_high)
         self.max_control_speed = (
-            None if max_control_speed is None else check_number("max_control_speed", max_control_speed, 0.0, open_low=True)
+            None
+            if max_control_speed is None
+            else check_number("max_control_speed", max_control_speed, 0.0, open_low=True)
         )
         finite = np.isfinite(self.u_low) & np.isfinite(self.u_high)
-        u_start = np.where(finite, 0.5 * (np.where(finite, self.u_low, 0.0) + np.where(finite, self.u_high, 0.0)), 0.0)
-        self.u_start = np.clip(u_start, self.u_low, self.u_high)
+        midpoint = 0.5 * (np.where(finite, self.u_low, 0.0) + np.where(finite, self.u_high, 0.0))
+        self.u_start = np.where(finite, midpoint, np.clip(0.0, self.u_low, self.u_high))
         q_samples, u_samples = self._samples()
         check_metric(system, q_samples, u_samples)
         self.jump_class = getattr(system, "jump_class", None) or classify(system, q_samples, u_samples)
