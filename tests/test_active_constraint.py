@@ -249,3 +249,27 @@ def test_connenv_import_stays_free_of_sympy():
 
     code = "import sys, connenv; print('sympy' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip() == "False"
+
+
+def test_a_blow_up_in_finite_time_raises_stepper_error():
+    """H = p²/2 − q⁴ reaches q = ∞ in finite time from q = 1, p = √2 (E = 0: q(t) = 1/(1 − √2 t)), within the
+    first step at dt = 1: the stepper raises instead of returning a non-finite state."""
+    from connenv.core import StepperError
+
+    q, q_dot = sp.symbols("q q_dot")
+    env = ActiveConstraintEnv.from_lagrangian(q_dot**2 / 2 + u_dot**2 / 2, -(q**4), [q], [u], u_low=0, u_high=1, dt=1.0)
+    env.reset(options={"state": {"q": [1.0], "p": [math.sqrt(2.0)]}})
+    with pytest.raises(StepperError, match="ActiveConstraintEnv in the step from t = 0"):
+        env.step(np.array([0.0]))
+
+
+def test_pickle_and_deepcopy_keep_the_derived_system():
+    import copy
+    import pickle
+
+    env = ActiveConstraintEnv(rotor_system(), -1.0, 1.0, task=StopAtQuarterTurn())
+    env.reset(seed=3)
+    for clone in (pickle.loads(pickle.dumps(env)), copy.deepcopy(env)):
+        assert clone.jump_class is JumpClass.FIT
+        a = np.array([0.4])
+        np.testing.assert_array_equal(clone.step(a)[0], copy.deepcopy(env).step(a)[0])

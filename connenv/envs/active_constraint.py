@@ -145,9 +145,11 @@ class ActiveConstraintEnv(TaskEnv):
     | draw | None | `draw(state, canvas)`: draws a state dict on a `connenv.envs.rendering.Canvas` |
     | render_mode | None | "human", "rgb_array" |
 
-    The default integrator is scipy's DOP853 at rtol = 1e-10, atol = 1e-12, the adaptive method that the
-    work–precision runs put on the front for the smooth, non-stiff flows of these systems; a generic system
-    has no closed-form flow. A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or
+    The default integrator is scipy's DOP853 at rtol = 1e-10, atol = 1e-12. A generic system has no closed-form
+    flow and time scales the env cannot know, so the step adapts to them rather than to a fixed substep count;
+    `python -m connenv.bench generic` measures the candidates (evaluations of the vector field per step, time,
+    error against DOP853 at 1e-13) on a swing and a bead on a bar, where DOP853 reaches round-off for the cost of
+    RK4 with 4 to 8 substeps. A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or
     an energy error (the change of E = ½ pᵀ A p + V over the segments where u is held) past 1e-2 (1 + |E|).
 
     Every `info` has `"state"`: `{"q": array(n), "p": array(n), "u": array(m), "t": float}` and
