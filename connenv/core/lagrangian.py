@@ -128,21 +128,20 @@ def _lambdify(groups, outputs):
     symbols = [sp.symbols(f"x{i}_0:{len(group)}") for i, group in enumerate(groups)]
     rename = {s: x for group, xs in zip(groups, symbols) for s, x in zip(group, xs)}
     entries = [[sp.sympify(e).xreplace(rename) for e in output] for output in flat]
-    f = sp.lambdify([x for xs in symbols for x in xs], [e for output in entries for e in output], "numpy", cse=True)
+    arguments, values = [x for xs in symbols for x in xs], [e for output in entries for e in output]
+    f = sp.lambdify(arguments, values, "numpy", cse=True)
+    f_scalar = sp.lambdify(arguments, values, "math", cse=True)  # one state: Python floats, no numpy overhead
     sizes = [len(output) for output in flat]
+    bounds = list(zip(np.cumsum([0, *sizes[:-1]]), np.cumsum(sizes)))
 
     def call(*arrays):
-        if all(np.ndim(a) == 1 for a in arrays):  # one state: Python floats, without numpy's per-call overhead
-            values = np.array(f(*(float(x) for a in arrays for x in a)), float)
-            return np.split(values, np.cumsum(sizes)[:-1])
+        if all(np.ndim(a) == 1 for a in arrays):
+            out = np.array(f_scalar(*(x for a in arrays for x in np.asarray(a, float).tolist())), float)
+            return [out] if len(bounds) == 1 else [out[start:end] for start, end in bounds]
         arrays = [np.asarray(a, float) for a in arrays]
         shape = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
         columns = [a[..., j] for a in arrays for j in range(a.shape[-1])]
-        values = [np.broadcast_to(v, shape) for v in f(*columns)]
-        out, start = [], 0
-        for size in sizes:
-            out.append(np.stack(values[start : start + size], axis=-1))
-            start += size
-        return out
+        out = [np.broadcast_to(v, shape) for v in f(*columns)]
+        return [np.stack(out[start:end], axis=-1) for start, end in bounds]
 
     return call
