@@ -159,20 +159,24 @@ class ActiveConstraintEnv(TaskEnv):
 
     `task` is any object with `reset(np_random) -> state dict`, `reward(state, next_state) -> float`,
     `terminated(state) -> bool` and optionally `observation(state) -> array`, all on state dicts as in
-    `info["state"]`. To stop the rotor body at θ = π/2 from rest at θ = 0:
+    `info["state"]`. To turn a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², to θ = 0.5 rad: at rest
+    θ + J u/(I + J) is conserved, so with I = 2, J = 1/2 the rotor turns to u ≈ −2.5 to get there:
 
-        class TurnBy90:
+        theta, theta_dot, u, u_dot = sp.symbols("theta theta_dot u u_dot")
+        rotor = LagrangianSystem(theta_dot**2 + (theta_dot + u_dot) ** 2 / 4, 0, [theta], [u])
+
+        class TurnTo:
             def reset(self, np_random):
                 return {"q": np_random.uniform(-0.1, 0.1, 1)}
 
             def reward(self, state, next_state):
-                return -abs(next_state["q"][0] - math.pi / 2)
+                return -abs(next_state["q"][0] - 0.5)
 
             def terminated(self, state):
-                return abs(state["q"][0] - math.pi / 2) < 0.01
+                return abs(state["q"][0] - 0.5) < 0.01
 
         env = gym.make("connenv/ActiveConstraint-v0", system=rotor, u_low=-math.pi, u_high=math.pi,
-                       task=TurnBy90(), max_episode_steps=200)
+                       task=TurnTo(), max_episode_steps=200)
 
     The vector env calls a task's functions row by row.
     """
