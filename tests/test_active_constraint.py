@@ -273,3 +273,16 @@ def test_pickle_and_deepcopy_keep_the_derived_system():
         assert clone.jump_class is JumpClass.FIT
         a = np.array([0.4])
         np.testing.assert_array_equal(clone.step(a)[0], copy.deepcopy(env).step(a)[0])
+
+
+def test_rotor_ramp_and_jump_turn_the_body_alike():
+    """At p = 0, θ + J u/(I + J) is conserved along any path of u: a ramp at bounded speed ends where the jump
+    lands (the ramp through the vector field, the jump through the jump equations)."""
+    jump = ActiveConstraintEnv(rotor_system(), -3.0, 3.0)
+    ramp = ActiveConstraintEnv(rotor_system(), -3.0, 3.0, max_control_speed=4.0)
+    for env in (jump, ramp):
+        env.reset(options={"state": {"q": [0.2], "u": [-1.0]}})
+        for _ in range(20):  # the ramp covers Δu = 2.5 in 0.625 s: 13 steps
+            *_, info = env.step(np.array([0.5]))
+        assert info["state"]["u"][0] == pytest.approx(1.5, abs=1e-15)
+        assert abs(info["state"]["q"][0] - (0.2 - J * 2.5 / (I + J))) < 1e-12
