@@ -124,6 +124,8 @@ class TwoByTwo:
                                                      u_high=1), r"\['u_dot'\].*not in q"),
         (lambda: ActiveConstraintEnv.from_lagrangian(theta_dot**4 + u_dot**2, 0, [theta], [u], u_low=0, u_high=1),
          "not a quadratic form"),
+        (lambda: ActiveConstraintEnv.from_lagrangian(theta_dot**2 + u_dot**2, sp.sign(theta), [theta], [u], u_low=0,
+                                                     u_high=1), "derivative sympy cannot evaluate"),
         (lambda: ActiveConstraintEnv(TwoByTwo([[1, 0.5], [0.2, 1]], [[0], [0]], [[1]], n=2), 0, 1),
          "G11 .* not symmetric"),
         (lambda: ActiveConstraintEnv(TwoByTwo([[-1]], [[0]], [[1]]), 0, 1), "G11 .* not positive definite"),

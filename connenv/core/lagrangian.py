@@ -60,6 +60,13 @@ class LagrangianSystem:
         y, delta = list(q) + list(p), sp.Matrix(sp.symbols(f"du0:{self.m}", real=True))
         pK = (p.T * K * delta)[0]
         jump = [-(K * delta)[i] for i in range(n)] + [sp.diff(pK, s) for s in q]
+        for name, expressions in (("the vector field", p_rate), ("the jump equations", jump)):
+            stuck = [e for e in expressions if e.has(sp.Derivative)]
+            if stuck:
+                raise ValueError(
+                    f"{name} has a derivative sympy cannot evaluate, {stuck[0]}: T and V must be differentiable in q "
+                    f"(kinetic={kinetic}, potential={potential})"
+                )
         self._metric = _lambdify([q, u], [G11, G12, G22])
         self._potential = _lambdify([q, u], [[potential]])
         self._field = _lambdify([y, u, u_dot], [list(q_rate) + p_rate])
@@ -130,14 +137,17 @@ def _lambdify(groups, outputs):
     entries = [[sp.sympify(e).xreplace(rename) for e in output] for output in flat]
     arguments, values = [x for xs in symbols for x in xs], [e for output in entries for e in output]
     f = sp.lambdify(arguments, values, "numpy", cse=True)
-    f_scalar = sp.lambdify(arguments, values, "math", cse=True)  # one state: Python floats, no numpy overhead
+    scalar = [sp.lambdify(arguments, values, "math", cse=True)]  # one state: Python floats, no numpy overhead
     sizes = [len(output) for output in flat]
     bounds = list(zip(np.cumsum([0, *sizes[:-1]]), np.cumsum(sizes)))
 
     def call(*arrays):
-        if all(np.ndim(a) == 1 for a in arrays):
-            out = np.array(f_scalar(*(x for a in arrays for x in np.asarray(a, float).tolist())), float)
-            return [out] if len(bounds) == 1 else [out[start:end] for start, end in bounds]
+        if scalar[0] is not None and all(np.ndim(a) == 1 for a in arrays):
+            try:
+                out = np.array(scalar[0](*(x for a in arrays for x in np.asarray(a, float).tolist())), float)
+                return [out] if len(bounds) == 1 else [out[start:end] for start, end in bounds]
+            except (NameError, TypeError, ValueError, OverflowError, ZeroDivisionError):
+                scalar[0] = None  # a function math lacks, or a domain error: numpy's, which answers nan or inf
         arrays = [np.asarray(a, float) for a in arrays]
         shape = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
         columns = [a[..., j] for a in arrays for j in range(a.shape[-1])]
