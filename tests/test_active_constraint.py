@@ -288,3 +288,19 @@ def test_rotor_ramp_and_jump_turn_the_body_alike():
             *_, info = env.step(np.array([0.5]))
         assert info["state"]["u"][0] == pytest.approx(1.5, abs=1e-15)
         assert abs(info["state"]["q"][0] - (0.2 - J * 2.5 / (I + J))) < 1e-12
+
+
+def test_explicit_euler_on_the_held_swing_trips_the_energy_check():
+    """Explicit Euler multiplies a pendulum's energy error each step; at dt = 0.3 s the held swing's energy, which
+    the flow conserves, drifts past the bound within a few steps: StepperError, not a wrong answer."""
+    from connenv.core import StepperError
+
+    accurate = ActiveConstraintEnv(swing_system(), 1.6, 2.0, dt=0.3)
+    accurate.reset(options={"state": {"q": [1.0]}})
+    for _ in range(20):
+        accurate.step(np.array([1.0]))  # the default stepper keeps E
+    env = ActiveConstraintEnv(swing_system(), 1.6, 2.0, dt=0.3, integrator="euler")
+    env.reset(options={"state": {"q": [1.0]}})
+    with pytest.raises(StepperError, match=r"Euler\(substeps=1\) diverged: \|energy error\|"):
+        for _ in range(20):
+            env.step(np.array([1.0]))
