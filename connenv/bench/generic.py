@@ -26,11 +26,14 @@ from connenv.envs.active_constraint import ActiveConstraintEnv
 
 G = 9.81
 r, r_dot, theta, theta_dot = sp.symbols("r r_dot theta theta_dot")
-SYSTEMS = {
-    "swing": (((r_dot**2 + r**2 * theta_dot**2) / 2, -G * r * sp.cos(theta), [theta], [r]),
-              {"u_low": 1.6, "u_high": 2.0}, {"q": [1.0]}),
-    "bead": (((r_dot**2 + r**2 * theta_dot**2) / 2, G * r * sp.sin(theta), [r], [theta]),
-             {"u_low": -1.0, "u_high": 1.0, "max_control_speed": 1.0}, {"q": [0.3]}),
+T = (r_dot**2 + r**2 * theta_dot**2) / 2
+SYSTEMS = {  # (kinetic, potential, q, u), make kwargs, reset state
+    "swing": ((T, -G * r * sp.cos(theta), [theta], [r]), {"u_low": 1.6, "u_high": 2.0}, {"q": [1.0]}),
+    "bead": (
+        (T, G * r * sp.sin(theta), [r], [theta]),
+        {"u_low": -1.0, "u_high": 1.0, "max_control_speed": 1.0},
+        {"q": [0.3]},
+    ),
 }
 TIGHT = {"integrator": "dop853", "rtol": 1e-13, "atol": 1e-15}
 CANDIDATES = [("rk4", {"substeps": s}) for s in (1, 2, 4, 8, 16)] + [
@@ -74,7 +77,8 @@ def main(argv=None):
     header("generic")
     for name in SYSTEMS:
         rows = measure(name, 50 if args.quick else 200)
-        print(f"\n{name}: {'stepper':<18} {'evals/step':>10} {'µs/step':>9} {'× Pendulum':>11} {'rel. error':>11}  front")
+        columns = f"{'stepper':<18} {'evals/step':>10} {'µs/step':>9} {'× Pendulum':>11} {'rel. error':>11}  front"
+        print(f"\n{name}: {columns}")
         for label, calls, us, ratio, error in rows:
             front = not any(o[1] <= calls and o[4] < error or o[1] < calls and o[4] <= error for o in rows)
             mark = "*" if front else ""
