@@ -11,6 +11,14 @@ is laid out as rl-zoo3's: the model {env}.zip, best_model.zip and evaluations.np
 with the final ones), and results.json, the final evaluation of agents.evaluate on the same episodes for every
 policy.
 
+With --env-kwargs module:factory the envs are made with the kwargs factory() returns (a dict, or a system, which
+becomes {"system": system}): enough to train on a user's own system,
+
+    python train.py --env connenv/ActiveConstraint-v0 --env-kwargs my_robot:env_kwargs --algo ppo
+
+The module is imported from the working directory or the Python path; the analytic controller is then left out of
+the final evaluation (there is none for a user's system).
+
 With --vector-env the training and periodic-evaluation envs are the env's native vector env (gym.make_vec with its
 vector_entry_point, through agents.vec_env.NativeVecEnv) instead of SB3's DummyVecEnv of single envs; the final
 evaluation stays on single envs.
@@ -32,6 +40,7 @@ from tqdm import TqdmExperimentalWarning
 
 import agents
 from agents import evaluate
+from agents.controllers import CONTROLLERS
 from agents.vec_env import make_native_vec_env
 
 HYPERPARAMS = Path(agents.__file__).parent / "hyperparams"
@@ -52,6 +61,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--runs", default="runs", help="folder of the run folders")
     parser.add_argument("--num-threads", type=evaluate.positive_int, default=1, help="torch threads")
     parser.add_argument("--vector-env", action="store_true", help="train on the env's native vector env")
+    parser.add_argument("--env-kwargs", help="module:factory returning the make kwargs (or the system) of --env")
     args = parser.parse_args(argv)
     args.hyperparams = args.hyperparams or str(HYPERPARAMS / f"{args.algo}.yml")
     if not Path(args.hyperparams).is_file():
@@ -104,7 +114,7 @@ class VectorExperimentManager(BestStatsExperimentManager):
         return self._maybe_normalize(env, eval_env)
 
 
-def train(args: argparse.Namespace):
+def train(args: argparse.Namespace, env_kwargs: dict | None = None):
     """Train with rl-zoo3's ExperimentManager into the run folder; return the model and the path of its zip."""
     set_random_seed(args.seed)
     th.set_num_threads(args.num_threads)
@@ -118,6 +128,7 @@ def train(args: argparse.Namespace):
         n_eval_episodes=PERIODIC_EVAL_EPISODES,
         seed=args.seed,
         config=args.hyperparams,
+        env_kwargs=env_kwargs,
         log_interval=-1,
         show_progress=True,
         verbose=0,
@@ -134,11 +145,12 @@ def train(args: argparse.Namespace):
 def main(argv: list[str] | None = None) -> dict:
     """Train, evaluate beside the analytic controller and a random policy, print the table, write results.json."""
     args = parse_args(argv)
+    env_kwargs = evaluate.env_kwargs_of(args.env_kwargs)
     start = time.perf_counter()
-    model, model_path = train(args)
+    model, model_path = train(args, env_kwargs)
     train_seconds = time.perf_counter() - start
-    specs = [str(model_path), "analytic", "random"]
-    report = evaluate.compare(args.env, specs, args.eval_episodes, args.eval_seed, args.algo)
+    specs = [str(model_path), *(["analytic"] if args.env in CONTROLLERS else []), "random"]
+    report = evaluate.compare(args.env, specs, args.eval_episodes, args.eval_seed, args.algo, env_kwargs=env_kwargs)
     print(f"trained {model.num_timesteps} timesteps in {train_seconds:.0f} s")
     print(evaluate.format_table(report))
     results = {

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import importlib
 import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -110,7 +111,22 @@ def algo_of(model_path: Path) -> str:
     return yaml.load(args_file.read_text(), Loader=yaml.UnsafeLoader)["algo"]  # rl-zoo3 writes an OrderedDict
 
 
-def load_model(model_path: str | Path, env_id: str, algo: str | None = None):
+def env_kwargs_of(spec: str | None) -> dict:
+    """The make kwargs named by ``module:factory``: factory() returns the kwargs dict, or a system, which becomes
+    {"system": system} (connenv/ActiveConstraint-v0's). None: no kwargs."""
+    if spec is None:
+        return {}
+    module, _, name = spec.partition(":")
+    if not module or not name:
+        raise ValueError(f"env kwargs {spec!r} must name a factory as module:factory (e.g. my_robot:env_kwargs)")
+    factory = getattr(importlib.import_module(module), name, None)
+    if not callable(factory):
+        raise ValueError(f"env kwargs {spec!r}: module {module!r} has no callable {name!r}")
+    made = factory()
+    return dict(made) if isinstance(made, dict) else {"system": made}
+
+
+def load_model(model_path: str | Path, env_id: str, algo: str | None = None, env_kwargs: dict | None = None):
     """An SB3 model checked against the env's spaces, behind its VecNormalize statistics if it has some."""
     from rl_zoo3.utils import ALGOS
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
@@ -121,7 +137,7 @@ def load_model(model_path: str | Path, env_id: str, algo: str | None = None):
     algo = algo or algo_of(model_path)
     if algo not in ALGOS:
         raise ValueError(f"algo {algo!r} is not one of {sorted(ALGOS)}")
-    env = gym.make(env_id)
+    env = gym.make(env_id, **(env_kwargs or {}))
     goal_env = isinstance(env.observation_space, gym.spaces.Dict)  # SB3 loads a HER model only with its env
     model = ALGOS[algo].load(model_path, device="cpu", **({"env": DummyVecEnv([lambda: env])} if goal_env else {}))
     for space in ("observation_space", "action_space"):
@@ -138,18 +154,20 @@ def load_model(model_path: str | Path, env_id: str, algo: str | None = None):
     return NormalizedPolicy(model, vec_normalize)
 
 
-def make_policy(spec: str, env_id: str, seed: int, algo: str | None = None) -> tuple[str, object]:
+def make_policy(
+    spec: str, env_id: str, seed: int, algo: str | None = None, env_kwargs: dict | None = None
+) -> tuple[str, object]:
     """(label, policy) for a controller name, 'random' or a model zip; a zip's label is algo:run-folder."""
     if spec in CONTROLLER_NAMES:
         return spec, controller(env_id, spec)
     if spec == "random":
-        return spec, RandomPolicy(gym.make(env_id).action_space, seed)
+        return spec, RandomPolicy(gym.make(env_id, **(env_kwargs or {})).action_space, seed)
     if not spec.endswith(".zip"):
         raise ValueError(
             f"policy {spec!r} is not one of {controller_names(env_id)}, 'random', 'pretrained' or a model PATH.zip"
         )
     algo = algo or algo_of(Path(spec))
-    return f"{algo}:{Path(spec).parent.name}", load_model(spec, env_id, algo)
+    return f"{algo}:{Path(spec).parent.name}", load_model(spec, env_id, algo, env_kwargs)
 
 
 def run_episode(env: gym.Env, policy, seed: int) -> Episode:
@@ -174,10 +192,13 @@ def save_gif(frames: list[np.ndarray], path: str | Path, fps: float):
     images[0].save(path, save_all=True, append_images=images[1:], duration=duration, loop=0)
 
 
-def evaluate(env_id: str, policy, episodes: int, seed: int, video: str | Path | None = None) -> list[Episode]:
+def evaluate(
+    env_id: str, policy, episodes: int, seed: int, video: str | Path | None = None, env_kwargs: dict | None = None
+) -> list[Episode]:
     """Episodes reset with seeds seed, seed + 1, ...; with `video`, the first is also written as a GIF."""
-    env = gym.make(env_id)
-    first_env = RenderCollection(gym.make(env_id, render_mode="rgb_array")) if video else env
+    env_kwargs = env_kwargs or {}
+    env = gym.make(env_id, **env_kwargs)
+    first_env = RenderCollection(gym.make(env_id, render_mode="rgb_array", **env_kwargs)) if video else env
     results = [run_episode(first_env if i == 0 else env, policy, seed + i) for i in range(episodes)]
     if video:
         save_gif(first_env.render(), video, env.metadata["render_fps"])
@@ -213,14 +234,22 @@ def expand_pretrained(specs: list[str], env_id: str, algo: str | None) -> list[t
 
 
 def compare(
-    env_id: str, specs: list[str], episodes: int = 100, seed: int = 0, algo: str | None = None, video=None
+    env_id: str,
+    specs: list[str],
+    episodes: int = 100,
+    seed: int = 0,
+    algo: str | None = None,
+    video=None,
+    env_kwargs: dict | None = None,
 ) -> dict:
     """Evaluate each policy spec on the same episodes; `video` films the first policy's first episode. `algo`
-    applies to the zips given by path; a pretrained model's is read from its folder."""
+    applies to the zips given by path; a pretrained model's is read from its folder. env_kwargs: gym.make's."""
     rows = []
     for i, (spec, spec_algo) in enumerate(expand_pretrained(specs, env_id, algo)):
-        label, policy = make_policy(spec, env_id, seed, spec_algo)
-        rows.append(summarize(label, evaluate(env_id, policy, episodes, seed, video if i == 0 else None)))
+        label, policy = make_policy(spec, env_id, seed, spec_algo, env_kwargs)
+        rows.append(
+            summarize(label, evaluate(env_id, policy, episodes, seed, video if i == 0 else None, env_kwargs))
+        )
     return {"env": env_id, "seed": seed, "episodes": episodes, "policies": rows}
 
 
@@ -267,6 +296,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--seed", type=int, default=0, help="episode i is reset with seed + i")
     parser.add_argument("--json", help="default: runs/eval_{env}_s{seed}.json")
     parser.add_argument("--video", help="GIF of the first policy's first episode")
+    parser.add_argument("--env-kwargs", help="module:factory returning the make kwargs (or the system) of --env")
     args = parser.parse_args(argv)
     args.json = args.json or f"runs/eval_{args.env.split('/')[-1]}_s{args.seed}.json"
     return args
@@ -274,7 +304,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> dict:
     args = parse_args(argv)
-    report = compare(args.env, args.policy, args.episodes, args.seed, args.algo, args.video)
+    env_kwargs = env_kwargs_of(args.env_kwargs)
+    report = compare(args.env, args.policy, args.episodes, args.seed, args.algo, args.video, env_kwargs)
     print(format_table(report))
     write_json(report, args.json)
     print(f"wrote {args.json}" + (f" and {args.video}" if args.video else ""))

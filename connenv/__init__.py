@@ -3,6 +3,17 @@
 from gymnasium.envs.registration import register
 
 __version__ = "0.1.0"
+__all__ = ["ActiveConstraintEnv"]
+
+
+def __getattr__(name):
+    """connenv.ActiveConstraintEnv, imported on first use (``import connenv`` stays light)."""
+    if name == "ActiveConstraintEnv":
+        from connenv.envs.active_constraint import ActiveConstraintEnv
+
+        return ActiveConstraintEnv
+    raise AttributeError(f"module 'connenv' has no attribute {name!r}")
+
 
 register(
     id="connenv/Swing-v0",
@@ -51,4 +62,10 @@ register(
     entry_point="connenv.envs.kapitza:KapitzaSwingUpEnv",
     vector_entry_point="connenv.envs.kapitza:KapitzaSwingUpVectorEnv",
     max_episode_steps=6000,
+)
+register(
+    id="connenv/ActiveConstraint-v0",
+    entry_point="connenv.envs.active_constraint:ActiveConstraintEnv",
+    vector_entry_point="connenv.envs.active_constraint:ActiveConstraintVectorEnv",
+    max_episode_steps=1000,
 )

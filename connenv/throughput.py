@@ -50,9 +50,23 @@ VECTOR_TARGETS = {
 }
 
 
+def make_kwargs(env_id: str) -> dict:
+    """The make kwargs of an id: none for the built envs; for ActiveConstraint-v0, which needs a system, the swing
+    from its Lagrangian, T = ½ (ṙ² + r² θ̇²), V = −g r cos θ, r ∈ [1.6, 2] (Swing-v0's defaults)."""
+    if env_id != "connenv/ActiveConstraint-v0":
+        return {}
+    import sympy as sp
+
+    from connenv.core.lagrangian import LagrangianSystem
+
+    r, r_dot, theta, theta_dot = sp.symbols("r r_dot theta theta_dot")
+    swing = LagrangianSystem((r_dot**2 + r**2 * theta_dot**2) / 2, -9.81 * r * sp.cos(theta), [theta], [r])
+    return {"system": swing, "u_low": 1.6, "u_high": 2.0}
+
+
 def single_step_times(env_id: str, steps: int, seed: int = 0):
     """Median step times (s) of env_id and of Pendulum-v1, stepped alternately, each step timed alone."""
-    envs = [gym.make(env_id), gym.make("Pendulum-v1")]
+    envs = [gym.make(env_id, **make_kwargs(env_id)), gym.make("Pendulum-v1")]
     times = [[], []]
     for k, env in enumerate(envs):
         env.reset(seed=seed)
@@ -72,7 +86,7 @@ def single_step_times(env_id: str, steps: int, seed: int = 0):
 def vector_rates(env_id: str, n: int, seconds: float, sync: bool, seed: int = 0):
     """Median env-steps/s of the native vector env and of SyncVectorEnv (None unless sync) at N = n."""
     modes = ["vector_entry_point"] + (["sync"] if sync else [])
-    envs = [gym.make_vec(env_id, n, vectorization_mode=mode) for mode in modes]
+    envs = [gym.make_vec(env_id, n, vectorization_mode=mode, **make_kwargs(env_id)) for mode in modes]
     rng = np.random.default_rng(seed)
     actions = rng.uniform(-1.0, 1.0, (16, *envs[0].action_space.shape)).astype(np.float32)
     rates = [[] for _ in envs]
@@ -109,7 +123,7 @@ class Counted:
 def step_breakdown(env_id: str, n: int, steps: int, seed: int = 0):
     """Where a native vector step goes at N = n: (ms per step, ms in the stepper, vector-field evaluations per
     step, µs per row reset, ms per step of autoresets in the steady state of episodes at the time limit)."""
-    venv = gym.make_vec(env_id, n, vectorization_mode="vector_entry_point")
+    venv = gym.make_vec(env_id, n, vectorization_mode="vector_entry_point", **make_kwargs(env_id))
     prototype = venv.unwrapped.env
     for name in ("system", "reduced_system", "full_system"):
         if hasattr(prototype, name):

@@ -197,3 +197,46 @@ def test_skier_trains_with_its_hyperparameters_and_the_controller_escapes(tmp_pa
     assert Path(results["model"]).name == "connenv-Skier-v0.zip"
     analytic, random = results["evaluation"]["policies"][1:]
     assert analytic["success_rate"] == 1.0 and random["success_rate"] == 0.0
+
+
+FACTORY = '''
+import sympy as sp
+
+theta, theta_dot, u, u_dot = sp.symbols("theta theta_dot u u_dot")
+
+
+class Turn:
+    def reset(self, np_random):
+        return {"q": np_random.uniform(-0.5, 0.5, 1)}
+
+    def reward(self, state, next_state):
+        return -abs(next_state["q"][0] - 1.0)
+
+    def terminated(self, state):
+        return abs(state["q"][0] - 1.0) < 0.05
+
+
+def rotor():
+    from connenv.core.lagrangian import LagrangianSystem
+
+    system = LagrangianSystem(theta_dot**2 + (theta_dot + u_dot) ** 2 / 4, 0, [theta], [u])
+    return {"system": system, "u_low": -3.0, "u_high": 3.0, "task": Turn(), "max_episode_steps": 20}
+'''
+
+
+def test_train_on_a_users_system_named_by_a_factory(tmp_path, monkeypatch):
+    """--env-kwargs module:factory is all train.py needs for ActiveConstraint-v0 on a user's own system."""
+    (tmp_path / "my_rotor.py").write_text(FACTORY)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    argv = ["--env", "connenv/ActiveConstraint-v0", "--env-kwargs", "my_rotor:rotor", "--algo", "ppo"]
+    argv += ["--timesteps", "300", "--runs", str(tmp_path / "runs"), "--eval-episodes", "2", "--eval-freq", "0"]
+    results = train.main(argv)
+    assert results["timesteps"] == 8 * 256
+    assert [row["policy"] for row in results["evaluation"]["policies"]] == ["ppo:ActiveConstraint-v0_ppo_s0", "random"]
+    assert all(row["length_mean"] <= 20 for row in results["evaluation"]["policies"])  # the factory's time limit
+    from agents.evaluate import env_kwargs_of
+
+    kwargs = env_kwargs_of("my_rotor:rotor")
+    env = gym.make("connenv/ActiveConstraint-v0", **kwargs)
+    policy = evaluate.load_model(results["model"], "connenv/ActiveConstraint-v0", env_kwargs=kwargs)
+    assert env.action_space.contains(policy.predict(env.reset(seed=0)[0], deterministic=True)[0])

@@ -5,6 +5,7 @@ smoke version of each); every figure the README or docs/ quote is printed by one
     python -m connenv.bench precision [--env NAME ...] [--quick]   work–precision charts, docs/precision/
     python -m connenv.bench stability [--env NAME ...] [--quick]   stability maps, docs/precision/
     python -m connenv.bench steppers [--env swing|skier|ball]      the energy-drift table that chose the defaults
+    python -m connenv.bench generic [--quick]                      ActiveConstraint-v0's steppers on two Lagrangians
     python -m connenv.bench [--env swing|skier|ball]               the same (the command the older docs quote)
 
 Times are medians of env.step on unwrapped envs, each step timed right after a step of Gymnasium's Pendulum-v1
@@ -15,7 +16,7 @@ from __future__ import annotations
 
 import sys
 
-COMMANDS = ("all", "precision", "stability", "steppers")
+COMMANDS = ("all", "precision", "stability", "steppers", "generic")
 
 
 def main(argv=None):
@@ -31,6 +32,8 @@ def main(argv=None):
         from connenv.bench.precision import main as run
     elif command == "stability":
         from connenv.bench.stability import main as run
+    elif command == "generic":
+        from connenv.bench.generic import main as run
     else:
         from connenv.bench.steppers import main as run
     run(argv)

@@ -143,3 +143,49 @@ def pivot_segments_batch(u, u_dot_cmd, travel: float, dt: float):
         u, u_dot = np.where(stopped, end_stops, u), np.where(stopped, 0.0, u_dot)
         start = end
     return np.stack(starts), np.stack(velocities), np.stack(durations), u, u_dot
+
+
+def bounded_segments(u, u_dot_cmd, low, high, dt: float):
+    """Control segments (u at the start, u̇, duration) covering a step of length dt in which u moves at the
+    commanded velocity until a coordinate meets its bound (low below, high above; ±inf: never), where that
+    coordinate rests for the rest of the step; and (u, u̇) at the end of the step. pivot_segments with bounds
+    of their own per coordinate, asymmetric or infinite. A ramp toward a command stops there: low = min(u, u_cmd),
+    high = max(u, u_cmd)."""
+    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
+    u_end = u + u_dot * dt
+    if np.all((low <= u_end) & (u_end <= high)):  # no stop within the step
+        return [(u, u_dot, dt)], u_end, u_dot
+    stops = np.where(u_dot > 0.0, high, low)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = np.where(u_dot != 0.0, np.maximum((stops - u) / u_dot, 0.0), math.inf)
+    segments, start = [], 0.0
+    for end in sorted({float(s) for s in reach if s < dt} | {dt}):
+        if end > start:
+            segments.append((u.copy(), u_dot.copy(), end - start))
+            u = u + u_dot * (end - start)
+        stopped = reach <= end
+        u[stopped], u_dot[stopped] = stops[stopped], 0.0
+        start = end
+    return segments, u, u_dot
+
+
+def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):
+    """bounded_segments over a batch (..., m): a list of m + 1 segments (u at the start (..., m), u̇ (..., m),
+    durations (...)), a duration 0 where a row has fewer, and (u, u̇) at the end of the step. A segment ends where a
+    coordinate reaches its bound or at dt; row i's segments of nonzero length are bounded_segments' for row i."""
+    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
+    u_end = u + u_dot * dt
+    free = np.all((low <= u_end) & (u_end <= high), axis=-1, keepdims=True)  # no stop within the step
+    stops = np.where(u_dot > 0.0, high, low)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = np.where((u_dot != 0.0) & ~free, np.maximum((stops - u) / u_dot, 0.0), math.inf)
+    ends = np.concatenate([np.sort(np.minimum(reach, dt), axis=-1), np.full(free.shape, dt)], axis=-1)
+    segments, start = [], 0.0
+    for end in np.moveaxis(ends, -1, 0):
+        duration = end - start
+        segments.append((u, u_dot, duration))
+        u = np.where(duration[..., None] > 0.0, u + u_dot * duration[..., None], u)
+        stopped = reach <= end[..., None]
+        u, u_dot = np.where(stopped, stops, u), np.where(stopped, 0.0, u_dot)
+        start = end
+    return segments, u, u_dot

@@ -1,0 +1,466 @@
+"""ActiveConstraint-v0: any Lagrangian system steered by active constraints, from its metric or its Lagrangian."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.batched import batched
+from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
+from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
+from connenv.core.steppers import Scipy, make_stepper
+from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
+
+ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
+JUMP_STEPPER = Scipy("DOP853", rtol=1e-13, atol=1e-13)  # the jump flow over s ∈ [0, 1]
+
+CONTROLS = ("position", "velocity")
+
+
+@dataclass
+class ActiveConstraintState(State):
+    """y = (q, p); the assigned coordinates u; the time t; the stepper's energy error (the change of E = H_u at
+    u̇ = 0 on the segments where u is held, summed since reset)."""
+
+    y: np.ndarray
+    u: np.ndarray
+    t: float
+    energy_error: float
+
+
+@dataclass(frozen=True)
+class MetricField:
+    """A system given by its metric and potential alone, with connenv.core.mechanics' numerical vector field."""
+
+    system: object
+
+    @property
+    def n(self):
+        return self.system.n
+
+    def vector_field(self, y, u, u_dot):
+        return vector_field(self.system, y, u, u_dot)
+
+
+@dataclass(frozen=True)
+class JumpFlow:
+    """The jump equations of a fit system as a vector field in s: along u(s) = u + s Δu, dq/ds = −K Δu,
+    dp/ds = ∂/∂q [pᵀ K] Δu; the system's own ``jump_field`` if it has one (exact), else K from the metric and
+    ∂/∂q by scipy.differentiate. A stepper over the segment (u, Δu, 1) is then the jump."""
+
+    system: object
+
+    def vector_field(self, y, u, delta_u):
+        if hasattr(self.system, "jump_field"):
+            return self.system.jump_field(y, u, delta_u)
+        n, delta_u = self.system.n, np.asarray(delta_u, float)
+        q, p = y[..., :n], y[..., n:]
+        K_delta = _matvec(bressan_matrices(self.system, q, u)[1], delta_u)
+        flux = _gradient(self._momentum_flux, q, p, u, delta_u)
+        return np.concatenate([-K_delta, flux], axis=-1)
+
+    def _momentum_flux(self, q, p, u, delta_u):
+        """pᵀ K(q, u) Δu."""
+        return np.sum(p * _matvec(bressan_matrices(self.system, q, u)[1], delta_u), axis=-1)
+
+
+class ActiveConstraintEnv(TaskEnv):
+    r"""
+    ## Description
+
+    Any mechanical system steered by *active constraints* (Bressan): the controller assigns the coordinates
+    u = (u¹…uᵐ) directly, and the free ones q = (q¹…qⁿ), with their conjugate momenta p, obey Hamilton's equations
+
+        H_u(q, p) = ½ (p − G12 u̇)ᵀ G11⁻¹ (p − G12 u̇) − ½ u̇ᵀ G22 u̇ + V(q, u),
+        q̇ = ∂H_u/∂p,   ṗ = −∂H_u/∂q,
+
+    where T = ½ q̇ᵀ G11 q̇ + q̇ᵀ G12 u̇ + ½ u̇ᵀ G22 u̇ is the kinetic energy in the metric blocks G11, G12, G22 and
+    V the potential. `system` is any object with integer attributes `n`, `m` and methods
+    `metric(q, u) -> (G11, G12, G22)` and `potential(q, u)` broadcasting over leading axes; its own
+    `vector_field(y, u, u_dot)` is used if it has one (else a numerical derivative of H_u). Or build it from
+    sympy expressions with `ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u, **kwargs)`, which
+    derives the equations with exact gradients.
+
+    With A = G11⁻¹, K = A G12 and B = G22 − G12ᵀ A G12, the system's class `env.unwrapped.jump_class`
+    (`connenv.core.JumpClass`) decides which controls are admissible:
+
+    | class | test | u may | default control |
+    |---|---|---|---|
+    | strongly fit | K ≡ 0, ∂B/∂q ≡ 0 | jump; (q, p) unchanged | "position" |
+    | fit | ∂B/∂q ≡ 0 | jump; (q, p) follow the jump equations | "position" |
+    | general | ∂B/∂q ≢ 0 | move at a bounded speed only | "velocity" |
+
+    A jump of a fit system from u to u + Δu follows the straight path u(s) = u + s Δu, s ∈ [0, 1]:
+    dq/ds = −K(q, u(s)) Δu, dp/ds = ∂/∂q [pᵀ K(q, u(s))] Δu, integrated by DOP853 at rtol = atol = 1e-13.
+
+    ## Action Space
+
+    `Box(-1, 1, (m,), float32)`; actions outside are clipped, a wrong shape or a non-finite value raises
+    ValueError.
+
+    - `control="position"`: the commanded u = u_low + (a + 1)/2 (u_high − u_low). u jumps there at the start of
+      the step or, with `max_control_speed`, moves toward it at that speed (each coordinate) and stops there.
+      Needs finite bounds and a fit or strongly fit system (or `max_control_speed`).
+    - `control="velocity"`: u̇ = a · max_control_speed through the step; a coordinate that meets a finite bound
+      stops there. Needs `max_control_speed`. The control for a coordinate that winds (infinite bounds).
+
+    ## Observation Space
+
+    Default: (q, p, u), `Box(-inf, inf, (2n + m,), float32)`. With a task that has `observation(state)`, its
+    value as float32 in an unbounded Box of its shape.
+
+    ## Rewards
+
+    Default 0. With `task`, `task.reward(state, next_state)` on the state dicts before and after the step.
+
+    ## Starting State
+
+    Default q = 0, p = 0, u at the midpoint of finite bounds (0 on a coordinate with an infinite bound), t = 0.
+    With `task`, `task.reset(np_random)` returns a state dict with any of q, p, u (the rest default).
+    `reset(options={"state": {...}})` sets any of `q`, `p`, `u` exactly (arrays of n, n, m finite numbers; u
+    within its bounds).
+
+    ## Episode End
+
+    Default: never terminates. With `task`, terminated when `task.terminated(state)` (also
+    `info["is_success"]`). `gym.make("connenv/ActiveConstraint-v0", ...)` truncates after 1000 steps (the
+    registration's time limit; `max_episode_steps=` to change it).
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | system | required | n, m, metric, potential (above) |
+    | u_low, u_high | required | numbers or m of them, u_low < u_high; ±inf allowed (velocity control) |
+    | dt | 0.05 | (0, ∞) s |
+    | control | by jump_class (above) | "position", "velocity" |
+    | max_control_speed | None | None or (0, ∞), per unit of u per second |
+    | integrator | "dop853" | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps / rtol, atol | | see `connenv.core.steppers` |
+    | task | None | an object with reset, reward, terminated and optionally observation (below) |
+    | draw | None | `draw(state, canvas)`: draws a state dict on a `connenv.envs.rendering.Canvas` |
+    | render_mode | None | "human", "rgb_array" |
+
+    The default integrator is scipy's DOP853 at rtol = 1e-10, atol = 1e-12. A generic system has no closed-form
+    flow and time scales the env cannot know, so the step adapts to them rather than to a fixed substep count;
+    `python -m connenv.bench generic` measures the candidates (evaluations of the vector field per step, time,
+    error against DOP853 at 1e-13) on a swing and a bead on a bar, where DOP853 reaches round-off for the cost of
+    RK4 with 4 to 8 substeps. A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or
+    an energy error (the change of E = ½ pᵀ A p + V over the segments where u is held) past 1e-2 (1 + |E|).
+
+    Every `info` has `"state"`: `{"q": array(n), "p": array(n), "u": array(m), "t": float}` and
+    `"is_success"`.
+
+    ## A task
+
+    `task` is any object with `reset(np_random) -> state dict`, `reward(state, next_state) -> float`,
+    `terminated(state) -> bool` and optionally `observation(state) -> array`, all on state dicts as in
+    `info["state"]`. To turn a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², to θ = 0.5 rad: at rest
+    θ + J u/(I + J) is conserved, so with I = 2, J = 1/2 the rotor turns to u ≈ −2.5 to get there:
+
+        theta, theta_dot, u, u_dot = sp.symbols("theta theta_dot u u_dot")
+        rotor = LagrangianSystem(theta_dot**2 + (theta_dot + u_dot) ** 2 / 4, 0, [theta], [u])
+
+        class TurnTo:
+            def reset(self, np_random):
+                return {"q": np_random.uniform(-0.1, 0.1, 1)}
+
+            def reward(self, state, next_state):
+                return -abs(next_state["q"][0] - 0.5)
+
+            def terminated(self, state):
+                return abs(state["q"][0] - 0.5) < 0.01
+
+        env = gym.make("connenv/ActiveConstraint-v0", system=rotor, u_low=-math.pi, u_high=math.pi,
+                       task=TurnTo(), max_episode_steps=200)
+
+    The vector env calls a task's functions row by row.
+    """
+
+    def __init__(
+        self,
+        system=None,
+        u_low=None,
+        u_high=None,
+        *,
+        dt: float = 0.05,
+        control: str | None = None,
+        max_control_speed: float | None = None,
+        integrator: str | None = None,
+        task=None,
+        render_mode: str | None = None,
+        draw=None,
+        **stepper_options,
+    ):
+        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        if system is None or not all(hasattr(system, key) for key in ("n", "m", "metric", "potential")):
+            raise ValueError(
+                f"system={system!r} must have integer attributes n, m and methods metric(q, u) -> (G11, G12, G22) "
+                "and potential(q, u); or use ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u)"
+            )
+        for name in ("n", "m"):
+            value = getattr(system, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+                raise ValueError(f"system.{name}={value!r} must be an integer ≥ 1")
+        self.system, self.n, self.m = system, int(system.n), int(system.m)
+        self.u_low, self.u_high = self._check_bounds(u_low, u_high)
+        self.max_control_speed = (
+            None
+            if max_control_speed is None
+            else check_number("max_control_speed", max_control_speed, 0.0, open_low=True)
+        )
+        finite = np.isfinite(self.u_low) & np.isfinite(self.u_high)
+        midpoint = 0.5 * (np.where(finite, self.u_low, 0.0) + np.where(finite, self.u_high, 0.0))
+        self.u_start = np.where(finite, midpoint, np.clip(0.0, self.u_low, self.u_high))
+        q_samples, u_samples = self._samples()
+        check_metric(system, q_samples, u_samples)
+        self.jump_class = getattr(system, "jump_class", None) or classify(system, q_samples, u_samples)
+        self.control = self._check_control(control)
+        self.field = system if hasattr(system, "vector_field") else MetricField(system)
+        check_stepper_options("ActiveConstraint-v0", stepper_options, type(self))
+        self.stepper = make_stepper(integrator or "dop853", self.field, **stepper_options)
+        self.jump = JumpFlow(system)
+        self.task, self.draw = task, draw
+        self.action_space = spaces.Box(-1.0, 1.0, (self.m,), np.float32)
+        self.state = self.at(np.zeros(2 * self.n), self.u_start.copy(), 0.0, 0.0)
+        size = 2 * self.n + self.m
+        if task is not None and hasattr(task, "observation"):
+            size = np.shape(np.asarray(task.observation(self.state_dict(self.state)), np.float32))
+            size = size[0] if len(size) == 1 else size
+        shape = size if isinstance(size, tuple) else (size,)
+        self.observation_space = spaces.Box(-np.inf, np.inf, shape, np.float32)
+
+    @classmethod
+    def from_lagrangian(cls, kinetic, potential, q, u, **kwargs):
+        """The env of the system with kinetic energy T and potential V, sympy expressions in q, u (lists of
+        Symbols) and their velocities (the Symbol named s.name + "_dot" for a coordinate s); see
+        connenv.core.lagrangian.LagrangianSystem. kwargs: the env's."""
+        from connenv.core.lagrangian import LagrangianSystem
+
+        return cls(LagrangianSystem(kinetic, potential, q, u), **kwargs)
+
+    def parameters(self):
+        return {"system": self.system, "u_low": self.u_low, "u_high": self.u_high, "control": self.control}
+
+    # -- checks ----------------------------------------------------------------
+
+    def _check_bounds(self, u_low, u_high):
+        bounds = []
+        for name, value in (("u_low", u_low), ("u_high", u_high)):
+            try:
+                array = np.broadcast_to(np.asarray(value, float), (self.m,)).copy()
+            except (TypeError, ValueError) as error:
+                raise ValueError(f"{name}={value!r} must be a number or {self.m} of them (m = {self.m})") from error
+            if np.isnan(array).any():
+                raise ValueError(f"{name}={value!r} holds NaN; give numbers (±inf for no bound)")
+            bounds.append(array)
+        if not np.all(bounds[0] < bounds[1]):
+            raise ValueError(f"u_low={u_low!r} must be below u_high={u_high!r} in every coordinate")
+        return bounds
+
+    def _check_control(self, control):
+        if control is None:
+            control = "velocity" if self.jump_class is JumpClass.GENERAL else "position"
+        if control not in CONTROLS:
+            raise ValueError(f"control={control!r} is not one of {CONTROLS}")
+        if control == "velocity" and self.max_control_speed is None:
+            raise ValueError(
+                f"control='velocity' (the default for a system of class {self.jump_class.value!r}) needs "
+                "max_control_speed: u̇ = action · max_control_speed"
+            )
+        if control == "position":
+            if self.jump_class is JumpClass.GENERAL and self.max_control_speed is None:
+                raise ValueError(
+                    f"control='position' without max_control_speed would jump u, which a system of class "
+                    f"{self.jump_class.value!r} (∂B/∂q ≠ 0) does not admit: give max_control_speed (u ramps to the "
+                    "command) or use control='velocity' (the default for this class)"
+                )
+            if not (np.all(np.isfinite(self.u_low)) and np.all(np.isfinite(self.u_high))):
+                raise ValueError(
+                    f"control='position' maps the action onto [u_low, u_high] = [{self.u_low}, {self.u_high}], which "
+                    "needs finite bounds; a coordinate that winds takes control='velocity' with max_control_speed"
+                )
+        return control
+
+    def _samples(self):
+        """Points (q, u) at which the metric is checked and, for a system without its own, the class decided: q
+        at 0 and ±0.5 on every coordinate; u at the start, and at the finite bounds or ±1 around the start."""
+        q = np.array([0.0, 0.5, -0.5])[:, None] * np.ones(self.n)
+        low = np.where(np.isfinite(self.u_low), self.u_low, self.u_start - 1.0)
+        high = np.where(np.isfinite(self.u_high), self.u_high, self.u_start + 1.0)
+        return q, np.stack([self.u_start, low, high, 0.75 * low + 0.25 * high])
+
+    def _check_state(self, state, defaults):
+        check_keys("options['state']", state, {"q", "p", "u"})
+        values = dict(defaults)
+        for key, value in state.items():
+            size = self.m if key == "u" else self.n
+            array = np.asarray(value, float).reshape(-1) if np.ndim(value) <= 1 else np.asarray(value, float)
+            if array.shape != (size,) or not np.all(np.isfinite(array)):
+                raise ValueError(f"state {key}={value!r} must be {size} finite number(s)")
+            values[key] = array.copy()
+        u = values["u"]
+        if not np.all((self.u_low <= u) & (u <= self.u_high)):
+            raise ValueError(f"state u={u!r} is out of range: must be within [{self.u_low}, {self.u_high}]")
+        return values
+
+    # -- physics ---------------------------------------------------------------
+
+    def at(self, y, u, t, energy_error):
+        return ActiveConstraintState(y, u, t, energy_error)
+
+    def start(self, options):
+        check_keys("reset options", options, {"state"})
+        defaults = {"q": np.zeros(self.n), "p": np.zeros(self.n), "u": self.u_start.copy()}
+        if self.task is not None:
+            defaults = self._check_state(dict(self.task.reset(self.np_random)), defaults)
+        values = self._check_state(options.get("state", {}), defaults)
+        return self.at(np.concatenate([values["q"], values["p"]]), values["u"], 0.0, 0.0)
+
+    def command(self, a):
+        """The commanded u (position control) or u̇ (velocity control) of action a (one or a batch)."""
+        if self.control == "velocity":
+            return a * self.max_control_speed
+        return self.u_low + 0.5 * (a + 1.0) * (self.u_high - self.u_low)
+
+    def segments(self, u, command, batch=False):
+        """(y's jump or None, control segments, u at the end) of a step from u under the command."""
+        if self.control == "position" and self.max_control_speed is None:
+            return command - u, [(command, np.zeros_like(command), self.dt)], command
+        if self.control == "position":
+            u_dot = np.copysign(self.max_control_speed, command - u)
+            low, high = np.minimum(u, command), np.maximum(u, command)
+        else:
+            u_dot, low, high = command, self.u_low, self.u_high
+        if batch:
+            segments, u_end, _ = bounded_segments_batch(u, u_dot, low, high, self.dt)
+        else:
+            segments, u_end, _ = bounded_segments(u, u_dot, low, high, self.dt)
+        return None, segments, u_end
+
+    def advance(self, s, command):
+        delta, segments, u_end = self.segments(s.u, command)
+        y = s.y
+        if delta is not None and self.jump_class is JumpClass.FIT and np.any(delta != 0.0):
+            y = JUMP_STEPPER(self.jump, y, s.u, delta, 1.0)
+        y, change = run_segments(self.stepper, self.field, y, segments, self.held_energy)
+        self.check_energy_error(s.energy_error + change, y, u_end)
+        return self.at(y, u_end, s.t + self.dt, s.energy_error + change)
+
+    def held_energy(self, y, u, u_dot):
+        """E = ½ pᵀ A p + V(q, u) on the states whose u is held (u̇ = 0), 0 where u moves."""
+        held = np.all(u_dot == 0.0, axis=-1)
+        if not np.any(held):
+            return 0.0 if np.ndim(held) == 0 else np.zeros(held.shape)
+        n = self.n
+        energy = hamiltonian(self.system, y[..., :n], y[..., n:], u, np.zeros_like(u))
+        return np.where(held, energy, 0.0) if np.ndim(held) else float(energy)
+
+    def check_energy_error(self, energy_error, y, u):
+        n = self.n
+        energy = hamiltonian(self.system, y[..., :n], y[..., n:], u, np.zeros_like(u))
+        check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
+
+    # -- task: one state, or a batch with ops=BATCH (the vector env) -----------
+
+    def state_dict(self, s, ops=SCALAR):
+        n = self.n
+        q, p = s.y[..., :n].copy(), s.y[..., n:].copy()
+        return {"q": q, "p": p, "u": np.array(s.u, float), "t": ops.real(s.t)}
+
+    def _rows(self, s):
+        """The state dicts of the rows of a batch."""
+        return [self.state_dict(self.at(s.y[i], s.u[i], float(s.t[i]), 0.0)) for i in range(len(s.t))]
+
+    def observe(self, s, ops=SCALAR):
+        if self.task is not None and hasattr(self.task, "observation"):
+            if ops is BATCH:
+                return np.stack([np.asarray(self.task.observation(d), np.float32) for d in self._rows(s)])
+            return np.asarray(self.task.observation(self.state_dict(s)), np.float32)
+        return np.concatenate([s.y, s.u], axis=-1).astype(np.float32)
+
+    def reward(self, before, after, info, ops=SCALAR):
+        if self.task is None:
+            return ops.real(0.0 * after.t)
+        if ops is BATCH:
+            return np.array([self.task.reward(a, b) for a, b in zip(self._rows(before), self._rows(after))], float)
+        return float(self.task.reward(self.state_dict(before), self.state_dict(after)))
+
+    def describe(self, s, ops=SCALAR):
+        if self.task is None:
+            success = ops.flag(0.0 * s.t != 0.0)
+        elif ops is BATCH:
+            success = np.array([bool(self.task.terminated(d)) for d in self._rows(s)])
+        else:
+            success = bool(self.task.terminated(self.state_dict(s)))
+        return {"state": self.state_dict(s, ops), "is_success": success}
+
+    # -- rendering -------------------------------------------------------------
+
+    def _make_renderer(self):
+        from connenv.envs.rendering import CoordinatePlot
+
+        return CoordinatePlot(self.n, self.m, self.render_mode, self.metadata["render_fps"], self.draw)
+
+    def _draw(self, renderer):
+        return renderer.draw(self.state_dict(self.state))
+
+
+def check_metric(system, q, u):
+    """ValueError unless the metric at every sample (each q with each u) has blocks of shapes (n, n), (n, m),
+    (m, m) that make a finite, symmetric G, positive semidefinite with G11 positive definite (the bead at the
+    pivot of its bar has G22 = 0), and the potential is finite."""
+    n, m = system.n, system.m
+    q, u = np.repeat(q, len(u), axis=0), np.tile(u, (len(q), 1))
+    blocks = [np.asarray(block, float) for block in system.metric(q, u)]
+    for name, block, shape in zip(("G11", "G12", "G22"), blocks, ((n, n), (n, m), (m, m))):
+        if block.shape != (len(q), *shape):
+            raise ValueError(
+                f"metric block {name} has shape {block.shape[1:]} at a batch of {len(q)} points; expected {shape} "
+                f"(n = {n}, m = {m}), broadcast over leading axes"
+            )
+    G11, G12, G22 = blocks
+    G = np.block([[G11, G12], [np.swapaxes(G12, -1, -2), G22]])
+    for name, block in (("G11", G11), ("G22", G22)):
+        if not np.all(np.isfinite(block)) or not np.allclose(block, np.swapaxes(block, -1, -2), rtol=1e-12, atol=0):
+            i = np.argmax(np.abs(block - np.swapaxes(block, -1, -2)).reshape(len(q), -1).max(-1))
+            raise ValueError(f"metric block {name} = {block[i].tolist()} at q = {q[i]}, u = {u[i]} is not symmetric")
+    for name, matrix, floor in (("G11", G11, 0.0), ("G", G, -1e-12)):
+        eigenvalues = np.linalg.eigvalsh(matrix)
+        scale = np.max(np.abs(eigenvalues), axis=-1)
+        if not np.all(eigenvalues[..., 0] > floor * scale):
+            i = np.argmin(eigenvalues[..., 0] / scale)
+            kind = "positive definite (q̇ must cost kinetic energy)" if name == "G11" else "positive semidefinite"
+            raise ValueError(
+                f"the metric {'block G11' if name == 'G11' else 'G'} = {matrix[i].tolist()} at q = {q[i]}, "
+                f"u = {u[i]} is not {kind}: eigenvalues {eigenvalues[i].tolist()}"
+            )
+    potential = np.asarray(system.potential(q, u), float)
+    if potential.shape != (len(q),) or not np.all(np.isfinite(potential)):
+        raise ValueError(f"potential has shape {potential.shape} or non-finite values at {len(q)} points; expected "
+                         f"({len(q)},) finite")
+
+
+class ActiveConstraintVectorEnv(TaskVectorEnv):
+    """ActiveConstraint-v0 over a batch (``gym.make_vec("connenv/ActiveConstraint-v0", num_envs=N, system=...)``;
+    see ``connenv.envs.vector``): row i steps as the single env steps one state."""
+
+    single_env = ActiveConstraintEnv
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
+        super().__init__(num_envs, max_episode_steps, **kwargs)
+        self.jump_stepper = batched(JUMP_STEPPER)
+
+    def advance(self, s, command):
+        env = self.env
+        delta, segments, u_end = env.segments(s.u, command, batch=True)
+        y = s.y
+        if delta is not None and env.jump_class is JumpClass.FIT and np.any(delta != 0.0):
+            y = self.jump_stepper(env.jump, y, s.u, delta, np.ones(len(y)))
+        y, change = run_segments(self.stepper, env.field, y, segments, env.held_energy)
+        env.check_energy_error(s.energy_error + change, y, u_end)
+        return env.at(y, u_end, s.t + env.dt, s.energy_error + change)
