@@ -1,0 +1,353 @@
+"""Lie groups of motions and the integrator of a mechanical connection on them.
+
+A mechanical connection A(s) (Lawton) turns shape changes ṡ into a group velocity ξ = −A(s) ṡ, which moves the
+group element g by ġ = g ξ^ (body frame: ξ in the moving body's coordinates) or ġ = ξ^ g (space frame). Groups:
+
+| group | g as a matrix | coordinates of g (the state) | algebra coordinates ξ | bracket |
+|---|---|---|---|---|
+| "SO2" | 2×2 rotation | θ | ω | 0 |
+| "SE2" | 3×3 homogeneous | (x, y, θ) | (v₁, v₂, ω) | (ω' v₂ − ω v₂', ω v₁' − ω' v₁, 0) |
+| "SO3" | 3×3 rotation | its 9 entries, row by row | (ω₁, ω₂, ω₃), ω̂ v = ω × v | ω × ω' |
+| "R2" | the vector itself | (x, y) | (v₁, v₂) | 0 |
+
+Everything here works on *components*: tuples of Python floats for one state (the fast path: no numpy call per
+operation) or of arrays over the rows of a batch, with the same arithmetic, so that row i of a batch follows the
+single state's path (to the last bits of sin and cos, numpy's and libm's).
+
+`Magnus` is the stepper: the Magnus method with Gauss points (Blanes, Casas & Ros 2000; Iserles et al. 2000), each
+substep of length h one exponential. Of order 4, with two Gauss points,
+
+    Ω = h/2 (ξ₁ + ξ₂) ± (√3/12) h² [ξ₁, ξ₂],    ξ_i = ξ(t + c_i h),  c_i = 1/2 ∓ √3/6,
+
+with + in the body frame (g ← g exp Ω) and − in the space frame (g ← exp(Ω) g); of order 6 (the default: fewer
+substeps for the same error), with three Gauss points and nested brackets (`_omega`). Exponentials are closed forms
+(Rodrigues for SO(3)), so g stays on its group to rounding. Where ξ is constant along a step (A constant along the
+path, or ṡ = 0) one exponential is the exact flow, and that is what the method computes; on the abelian groups SO2
+and R2 the bracket vanishes and the step is the two-point Gauss–Legendre quadrature of ∫ξ dt.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from connenv.core.steppers import ConnectionSystem, Scipy, StepperError
+
+GAUSS = (0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0)  # the Gauss–Legendre nodes on [0, 1]
+BRACKET_WEIGHT = math.sqrt(3.0) / 12.0
+GAUSS6 = (0.5 - math.sqrt(15.0) / 10.0, 0.5, 0.5 + math.sqrt(15.0) / 10.0)  # three nodes, for order 6
+SQRT15_3 = math.sqrt(15.0) / 3.0
+MAX_SUBSTEPS = 4096  # per segment: past it the shape path is too rough for the tolerance (StepperError)
+
+
+class _Floats:
+    sin, cos, sqrt, atan2 = math.sin, math.cos, math.sqrt, math.atan2
+
+    @staticmethod
+    def sinc(x):
+        """sin x / x, 1 at 0."""
+        return math.sin(x) / x if x != 0.0 else 1.0
+
+    @staticmethod
+    def sinc_half_squared(x):
+        """(1 − cos x)/x² = ½ (sin(x/2)/(x/2))², ½ at 0; without the cancellation of 1 − cos x."""
+        return 0.5 * _Floats.sinc(0.5 * x) ** 2
+
+
+class _Arrays:
+    sin, cos, sqrt, atan2 = np.sin, np.cos, np.sqrt, np.arctan2
+
+    @staticmethod
+    def sinc(x):
+        return np.sinc(x / math.pi)
+
+    @staticmethod
+    def sinc_half_squared(x):
+        return 0.5 * np.sinc(x / (2.0 * math.pi)) ** 2
+
+
+def _ops(component):
+    return _Floats if isinstance(component, float) else _Arrays
+
+
+@dataclass(frozen=True)
+class Group:
+    """A matrix Lie group in coordinates (see the module): ``size`` coordinates of g, ``dim`` of its algebra."""
+
+    name: str
+    size: int
+    dim: int
+    abelian: bool
+
+    def identity(self):
+        return {"SO2": (0.0,), "SE2": (0.0, 0.0, 0.0), "R2": (0.0, 0.0)}.get(self.name, tuple(np.eye(3).ravel()))
+
+    def exp(self, xi):
+        """The coordinates of exp(ξ^), closed form."""
+        if self.name in ("SO2", "R2"):
+            return tuple(xi)
+        if self.name == "SE2":
+            v1, v2, w = xi
+            ops = _ops(w)
+            a, b = ops.sinc(w), w * ops.sinc_half_squared(w)  # sin ω/ω and (1 − cos ω)/ω
+            return a * v1 - b * v2, b * v1 + a * v2, w
+        w1, w2, w3 = xi  # SO3: Rodrigues, R = I + a ω̂ + b ω̂²
+        ops = _ops(w1)
+        angle = ops.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
+        a, b = ops.sinc(angle), ops.sinc_half_squared(angle)
+        return (
+            1.0 - b * (w2 * w2 + w3 * w3), b * w1 * w2 - a * w3, b * w1 * w3 + a * w2,
+            b * w1 * w2 + a * w3, 1.0 - b * (w1 * w1 + w3 * w3), b * w2 * w3 - a * w1,
+            b * w1 * w3 - a * w2, b * w2 * w3 + a * w1, 1.0 - b * (w1 * w1 + w2 * w2),
+        )  # fmt: skip
+
+    def product(self, g, h):
+        """The coordinates of g h."""
+        if self.name in ("SO2", "R2"):
+            return tuple(a + b for a, b in zip(g, h))
+        if self.name == "SE2":
+            x, y, theta = g
+            ops = _ops(theta)
+            c, s = ops.cos(theta), ops.sin(theta)
+            return x + c * h[0] - s * h[1], y + s * h[0] + c * h[1], theta + h[2]
+        return tuple(sum(g[3 * i + k] * h[3 * k + j] for k in range(3)) for i in range(3) for j in range(3))
+
+    def bracket(self, xi, eta):
+        """[ξ, η] in algebra coordinates: the commutator [ξ^, η^] of the matrices."""
+        if self.name == "SE2":
+            (v1, v2, w), (u1, u2, z) = xi, eta
+            return z * v2 - w * u2, w * u1 - z * v1, 0.0 * w
+        (a1, a2, a3), (b1, b2, b3) = xi, eta  # SO3: the cross product
+        return a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1
+
+    def matrix(self, g):
+        """g as a matrix (a vector for R2), from its coordinates (..., size)."""
+        g = np.asarray(g, float)
+        if self.name == "R2":
+            return g.copy()
+        if self.name == "SO3":
+            return g.reshape(*g.shape[:-1], 3, 3)
+        c, s = np.cos(g[..., -1]), np.sin(g[..., -1])
+        if self.name == "SO2":
+            return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+        one, zero = np.ones_like(c), np.zeros_like(c)
+        rows = [[c, -s, g[..., 0]], [s, c, g[..., 1]], [zero, zero, one]]
+        return np.stack([np.stack(row, -1) for row in rows], -2)
+
+    def coordinates(self, matrix):
+        """The coordinates of g given as a matrix (a vector for R2); the inverse of ``matrix`` on the group."""
+        m = np.asarray(matrix, float)
+        if self.name == "R2":
+            return m.copy()
+        if self.name == "SO3":
+            return m.reshape(*m.shape[:-2], 9)
+        angle = np.arctan2(m[..., 1, 0], m[..., 0, 0])[..., None]
+        return angle if self.name == "SO2" else np.concatenate([m[..., :2, 2], angle], -1)
+
+    def off_group(self, matrix):
+        """How far a matrix is from the group (0 on it): max of ‖RᵀR − I‖ (Frobenius), |det R − 1| and, for SE2,
+        the last row's distance from (0, 0, 1). Coordinates of SO2, SE2 and R2 are on their group by construction."""
+        m = np.asarray(matrix, float)
+        if self.name == "R2":
+            return np.zeros(m.shape[:-1])
+        k = 3 if self.name == "SO3" else 2
+        R = m[..., :k, :k]
+        off = np.maximum(
+            np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(k), axis=(-2, -1)), np.abs(np.linalg.det(R) - 1.0)
+        )
+        if self.name == "SE2":
+            off = np.maximum(off, np.max(np.abs(m[..., 2, :] - [0.0, 0.0, 1.0]), axis=-1))
+        return off
+
+
+GROUPS = {
+    "SO2": Group("SO2", 1, 1, True),
+    "SE2": Group("SE2", 3, 3, False),
+    "SO3": Group("SO3", 9, 3, False),
+    "R2": Group("R2", 2, 2, True),
+}
+FRAMES = ("body", "space")
+
+
+@dataclass(frozen=True)
+class Connection:
+    """A system moved by a mechanical connection: ``connection(s)`` is A(s) of shape (…, dim 𝔤, dim S), the state
+    y the coordinates of g (see the module), the assigned coordinates u = s the shape."""
+
+    group: str
+    frame: str
+    connection: object = field(compare=False)
+
+    def group_velocity(self, s, s_dot):
+        """ξ = −A(s) ṡ, as components (floats for one shape, arrays over the rows of a batch)."""
+        xi = -np.sum(np.asarray(self.connection(s), float) * np.asarray(s_dot)[..., None, :], axis=-1)
+        return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
+
+
+def group_velocity(system, s, s_dot):
+    """ξ = −A(s) ṡ as components: the system's own ``group_velocity`` if it has one (a closed form), else from its
+    ``connection``."""
+    if hasattr(system, "group_velocity"):
+        return system.group_velocity(s, s_dot)
+    return Connection(system.group, system.frame, system.connection).group_velocity(s, s_dot)
+
+
+def magnus_flow(group: Group, frame: str, velocity, g, s, s_dot, tau, substeps, order: int = 6):
+    """g after ``substeps`` equal Magnus steps of the given order (4 or 6) over a segment of length tau on which
+    s(t) = s + t ṡ; g, s, ṡ, the result and velocity(s, ṡ) (ξ) are components. Over a batch, tau and substeps may
+    be one per row: each row takes its own steps, the arithmetic of the single state's, and a row that has taken
+    them leaves the batch. Returns (g, ξ at the first node, whether ξ was the same at every node: a bool, or one
+    per row)."""
+    if np.ndim(substeps):
+        return _magnus_rows(group, frame, velocity, g, s, s_dot, tau, substeps, order), None, False
+    h = tau / substeps
+    constant, first = True, None
+    nodes = GAUSS if order == 4 else GAUSS6
+    for k in range(substeps):
+        xi = [velocity(_shape_at(s, s_dot, (k + c) * h), s_dot) for c in nodes]
+        first = xi[0] if first is None else first
+        for x in xi:
+            constant = constant & _same(x, first)
+        step = group.exp(_omega(group, frame, h, xi))
+        g = group.product(g, step) if frame == "body" else group.product(step, g)
+    return g, first, constant
+
+
+def _magnus_rows(group, frame, velocity, g, s, s_dot, tau, substeps, order):
+    """magnus_flow's g over a batch whose rows take their own number of substeps."""
+    out, rows = [np.array(c) for c in g], np.arange(len(substeps))
+    h = np.broadcast_to(tau / substeps, substeps.shape)
+    nodes = GAUSS if order == 4 else GAUSS6
+    for k in range(int(np.max(substeps))):
+        going = substeps > k
+        if not np.all(going):
+            for o, c in zip(out, g):
+                o[rows[~going]] = c[~going]
+            rows, g, s, s_dot, h, substeps = rows[going], tuple(c[going] for c in g), s[going], s_dot[going], h[going], substeps[going]
+        xi = [velocity(_shape_at(s, s_dot, (k + c) * h), s_dot) for c in nodes]
+        step = group.exp(_omega(group, frame, h, xi))
+        g = group.product(g, step) if frame == "body" else group.product(step, g)
+    for o, c in zip(out, g):
+        o[rows] = c
+    return tuple(out)
+
+
+def _omega(group, frame, h, xi):
+    """Ω of one Magnus step from ξ at the Gauss nodes (2: order 4, 3: order 6), for ġ = ξ^ g (space frame); the
+    body frame's is the same with the bracket's sign reversed (g⁻¹ obeys the space frame's equation in −ξ)."""
+    if len(xi) == 2:
+        omega = [0.5 * h * (a + b) for a, b in zip(*xi)]
+        if group.abelian:
+            return omega
+        weight = (1.0 if frame == "body" else -1.0) * BRACKET_WEIGHT * h * h
+        return [o + weight * c for o, c in zip(omega, group.bracket(*xi))]
+    a1, a2, a3 = ([h * c for c in x] for x in xi)
+    alpha1 = a2
+    alpha2 = [SQRT15_3 * (z - x) for x, z in zip(a1, a3)]
+    alpha3 = [10.0 / 3.0 * (z - 2.0 * y + x) for x, y, z in zip(a1, a2, a3)]
+    omega = [p + r / 12.0 for p, r in zip(alpha1, alpha3)]
+    if group.abelian:
+        return omega
+    sign = 1.0 if frame == "space" else -1.0
+
+    def bracket(x, y):
+        return [sign * c for c in group.bracket(x, y)]
+
+    c1 = bracket(alpha1, alpha2)
+    c2 = [-c / 60.0 for c in bracket(alpha1, [2.0 * r + c for r, c in zip(alpha3, c1)])]
+    outer = bracket([-20.0 * p - r + c for p, r, c in zip(alpha1, alpha3, c1)], [q + c for q, c in zip(alpha2, c2)])
+    return [o + c / 240.0 for o, c in zip(omega, outer)]
+
+
+@dataclass(frozen=True)
+class Magnus:
+    """The Magnus stepper of ``order`` 6 (three Gauss points, the default) or 4 (two) for systems with a connection
+    (``connenv.core.steppers.ConnectionSystem``); other systems (the shell's full model) go to ``fallback``.
+
+    Substeps: each segment is stepped with one and with two Magnus steps; their difference d (max-norm of the
+    coordinates of g) estimates the error of the two-step result as d/(2^order − 1) (Richardson). Where that is
+    ≤ atol the two-step result is taken; elsewhere the segment is stepped again with
+    n = ⌈1.2 · 2 (d/((2^order − 1) atol))^(1/order)⌉ substeps, the count that brings the error to atol. Where ξ is the
+    same at every node (A constant along the path) the one-step result is taken: one exponential, the exact flow.
+    Rows of a batch choose their substeps alone.
+    """
+
+    atol: float = 1e-10
+    fallback: object = Scipy()
+    order: int = 6
+
+    def __call__(self, system, y, u, u_dot, tau):
+        if not _has_connection(system):
+            return self.fallback(system, y, u, u_dot, tau)
+        y = np.asarray(y, float)
+        if not np.any(u_dot):
+            return y.copy()
+        group, frame, order = GROUPS[system.group], system.frame, self.order
+        single = y.ndim == 1
+        if single:
+            g, tau = tuple(y.tolist()), float(tau)
+        else:
+            g = tuple(np.moveaxis(y, -1, 0))
+            tau = np.broadcast_to(np.reshape(tau, -1), y.shape[:1]) if np.ndim(tau) else tau
+
+        def velocity(s, s_dot):
+            return group_velocity(system, s, s_dot)
+
+        one, first_one, constant_one = magnus_flow(group, frame, velocity, g, u, u_dot, tau, 1, order)
+        two, first_two, constant_two = magnus_flow(group, frame, velocity, g, u, u_dot, tau, 2, order)
+        constant = constant_one & constant_two & _same(first_one, first_two)
+        if single:
+            error = max(abs(a - b) for a, b in zip(one, two)) / (2**order - 1)
+            if constant or error <= self.atol:
+                return _finite(np.array(one if constant else two), self)
+            g = magnus_flow(group, frame, velocity, g, u, u_dot, tau, self._substeps(error), order)[0]
+            return _finite(np.array(g), self)
+        error = np.max(np.abs(np.subtract(one, two)), axis=0) / (2**order - 1)
+        out = np.where(constant[:, None], np.stack(one, -1), np.stack(two, -1))
+        rough = np.flatnonzero(~constant & (error > self.atol))
+        if rough.size:
+            g_rows, tau_rows = tuple(c[rough] for c in g), tau[rough] if np.ndim(tau) else tau
+            counts = self._substeps(error[rough])
+            flow = magnus_flow(group, frame, velocity, g_rows, u[rough], u_dot[rough], tau_rows, counts, order)[0]
+            out[rough] = np.stack(flow, -1)
+        return _finite(out, self)
+
+    def _substeps(self, error):
+        """The substeps for an estimated two-step error (a float, or an array over rows)."""
+        n = np.ceil(1.2 * 2.0 * (np.asarray(error) / self.atol) ** (1.0 / self.order))
+        if not np.all(n <= MAX_SUBSTEPS):
+            worst = np.max(error)
+            raise StepperError(f"{self} needs > {MAX_SUBSTEPS} substeps on a segment: estimated error {worst:.3g}")
+        return n.astype(int) if np.ndim(n) else int(n)
+
+
+_CONNECTION_TYPES: dict = {}
+
+
+def _has_connection(system) -> bool:
+    """Whether the system is a ConnectionSystem, decided once per type (a Protocol's isinstance is slow)."""
+    kind = type(system)
+    if kind not in _CONNECTION_TYPES:
+        _CONNECTION_TYPES[kind] = isinstance(system, ConnectionSystem)
+    return _CONNECTION_TYPES[kind]
+
+
+def _shape_at(s, s_dot, t):
+    """s + t ṡ, t a float or one per row."""
+    return s + (t[..., None] if np.ndim(t) else t) * s_dot
+
+
+def _same(a, b):
+    """Whether the components a and b are equal: a bool, or one per row."""
+    same = True
+    for x, y in zip(a, b):
+        same = same & (x == y)
+    return same
+
+
+def _finite(y, stepper):
+    if not np.all(np.isfinite(y)):
+        raise StepperError(f"{stepper} produced a non-finite value {y}")
+    return y
