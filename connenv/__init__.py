@@ -2,6 +2,8 @@
 
 from gymnasium.envs.registration import register
 
+from connenv.envs.connection import ConnectionEnv
+
 __version__ = "0.1.0"
 
 register(
@@ -52,3 +54,10 @@ register(
     vector_entry_point="connenv.envs.kapitza:KapitzaSwingUpVectorEnv",
     max_episode_steps=6000,
 )
+register(
+    id="connenv/Connection-v0",
+    entry_point="connenv.envs.connection:ConnectionEnv",
+    vector_entry_point="connenv.envs.connection:ConnectionVectorEnv",
+)
+
+__all__ = ["ConnectionEnv"]

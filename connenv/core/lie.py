@@ -173,16 +173,21 @@ FRAMES = ("body", "space")
 
 @dataclass(frozen=True)
 class Connection:
-    """A system moved by a mechanical connection: ``connection(s)`` is A(s) of shape (…, dim 𝔤, dim S), the state
-    y the coordinates of g (see the module), the assigned coordinates u = s the shape."""
+    """A system moved by a mechanical connection: ``connection(s)`` is A(s) of shape (dim 𝔤, dim S), the state
+    y the coordinates of g (see the module), the assigned coordinates u = s the shape. With ``vectorized`` the
+    connection takes a batch of shapes (N, dim S) to (N, dim 𝔤, dim S) (as solve_ivp's vectorized); without it,
+    a batch is evaluated one shape at a time."""
 
     group: str
     frame: str
     connection: object = field(compare=False)
+    vectorized: bool = False
 
     def group_velocity(self, s, s_dot):
         """ξ = −A(s) ṡ, as components (floats for one shape, arrays over the rows of a batch)."""
-        xi = -np.sum(np.asarray(self.connection(s), float) * np.asarray(s_dot)[..., None, :], axis=-1)
+        s = np.asarray(s, float)
+        A = self.connection(s) if s.ndim == 1 or self.vectorized else np.stack([self.connection(r) for r in s])
+        xi = -np.sum(np.asarray(A, float) * np.asarray(s_dot)[..., None, :], axis=-1)
         return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
 
 

@@ -132,3 +132,31 @@ def pivot_segments_batch(u, u_dot_cmd, travel: float, dt: float):
         u, u_dot = np.where(stopped, end_stops, u), np.where(stopped, 0.0, u_dot)
         start = end
     return np.stack(starts), np.stack(velocities), np.stack(durations), u, u_dot
+
+
+def box_segments(s, s_dot, low, high, dt: float):
+    """Control segments (s at the start, ṡ, τ) covering a step of length dt in which the coordinates s move at the
+    commanded velocity ṡ until each meets its bound (low where it decreases, high where it increases; ±inf for
+    none) and rests there for the rest of the step; and s at the end of the step.
+
+    One state (s of shape (k,)): a list of segments with float τ, one per stretch between stops. A batch (N, k):
+    k + 1 segments with τ one per row (0 where a row has fewer stops), as run_segments takes them.
+    """
+    s, s_dot = np.array(s, float), np.array(s_dot, float)
+    stops = np.where(s_dot > 0.0, high, low)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = np.where(s_dot != 0.0, np.maximum((stops - s) / s_dot, 0.0), math.inf)
+    if s.ndim == 1 and not np.any(reach < dt):  # no stop within the step (rounding kept inside the bounds)
+        return [(s, s_dot, dt)], np.minimum(np.maximum(s + s_dot * dt, low), high)
+    ends = np.concatenate([np.sort(np.minimum(reach, dt), axis=-1), np.full((*s.shape[:-1], 1), dt)], axis=-1)
+    segments, start = [], 0.0
+    for end in np.moveaxis(ends, -1, 0):
+        duration = end - start
+        segments.append((s, s_dot, duration if s.ndim > 1 else float(duration)))
+        s = s + s_dot * np.expand_dims(duration, -1)
+        stopped = reach <= np.expand_dims(end, -1)
+        s, s_dot = np.where(stopped, stops, s), np.where(stopped, 0.0, s_dot)
+        start = end
+    if s.ndim == 1:
+        segments = [segment for segment in segments if segment[2] > 0.0]
+    return segments, s
