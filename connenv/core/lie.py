@@ -190,6 +190,25 @@ class Connection:
         xi = -np.sum(np.asarray(A, float) * np.asarray(s_dot)[..., None, :], axis=-1)
         return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
 
+    def vector_field(self, y, s, s_dot):
+        """ẏ of the coordinates of g (for the generic steppers: RK4, scipy's): θ̇ = ω on SO2; on SE2 (ẋ, ẏ) = R(θ) v
+        (body) or v + ω (−y, x) (space), θ̇ = ω; Ṙ = R ω̂ (body) or ω̂ R (space) on SO3; ẋ = v on R2."""
+        y = np.asarray(y, float)
+        xi = np.stack(np.broadcast_arrays(*self.group_velocity(s, s_dot)), -1)
+        if self.group in ("SO2", "R2"):
+            return np.broadcast_to(xi, y.shape).copy()
+        if self.group == "SE2":
+            x, y_, theta = y[..., 0], y[..., 1], y[..., 2]
+            v1, v2, w = xi[..., 0], xi[..., 1], xi[..., 2]
+            if self.frame == "body":
+                c, s_ = np.cos(theta), np.sin(theta)
+                return np.stack([c * v1 - s_ * v2, s_ * v1 + c * v2, w + 0 * theta], -1)
+            return np.stack([v1 - w * y_, v2 + w * x, w + 0 * theta], -1)
+        R, W = y.reshape(*y.shape[:-1], 3, 3), np.zeros((*xi.shape[:-1], 3, 3))
+        W[..., 0, 1], W[..., 0, 2], W[..., 1, 2] = -xi[..., 2], xi[..., 1], -xi[..., 0]
+        W = W - np.swapaxes(W, -1, -2)
+        return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
+
 
 def group_velocity(system, s, s_dot):
     """ξ = −A(s) ṡ as components: the system's own ``group_velocity`` if it has one (a closed form), else from its
@@ -280,7 +299,7 @@ class Magnus:
     """
 
     atol: float = 1e-10
-    fallback: object = Scipy()
+    fallback: object = field(default=Scipy(), compare=False)
     order: int = 6
 
     def __call__(self, system, y, u, u_dot, tau):

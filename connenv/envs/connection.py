@@ -8,10 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.lie import FRAMES, GROUPS, Connection, Magnus
+from connenv.core.lie import FRAMES, GROUPS, Connection
 from connenv.core.segments import box_segments, run_segments
-from connenv.core.steppers import Scipy, StepperError
-from connenv.core.validation import check_keys, check_number
+from connenv.core.steppers import StepperError, make_stepper
+from connenv.core.validation import check_keys, check_number, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
@@ -91,13 +91,15 @@ class ConnectionEnv(TaskEnv):
     | max_shape_speed | 1.0 | (0, ∞) |
     | task | None | an object with reset, reward, terminated and optionally observation (above) |
     | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
-    | atol | 1e-10 | (0, ∞): the stepper's error bound per segment on the coordinates of g |
     | vectorized | False | True if connection(s) takes shapes (N, k) to (N, dim 𝔤, k): the vector env then calls it once |
+    | integrator | "magnus" | "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | atol (magnus: its error bound per segment, default 1e-10) / substeps, rtol, atol (the others) | | see `connenv.core.steppers` |
 
-    The step is `connenv.core.lie.Magnus`, the sixth-order Magnus method with closed-form exponentials, with
-    substeps chosen per segment for an error ≤ atol; where A is constant along the shape's path it is one
-    exponential, the exact flow. g stays on its group to rounding; a g further than 1e-9 from it after a step
-    raises `connenv.core.StepperError`, as does a non-finite state.
+    The default step is `connenv.core.lie.Magnus`, the sixth-order Magnus method with closed-form exponentials,
+    with substeps chosen per segment for an error ≤ atol on the coordinates of g; where A is constant along the
+    shape's path it is one exponential, the exact flow. g stays on its group to rounding (the other integrators
+    step ġ in coordinates and leave SO(3) slowly). A g further than 1e-9 from its group after a step raises
+    `connenv.core.StepperError`, as does a non-finite state or a segment that needs more than 4096 substeps.
 
     Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`.
     """
@@ -114,8 +116,9 @@ class ConnectionEnv(TaskEnv):
         task=None,
         render_mode: str | None = None,
         draw=None,
-        atol: float = 1e-10,
         vectorized: bool = False,
+        integrator: str = "magnus",
+        **stepper_options,
     ):
         super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
         if group not in GROUPS:
@@ -130,7 +133,8 @@ class ConnectionEnv(TaskEnv):
         self.task, self.draw = task, draw
         connection = _check_connection(connection, self.group, self.start_shape())
         self.system = Connection(group, frame, connection, bool(vectorized))
-        self.stepper = Magnus(check_number("atol", atol, 0.0, open_low=True), Scipy())
+        check_stepper_options("Connection-v0", stepper_options, type(self))
+        self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.state = ConnectionState(np.array(self.group.identity()), self.start_shape(), 0.0)
         self.action_space = spaces.Box(-1.0, 1.0, self.low.shape, np.float32)
         self.observation_space = self._observation_space()
