@@ -61,11 +61,13 @@ class _Arrays:
 
     @staticmethod
     def sinc(x):
-        return np.sinc(x / math.pi)
+        safe = np.where(x == 0.0, 1.0, x)
+        return np.where(x == 0.0, 1.0, np.sin(safe) / safe)
 
     @staticmethod
     def sinc_half_squared(x):
-        return 0.5 * np.sinc(x / (2.0 * math.pi)) ** 2
+        half = np.where(x == 0.0, 1.0, 0.5 * x)
+        return np.where(x == 0.0, 0.5, 0.5 * (np.sin(half) / half) ** 2)
 
 
 def _ops(component):
@@ -118,7 +120,7 @@ class Group:
         """[ξ, η] in algebra coordinates: the commutator [ξ^, η^] of the matrices."""
         if self.name == "SE2":
             (v1, v2, w), (u1, u2, z) = xi, eta
-            return z * v2 - w * u2, w * u1 - z * v1, 0.0 * w
+            return z * v2 - w * u2, w * u1 - z * v1, 0.0
         (a1, a2, a3), (b1, b2, b3) = xi, eta  # SO3: the cross product
         return a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1
 
