@@ -188,7 +188,11 @@ class Connection:
     def group_velocity(self, s, s_dot):
         """ξ = −A(s) ṡ, as components (floats for one shape, arrays over the rows of a batch)."""
         s = np.asarray(s, float)
-        A = self.connection(s) if s.ndim == 1 or self.vectorized else np.stack([self.connection(r) for r in s])
+        if s.ndim == 1 or self.vectorized:
+            A = self.connection(s)
+        else:
+            rows = s.reshape(-1, s.shape[-1])
+            A = np.stack([self.connection(r) for r in rows]).reshape(*s.shape[:-1], -1, s.shape[-1])
         xi = -np.sum(np.asarray(A, float) * np.asarray(s_dot)[..., None, :], axis=-1)
         return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
 
@@ -287,6 +291,71 @@ def _omega(group, frame, h, xi):
     return [o + c / 240.0 for o, c in zip(omega, outer)]
 
 
+def _integration_matrix(nodes):
+    """Q with Q[j, k] = ∫₀^{x_j} ℓ_k(x) dx, ℓ_k the Lagrange polynomials of the nodes x on [0, 1]: ∫₀^{x_j} f ≈ Σ_k
+    Q[j, k] f(x_k), exact for polynomials of degree < len(nodes)."""
+    legendre = np.polynomial.legendre
+    basis = np.eye(len(nodes))
+    coefficients = [legendre.legfit(2.0 * nodes - 1.0, row, len(nodes) - 1) for row in basis]
+    return np.array([0.5 * legendre.legval(2.0 * nodes - 1.0, legendre.legint(c, lbnd=-1.0)) for c in coefficients]).T
+
+
+QUADRATURE_POINTS = 8
+_x, _w = np.polynomial.legendre.leggauss(QUADRATURE_POINTS)
+NODES, WEIGHTS = 0.5 * (_x + 1.0), 0.5 * _w  # Gauss–Legendre on [0, 1]
+INTEGRATION = _integration_matrix(NODES)
+QUADRATURE_ORDER = QUADRATURE_POINTS  # of the nested quadrature in the piece length (Richardson's exponent)
+
+
+def quadrature_flow(group: Group, frame: str, velocity, g, s, s_dot, tau, pieces: int):
+    """g after a segment of length tau on SO2, R2 or SE2, cut into ``pieces`` equal pieces, by quadrature: these
+    groups are solvable, and the flow of ġ = g ξ^ is θ(t) = θ₀ + W(t), W = ∫₀ᵗ ω, and on SE2
+    p(T) = p₀ + R(θ₀) ∫₀ᵀ R(W(t)) v(t) dt (body frame), p(T) = R(W(T)) (p₀ + ∫₀ᵀ R(−W(t)) v(t) dt) (space frame);
+    on R2, g(T) = g₀ + ∫ v. Each piece takes ξ at 8 Gauss–Legendre nodes (one call of velocity for all nodes of
+    all pieces), W at the nodes from their interpolating polynomial, and the outer integral by the Gauss rule.
+    Returns (g, ξ at the first node, whether ξ was the same at every node), as magnus_flow."""
+    h = tau / pieces
+    times = [np.multiply.outer((j + NODES), h) for j in range(pieces)]  # (8,) or (8, N) each
+    t = np.concatenate(times)
+    t = t.reshape(t.shape + (1,) * (np.ndim(s) + 1 - t.ndim))  # against s (k,) or (N, k)
+    shapes = np.asarray(s)[None] + t * np.asarray(s_dot)[None]
+    xi = np.stack(np.broadcast_arrays(*velocity(shapes, s_dot)))  # (dim, nodes of all pieces, ...)
+    constant = np.all(xi == xi[:, :1], axis=(0, 1))
+    xi = xi.reshape(len(xi), pieces, QUADRATURE_POINTS, *xi.shape[2:])
+    first = tuple(xi[:, 0, 0])
+    for j in range(pieces):
+        g = _piece(group, frame, g, xi[:, j], h)
+    return g, first, constant if np.ndim(constant) else bool(constant)
+
+
+def _piece(group, frame, g, xi, h):
+    """g after one piece of length h with ξ given at the 8 nodes (arrays (8,) or (8, N))."""
+    if group.name == "R2":
+        increment = tuple(h * _weighted(c) for c in xi)
+        return group.product(g, increment)
+    omega = xi[-1]
+    turn = h * _weighted(omega)
+    if group.name == "SO2":
+        return group.product(g, (turn,))
+    W = h * (INTEGRATION @ omega)
+    v1, v2 = xi[0], xi[1]
+    if frame == "body":
+        c, s_ = np.cos(W), np.sin(W)
+        increment = (h * _weighted(c * v1 - s_ * v2), h * _weighted(s_ * v1 + c * v2), turn)
+        return group.product(g, increment)
+    c, s_ = np.cos(W), np.sin(W)
+    a1, a2 = h * _weighted(c * v1 + s_ * v2), h * _weighted(c * v2 - s_ * v1)  # ∫ R(−W) v
+    ops = _ops(turn)
+    ct, st = ops.cos(turn), ops.sin(turn)
+    return group.product((ct * a1 - st * a2, st * a1 + ct * a2, turn), g)
+
+
+def _weighted(values):
+    """Σ_k w_k values[k] over the nodes (axis 0)."""
+    total = WEIGHTS @ values
+    return float(total) if np.ndim(total) == 0 else total
+
+
 @dataclass(frozen=True)
 class Magnus:
     """The Magnus stepper of ``order`` 6 (three Gauss points, the default) or 4 (two) for systems with a connection
@@ -321,28 +390,52 @@ class Magnus:
         def velocity(s, s_dot):
             return group_velocity(system, s, s_dot)
 
-        one, first_one, constant_one = magnus_flow(group, frame, velocity, g, u, u_dot, tau, 1, order)
-        two, first_two, constant_two = magnus_flow(group, frame, velocity, g, u, u_dot, tau, 2, order)
+        if group.name == "SO3":
+            order = self.order
+
+            def flow(g, s, s_dot, tau, n):
+                return magnus_flow(group, frame, velocity, g, s, s_dot, tau, n, order)
+        else:
+            order = QUADRATURE_ORDER
+
+            def flow(g, s, s_dot, tau, n):
+                if np.ndim(n) == 0:
+                    return quadrature_flow(group, frame, velocity, g, s, s_dot, tau, n)
+                out = [np.array(c) for c in g]  # rows grouped by their number of pieces
+                for count in np.unique(n):
+                    rows = np.flatnonzero(n == count)
+                    rows_tau = tau[rows] if np.ndim(tau) else tau
+                    part = quadrature_flow(group, frame, velocity, tuple(c[rows] for c in g), s[rows], s_dot[rows],
+                                           rows_tau, int(count))[0]  # fmt: skip
+                    for o, c in zip(out, part):
+                        o[rows] = c
+                return tuple(out), None, False
+
+        one, first_one, constant_one = flow(g, u, u_dot, tau, 1)
+        two, first_two, constant_two = flow(g, u, u_dot, tau, 2)
         constant = constant_one & constant_two & _same(first_one, first_two)
+        if np.any(constant):  # ξ the same at every node: one exponential, exact
+            step = group.exp([tau * c for c in first_one])
+            exact = group.product(g, step) if frame == "body" else group.product(step, g)
         if single:
             error = max(abs(a - b) for a, b in zip(one, two)) / (2**order - 1)
-            if constant or error <= self.atol:
-                return _finite(np.array(one if constant else two), self)
-            g = magnus_flow(group, frame, velocity, g, u, u_dot, tau, self._substeps(error), order)[0]
-            return _finite(np.array(g), self)
+            if constant:
+                return _finite(np.array(exact), self)
+            if error <= self.atol:
+                return _finite(np.array(two), self)
+            return _finite(np.array(flow(g, u, u_dot, tau, self._substeps(error, order))[0]), self)
         error = np.max(np.abs(np.subtract(one, two)), axis=0) / (2**order - 1)
-        out = np.where(constant[:, None], np.stack(one, -1), np.stack(two, -1))
+        out = np.where(constant[:, None], np.stack(exact, -1), np.stack(two, -1)) if np.any(constant) else np.stack(two, -1)
         rough = np.flatnonzero(~constant & (error > self.atol))
         if rough.size:
             g_rows, tau_rows = tuple(c[rough] for c in g), tau[rough] if np.ndim(tau) else tau
-            counts = self._substeps(error[rough])
-            flow = magnus_flow(group, frame, velocity, g_rows, u[rough], u_dot[rough], tau_rows, counts, order)[0]
-            out[rough] = np.stack(flow, -1)
+            counts = self._substeps(error[rough], order)
+            out[rough] = np.stack(flow(g_rows, u[rough], u_dot[rough], tau_rows, counts)[0], -1)
         return _finite(out, self)
 
-    def _substeps(self, error):
-        """The substeps for an estimated two-step error (a float, or an array over rows)."""
-        n = np.ceil(1.2 * 2.0 * (np.asarray(error) / self.atol) ** (1.0 / self.order))
+    def _substeps(self, error, order):
+        """The substeps for an estimated two-step error (a float, or an array over rows) of a method of that order."""
+        n = np.ceil(1.2 * 2.0 * (np.asarray(error) / self.atol) ** (1.0 / order))
         if not np.all(n <= MAX_SUBSTEPS):
             worst = np.max(error)
             raise StepperError(f"{self} needs > {MAX_SUBSTEPS} substeps on a segment: estimated error {worst:.3g}")
