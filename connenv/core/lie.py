@@ -14,16 +14,18 @@ Everything here works on *components*: tuples of Python floats for one state (th
 operation) or of arrays over the rows of a batch, with the same arithmetic, so that row i of a batch follows the
 single state's path (to the last bits of sin and cos, numpy's and libm's).
 
-`Magnus` is the stepper: the Magnus method with Gauss points (Blanes, Casas & Ros 2000; Iserles et al. 2000), each
-substep of length h one exponential. Of order 4, with two Gauss points,
+`Magnus` is the stepper (``integrator="magnus"``). On SO(3) it is the Magnus method with Gauss points (Blanes,
+Casas & Ros 2000; Iserles et al. 2000), each substep of length h one exponential. Of order 4, with two Gauss points,
 
     Ω = h/2 (ξ₁ + ξ₂) ± (√3/12) h² [ξ₁, ξ₂],    ξ_i = ξ(t + c_i h),  c_i = 1/2 ∓ √3/6,
 
 with + in the body frame (g ← g exp Ω) and − in the space frame (g ← exp(Ω) g); of order 6 (the default: fewer
-substeps for the same error), with three Gauss points and nested brackets (`_omega`). Exponentials are closed forms
-(Rodrigues for SO(3)), so g stays on its group to rounding. Where ξ is constant along a step (A constant along the
-path, or ṡ = 0) one exponential is the exact flow, and that is what the method computes; on the abelian groups SO2
-and R2 the bracket vanishes and the step is the two-point Gauss–Legendre quadrature of ∫ξ dt.
+substeps for the same error), with three Gauss points and nested brackets (`_omega`). SO(2), ℝ² and SE(2) are
+solvable, and there the flow is nested quadratures (`quadrature_flow`): θ = ∫ω, and on SE(2) the translation
+∫R(θ(t)) v(t) dt, by 8-point Gauss–Legendre rules, of spectral accuracy on smooth connections (on the abelian
+groups this is the integral of ξ itself). Exponentials are closed forms (Rodrigues for SO(3)), so g stays on its
+group to rounding. Where ξ is the same at every node (A constant along the path, or ṡ = 0) the step is one
+exponential, the exact flow.
 """
 
 from __future__ import annotations
@@ -358,15 +360,17 @@ def _weighted(values):
 
 @dataclass(frozen=True)
 class Magnus:
-    """The Magnus stepper of ``order`` 6 (three Gauss points, the default) or 4 (two) for systems with a connection
-    (``connenv.core.steppers.ConnectionSystem``); other systems (the shell's full model) go to ``fallback``.
+    """The Lie-group stepper of systems with a connection (``connenv.core.steppers.ConnectionSystem``; see the
+    module): Magnus of ``order`` 6 (three Gauss points, the default) or 4 (two) on SO3, nested quadrature (order 8
+    in the piece length, spectral in practice) on SO2, R2 and SE2. Other systems (the shell's full model) go to
+    ``fallback``.
 
-    Substeps: each segment is stepped with one and with two Magnus steps; their difference d (max-norm of the
+    Substeps: each segment is stepped with one and with two substeps; their difference d (max-norm of the
     coordinates of g) estimates the error of the two-step result as d/(2^order − 1) (Richardson). Where that is
     ≤ atol the two-step result is taken; elsewhere the segment is stepped again with
     n = ⌈1.2 · 2 (d/((2^order − 1) atol))^(1/order)⌉ substeps, the count that brings the error to atol. Where ξ is the
-    same at every node (A constant along the path) the one-step result is taken: one exponential, the exact flow.
-    Rows of a batch choose their substeps alone.
+    same at every node (A constant along the path) the step is one exponential, the exact flow. Rows of a batch
+    choose their substeps alone.
     """
 
     atol: float = 1e-10

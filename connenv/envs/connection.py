@@ -95,9 +95,10 @@ class ConnectionEnv(TaskEnv):
     | integrator | "magnus" | "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | atol (magnus: its error bound per segment, default 1e-10) / substeps, rtol, atol (the others) | | see `connenv.core.steppers` |
 
-    The default step is `connenv.core.lie.Magnus`, the sixth-order Magnus method with closed-form exponentials,
-    with substeps chosen per segment for an error ≤ atol on the coordinates of g; where A is constant along the
-    shape's path it is one exponential, the exact flow. g stays on its group to rounding (the other integrators
+    The default step is `connenv.core.lie.Magnus`: on SO3 the sixth-order Magnus method with closed-form
+    exponentials; on SO2, R2 and SE2 (solvable groups) nested Gauss–Legendre quadratures of θ = ∫ω and of the
+    translation; with substeps chosen per segment for an error ≤ atol on the coordinates of g. Where A is constant
+    along the shape's path the step is one exponential, the exact flow. g stays on its group to rounding (the other integrators
     step ġ in coordinates and leave SO(3) slowly). A g further than 1e-9 from its group after a step raises
     `connenv.core.StepperError`, as does a non-finite state or a segment that needs more than 4096 substeps.
 
