@@ -161,7 +161,7 @@ def shell_steppers(integrators, n: int, steps: int, seconds: float, seed: int = 
     system, dt, u_max = ReducedKozlovShell(), 0.1, np.array([0.5, 0.25])
     rng = np.random.default_rng(seed)
     commands = rng.uniform(-1.0, 1.0, (256, 2)) * u_max
-    print(f"\nthe shell's reduced model by integrator, stepped directly: one state × Pendulum-v1's env step (target")
+    print("\nthe shell's reduced model by integrator, stepped directly: one state × Pendulum-v1's env step (target")
     print(f"≤ 5), N={n} rows × CartPole-v1's native vector env (target ≥ 0.1)")
     print("and the pose error after 300 steps from rest against DOP853 at rtol 1e-13 (max-norm of x, y, θ; m, rad)")
     print(

@@ -310,7 +310,8 @@ def test_magnus_falls_back_for_systems_without_a_connection():
 
     system, y = KozlovShell(), np.array([0.1, 0.2, 0.3, 0.3, 0.1, 0.05])
     u, u_dot = np.array([0.1, -0.1]), np.array([2.0, 1.0])
-    magnus, dop853 = make_stepper("magnus", system, rtol=1e-9, atol=1e-11), make_stepper("dop853", rtol=1e-9, atol=1e-11)
+    magnus = make_stepper("magnus", system, rtol=1e-9, atol=1e-11)
+    dop853 = make_stepper("dop853", rtol=1e-9, atol=1e-11)
     assert np.array_equal(magnus(system, y, u, u_dot, 0.1), dop853(system, y, u, u_dot, 0.1))
     assert isinstance(gym.make(ID, group="R2", connection=lambda s: np.eye(2), shape_low=[-1, -1],
                                shape_high=[1, 1]).unwrapped, connenv.ConnectionEnv)  # fmt: skip

@@ -257,7 +257,8 @@ def _magnus_rows(group, frame, velocity, g, s, s_dot, tau, substeps, order):
         if not np.all(going):
             for o, c in zip(out, g):
                 o[rows[~going]] = c[~going]
-            rows, g, s, s_dot, h, substeps = rows[going], tuple(c[going] for c in g), s[going], s_dot[going], h[going], substeps[going]
+            rows, g, s, s_dot = rows[going], tuple(c[going] for c in g), s[going], s_dot[going]
+            h, substeps = h[going], substeps[going]
         xi = [velocity(_shape_at(s, s_dot, (k + c) * h), s_dot) for c in nodes]
         step = group.exp(_omega(group, frame, h, xi))
         g = group.product(g, step) if frame == "body" else group.product(step, g)
@@ -429,7 +430,9 @@ class Magnus:
                 return _finite(np.array(two), self)
             return _finite(np.array(flow(g, u, u_dot, tau, self._substeps(error, order))[0]), self)
         error = np.max(np.abs(np.subtract(one, two)), axis=0) / (2**order - 1)
-        out = np.where(constant[:, None], np.stack(exact, -1), np.stack(two, -1)) if np.any(constant) else np.stack(two, -1)
+        out = np.stack(two, -1)
+        if np.any(constant):
+            out = np.where(constant[:, None], np.stack(exact, -1), out)
         rough = np.flatnonzero(~constant & (error > self.atol))
         if rough.size:
             g_rows, tau_rows = tuple(c[rough] for c in g), tau[rough] if np.ndim(tau) else tau

@@ -12,7 +12,7 @@ from connenv.core.lie import FRAMES, GROUPS, Connection
 from connenv.core.segments import box_segments, run_segments
 from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import check_keys, check_number, check_stepper_options
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
 ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
@@ -91,15 +91,15 @@ class ConnectionEnv(TaskEnv):
     | max_shape_speed | 1.0 | (0, ∞) |
     | task | None | an object with reset, reward, terminated and optionally observation (above) |
     | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
-    | vectorized | False | True if connection(s) takes shapes (N, k) to (N, dim 𝔤, k): the vector env then calls it once |
+    | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the vector env calls it once |
     | integrator | "magnus" | "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | atol (magnus: its error bound per segment, default 1e-10) / substeps, rtol, atol (the others) | | see `connenv.core.steppers` |
+    | atol (magnus: its error bound per segment, 1e-10) / substeps, rtol, atol (others) | | `connenv.core.steppers` |
 
     The default step is `connenv.core.lie.Magnus`: on SO3 the sixth-order Magnus method with closed-form
     exponentials; on SO2, R2 and SE2 (solvable groups) nested Gauss–Legendre quadratures of θ = ∫ω and of the
     translation; with substeps chosen per segment for an error ≤ atol on the coordinates of g. Where A is constant
-    along the shape's path the step is one exponential, the exact flow. g stays on its group to rounding (the other integrators
-    step ġ in coordinates and leave SO(3) slowly). A g further than 1e-9 from its group after a step raises
+    along the shape's path the step is one exponential, the exact flow. g stays on its group to rounding (the other
+    integrators step ġ in coordinates and leave SO(3) slowly). A g further than 1e-9 from its group after a step raises
     `connenv.core.StepperError`, as does a non-finite state or a segment that needs more than 4096 substeps.
 
     Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`.
