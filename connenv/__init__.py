@@ -3,15 +3,20 @@
 from gymnasium.envs.registration import register
 
 __version__ = "0.1.0"
-__all__ = ["ActiveConstraintEnv"]
+__all__ = ["ActiveConstraintEnv", "ConnectionEnv"]
 
 
 def __getattr__(name):
-    """connenv.ActiveConstraintEnv, imported on first use (``import connenv`` stays light)."""
+    """connenv.ActiveConstraintEnv and connenv.ConnectionEnv, imported on first use (``import connenv`` stays
+    light: no sympy)."""
     if name == "ActiveConstraintEnv":
         from connenv.envs.active_constraint import ActiveConstraintEnv
 
         return ActiveConstraintEnv
+    if name == "ConnectionEnv":
+        from connenv.envs.connection import ConnectionEnv
+
+        return ConnectionEnv
     raise AttributeError(f"module 'connenv' has no attribute {name!r}")
 
 
@@ -67,5 +72,11 @@ register(
     id="connenv/ActiveConstraint-v0",
     entry_point="connenv.envs.active_constraint:ActiveConstraintEnv",
     vector_entry_point="connenv.envs.active_constraint:ActiveConstraintVectorEnv",
+    max_episode_steps=1000,
+)
+register(
+    id="connenv/Connection-v0",
+    entry_point="connenv.envs.connection:ConnectionEnv",
+    vector_entry_point="connenv.envs.connection:ConnectionVectorEnv",
     max_episode_steps=1000,
 )

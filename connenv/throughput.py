@@ -36,6 +36,7 @@ import numpy as np
 import scipy
 
 import connenv  # noqa: F401  (registers the envs)
+from connenv.examples import MAKE_KWARGS
 
 SINGLE_STEPS = 3000
 ROUNDS = 5
@@ -51,22 +52,15 @@ VECTOR_TARGETS = {
 
 
 def make_kwargs(env_id: str) -> dict:
-    """The make kwargs of an id: none for the built envs; for ActiveConstraint-v0, which needs a system, the swing
-    from its Lagrangian, T = ½ (ṙ² + r² θ̇²), V = −g r cos θ, r ∈ [1.6, 2] (Swing-v0's defaults)."""
-    if env_id != "connenv/ActiveConstraint-v0":
-        return {}
-    import sympy as sp
-
-    from connenv.core.lagrangian import LagrangianSystem
-
-    r, r_dot, theta, theta_dot = sp.symbols("r r_dot theta theta_dot")
-    swing = LagrangianSystem((r_dot**2 + r**2 * theta_dot**2) / 2, -9.81 * r * sp.cos(theta), [theta], [r])
-    return {"system": swing, "u_low": 1.6, "u_high": 2.0}
+    """The make kwargs of an id: none for the built envs; the generic ids need a system, for which they take
+    connenv.examples' (the swing from its Lagrangian; Elroy's beanie)."""
+    return MAKE_KWARGS[env_id]() if env_id in MAKE_KWARGS else {}
 
 
-def single_step_times(env_id: str, steps: int, seed: int = 0):
-    """Median step times (s) of env_id and of Pendulum-v1, stepped alternately, each step timed alone."""
-    envs = [gym.make(env_id, **make_kwargs(env_id)), gym.make("Pendulum-v1")]
+def single_step_times(env_id: str, steps: int, seed: int = 0, **kwargs):
+    """Median step times (s) of env_id (made with kwargs, default make_kwargs(env_id)) and of Pendulum-v1, stepped
+    alternately, each step timed alone."""
+    envs = [gym.make(env_id, **(kwargs or make_kwargs(env_id))), gym.make("Pendulum-v1")]
     times = [[], []]
     for k, env in enumerate(envs):
         env.reset(seed=seed)
@@ -83,21 +77,29 @@ def single_step_times(env_id: str, steps: int, seed: int = 0):
     return statistics.median(times[0]), statistics.median(times[1])
 
 
-def vector_rates(env_id: str, n: int, seconds: float, sync: bool, seed: int = 0):
-    """Median env-steps/s of the native vector env and of SyncVectorEnv (None unless sync) at N = n."""
+def vector_rates(env_id: str, n: int, seconds: float, sync: bool, seed: int = 0, reference=None, **kwargs):
+    """Median env-steps/s of the native vector env (made with kwargs) and of SyncVectorEnv (None unless sync) at
+    N = n; or, with reference an id, of that id's native vector env in place of SyncVectorEnv, stepped alternately."""
     modes = ["vector_entry_point"] + (["sync"] if sync else [])
-    envs = [gym.make_vec(env_id, n, vectorization_mode=mode, **make_kwargs(env_id)) for mode in modes]
+    kwargs = kwargs or make_kwargs(env_id)
+    envs = [gym.make_vec(env_id, n, vectorization_mode=mode, **kwargs) for mode in modes]
+    if reference is not None:
+        envs.append(gym.make_vec(reference, n, vectorization_mode="vector_entry_point"))
+        sync = True
     rng = np.random.default_rng(seed)
     actions = rng.uniform(-1.0, 1.0, (16, *envs[0].action_space.shape)).astype(np.float32)
+    envs[-1].action_space.seed(seed)
+    own = [actions] * (len(envs) - 1) + [[envs[-1].action_space.sample() for _ in range(16)]]
+    actions = own if reference is not None else [actions] * len(envs)
     rates = [[] for _ in envs]
-    for env in envs:
+    for k, env in enumerate(envs):
         env.reset(seed=seed)
-        env.step(actions[0])
+        env.step(actions[k][0])
     for _ in range(ROUNDS):
         for k, env in enumerate(envs):
             steps, start = 0, time.perf_counter()
             while (elapsed := time.perf_counter() - start) < seconds / ROUNDS or steps == 0:
-                env.step(actions[steps % len(actions)])
+                env.step(actions[k][steps % 16])
                 steps += 1
             rates[k].append(n * steps / elapsed)
     for env in envs:
@@ -155,6 +157,70 @@ def step_breakdown(env_id: str, n: int, steps: int, seed: int = 0):
     return elapsed / steps, in_stepper[0] / steps, calls / steps, reset_per_row, amortized
 
 
+def shell_steppers(integrators, n: int, steps: int, seconds: float, seed: int = 0):
+    """The shell's reduced model (KozlovShell-v0's default episode) stepped by each integrator as the env steps it,
+    a straight mass motion to a random command per step of 0.1 s: one state against Pendulum-v1's env step, and N = n
+    rows by the batched stepper against Gymnasium's native CartPole-v1 vector env, each pair alternated in one loop
+    (issue 15's targets: ≤ 5× and ≥ 0.1×). The system is stepped directly, without the env's task code."""
+    from connenv.core.batched import batched
+    from connenv.core.steppers import make_stepper
+    from connenv.systems.kozlov_shell import ReducedKozlovShell
+
+    system, dt, u_max = ReducedKozlovShell(), 0.1, np.array([0.5, 0.25])
+    rng = np.random.default_rng(seed)
+    commands = rng.uniform(-1.0, 1.0, (256, 2)) * u_max
+    print("\nthe shell's reduced model by integrator, stepped directly: one state × Pendulum-v1's env step (target")
+    print(f"≤ 5), N={n} rows × CartPole-v1's native vector env (target ≥ 0.1)")
+    print("and the pose error after 300 steps from rest against DOP853 at rtol 1e-13 (max-norm of x, y, θ; m, rad)")
+    print(
+        f"{'integrator':12} {'µs/step':>9} {'× Pendulum':>11} {'M/s':>9} {'CartPole M/s':>13} {'× CartPole':>11} "
+        f"{'pose error':>11}"
+    )
+    reference = make_stepper("dop853", system, rtol=1e-13, atol=1e-15)
+    for name in integrators:
+        integrator, _, atol = name.partition(":")  # "magnus:1e-9": the Magnus step with atol 1e-9
+        options = {"rtol": 1e-8, "atol": 1e-10} if integrator == "dop853" else {"atol": float(atol)} if atol else {}
+        stepper = make_stepper(integrator, system, **options)
+        y, y_ref, u = np.zeros(3), np.zeros(3), np.zeros(2)
+        for u_cmd in np.random.default_rng(seed).uniform(-1.0, 1.0, (300, 2)) * u_max:
+            u_dot = (u_cmd - u) / dt
+            y, y_ref, u = stepper(system, y, u, u_dot, dt), reference(system, y_ref, u, u_dot, dt), u_cmd
+        error = np.max(np.abs(y - y_ref))
+        pendulum = gym.make("Pendulum-v1")
+        pendulum.reset(seed=seed)
+        times, y, u = [[], []], np.zeros(3), np.zeros(2)
+        for i in range(steps):
+            u_cmd = commands[i % 256]
+            start = time.perf_counter()
+            y = stepper(system, y, u, (u_cmd - u) / dt, dt)
+            times[0].append(time.perf_counter() - start)
+            u, action = u_cmd, pendulum.action_space.sample()
+            start = time.perf_counter()
+            pendulum.step(action)
+            times[1].append(time.perf_counter() - start)
+        single, pendulum_time = statistics.median(times[0]), statistics.median(times[1])
+        rows = batched(stepper)
+        cartpole = gym.make_vec("CartPole-v1", n, vectorization_mode="vector_entry_point")
+        cartpole.reset(seed=seed)
+        y, u, rates = np.zeros((n, 3)), np.zeros((n, 2)), [[], []]
+        for _ in range(ROUNDS):
+            count, start = 0, time.perf_counter()
+            while (elapsed := time.perf_counter() - start) < seconds / ROUNDS or count == 0:
+                u_cmd = rng.uniform(-1.0, 1.0, (n, 2)) * u_max
+                y, u, count = rows(system, y, u, (u_cmd - u) / dt, dt), u_cmd, count + 1
+            rates[0].append(n * count / elapsed)
+            count, start = 0, time.perf_counter()
+            while (elapsed := time.perf_counter() - start) < seconds / ROUNDS or count == 0:
+                cartpole.step(cartpole.action_space.sample())
+                count += 1
+            rates[1].append(n * count / elapsed)
+        native, cartpole_rate = statistics.median(rates[0]), statistics.median(rates[1])
+        print(
+            f"{name:12} {single * 1e6:9.1f} {single / pendulum_time:11.2f} {native / 1e6:9.4f} "
+            f"{cartpole_rate / 1e6:13.3f} {native / cartpole_rate:11.3f} {error:11.1e}"
+        )
+
+
 def main(argv=None):
     ids = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -166,7 +232,15 @@ def main(argv=None):
     parser.add_argument("--skip-single", action="store_true")
     parser.add_argument("--skip-vector", action="store_true")
     parser.add_argument("--breakdown", action="store_true", help="also where a native step goes at the largest N")
+    parser.add_argument(
+        "--shell-steppers", nargs="*", metavar="INTEGRATOR", help="only the shell's reduced model under these "
+        "integrators (default: dop853 magnus; magnus:ATOL for another atol) against Pendulum-v1 and CartPole-v1's "
+        "native vector env, at the largest N"
+    )
     args = parser.parse_args(argv)
+    if args.shell_steppers is not None:
+        shell_steppers(args.shell_steppers or ["dop853", "magnus"], max(args.sizes), args.single_steps, args.seconds)
+        return
     print(
         f"# {datetime.datetime.now():%Y-%m-%d %H:%M}, {platform.machine()}, {os.cpu_count()} cores, "
         f"python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, "

@@ -41,6 +41,8 @@ def describe(integrator: str, options: dict) -> str:
         return f"{integrator} ×{options['substeps']}"
     if "rtol" in options:
         return f"{integrator} rtol {options['rtol']:.0e}"
+    if "atol" in options:
+        return f"{integrator} atol {options['atol']:.0e}"
     return integrator
 
 

@@ -1,7 +1,7 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball kapitza shell] [--quick]
+    python -m connenv.bench precision [--env swing skier ball kapitza shell connection] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -21,7 +21,11 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
 - shell: KozlovShell-v0, 300 steps of seeded random mass positions, from rest (the reduced model, the default
   episode) and from the body momentum (0.3, 0.1, 0.05) (the full Kirchhoff model); reference: DOP853 at rtol
   1e-13, atol 1e-15. State error: max-norm of the pose (x, y, θ) error at the end (m, rad), for each model.
-  Invariant: max |S(t) − S(0)| / |S(0)| of the spatial momentum S in the full model.
+  Invariant: max |S(t) − S(0)| / |S(0)| of the spatial momentum S in the full model. Besides the common
+  candidates, the Magnus step (`integrator="magnus"`: the reduced model's connection; DOP853 on the full model).
+- connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
+  shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
+  max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
 
 Time: median µs of env.step over the first episode (the reduced one for the shell), and its ratio to the median
 Pendulum-v1 step timed beside it. A stepper that raises StepperError (non-finite, or the env's invariant bound)
@@ -66,6 +70,16 @@ class Case:
     invariant: str  # what the drift measures, as printed
     drift: object  # (env, info, start) -> the invariant's drift at this step; start: the env's state at reset
     error_unit: str
+    kwargs: dict = dataclasses.field(default_factory=dict)  # make kwargs of every env of the case
+    steppers: tuple = ()  # (integrator, options) charted besides the common candidates
+
+
+MAGNUS = tuple(("magnus", {"atol": atol}) for atol in (1e-6, 1e-8, 1e-10, 1e-12))
+
+
+def twisted(s):
+    """A non-flat connection on SO(3) over a 2-D shape space (the connection case's)."""
+    return np.array([[1.0 + s[1] ** 2, 0.5], [math.sin(s[0]), 1.0], [0.3, s[0] * s[1]]])
 
 
 def held(action):
@@ -158,6 +172,18 @@ CASES = {
         "max |S − S(0)| / |S(0)| (full model)",
         momentum_drift,
         "m, rad",
+        steppers=MAGNUS,
+    ),
+    "connection": Case(
+        "connenv/Connection-v0",
+        TIGHT,
+        (Episode("random ṡ", {}, uniform(2), 300),),
+        lambda env, ref: float(np.max(np.abs(env.state.g - ref.state.g))),
+        "max ‖RᵀR − I‖",
+        lambda env, info, start: float(env.group.off_group(info["state"]["g"])),
+        "",
+        {"group": "SO3", "connection": twisted, "shape_low": [-1.0, -1.0], "shape_high": [1.0, 1.0], "dt": 0.1},
+        MAGNUS,
     ),
 }
 
@@ -170,7 +196,7 @@ def references(case, steps_of):
     """The reference env at the end of each episode."""
     envs = []
     for episode in case.episodes:
-        env = make_env(case.env_id, *case.reference)
+        env = make_env(case.env_id, *case.reference, **case.kwargs)
         run(env, episode.reset, actions_of(episode, steps_of(episode)))
         envs.append(env)
     return envs
@@ -181,7 +207,7 @@ def measure_stepper(case, integrator, options, steps_of, clock, reference_envs):
     row = {"integrator": integrator, "options": describe(integrator, options), "diverged": ""}
     drift, errors = 0.0, {}
     for k, (episode, reference) in enumerate(zip(case.episodes, reference_envs)):
-        env = make_env(case.env_id, integrator, options)
+        env = make_env(case.env_id, integrator, options, **case.kwargs)
         if env is None:
             return None
         actions = actions_of(episode, steps_of(episode))
@@ -226,9 +252,9 @@ def pareto(rows):
 
 def default_row(case, rows):
     """The row whose stepper is the env's default (the stepper of the env made without kwargs)."""
-    default = make_env(case.env_id, None, {}).stepper
+    default = make_env(case.env_id, None, {}, **case.kwargs).stepper
     for row in rows:
-        env = make_env(case.env_id, row["integrator"], row["stepper_options"])
+        env = make_env(case.env_id, row["integrator"], row["stepper_options"], **case.kwargs)
         if env is not None and env.stepper == default:
             return row
     return None
@@ -261,6 +287,7 @@ STYLE = {
     "dop853": ("tab:green", "s"),
     "lsoda": ("tab:purple", "D"),
     "radau": ("tab:brown", "P"),
+    "magnus": ("tab:cyan", "X"),
 }
 
 
@@ -323,7 +350,7 @@ def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
     print(f"| stepper | µs/step | × Pendulum-v1 | {errors} | {case.invariant} |")
     print("|---|---|---|" + "---|" * len(labels) + "---|")
     rows, reference_envs = [], references(case, steps_of)
-    for integrator, options in steppers or candidates():
+    for integrator, options in steppers or [*candidates(), *case.steppers]:
         row = measure_stepper(case, integrator, options, steps_of, clock, reference_envs)
         if row is None:
             continue

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import DOP853, RK45
 
+from connenv.core.lie import Magnus
 from connenv.core.steppers import MAX_EVALUATIONS, Exact, Scipy, StepperError
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # scipy.integrate._ivp.rk's step-size control
@@ -177,7 +178,7 @@ def batched(stepper):
         if stepper.method in TABLEAUS:
             return EmbeddedRK(stepper.method, stepper.rtol, stepper.atol)
         return RowByRow(stepper)
-    if isinstance(stepper, Exact):
+    if isinstance(stepper, (Exact, Magnus)):  # Magnus steps a batch row by row already, with per-row substeps
         return dataclasses.replace(stepper, fallback=batched(stepper.fallback))
     return ColumnTau(stepper)
 

@@ -9,7 +9,8 @@ or else its ``exact_flow(y, u, tau)`` where u̇ = 0. All of them broadcast over
 leading batch axes of y.
 
 Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
-flow), ``"euler"``, ``"semi_implicit_euler"`` or ``"rk4"`` with ``substeps``, or
+flow), ``"magnus"`` (the fourth-order Lie-group step of a system with a
+connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"`` or ``"rk4"`` with ``substeps``, or
 one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol``
 and ``atol``. The two Euler methods are Gymnasium classic control's
 integrators (its ``kinematics_integrator``), there to compare against: they are
@@ -54,6 +55,20 @@ class CanonicalSystem(Protocol):
     splits it there); a kinematic model (no p) has no n."""
 
     n: int
+
+
+@runtime_checkable
+class ConnectionSystem(Protocol):
+    """A system moved by a mechanical connection (``connenv.core.lie``): its state is the coordinates of g in
+    ``group`` ("SO2", "SE2", "SO3", "R2"), its assigned coordinates the shape s, and ξ = −A(s) ṡ with
+    ``connection(s)`` = A(s) of shape (…, dim 𝔤, dim S) moves g in ``frame`` ("body": ġ = g ξ^, "space":
+    ġ = ξ^ g). It may give ``group_velocity(s, ṡ)``, ξ as components, in closed form (the Magnus stepper's fast
+    path)."""
+
+    group: str
+    frame: str
+
+    def connection(self, s): ...
 
 
 class StepperError(ArithmeticError):
@@ -180,7 +195,7 @@ class Exact:
 
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
 FIXED_STEP = {"euler": Euler, "semi_implicit_euler": SemiImplicitEuler, "rk4": RK4}
-INTEGRATORS = ("exact", *FIXED_STEP, *SCIPY_METHODS)
+INTEGRATORS = ("exact", "magnus", *FIXED_STEP, *SCIPY_METHODS)
 STEPPER_OPTIONS = ("substeps", "rtol", "atol")
 
 
@@ -189,7 +204,9 @@ def make_stepper(integrator: str, system: SteppedSystem | None = None, **options
 
     euler, semi_implicit_euler and rk4 take ``substeps`` (int ≥ 1); the scipy
     methods take ``rtol`` and ``atol`` (> 0); exact takes the scipy options for
-    the segments where u moves.
+    the segments where u moves; magnus takes ``atol``, its error bound per
+    segment on the coordinates of g (default 1e-10), and hands ``rtol`` and
+    ``atol`` to DOP853 for systems without a connection (the shell's full model).
     """
     if integrator not in INTEGRATORS:
         raise ValueError(f"integrator={integrator!r} is not one of {INTEGRATORS}")
@@ -213,6 +230,10 @@ def make_stepper(integrator: str, system: SteppedSystem | None = None, **options
         value = options.get(name, 1.0)
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
             raise ValueError(f"{name}={value!r} must be a finite number > 0")
+    if integrator == "magnus":
+        from connenv.core.lie import Magnus  # lie builds on this module
+
+        return Magnus(options.get("atol", Magnus.atol), Scipy(**options))
     if integrator == "exact":
         if system is not None and not isinstance(system, (ExactFlow, ExactSegment)):
             raise ValueError(f"integrator='exact' needs a closed-form flow, which {type(system).__name__} has not")

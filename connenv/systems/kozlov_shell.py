@@ -125,7 +125,21 @@ class KozlovShell:
 
 @dataclass(frozen=True)
 class ReducedKozlovShell(KozlovShell):
-    """The shell at zero momentum: state y = (x, y, θ) and ξ = −I⁻¹ C u̇, the mechanical connection."""
+    """The shell at zero momentum: state y = (x, y, θ) and ξ = −I⁻¹ C u̇, the mechanical connection A = I⁻¹ C on
+    SE(2) in the body frame (a ``connenv.core.steppers.ConnectionSystem``: the Magnus stepper's)."""
+
+    group = "SE2"
+    frame = "body"
+
+    def connection(self, u):
+        """A(u) = I(u)⁻¹ C(u), shape (..., 3, 2)."""
+        return np.linalg.solve(self.locked_inertia(u), self.coupling(u))
+
+    def group_velocity(self, u, u_dot):
+        """ξ = −A(u) u̇ = −I⁻¹ C u̇ in closed form, as components (v₁, v₂, ω): floats for one u, arrays over rows."""
+        if np.ndim(u) == 1:
+            return self._body_velocity((0.0, 0.0, 0.0), tuple(u.tolist()), tuple(u_dot.tolist()))
+        return self._body_velocity((0.0, 0.0, 0.0), _split(u), _split(u_dot))
 
     def vector_field(self, y, u, u_dot):
         """Reduced model: ẏ for y = (x, y, θ), the connection ξ = −I⁻¹ C u̇ reconstructed on SE(2)."""

@@ -1,0 +1,334 @@
+"""Connection-v0: any system moved by a mechanical connection, from the connection alone."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.lie import FRAMES, GROUPS, Connection
+from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
+from connenv.core.steppers import StepperError, make_stepper
+from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
+
+ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
+GROUP_BOUND = 1e-9  # how far a stepped g may drift from its group before the step raises StepperError
+
+
+@dataclass
+class ConnectionState(State):
+    """g as its group's coordinates (``connenv.core.lie``: θ for SO2, (x, y, θ) for SE2, the 9 entries of R for SO3,
+    (x, y) for R2), the shape s and the time t."""
+
+    g: np.ndarray
+    s: np.ndarray
+    t: float
+
+
+class ConnectionEnv(TaskEnv):
+    r"""
+    ## Description
+
+    A system whose shape s ∈ ℝᵏ the controller moves and whose position g in a Lie group follows through a
+    *mechanical connection* A(s) (Lawton; Marsden, Montgomery & Ratiu 1990): with ξ the group velocity,
+
+        ξ = −A(s) ṡ,    ġ = g ξ^ (frame="body"),    ġ = ξ^ g (frame="space").
+
+    A falling cat, a swimmer at zero momentum, a satellite with rotors, a rolling ball: a closed loop of shapes
+    moves g by the connection's holonomy, whatever the speed at which it is run. `group` is one of
+
+    | group | g (in `info["state"]["g"]`) | ξ |
+    |---|---|---|
+    | "SO2" | 2×2 rotation | ω |
+    | "SE2" | 3×3 homogeneous [[R, (x, y)], [0, 0, 1]] | (v₁, v₂, ω) |
+    | "SO3" | 3×3 rotation | (ω₁, ω₂, ω₃), ω̂ v = ω × v |
+    | "R2" | the vector (x, y) | (v₁, v₂) |
+
+    and `connection(s)` returns A(s) as an array of shape (dim 𝔤, k) for a shape s of shape (k,).
+
+    ## Action Space
+
+    `Box(-1, 1, (k,), float32)`; actions outside are clipped, a wrong shape or a non-finite value raises
+    ValueError. The shape velocity is ṡ = action · max_shape_speed, constant over the step; a coordinate that
+    reaches a finite bound stops there for the rest of the step (the step is cut into segments at the stops).
+    Infinite bounds are allowed (a coordinate that winds, such as a rotor's angle).
+
+    ## Observation Space
+
+    Default: `Box(-inf, inf, (n + k,), float32)`, g flattened (4 numbers for SO2, 9 for SE2 and SO3, 2 for R2)
+    followed by s. With a `task` that has `observation(state)`, its value (float32), in an unbounded Box of its
+    shape, or the task's `observation_space` if it has one.
+
+    ## Rewards
+
+    Default 0. With a `task`: `task.reward(state, next_state)`, the states as in `info["state"]`.
+
+    ## Starting State
+
+    g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0. With
+    a `task`: `task.reset(np_random)` returns a dict with any of "g" and "s" (np_random is the env's generator: all
+    randomness from it). `reset(options={"state": {"g": ..., "s": ...}})` sets either exactly (checked: g on its
+    group to 1e-9, s of shape (k,) within the bounds).
+
+    ## Episode End
+
+    Never terminates by default; with a `task`, when `task.terminated(state)`. No time limit of its own (the
+    registration's `max_episode_steps` is None: pass one to `gym.make`).
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | group | (required) | "SO2", "SE2", "SO3", "R2" |
+    | connection | (required) | callable s -> A(s) of shape (dim 𝔤, k), finite |
+    | shape_low, shape_high | (required) | arrays of shape (k,), low < high, ±inf allowed |
+    | dt | 0.1 | (0, ∞) s |
+    | frame | "body" | "body", "space" |
+    | max_shape_speed | 1.0 | (0, ∞) |
+    | task | None | an object with reset, reward, terminated and optionally observation (above) |
+    | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
+    | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the vector env calls it once |
+    | integrator | "magnus" | "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | atol (magnus: its error bound per segment, 1e-10) / substeps, rtol, atol (others) | | `connenv.core.steppers` |
+
+    The default step is `connenv.core.lie.Magnus`: on SO3 the sixth-order Magnus method with closed-form
+    exponentials; on SO2, R2 and SE2 (solvable groups) nested Gauss–Legendre quadratures of θ = ∫ω and of the
+    translation; with substeps chosen per segment for an error ≤ atol on the coordinates of g. Where A is constant
+    along the shape's path the step is one exponential, the exact flow. g stays on its group to rounding (the other
+    integrators step ġ in coordinates and leave SO(3) slowly). A g further than 1e-9 from its group after a step raises
+    `connenv.core.StepperError`, as does a non-finite state or a segment that needs more than 4096 substeps.
+
+    Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`.
+    """
+
+    def __init__(
+        self,
+        group: str,
+        connection,
+        shape_low,
+        shape_high,
+        dt: float = 0.1,
+        frame: str = "body",
+        max_shape_speed: float = 1.0,
+        task=None,
+        render_mode: str | None = None,
+        draw=None,
+        vectorized: bool = False,
+        integrator: str = "magnus",
+        **stepper_options,
+    ):
+        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        if group not in GROUPS:
+            raise ValueError(f"group={group!r} is not one of {list(GROUPS)}")
+        if frame not in FRAMES:
+            raise ValueError(f"frame={frame!r} is not one of {list(FRAMES)}")
+        self.group = GROUPS[group]
+        self.low, self.high = _check_bounds(shape_low, shape_high)
+        self.max_shape_speed = check_number("max_shape_speed", max_shape_speed, 0.0, open_low=True)
+        if draw is not None and not callable(draw):
+            raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
+        self.task, self.draw = task, draw
+        connection = _check_connection(connection, self.group, self.start_shape())
+        self.system = Connection(group, frame, connection, bool(vectorized))
+        check_stepper_options("Connection-v0", stepper_options, type(self))
+        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+        self.state = ConnectionState(np.array(self.group.identity()), self.start_shape(), 0.0)
+        self.action_space = spaces.Box(-1.0, 1.0, self.low.shape, np.float32)
+        self.observation_space = self._observation_space()
+
+    def start_shape(self):
+        """The default s: the midpoint of finite bounds, else the finite bound, else 0."""
+        low, high = np.isfinite(self.low), np.isfinite(self.high)
+        middle = 0.5 * (np.where(low, self.low, 0.0) + np.where(high, self.high, 0.0))
+        return np.where(low & high, middle, np.where(low, self.low, np.where(high, self.high, 0.0)))
+
+    def _observation_space(self):
+        if self.task is not None and hasattr(self.task, "observation_space"):
+            return self.task.observation_space
+        shape = self.observe(self.state).shape
+        return spaces.Box(-np.inf, np.inf, shape, np.float32)
+
+    def parameters(self):
+        return {"group": self.group.name, "frame": self.system.frame, "max_shape_speed": self.max_shape_speed}
+
+    # -- physics ---------------------------------------------------------------
+
+    def start(self, options):
+        check_keys("reset options", options, {"state"})
+        given = dict(self.task.reset(self.np_random)) if self.task is not None else {}
+        check_keys("the task's reset state", given, {"g", "s"})
+        given.update(options.get("state", {}))
+        check_keys("options['state']", given, {"g", "s"})
+        g = self._check_g(given["g"]) if "g" in given else np.array(self.group.identity())
+        return ConnectionState(g, self._check_s(given["s"]) if "s" in given else self.start_shape(), 0.0)
+
+    def command(self, a):
+        """ṡ of action a."""
+        return a * self.max_shape_speed
+
+    def advance(self, state, s_dot):
+        segments, s, _ = bounded_segments(state.s, s_dot, self.low, self.high, self.dt)
+        g, _ = run_segments(self.stepper, self.system, state.g, segments)
+        self.check_group(g)
+        return ConnectionState(g, s, state.t + self.dt)
+
+    def check_group(self, g):
+        """StepperError if g (any row of a batch) has left its group by more than GROUP_BOUND (SO3's matrices; the
+        other groups' coordinates are on the group by construction)."""
+        if self.group.name != "SO3":
+            return
+        off = np.max(self.group.off_group(self.group.matrix(g)))
+        if not off <= GROUP_BOUND:
+            raise StepperError(f"{self.stepper} left SO(3): ‖RᵀR − I‖ = {off:.3g} > {GROUP_BOUND}")
+
+    def _check_g(self, value):
+        shape = (2,) if self.group.name == "R2" else (2, 2) if self.group.name == "SO2" else (3, 3)
+        try:
+            g = np.array(value, dtype=float)
+        except (TypeError, ValueError):
+            g = None
+        if g is None or g.shape != shape or not np.all(np.isfinite(g)):
+            raise ValueError(f"state g={value!r} must be a finite array of shape {shape} for group {self.group.name}")
+        off = float(self.group.off_group(g))
+        if not off <= ON_GROUP:
+            raise ValueError(f"state g={value!r} is {off:.3g} off {self.group.name}; it must be on it to {ON_GROUP}")
+        return self.group.coordinates(g)
+
+    def _check_s(self, value):
+        try:
+            s = np.array(value, dtype=float)
+        except (TypeError, ValueError):
+            s = None
+        if s is None or s.shape != self.low.shape or not np.all(np.isfinite(s)):
+            raise ValueError(f"state s={value!r} must be a finite array of shape {self.low.shape}")
+        if np.any(s < self.low) or np.any(s > self.high):
+            raise ValueError(f"state s={value!r} is out of range: must be within [{self.low}, {self.high}]")
+        return s
+
+    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
+
+    def state_dict(self, state):
+        """The state as `info["state"]`: g as a matrix (a vector for R2), s, t."""
+        return {"g": self.group.matrix(state.g), "s": np.array(state.s), "t": state.t}
+
+    def observe(self, state, ops=SCALAR):
+        if self.task is not None and hasattr(self.task, "observation"):
+            return _rows(lambda d: np.asarray(self.task.observation(d), np.float32), self.state_dict(state), ops)
+        g = self.group.matrix(state.g)
+        return np.concatenate([g.reshape(*np.shape(state.s)[:-1], -1), state.s], axis=-1).astype(np.float32)
+
+    def describe(self, state, ops=SCALAR):
+        return {"state": self.state_dict(state)}
+
+    def reward(self, before, after, info, ops=SCALAR):
+        if self.task is None:
+            return ops.real(0.0) if ops is SCALAR else np.zeros(len(after.t))
+        pairs = {"before": self.state_dict(before), "after": info["state"]}
+        return _rows(lambda d: float(self.task.reward(d["before"], d["after"])), pairs, ops, nested=True)
+
+    def terminated(self, state, info, ops=SCALAR):
+        if self.task is None:
+            return False if ops is SCALAR else np.zeros(len(state.t), bool)
+        return _rows(lambda d: bool(self.task.terminated(d)), info["state"], ops)
+
+    # -- rendering ---------------------------------------------------------------
+
+    def _make_renderer(self):
+        from connenv.envs.rendering import Canvas
+
+        return Canvas(2.0, 0.0, self.render_mode, self.metadata["render_fps"])
+
+    def _draw(self, canvas):
+        state = self.state_dict(self.state)
+        if self.draw is not None:
+            self.draw(state, canvas)
+            return canvas.show()
+        return draw_plain(canvas, self.group.name, state, self.low, self.high)
+
+
+class ConnectionVectorEnv(TaskVectorEnv):
+    """Connection-v0 over a batch (``gym.make_vec("connenv/Connection-v0", num_envs=N, group=..., ...)``; see
+    ``connenv.envs.vector``): every row stepped by the same Magnus arithmetic as the single env, with its own
+    segments where its shape stops at a bound and its own substeps. A task's functions run row by row."""
+
+    single_env = ConnectionEnv
+
+    def advance(self, state, s_dot):
+        env = self.env
+        segments, s, _ = bounded_segments_batch(state.s, s_dot, env.low, env.high, env.dt)
+        g, _ = run_segments(self.stepper, env.system, state.g, segments)
+        env.check_group(g)
+        return ConnectionState(g, s, state.t + env.dt)
+
+
+def draw_plain(canvas, group: str, state: dict, low, high):
+    """The body frame (x axis red, y axis green; SO3's projected on the screen's plane, z blue, with the unit
+    circle), centred on g's position for SE2 and R2, and s as bars against its bounds; the time."""
+    pg, screen = canvas.pygame, canvas.screen
+    screen.fill((255, 255, 255))
+    g = state["g"]
+    if group == "R2":
+        canvas.center_x, canvas.center_y = g
+        origin, axes = g, np.eye(2)
+    elif group == "SE2":
+        canvas.center_x, canvas.center_y = g[:2, 2]
+        origin, axes = g[:2, 2], g[:2, :2]
+    else:
+        origin, axes = np.zeros(2), g[:2, :]
+    if group == "SO3":
+        pg.draw.circle(screen, (200, 200, 200), canvas.px(0.0, 0.0), int(canvas.scale), 1)
+    for column, colour in zip(axes.T, ((204, 60, 60), (60, 160, 60), (60, 60, 204))):
+        pg.draw.line(screen, colour, canvas.px(*origin), canvas.px(*(origin + column)), 4)
+    pg.draw.circle(screen, (0, 0, 0), canvas.px(*origin), 5)
+    size = screen.get_width()
+    for i, value in enumerate(state["s"]):  # a bar per shape coordinate: its place within the bounds
+        finite = math.isfinite(low[i]) and math.isfinite(high[i])
+        fraction = (value - low[i]) / (high[i] - low[i]) if finite else 0.5 + math.atan(value) / math.pi
+        x, width = 10 + 18 * i, 12
+        pg.draw.rect(screen, (220, 220, 230), (x, size - 110, width, 100))
+        pg.draw.rect(screen, (70, 110, 160), (x, size - 10 - int(100 * fraction), width, int(100 * fraction)))
+    screen.blit(canvas.font.render(f"t = {state['t']:5.2f}   s = {np.round(state['s'], 2)}", True, (0, 0, 0)), (10, 10))
+    return canvas.show()
+
+
+def _rows(function, state, ops, nested=False):
+    """function(state) on one state; on a batch (ops=BATCH), function of each row's state, stacked."""
+    if ops is SCALAR:
+        return function(state)
+    if nested:
+        rows = [{k: {key: value[i] for key, value in d.items()} for k, d in state.items()}
+                for i in range(len(state["after"]["t"]))]
+    else:
+        rows = [{key: value[i] for key, value in state.items()} for i in range(len(state["t"]))]
+    return np.stack([np.asarray(function(row)) for row in rows])
+
+
+def _check_bounds(low, high):
+    """(low, high) as float arrays of one shape (k,), k ≥ 1, low < high, no NaN (±inf allowed)."""
+    try:
+        low, high = np.array(low, dtype=float), np.array(high, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"shape_low={low!r}, shape_high={high!r} must be arrays of real numbers") from error
+    if low.ndim != 1 or low.shape != high.shape or low.size == 0:
+        raise ValueError(f"shape_low={low!r} and shape_high={high!r} must have one shape (k,), k ≥ 1")
+    if np.any(np.isnan(low)) or np.any(np.isnan(high)) or not np.all(low < high):
+        raise ValueError(f"shape_low={low!r}, shape_high={high!r}: each must be below the other, in [-inf, inf]")
+    return low, high
+
+
+def _check_connection(connection, group, s):
+    """The connection, if it is callable and A(s) at the start shape is finite of shape (dim 𝔤, k)."""
+    if not callable(connection):
+        raise ValueError(f"connection={connection!r} must be a callable s -> A(s)")
+    value = np.asarray(connection(s), dtype=float)
+    shape = (group.dim, s.size)
+    if value.shape != shape or not np.all(np.isfinite(value)):
+        raise ValueError(
+            f"connection(s) at s={s} returned {value!r} of shape {value.shape}; for group {group.name} and a shape "
+            f"of {s.size} coordinates it must be finite of shape {shape} (dim 𝔤, k)"
+        )
+    return connection

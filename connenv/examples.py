@@ -1,0 +1,54 @@
+"""Worked examples of the two builders, each as make kwargs: what the README shows, the benchmarks time and the
+contract tests check the generic ids with.
+
+- ``rotor()``: ActiveConstraint-v0 on a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², fit for jumps;
+- ``swing()``: ActiveConstraint-v0 on the swing from its Lagrangian, T = ½ m (ṙ² + r² θ̇²), V = −m g r cos θ,
+  strongly fit, with Swing-v0's radii;
+- ``beanie()``: Connection-v0 on Elroy's beanie, SO(2) with A = I₂/(I₁+I₂), flat.
+
+Every value is picklable (module-level functions, partials, sympy systems), as vector envs and copies need.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+
+def rotor(inertia: float = 1.0, rotor_inertia: float = 0.25) -> dict:
+    """A body (angle θ, inertia I) turned by a rotor on it (angle u relative to the body, inertia J)."""
+    import sympy as sp
+
+    from connenv.core.lagrangian import LagrangianSystem
+
+    theta, theta_dot, u, u_dot = sp.symbols("theta theta_dot u u_dot")
+    kinetic = inertia * theta_dot**2 / 2 + rotor_inertia * (theta_dot + u_dot) ** 2 / 2
+    return {"system": LagrangianSystem(kinetic, sp.Integer(0), [theta], [u]), "u_low": -np.pi, "u_high": np.pi}
+
+
+def swing(mass: float = 1.0, g: float = 9.81, r_min: float = 1.6, r_max: float = 2.0) -> dict:
+    """The swing with its radius r assigned (q = θ, u = r)."""
+    import sympy as sp
+
+    from connenv.core.lagrangian import LagrangianSystem
+
+    r, r_dot, theta, theta_dot = sp.symbols("r r_dot theta theta_dot")
+    kinetic = mass * (r_dot**2 + r**2 * theta_dot**2) / 2
+    return {"system": LagrangianSystem(kinetic, -mass * g * r * sp.cos(theta), [theta], [r]),
+            "u_low": r_min, "u_high": r_max}
+
+
+def beanie_connection(s, body_inertia: float, beanie_inertia: float):
+    """A(ψ) = I₂/(I₁+I₂) (1×1): the body turns by −I₂/(I₁+I₂) dψ as the beanie turns by dψ relative to it."""
+    return np.full((*np.shape(s)[:-1], 1, 1), beanie_inertia / (body_inertia + beanie_inertia))
+
+
+def beanie(body_inertia: float = 3.0, beanie_inertia: float = 1.0) -> dict:
+    """Elroy's beanie: group SO2 (the body's angle θ₁), shape ψ, the beanie's angle relative to the body."""
+    connection = functools.partial(beanie_connection, body_inertia=body_inertia, beanie_inertia=beanie_inertia)
+    return {"group": "SO2", "connection": connection, "shape_low": [-np.inf], "shape_high": [np.inf], "vectorized": True}
+
+
+MAKE_KWARGS = {"connenv/ActiveConstraint-v0": swing, "connenv/Connection-v0": beanie}
+"""The example each generic id is benchmarked and contract-tested with."""
