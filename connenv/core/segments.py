@@ -23,7 +23,7 @@ def run_segments(stepper, system, y, segments, conserved=None):
     length 0."""
     change = 0.0
     for u, u_dot, tau in segments:
-        if np.ndim(tau) == 0:
+        if isinstance(tau, float) or np.ndim(tau) == 0:  # a float first: np.ndim of a float raises inside
             before = None if conserved is None else conserved(y, u, u_dot)
             y = stepper(system, y, u, u_dot, tau)
             if conserved is not None:
