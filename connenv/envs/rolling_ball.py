@@ -62,6 +62,14 @@ class BallState(State):
     distance: float
 
 
+@dataclass
+class GoalBallState(BallState):
+    """BallState with the goals of RollingBallGoal-v0: R (achieved) and R* (desired) in 6-D form, float32."""
+
+    achieved_goal: np.ndarray
+    desired_goal: np.ndarray
+
+
 class RollingBallEnv(TaskEnv):
     r"""
     ## Description
@@ -259,8 +267,7 @@ class RollingBallEnv(TaskEnv):
             "path_length": s.path_length,
         }
         if self.measures_distance:  # else not known: left out rather than NaN
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
+            ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
             info |= {"distance": s.distance, "path_ratio": ratio}
         return {**info, "is_success": ops.flag(self.success(s, ops))}
 
@@ -359,19 +366,21 @@ class RollingBallGoalEnv(RollingBallEnv):
         box = spaces.Box(-1.0, 1.0, (6,), np.float32)
         return spaces.Dict({"observation": box, "achieved_goal": box, "desired_goal": box})
 
-    def goals(self, s):
-        """The achieved and the desired goal: R and R* in 6-D form (float32)."""
-        return six_d(s.R).astype(np.float32), six_d(s.R_target).astype(np.float32)
+    def at(self, R, R_target, position, t, path_length, distance, ops=SCALAR):
+        """RollingBall-v0's state, with the achieved and the desired goal."""
+        state = super().at(R, R_target, position, t, path_length, distance, ops)
+        achieved, desired = six_d(R).astype(np.float32), six_d(R_target).astype(np.float32)
+        return GoalBallState(**vars(state), achieved_goal=achieved, desired_goal=desired)
 
     def observe(self, s, ops=SCALAR):
-        achieved, desired = self.goals(s)
-        return {"observation": achieved, "achieved_goal": achieved.copy(), "desired_goal": desired}
+        achieved = s.achieved_goal
+        return {"observation": achieved.copy(), "achieved_goal": achieved.copy(), "desired_goal": s.desired_goal.copy()}
 
     def reward(self, before, after, info, ops=SCALAR):
-        return ops.real(self.compute_reward(*self.goals(after), None))
+        return ops.real(self.compute_reward(after.achieved_goal, after.desired_goal, None))
 
     def success(self, s, ops=SCALAR):
-        return self.compute_terminated(*self.goals(s), None)
+        return self.compute_terminated(s.achieved_goal, s.desired_goal, None)
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
