@@ -215,7 +215,7 @@ class RollingBallEnv(TaskEnv):
         R, position = np.eye(3), np.zeros(2)
         R_target = Rotation.random(rng=self.np_random).as_matrix()
         if "state" in options:
-            R, position = self._check_state(options["state"], R)
+            R, position = self._check_state(options["state"])
         if "target" in options:
             R_target = check_rotation("target", options["target"])
         s = self.at(R, R_target, position, 0.0, 0.0, math.nan)
@@ -234,11 +234,12 @@ class RollingBallEnv(TaskEnv):
         path_length = s.path_length + ops.hypot(v[..., 0], v[..., 1]) * self.dt
         return self.at(R, s.R_target, s.position + v * self.dt, s.t + self.dt, path_length, s.distance, ops)
 
-    def _check_state(self, state, R):
+    def _check_state(self, state):
+        """(R, position) of options["state"]: R = I and the origin where not given."""
         check_keys("options['state']", state, {"x", "y", "R"})
         x = check_number("state x", state.get("x", 0.0))
         y = check_number("state y", state.get("y", 0.0))
-        return (check_rotation("state R", state["R"]) if "R" in state else R), np.array([x, y])
+        return (check_rotation("state R", state["R"]) if "R" in state else np.eye(3)), np.array([x, y])
 
     # -- task: one state (Python floats and one R), or a batch with ops=BATCH (the vector env) ----------------
 
