@@ -91,7 +91,7 @@ def test_ball_exact_step_rolls_the_closed_form_at_every_radius_and_step(radius, 
         env.step(np.array([1.0, 0.0], np.float32))
     angle = 100 * env.v_max * dt / radius
     c, s = math.cos(angle), math.sin(angle)
-    np.testing.assert_allclose(env.R, [[c, 0, s], [0, 1, 0], [-s, 0, c]], atol=1e-12)
+    np.testing.assert_allclose(env.state.R, [[c, 0, s], [0, 1, 0], [-s, 0, c]], atol=1e-12)
 
 
 @pytest.mark.parametrize("v_max", [1.0, 10.0, 100.0])

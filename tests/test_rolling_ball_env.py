@@ -71,7 +71,7 @@ def test_targets_are_uniform_on_so3():
     quats = []
     for seed in range(400):
         env.reset(seed=seed)
-        quats.append(Rotation.from_matrix(env.R_target).as_quat(canonical=True))
+        quats.append(Rotation.from_matrix(env.state.R_target).as_quat(canonical=True))
     quats = np.array(quats)
     assert np.mean(quats[:, 3]) == pytest.approx(4 / (3 * math.pi), abs=0.04)
     assert np.mean(quats[:, :3] ** 2, axis=0) == pytest.approx([0.25] * 3, abs=0.04)
@@ -94,9 +94,9 @@ def test_actions_beyond_the_unit_disk_are_projected_radially():
     env = gym.make(ORIENT).unwrapped
     env.reset(seed=0, options={"target": np.eye(3)})
     env.step(np.array([3.0, 4.0], np.float32))
-    assert env.position == pytest.approx([0.06, 0.08])  # speed v_max = 1 along (3, 4)/5 over dt = 0.1
+    assert env.state.position == pytest.approx([0.06, 0.08])  # speed v_max = 1 along (3, 4)/5 over dt = 0.1
     env.step(np.array([0.3, 0.4], np.float32))
-    assert env.position == pytest.approx([0.09, 0.12])  # inside the disk: unchanged
+    assert env.state.position == pytest.approx([0.09, 0.12])  # inside the disk: unchanged
 
 
 @pytest.mark.parametrize("env_id, names", [(ORIENT, ["arc", "holonomy"]), (POSE, ["holonomy"]), (GOAL, ["arc"])])

@@ -140,9 +140,9 @@ CASES = {
         "connenv/RollingBall-v0",
         EXACT,
         (Episode("random v", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
-        lambda env, ref: float(rotation_angle(env.R @ ref.R.T)),
+        lambda env, ref: float(rotation_angle(env.state.R @ ref.state.R.T)),
         "max ‖RᵀR − I‖",
-        lambda env, info, start: float(np.linalg.norm(env.R.T @ env.R - np.eye(3))),
+        lambda env, info, start: float(np.linalg.norm(env.state.R.T @ env.state.R - np.eye(3))),
         "rad",
     ),
     "kapitza": Case(

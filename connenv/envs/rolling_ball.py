@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
 from scipy.spatial.transform import Rotation
 
+from connenv.core.segments import run_segments
 from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import check_keys, check_number, check_stepper_options, finite_action
-from connenv.envs.base import RenderedEnv
-from connenv.envs.vector import BATCH, SCALAR, TaskVectorEnv
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -37,7 +39,38 @@ def check_rotation(name: str, value) -> np.ndarray:
     return R
 
 
-class RollingBallEnv(RenderedEnv):
+def check_so3(stepper, R):
+    """StepperError if R (any row of a batch) is more than DRIFT_LIMIT off SO(3): the stepper has left it."""
+    drift = np.max(np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1)))
+    if not drift <= DRIFT_LIMIT:
+        raise StepperError(f"{stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")
+
+
+@dataclass
+class BallState(State):
+    """The attitude R (body → space) and the target R*; the centre's position (x, y); the attitude error
+    P = R R*ᵀ and its angle e (rad), which the observation and reward read; the time t; the path length rolled
+    since reset; the distance, the optimal arc's length from the start attitude (NaN where not measured)."""
+
+    R: np.ndarray
+    R_target: np.ndarray
+    position: np.ndarray
+    error: np.ndarray
+    angle_error: float
+    t: float
+    path_length: float
+    distance: float
+
+
+@dataclass
+class GoalBallState(BallState):
+    """BallState with the goals of RollingBallGoal-v0: R (achieved) and R* (desired) in 6-D form, float32."""
+
+    achieved_goal: np.ndarray
+    desired_goal: np.ndarray
+
+
+class RollingBallEnv(TaskEnv):
     r"""
     ## Description
 
@@ -117,8 +150,8 @@ class RollingBallEnv(RenderedEnv):
     length / distance) and `"is_success"`.
     """
 
-    metadata = {**RenderedEnv.metadata, "measures": ("angle_error", "path_ratio")}
-    measures_distance = True  # whether reset solves for the optimal arc (info "distance"); the vector env may not
+    metadata = {**TaskEnv.metadata, "measures": ("angle_error", "path_ratio")}
+    measures_distance = True  # whether start solves for the optimal arc (info "distance"); the vector env may not
 
     def __init__(
         self,
@@ -139,47 +172,21 @@ class RollingBallEnv(RenderedEnv):
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.observation_space = self._observation_space()
-        self.R, self.R_target, self.position = np.eye(3), np.eye(3), np.zeros(2)
-        self.update_error(self)  # self.error, P = R R*ᵀ, and self.angle_error, its angle e
-        self.t, self.path_length, self.distance = 0.0, 0.0, 0.0
-        self.path = [self.position]
-
-    # -- Gymnasium API -------------------------------------------------------
+        self.state = self.at(np.eye(3), np.eye(3), np.zeros(2), 0.0, 0.0, math.nan)
+        self.path = []  # where each step since reset started: the track drawn behind the ball
 
     def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        options = dict(options or {})
-        check_keys("reset options", options, {"state", "target"})
-        self.R, self.position, self.t, self.path_length = np.eye(3), np.zeros(2), 0.0, 0.0
-        self.R_target = Rotation.random(rng=self.np_random).as_matrix()
-        if "state" in options:
-            self._set_state(options["state"])
-        if "target" in options:
-            self.R_target = check_rotation("target", options["target"])
-        self.path = [self.position]
-        self.update_error(self)
-        self.distance = math.nan
-        if self.measures_distance:
-            self.distance = self.system.optimal_arc(Rotation.from_matrix(self.error)).length
-        return self.observe(self), self.describe(self)
+        self.path = []
+        return super().reset(seed=seed, options=options)
 
     def step(self, action):
-        v = self.velocity(finite_action(action, self.action_space))
-        before = self.progress(self)
-        try:
-            self.R = self.roll(self, v, self.stepper)
-        except StepperError as error:
-            raise self._stepper_error(error) from error
-        self.position = self.position + v * self.dt
-        self.update_error(self)
-        self.t += self.dt
-        self.path_length += math.hypot(v[0], v[1]) * self.dt
-        self.path.append(self.position)
-        info = self.describe(self)
-        reward = self.reward(self, before)
-        if self.render_mode == "human":
-            self.render()
-        return self.observe(self), reward, info["is_success"], False, info
+        self.path.append(self.state.position)
+        return super().step(action)
+
+    def check_action(self, action):
+        """The action as a finite float array of the space's shape (else ValueError), not clipped: the command
+        projects it onto the unit disk."""
+        return finite_action(action, self.action_space)
 
     def _make_renderer(self):
         from connenv.envs.rendering import RollingBallRenderer
@@ -187,30 +194,59 @@ class RollingBallEnv(RenderedEnv):
         return RollingBallRenderer(self.system.radius, self.render_mode, self.metadata["render_fps"])
 
     def _draw(self, renderer):
-        return renderer.draw(self.R, self.R_target, np.array(self.path), self.t, self.angle_error)
+        s = self.state
+        return renderer.draw(s.R, s.R_target, np.array([*self.path, s.position]), s.t, s.angle_error)
 
-    # -- task ----------------------------------------------------------------
-    # s is the state: the env itself (Python floats and one R), or a vector env's batch with ops=BATCH. Both carry
-    # R, R_target, position, error (P), angle_error, t, path_length and distance.
+    def parameters(self):
+        return {"radius": self.system.radius, "v_max": self.v_max}
 
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (6,), np.float32)
 
-    def velocity(self, a, ops=SCALAR):
-        """v = v_max a, with a projected radially onto the unit disk."""
+    # -- physics ---------------------------------------------------------------
+
+    def at(self, R, R_target, position, t, path_length, distance, ops=SCALAR):
+        """The state at attitude R and centre position, with its error P = R R*ᵀ and angle e."""
+        error = attitude_error(R, R_target)
+        return BallState(R, R_target, position, error, ops.real(rotation_angle(error)), t, path_length, distance)
+
+    def start(self, options):
+        check_keys("reset options", options, {"state", "target"})
+        R, position = np.eye(3), np.zeros(2)
+        R_target = Rotation.random(rng=self.np_random).as_matrix()
+        if "state" in options:
+            R, position = self._check_state(options["state"])
+        if "target" in options:
+            R_target = check_rotation("target", options["target"])
+        s = self.at(R, R_target, position, 0.0, 0.0, math.nan)
+        if not self.measures_distance:
+            return s
+        return s.replace(distance=self.system.optimal_arc(Rotation.from_matrix(s.error)).length)
+
+    def advance(self, s, v):
+        return self.rolled(s, v, self.stepper)
+
+    def rolled(self, s, v, stepper, ops=SCALAR):
+        """The state after a step at velocity v (one, or one per row with ops=BATCH and a batched stepper)."""
+        y = s.R.reshape(*s.R.shape[:-2], 9)
+        R = run_segments(stepper, self.system, y, [(s.position, v, self.dt)])[0].reshape(s.R.shape)
+        check_so3(stepper, R)
+        path_length = s.path_length + ops.hypot(v[..., 0], v[..., 1]) * self.dt
+        return self.at(R, s.R_target, s.position + v * self.dt, s.t + self.dt, path_length, s.distance, ops)
+
+    def _check_state(self, state):
+        """(R, position) of options["state"]: R = I and the origin where not given."""
+        check_keys("options['state']", state, {"x", "y", "R"})
+        x = check_number("state x", state.get("x", 0.0))
+        y = check_number("state y", state.get("y", 0.0))
+        return (check_rotation("state R", state["R"]) if "R" in state else np.eye(3)), np.array([x, y])
+
+    # -- task: one state (Python floats and one R), or a batch with ops=BATCH (the vector env) ----------------
+
+    def command(self, a):
+        """v = v_max a, with a projected radially onto the unit disk; a is one action (2,) or a batch (N, 2)."""
+        ops = SCALAR if a.ndim == 1 else BATCH
         return self.v_max * a / ops.column(ops.maximum(1.0, ops.hypot(a[..., 0], a[..., 1])))
-
-    def roll(self, s, v, stepper):
-        """R after a step at velocity v, or StepperError where the stepper has left SO(3)."""
-        R = stepper(self.system, s.R.reshape(*s.R.shape[:-2], 9), s.position, v, self.dt).reshape(s.R.shape)
-        drift = np.max(np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1)))
-        if not drift <= DRIFT_LIMIT:
-            raise StepperError(f"{stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")
-        return R
-
-    def update_error(self, s, ops=SCALAR):
-        s.error = attitude_error(s.R, s.R_target)
-        s.angle_error = ops.real(rotation_angle(s.error))
 
     def observe(self, s, ops=SCALAR):
         return six_d(s.error).astype(np.float32)
@@ -219,8 +255,8 @@ class RollingBallEnv(RenderedEnv):
         """What the reward pays the decrease of: the angle error (rad)."""
         return s.angle_error
 
-    def reward(self, s, before, ops=SCALAR):
-        return before - self.progress(s, ops) - TIME_COST
+    def reward(self, before, after, info, ops=SCALAR):
+        return self.progress(before, ops) - self.progress(after, ops) - TIME_COST
 
     def success(self, s, ops=SCALAR):
         return s.angle_error <= self.tolerance
@@ -232,24 +268,9 @@ class RollingBallEnv(RenderedEnv):
             "path_length": s.path_length,
         }
         if self.measures_distance:  # else not known: left out rather than NaN
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
+            ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
             info |= {"distance": s.distance, "path_ratio": ratio}
         return {**info, "is_success": ops.flag(self.success(s, ops))}
-
-    # -- internals -----------------------------------------------------------
-
-    def _set_state(self, state):
-        check_keys("options['state']", state, {"x", "y", "R"})
-        x = check_number("state x", state.get("x", 0.0))
-        y = check_number("state y", state.get("y", 0.0))
-        self.position = np.array([x, y])
-        if "R" in state:
-            self.R = check_rotation("state R", state["R"])
-
-    def parameters(self):
-        return {"radius": self.system.radius, "v_max": self.v_max}
-
 
 
 class RollingBallPoseEnv(RollingBallEnv):
@@ -346,19 +367,21 @@ class RollingBallGoalEnv(RollingBallEnv):
         box = spaces.Box(-1.0, 1.0, (6,), np.float32)
         return spaces.Dict({"observation": box, "achieved_goal": box, "desired_goal": box})
 
-    def update_error(self, s, ops=SCALAR):
-        super().update_error(s, ops)
-        s.goals = six_d(s.R).astype(np.float32), six_d(s.R_target).astype(np.float32)  # achieved, desired
+    def at(self, R, R_target, position, t, path_length, distance, ops=SCALAR):
+        """RollingBall-v0's state, with the achieved and the desired goal."""
+        state = super().at(R, R_target, position, t, path_length, distance, ops)
+        achieved, desired = six_d(R).astype(np.float32), six_d(R_target).astype(np.float32)
+        return GoalBallState(**vars(state), achieved_goal=achieved, desired_goal=desired)
 
     def observe(self, s, ops=SCALAR):
-        achieved, desired = s.goals
-        return {"observation": achieved.copy(), "achieved_goal": achieved.copy(), "desired_goal": desired.copy()}
+        achieved = s.achieved_goal
+        return {"observation": achieved.copy(), "achieved_goal": achieved.copy(), "desired_goal": s.desired_goal.copy()}
 
-    def reward(self, s, before, ops=SCALAR):
-        return ops.real(self.compute_reward(*s.goals, None))
+    def reward(self, before, after, info, ops=SCALAR):
+        return ops.real(self.compute_reward(after.achieved_goal, after.desired_goal, None))
 
     def success(self, s, ops=SCALAR):
-        return self.compute_terminated(*s.goals, None)
+        return self.compute_terminated(s.achieved_goal, s.desired_goal, None)
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
@@ -384,39 +407,13 @@ class RollingBallVectorEnv(TaskVectorEnv):
     """
 
     single_env = RollingBallEnv
-    clips_actions = False  # projected onto the unit disk by velocity()
-    STATE = ("R", "R_target", "position", "t", "path_length", "distance", "error", "angle_error")
 
     def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, measure_distance=False, **kwargs):
         super().__init__(num_envs, max_episode_steps, **kwargs)
         self.env.measures_distance = bool(measure_distance)
-        self.R, self.R_target = np.tile(np.eye(3), (num_envs, 1, 1)), np.tile(np.eye(3), (num_envs, 1, 1))
-        self.position = np.zeros((num_envs, 2))
-        self.t, self.path_length, self.distance = np.zeros(num_envs), np.zeros(num_envs), np.full(num_envs, math.nan)
-        self.env.update_error(self, BATCH)
 
-    def _capture(self, i):
-        for name in self.STATE:
-            getattr(self, name)[i] = getattr(self.env, name)
-        for batch, row in zip(getattr(self, "goals", ()), getattr(self.env, "goals", ())):
-            batch[i] = row
-
-    def _advance(self, actions):
-        env = self.env
-        v = env.velocity(actions, BATCH)
-        before = env.progress(self, BATCH)
-        self.R = env.roll(self, v, self.stepper)
-        self.position = self.position + v * env.dt
-        env.update_error(self, BATCH)
-        self.t = self.t + env.dt
-        self.path_length = self.path_length + np.hypot(v[:, 0], v[:, 1]) * env.dt
-        return env.reward(self, before, BATCH)
-
-    def _observe(self):
-        return self.env.observe(self, BATCH)
-
-    def _describe(self):
-        return self.env.describe(self, BATCH)
+    def advance(self, s, v):
+        return self.env.rolled(s, v, self.stepper, BATCH)
 
 
 class RollingBallPoseVectorEnv(RollingBallVectorEnv):

@@ -61,9 +61,12 @@ def split(kwargs):
 
 
 def single_run(env_id, kwargs, options, seed):
-    """STEPS uniform random actions on gym.make(id), reset (with options) whenever an episode ends."""
+    """STEPS uniform random actions on gym.make(id), reset (with options) whenever an episode ends. The time limit
+    is Gymnasium's own TimeLimit: rl_zoo3, once imported (by other tests), replaces gym.make's by one that adds an
+    info key and reports no truncation on a step that also terminates."""
     limit, kwargs = split(kwargs)
-    env = gym.make(env_id, max_episode_steps=limit, **kwargs)
+    time_limit = next(c for c in gym.wrappers.TimeLimit.__mro__ if c.__module__.startswith("gymnasium"))
+    env = time_limit(gym.make(env_id, **kwargs), limit)
     actions = np.random.default_rng(seed).uniform(-1, 1, (STEPS, *env.action_space.shape)).astype(np.float32)
     out = {}
     obs, info = env.reset(seed=seed, options=options)
