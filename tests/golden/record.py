@@ -66,7 +66,7 @@ def single_run(env_id, kwargs, options, seed):
     info key and reports no truncation on a step that also terminates."""
     limit, kwargs = split(kwargs)
     time_limit = next(c for c in gym.wrappers.TimeLimit.__mro__ if c.__module__.startswith("gymnasium"))
-    env = time_limit(gym.make(env_id, **kwargs), limit)
+    env = time_limit(gym.make(env_id, **kwargs).unwrapped, limit)
     actions = np.random.default_rng(seed).uniform(-1, 1, (STEPS, *env.action_space.shape)).astype(np.float32)
     out = {}
     obs, info = env.reset(seed=seed, options=options)
