@@ -66,8 +66,10 @@ CASES = [
 @pytest.fixture(params=CASES, ids=[label(*case) for case in CASES])
 def case(request):
     if request.param.kwargs is None:
-        pytest.fail(f"{request.param.env_id} is registered but has no entry in CONTRACT_KWARGS (tests/test_contract.py):"
-                    " add the make kwargs it is checked with")
+        pytest.fail(
+            f"{request.param.env_id} is registered but has no entry in CONTRACT_KWARGS (tests/test_contract.py): "
+            "add the make kwargs it is checked with"
+        )
     return request.param
 
 
