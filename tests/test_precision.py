@@ -122,47 +122,8 @@ def test_shell_default_follows_the_reference_at_every_mass_ratio(ratio, dt):
 # -- divergence: StepperError naming the stepper, dt and the parameter ------------------------------------------
 
 
-DIVERGING = [  # (env_id, make kwargs, reset state, action, the StepperError's message); tests/test_vector.py too
-        (
-            "connenv/Swing-v0",
-            {"integrator": "euler", "r_min": 0.1},
-            {"theta": 1.0, "r": 0.1},
-            [-1.0],
-            r"Euler\(substeps=1\) diverged: \|energy error\| .* dt = 0.05, r_min = 0.1,",
-        ),
-        (
-            "connenv/Skier-v0",
-            {"integrator": "rk4", "h_max": 0.99 / VALLEY_KAPPA_MAX},
-            {"x": 2.0, "h": 0.99 / VALLEY_KAPPA_MAX},
-            [1.0],
-            r"RK4\(substeps=1\) diverged: .* dt = 0.05, .*min 1 − κ h_max = 0.01,",
-        ),
-        (
-            "connenv/RollingBall-v0",
-            {"integrator": "euler", "radius": 0.5},
-            {},
-            [1.0, 0.0],
-            r"Euler\(substeps=1\) left SO\(3\).* dt = 0.1, radius = 0.5",
-        ),
-        (
-            "connenv/KapitzaPendulum-v0",
-            {"integrator": "euler", "v_max": 100.0, "dt": 0.02},
-            {"theta": math.pi + 0.1},
-            [1.0],
-            r"Euler\(substeps=1\) diverged: \|energy error\| .* dt = 0.02, .*v_max = 100.0, a_max = 0.1",
-        ),
-        (
-            "connenv/KozlovShell-v0",
-            {"integrator": "semi_implicit_euler", "mass": 10.0 * (1.0 + math.pi / 4)},
-            {"momentum": (0.3, 0.1, 0.05)},
-            [1.0, 1.0],
-            r"SemiImplicitEuler\(substeps=1\) diverged: the spatial momentum .* dt = 0.1, .*m/\(M \+ λ₁\) = 10.0,",
-        ),
-]
-
-
-@pytest.mark.parametrize("env_id, kwargs, reset, action, message", DIVERGING)
-def test_a_diverging_stepper_raises_naming_stepper_dt_and_parameter_never_nan(env_id, kwargs, reset, action, message):
+def test_a_diverging_stepper_raises_naming_stepper_dt_and_parameter_never_nan(diverging):
+    env_id, kwargs, reset, action, message = diverging
     env = make(env_id, **kwargs)
     obs, _ = env.reset(seed=0, options={"state": reset})
     sign = np.asarray(action, np.float32)

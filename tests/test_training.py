@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import shutil
 import subprocess
@@ -12,7 +11,6 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
-import yaml
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
@@ -23,45 +21,15 @@ ENV_ID = "connenv/Swing-v0"
 DT = 0.05  # Swing-v0's default step, s
 
 
-def import_train():
-    """train.py lives at the top of the repo, outside the packages."""
-    spec = importlib.util.spec_from_file_location("train", ROOT / "train.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-train = import_train()
-
-
 @pytest.fixture(scope="module")
-def ppo_run(tmp_path_factory):
+def ppo_run(tmp_path_factory, train):
     """A PPO run of one rollout (8 envs × 256 steps), evaluated periodically every 1024 steps."""
     runs = tmp_path_factory.mktemp("runs")
     argv = ["--algo", "ppo", "--timesteps", "300", "--runs", str(runs), "--eval-episodes", "2", "--eval-freq", "1024"]
     return train.main(argv)
 
 
-def check_run(results: dict, algo: str):
-    """The run folder holds the model, the hyperparameters used and the results; the model reloads and acts."""
-    model_path = Path(results["model"])
-    run_dir = model_path.parent
-    assert run_dir.name == f"Swing-v0_{algo}_s0"
-    config = yaml.load((run_dir / "connenv-Swing-v0" / "config.yml").read_text(), Loader=yaml.UnsafeLoader)
-    expected = yaml.safe_load((ROOT / "agents" / "hyperparams" / f"{algo}.yml").read_text())[ENV_ID]
-    assert dict(config) == expected
-    assert json.loads((run_dir / "results.json").read_text())["timesteps"] == results["timesteps"]
-    labels = [row["policy"] for row in results["evaluation"]["policies"]]
-    assert labels == [f"{algo}:{run_dir.name}", "analytic", "random"]
-    policy = evaluate.load_model(model_path, ENV_ID)  # the algorithm is read from the run folder
-    env = gym.make(ENV_ID)
-    for seed in range(5):
-        action, _ = policy.predict(env.reset(seed=seed)[0], deterministic=True)
-        assert env.action_space.contains(action)
-    return policy
-
-
-def test_ppo_run_folder_holds_normalized_model_and_periodic_evaluations(ppo_run):
+def test_ppo_run_folder_holds_normalized_model_and_periodic_evaluations(ppo_run, train, check_run):
     assert ppo_run["timesteps"] == 8 * 256  # PPO collects whole rollouts
     policy = check_run(ppo_run, "ppo")
     assert isinstance(policy, evaluate.NormalizedPolicy)  # ppo.yml normalizes observations
@@ -88,7 +56,7 @@ def test_best_model_is_loaded_with_its_own_statistics_and_the_final_model_with_t
 
 
 @pytest.mark.parametrize("algo", ["sac", "td3"])
-def test_off_policy_run_folder_holds_model_that_reloads(algo, tmp_path):
+def test_off_policy_run_folder_holds_model_that_reloads(algo, tmp_path, train, check_run):
     argv = ["--algo", algo, "--timesteps", "1100", "--runs", str(tmp_path), "--eval-episodes", "2", "--eval-freq", "-1"]
     results = train.main(argv)
     assert results["timesteps"] == 1100  # past learning_starts, so some gradient steps were taken
@@ -149,18 +117,19 @@ def test_evaluate_cli_writes_table_and_json(tmp_path, capsys):
 
 
 @pytest.mark.parametrize(
-    ("main", "argv", "named"),
+    ("program", "argv", "named"),
     [
-        (train.main, ["--env", "Nope-v0"], ["'Nope-v0'", "connenv/Swing-v0"]),
-        (train.main, ["--algo", "nope"], ["'nope'", "ppo", "sac", "td3"]),
-        (train.main, ["--timesteps", "0"], ["'0'", "positive integer"]),
-        (train.main, ["--timesteps", "-5"], ["'-5'", "positive integer"]),
-        (train.main, ["--algo", "a2c"], ["a2c.yml", "--hyperparams"]),
-        (evaluate.main, ["--episodes", "0"], ["'0'", "positive integer"]),
-        (evaluate.main, ["--policy", "nope"], ["'nope'", "analytic", "random"]),
+        ("train", ["--env", "Nope-v0"], ["'Nope-v0'", "connenv/Swing-v0"]),
+        ("train", ["--algo", "nope"], ["'nope'", "ppo", "sac", "td3"]),
+        ("train", ["--timesteps", "0"], ["'0'", "positive integer"]),
+        ("train", ["--timesteps", "-5"], ["'-5'", "positive integer"]),
+        ("train", ["--algo", "a2c"], ["a2c.yml", "--hyperparams"]),
+        ("evaluate", ["--episodes", "0"], ["'0'", "positive integer"]),
+        ("evaluate", ["--policy", "nope"], ["'nope'", "analytic", "random"]),
     ],
 )
-def test_bad_cli_input_exits_naming_value_and_choices(main, argv, named, capsys):
+def test_bad_cli_input_exits_naming_value_and_choices(program, argv, named, capsys, train):
+    main = {"train": train.main, "evaluate": evaluate.main}[program]
     with pytest.raises(SystemExit) as exit_info:
         main(argv)
     assert exit_info.value.code == 2
@@ -190,7 +159,7 @@ def test_rl_zoo3_trains_on_the_package_unchanged(conf, tmp_path):
     assert gym.make(ENV_ID).action_space.contains(action)
 
 
-def test_skier_trains_with_its_hyperparameters_and_the_controller_escapes(tmp_path):
+def test_skier_trains_with_its_hyperparameters_and_the_controller_escapes(tmp_path, train):
     """train.py and the evaluation CLI on Skier-v0: a tiny PPO run, and analytic against random."""
     argv = ["--env", "connenv/Skier-v0", "--timesteps", "300", "--runs", str(tmp_path), "--eval-episodes", "2"]
     results = train.main([*argv, "--eval-freq", "-1"])

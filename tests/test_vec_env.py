@@ -9,12 +9,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from stable_baselines3.common.vec_env import DummyVecEnv
-from test_training import check_run, import_train
 
 import connenv  # noqa: F401
 from agents.vec_env import NativeVecEnv, make_native_vec_env
-
-train = import_train()
 
 
 @pytest.mark.parametrize(
@@ -66,7 +63,7 @@ def test_native_vec_env_answers_her_from_the_prototype():
     assert venv.get_attr("tolerance") == [0.05, 0.05]
 
 
-def test_train_py_trains_ppo_on_the_native_vector_env(tmp_path):
+def test_train_py_trains_ppo_on_the_native_vector_env(tmp_path, train, check_run):
     argv = ["--vector-env", "--timesteps", "300", "--runs", str(tmp_path), "--eval-episodes", "2", "--eval-freq", "1024"]
     results = train.main(argv)
     assert results["timesteps"] == 8 * 256  # ppo.yml: 8 envs, 256 steps each per rollout

@@ -8,9 +8,7 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.vector import AutoresetMode
 from scipy.integrate import solve_ivp
-from test_precision import DIVERGING
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv.core import StepperError, make_stepper
@@ -19,97 +17,18 @@ from connenv.core.segments import pivot_segments, pivot_segments_batch
 from connenv.systems.skier import Skier
 from connenv.systems.trails import make_trail
 
-RTOL = 1e-12  # |vector − single| ≤ RTOL · max(1, |single|), for every number of obs, reward and info
 
-# kwargs that make episodes short, so that a run holds terminations, truncations and autoresets
-CASES = {
-    "connenv/Swing-v0": {"max_episode_steps": 40, "target_amplitude": 0.12},
-    "connenv/Skier-v0": {"max_episode_steps": 15, "target_x": 0.3},  # one goal, reached from the side of the start
-    "connenv/RollingBall-v0": {"max_episode_steps": 30, "tolerance": 2.0},
-    "connenv/RollingBallPose-v0": {"max_episode_steps": 30, "tolerance": 2.5, "position_tolerance": 0.2},
-    "connenv/RollingBallGoal-v0": {"max_episode_steps": 30, "tolerance": 2.0},
-    "connenv/KozlovShell-v0": {"max_episode_steps": 30, "success_radius": 0.45},
-    "connenv/KapitzaPendulum-v0": {"max_episode_steps": 60, "tolerance": 0.21, "pivot": "horizontal"},  # it falls
-    "connenv/KapitzaSwingUp-v0": {"max_episode_steps": 40, "hold_time": 0.05, "tolerance": 3.07},
-}
-BALLS = ("connenv/RollingBall-v0", "connenv/RollingBallPose-v0", "connenv/RollingBallGoal-v0")
-VECTOR_ONLY = {env_id: {"measure_distance": True} for env_id in BALLS}  # the single envs always measure it
-
-
-def flat(info, prefix=""):
-    """{dotted key: array} of a vector info, masks left out; tuples and strings of SyncVectorEnv's object arrays
-    become numbers and strings."""
-    out = {}
-    for key, value in info.items():
-        if isinstance(value, dict):
-            out.update(flat(value, f"{prefix}{key}."))
-        elif not key.startswith("_"):
-            array = np.asarray(value)
-            if array.dtype == object:
-                array = np.array([v if isinstance(v, str) else np.asarray(v, float) for v in value])
-            out[prefix + key] = array
-    return out
-
-
-def assert_same(native, sync, what):
-    native, sync = (flat(native), flat(sync)) if isinstance(native, dict) else ({"": native}, {"": sync})
-    assert native.keys() == sync.keys(), what
-    for key, a in native.items():
-        b = sync[key]
-        assert a.shape == b.shape, (what, key)
-        if a.dtype.kind in "USb":
-            assert np.array_equal(a, b), (what, key, a, b)
-        else:
-            a, b = a.astype(float), b.astype(float)
-            both_nan = np.isnan(a) & np.isnan(b)
-            gap = np.where(both_nan, 0.0, np.abs(a - b) / np.maximum(1.0, np.abs(b)))
-            assert np.all(gap <= RTOL), (what, key, float(np.max(gap)))
-
-
-def single_env(env_id, kwargs):
-    """gym.make(env_id) under Gymnasium's own TimeLimit: rl_zoo3, once imported (by other tests), replaces it by
-    one that reports no truncation on a step that also terminates."""
-    time_limit = next(c for c in gym.wrappers.TimeLimit.__mro__ if c.__module__.startswith("gymnasium"))
-    env_kwargs = {key: value for key, value in kwargs.items() if key != "max_episode_steps"}
-    steps = kwargs.get("max_episode_steps", gym.spec(env_id).max_episode_steps)
-    return time_limit(gym.make(env_id, **env_kwargs).unwrapped, steps)
-
-
-def run_both(env_id, n, steps, seed, kwargs, vector_kwargs=None, options=None):
-    """Step the native vector env and a SyncVectorEnv of single envs on the same seed and random actions,
-    asserting equality at every step; return how many episodes ended by termination and by truncation."""
-    native = gym.make_vec(env_id, n, vectorization_mode="vector_entry_point", **kwargs, **(vector_kwargs or {}))
-    sync = gym.vector.SyncVectorEnv([lambda: single_env(env_id, kwargs)] * n)
-    for a, b, name in zip(native.reset(seed=seed, options=options), sync.reset(seed=seed, options=options), "oi"):
-        assert_same(a, b, f"reset {name}")
-    actions = np.random.default_rng(seed).uniform(-1.0, 1.0, (steps, *native.action_space.shape)).astype(np.float32)
-    ends = np.zeros(2, int)
-    for t, action in enumerate(actions):
-        got, want = native.step(action), sync.step(action)
-        for name, a, b in zip(("obs", "reward", "terminated", "truncated", "info"), got, want):
-            assert_same(a, b, f"{name} at step {t}")
-        ends += [got[2].sum(), got[3].sum()]
-    return ends
-
-
-@pytest.mark.parametrize("env_id", sorted(CASES))
-def test_each_row_is_the_single_env_over_episodes_and_autoresets(env_id):
-    """Row i, seeded s + i, follows gym.make(env_id) reset with seed s + i, through NEXT_STEP autoresets."""
-    terminated, truncated = run_both(env_id, 4, 100, 7, CASES[env_id], VECTOR_ONLY.get(env_id))
-    assert terminated > 0 and truncated > 0  # both ways an episode ends, and the resets after them, were compared
-
-
-def test_swing_rows_match_over_whole_default_episodes():
+def test_swing_rows_match_over_whole_default_episodes(run_both):
     """Swing-v0 as registered: two full 500-step episodes per row on the exact flow."""
     assert run_both("connenv/Swing-v0", 3, 1002, 0, {}).sum() >= 6
 
 
-def test_skier_rows_match_on_the_default_valley():
+def test_skier_rows_match_on_the_default_valley(run_both):
     """The default valley with its two rims, 100 steps a row on the per-row DOP853."""
     assert run_both("connenv/Skier-v0", 3, 110, 2, {"max_episode_steps": 100})[1] == 3
 
 
-def test_shell_rows_in_the_full_model_match_and_mix_with_reduced_rows():
+def test_shell_rows_in_the_full_model_match_and_mix_with_reduced_rows(run_both):
     """Reset with a momentum puts every row in the full (Kirchhoff) model; autoresets put rows back at rest in the
     reduced one, so the batch steps both models at once."""
     options = {"state": {"momentum": (0.3, -0.2, 0.1), "u": (0.1, 0.05)}}
@@ -118,8 +37,8 @@ def test_shell_rows_in_the_full_model_match_and_mix_with_reduced_rows():
 
 
 @pytest.mark.parametrize("integrator", [{"integrator": "rk4", "substeps": 2}, {"integrator": "lsoda"}])
-def test_other_steppers_keep_rows_on_the_single_path(integrator):
-    kwargs = {**CASES["connenv/Swing-v0"], **integrator, "max_episode_steps": 15}
+def test_other_steppers_keep_rows_on_the_single_path(integrator, run_both, short_episodes):
+    kwargs = {**short_episodes["connenv/Swing-v0"], **integrator, "max_episode_steps": 15}
     run_both("connenv/Swing-v0", 3, 20, 1, kwargs)
 
 
@@ -131,14 +50,14 @@ def test_other_steppers_keep_rows_on_the_single_path(integrator):
         ("connenv/Skier-v0", {"max_height_speed": 3.0}),
     ],
 )
-def test_ramped_controls_match_with_a_ramp_time_per_row(env_id, kwargs):
-    assert run_both(env_id, 3, 50, 6, {**CASES[env_id], **kwargs}).sum() > 0
+def test_ramped_controls_match_with_a_ramp_time_per_row(env_id, kwargs, run_both, short_episodes):
+    assert run_both(env_id, 3, 50, 6, {**short_episodes[env_id], **kwargs}).sum() > 0
 
 
-def test_ball_rows_on_dop853_match():
+def test_ball_rows_on_dop853_match(run_both, short_episodes):
     """The ball's matrix ODE on per-row DOP853 (at a loose tolerance, where one step size for all rows would show)."""
-    kwargs = {**CASES["connenv/RollingBall-v0"], "integrator": "dop853", "rtol": 1e-5, "atol": 1e-7}
-    assert run_both("connenv/RollingBall-v0", 3, 40, 2, kwargs, VECTOR_ONLY["connenv/RollingBall-v0"]).sum() > 0
+    kwargs = {**short_episodes["connenv/RollingBall-v0"], "integrator": "dop853", "rtol": 1e-5, "atol": 1e-7}
+    assert run_both("connenv/RollingBall-v0", 3, 40, 2, kwargs).sum() > 0
 
 
 @pytest.mark.parametrize(
@@ -149,7 +68,7 @@ def test_ball_rows_on_dop853_match():
         {"integrator": "rk4", "substeps": 3, "max_episode_steps": 50},
     ],
 )
-def test_kapitza_rows_with_their_own_end_stops_match(kwargs):
+def test_kapitza_rows_with_their_own_end_stops_match(kwargs, run_both):
     assert run_both("connenv/KapitzaPendulum-v0", 3, 120, 4, kwargs).sum() > 0
 
 
@@ -195,16 +114,6 @@ def test_per_row_stepper_that_cannot_meet_its_tolerance_raises():
         EmbeddedRK("DOP853", 1e-8, 1e-10)(Blowup(), np.array([[0.1], [100.0]]), np.zeros((2, 1)), np.zeros((2, 1)), 1.0)
 
 
-@pytest.mark.parametrize("env_id", sorted(CASES))
-def test_vector_env_is_registered_with_next_step_autoreset(env_id):
-    env = gym.make_vec(env_id, 5, vectorization_mode="vector_entry_point")
-    assert env.metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP
-    assert env.action_space.shape == (5, *env.single_action_space.shape)
-    obs, info = env.reset(seed=0)
-    assert env.observation_space.contains(obs)
-    assert info["_is_success"].all() and info["is_success"].shape == (5,)
-
-
 def test_seeded_vector_runs_are_bit_identical_and_seeds_map_to_rows():
     def run(seed):
         env = gym.make_vec("connenv/Skier-v0", 3, vectorization_mode="vector_entry_point")
@@ -245,11 +154,11 @@ def test_bad_make_kwargs_are_refused(kwargs, message):
         SwingVectorEnv(**kwargs)
 
 
-@pytest.mark.parametrize(("env_id", "kwargs", "reset", "action", "message"), DIVERGING)
-def test_a_diverging_stepper_raises_in_the_batch_as_in_the_single_env(env_id, kwargs, reset, action, message):
-    """The single envs' divergence cases (tests/test_precision.py), on 3 rows: the same StepperError, never NaN.
+def test_a_diverging_stepper_raises_in_the_batch_as_in_the_single_env(diverging):
+    """The single envs' divergence cases (tests/conftest.py's diverging), on 3 rows: the same StepperError, never NaN.
     The swing's bound is lowered (r_max = 0.2 m, bound 0.1 m g r_max): at 2 m its Euler run succeeds first, and the
     vector env resets the row where the single env of that test steps on."""
+    env_id, kwargs, reset, action, message = diverging
     kwargs = {**kwargs, "r_max": 0.2} if env_id == "connenv/Swing-v0" else kwargs
     env = gym.make_vec(env_id, 3, vectorization_mode="vector_entry_point", **kwargs)
     env.reset(seed=0, options={"state": reset})
