@@ -4,7 +4,11 @@ contract tests check the generic ids with.
 - ``rotor()``: ActiveConstraint-v0 on a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², fit for jumps;
 - ``swing()``: ActiveConstraint-v0 on the swing from its Lagrangian, T = ½ m (ṙ² + r² θ̇²), V = −m g r cos θ,
   strongly fit, with Swing-v0's radii;
-- ``beanie()``: Connection-v0 on Elroy's beanie, SO(2) with A = I₂/(I₁+I₂), flat.
+- ``bead()``: ActiveConstraint-v0 on a bead on a rotating bar, T = ½ m (ṙ² + r² θ̇²), V = m g r sin θ, general
+  (the bar's angle θ is steered by its rate);
+- ``beanie()``: Connection-v0 on Elroy's beanie, SO(2) with A = I₂/(I₁+I₂), flat;
+- ``rolling_ball()``: Connection-v0 on the ball rolled without turning, SO(3) in the space frame, shape the contact
+  point, A = −(1/ρ) [[0, −1], [1, 0], [0, 0]] so that ω = e_z × v/ρ.
 
 Every value is picklable (module-level functions, partials, sympy systems), as vector envs and copies need.
 """
@@ -39,6 +43,19 @@ def swing(mass: float = 1.0, g: float = 9.81, r_min: float = 1.6, r_max: float =
             "u_low": r_min, "u_high": r_max}
 
 
+def bead(mass: float = 1.0, g: float = 9.81, max_tilt: float = 1.0, max_tilt_speed: float = 1.0) -> dict:
+    """The bead at distance r along a bar through the pivot (q = r), the bar's angle θ from the horizontal assigned
+    (u = θ, within ±max_tilt, turned at most at max_tilt_speed)."""
+    import sympy as sp
+
+    from connenv.core.lagrangian import LagrangianSystem
+
+    r, r_dot, theta, theta_dot = sp.symbols("r r_dot theta theta_dot")
+    kinetic = mass * (r_dot**2 + r**2 * theta_dot**2) / 2
+    system = LagrangianSystem(kinetic, mass * g * r * sp.sin(theta), [r], [theta])
+    return {"system": system, "u_low": -max_tilt, "u_high": max_tilt, "max_control_speed": max_tilt_speed}
+
+
 def beanie_connection(s, body_inertia: float, beanie_inertia: float):
     """A(ψ) = I₂/(I₁+I₂) (1×1): the body turns by −I₂/(I₁+I₂) dψ as the beanie turns by dψ relative to it."""
     return np.full((*np.shape(s)[:-1], 1, 1), beanie_inertia / (body_inertia + beanie_inertia))
@@ -48,6 +65,19 @@ def beanie(body_inertia: float = 3.0, beanie_inertia: float = 1.0) -> dict:
     """Elroy's beanie: group SO2 (the body's angle θ₁), shape ψ, the beanie's angle relative to the body."""
     connection = functools.partial(beanie_connection, body_inertia=body_inertia, beanie_inertia=beanie_inertia)
     return {"group": "SO2", "connection": connection, "shape_low": [-np.inf], "shape_high": [np.inf], "vectorized": True}
+
+
+def rolling_ball_connection(s, radius: float):
+    """A(s) = −(1/ρ) [[0, −1], [1, 0], [0, 0]] (3×2) at every contact point s: ξ = −A ṡ = e_z × ṡ/ρ."""
+    A = np.array([[0.0, 1.0], [-1.0, 0.0], [0.0, 0.0]]) / radius
+    return np.broadcast_to(A, (*np.shape(s)[:-1], 3, 2))
+
+
+def rolling_ball(radius: float = 1.0, reach: float = 10.0) -> dict:
+    """The ball of RollingBall-v0 as a connection: SO3, space frame, shape the contact point within ±reach."""
+    connection = functools.partial(rolling_ball_connection, radius=radius)
+    return {"group": "SO3", "frame": "space", "connection": connection, "shape_low": [-reach, -reach],
+            "shape_high": [reach, reach], "vectorized": True}
 
 
 MAKE_KWARGS = {"connenv/ActiveConstraint-v0": swing, "connenv/Connection-v0": beanie}
