@@ -150,7 +150,7 @@ def test_reset_state_is_set_exactly_and_checked():
     assert info["state"]["u"][0] == 0.5 and info["state"]["q"][0] == 0.0 and info["state"]["t"] == 0.0
     _, info = env.reset(options={"state": {"q": [0.25], "p": [-1.5]}})
     assert (info["state"]["q"][0], info["state"]["p"][0], info["state"]["u"][0]) == (0.25, -1.5, 0.5)
-    with pytest.raises(ValueError, match="state u=.*out of range"):
+    with pytest.raises(ValueError, match=r"state u\[0\]=.*out of range"):
         env.reset(options={"state": {"u": [3.0]}})
     with pytest.raises(ValueError, match="state q=.*1 finite"):
         env.reset(options={"state": {"q": [np.nan]}})

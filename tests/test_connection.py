@@ -261,7 +261,7 @@ def test_reset_sets_the_state_and_renders():
         ({"connection": np.ones((3, 2))}, "callable"),
         ({"shape_low": [1.0, 0.0]}, "below"),
         ({"shape_low": [-1.0]}, "one shape"),
-        ({"shape_high": [1.0, np.nan]}, "below"),
+        ({"shape_high": [1.0, np.nan]}, "NaN"),
         ({"dt": 0.0}, "dt=0.0"),
         ({"max_shape_speed": -1.0}, "max_shape_speed=-1.0"),
     ],
@@ -278,7 +278,7 @@ def test_bad_construction_is_refused(kwargs, words):
         ({"g": np.diag([1.0, 1.0, 2.0])}, "off SO3"),
         ({"g": np.eye(2)}, "shape (3, 3)"),
         ({"s": [2.0, 0.0]}, "out of range"),
-        ({"s": [0.0]}, "shape (2,)"),
+        ({"s": [0.0]}, "sequence of 2"),
         ({"x": 1.0}, "unknown key"),
     ],
 )

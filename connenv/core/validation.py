@@ -51,3 +51,58 @@ def finite_action(action, space):
     if not np.isfinite(a).all():
         raise ValueError(f"action={action!r} is not finite; expected values in [{space.low}, {space.high}]")
     return a
+
+
+def check_vector(name: str, value, size: int, low=-math.inf, high=math.inf):
+    """value as a float array of shape (size,), every entry finite and within [low, high] (bounds a number or one
+    per entry), else ValueError naming it, the entry and the range."""
+    try:
+        vector = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        vector = None
+    if vector is None or vector.shape != (size,) or not np.all(np.isfinite(vector)):
+        raise ValueError(f"{name}={value!r} must be a sequence of {size} finite real numbers")
+    low, high = np.broadcast_to(low, (size,)), np.broadcast_to(high, (size,))
+    for i in np.flatnonzero((vector < low) | (vector > high)):
+        raise ValueError(f"{name}[{i}]={vector[i]!r} is out of range: must be in [{low[i]}, {high[i]}]")
+    return vector
+
+
+def check_bounds(low_name: str, low, high_name: str, high, size: int | None = None):
+    """(low, high) as float arrays of one shape (k,), k ≥ 1 (with size, a number broadcasts to (size,)), low < high
+    in every coordinate, ±inf allowed for no bound, NaN not; else ValueError naming both as given."""
+    given = f"{low_name}={low!r}, {high_name}={high!r}"
+    try:
+        lows, highs = (np.array(v, dtype=float) for v in (low, high))
+        if size is not None:
+            lows, highs = (np.broadcast_to(v, (size,)).copy() for v in (lows, highs))
+    except (TypeError, ValueError) as error:
+        count = "one number per coordinate" if size is None else f"a number or {size} of them"
+        raise ValueError(f"{given} must be real numbers, {count}, ±inf for no bound") from error
+    if lows.ndim != 1 or lows.shape != highs.shape or lows.size == 0:
+        raise ValueError(f"{given} must have one shape (k,), k ≥ 1")
+    if np.isnan(lows).any() or np.isnan(highs).any():
+        raise ValueError(f"{given} hold NaN; give numbers (±inf for no bound)")
+    if not np.all(lows < highs):
+        raise ValueError(f"{low_name}={low!r} must be below {high_name}={high!r} in every coordinate")
+    return lows, highs
+
+
+ORTHONORMAL_TOL = 1e-9  # ‖RᵀR − I‖ and |det R − 1| allowed in a given rotation
+
+
+def check_rotation(name: str, value) -> np.ndarray:
+    """value as a 3×3 rotation matrix (float64), or ValueError: never re-orthonormalized."""
+    R = np.asarray(value, dtype=np.float64) if np.size(value) == 9 else None
+    if R is None or R.shape != (3, 3):
+        raise ValueError(f"{name} has shape {np.shape(value)}; expected a 3×3 rotation matrix")
+    if not np.isfinite(R).all():
+        raise ValueError(f"{name}={R.tolist()} is not finite")
+    drift = float(np.linalg.norm(R.T @ R - np.eye(3)))
+    det = float(np.linalg.det(R))
+    if drift > ORTHONORMAL_TOL or abs(det - 1.0) > ORTHONORMAL_TOL:
+        raise ValueError(
+            f"{name}={R.tolist()} is not a rotation: ‖RᵀR − I‖ = {drift:.3g}, det R = {det:.12g}; "
+            f"both must be within {ORTHONORMAL_TOL} of 0 and 1"
+        )
+    return R

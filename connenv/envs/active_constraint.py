@@ -11,7 +11,7 @@ from connenv.core.batched import batched
 from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import Scipy, make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_bounds, check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
@@ -207,7 +207,7 @@ class ActiveConstraintEnv(TaskEnv):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
                 raise ValueError(f"system.{name}={value!r} must be an integer ≥ 1")
         self.system, self.n, self.m = system, int(system.n), int(system.m)
-        self.u_low, self.u_high = self._check_bounds(u_low, u_high)
+        self.u_low, self.u_high = check_bounds("u_low", u_low, "u_high", u_high, self.m)
         self.max_control_speed = (
             None
             if max_control_speed is None
@@ -248,20 +248,6 @@ class ActiveConstraintEnv(TaskEnv):
 
     # -- checks ----------------------------------------------------------------
 
-    def _check_bounds(self, u_low, u_high):
-        bounds = []
-        for name, value in (("u_low", u_low), ("u_high", u_high)):
-            try:
-                array = np.broadcast_to(np.asarray(value, float), (self.m,)).copy()
-            except (TypeError, ValueError) as error:
-                raise ValueError(f"{name}={value!r} must be a number or {self.m} of them (m = {self.m})") from error
-            if np.isnan(array).any():
-                raise ValueError(f"{name}={value!r} holds NaN; give numbers (±inf for no bound)")
-            bounds.append(array)
-        if not np.all(bounds[0] < bounds[1]):
-            raise ValueError(f"u_low={u_low!r} must be below u_high={u_high!r} in every coordinate")
-        return bounds
-
     def _check_control(self, control):
         if control is None:
             control = "velocity" if self.jump_class is JumpClass.GENERAL else "position"
@@ -298,14 +284,9 @@ class ActiveConstraintEnv(TaskEnv):
         check_keys("options['state']", state, {"q", "p", "u"})
         values = dict(defaults)
         for key, value in state.items():
-            size = self.m if key == "u" else self.n
-            array = np.asarray(value, float).reshape(-1) if np.ndim(value) <= 1 else np.asarray(value, float)
-            if array.shape != (size,) or not np.all(np.isfinite(array)):
-                raise ValueError(f"state {key}={value!r} must be {size} finite number(s)")
-            values[key] = array.copy()
-        u = values["u"]
-        if not np.all((self.u_low <= u) & (u <= self.u_high)):
-            raise ValueError(f"state u={u!r} is out of range: must be within [{self.u_low}, {self.u_high}]")
+            value = np.ravel(value) if np.ndim(value) == 0 else value  # a number for a single coordinate
+            bounds = (self.u_low, self.u_high) if key == "u" else (-np.inf, np.inf)
+            values[key] = check_vector(f"state {key}", value, self.m if key == "u" else self.n, *bounds)
         return values
 
     # -- physics ---------------------------------------------------------------

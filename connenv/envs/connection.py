@@ -11,7 +11,7 @@ from gymnasium import spaces
 from connenv.core.lie import FRAMES, GROUPS, Connection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
 from connenv.core.steppers import StepperError, make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_bounds, check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
@@ -127,7 +127,7 @@ class ConnectionEnv(TaskEnv):
         if frame not in FRAMES:
             raise ValueError(f"frame={frame!r} is not one of {list(FRAMES)}")
         self.group = GROUPS[group]
-        self.low, self.high = _check_bounds(shape_low, shape_high)
+        self.low, self.high = check_bounds("shape_low", shape_low, "shape_high", shape_high)
         self.max_shape_speed = check_number("max_shape_speed", max_shape_speed, 0.0, open_low=True)
         if draw is not None and not callable(draw):
             raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
@@ -199,15 +199,7 @@ class ConnectionEnv(TaskEnv):
         return self.group.coordinates(g)
 
     def _check_s(self, value):
-        try:
-            s = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            s = None
-        if s is None or s.shape != self.low.shape or not np.all(np.isfinite(s)):
-            raise ValueError(f"state s={value!r} must be a finite array of shape {self.low.shape}")
-        if np.any(s < self.low) or np.any(s > self.high):
-            raise ValueError(f"state s={value!r} is out of range: must be within [{self.low}, {self.high}]")
-        return s
+        return check_vector("state s", value, self.low.size, self.low, self.high)
 
     # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
@@ -305,19 +297,6 @@ def _rows(function, state, ops, nested=False):
     else:
         rows = [{key: value[i] for key, value in state.items()} for i in range(len(state["t"]))]
     return np.stack([np.asarray(function(row)) for row in rows])
-
-
-def _check_bounds(low, high):
-    """(low, high) as float arrays of one shape (k,), k ≥ 1, low < high, no NaN (±inf allowed)."""
-    try:
-        low, high = np.array(low, dtype=float), np.array(high, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"shape_low={low!r}, shape_high={high!r} must be arrays of real numbers") from error
-    if low.ndim != 1 or low.shape != high.shape or low.size == 0:
-        raise ValueError(f"shape_low={low!r} and shape_high={high!r} must have one shape (k,), k ≥ 1")
-    if np.any(np.isnan(low)) or np.any(np.isnan(high)) or not np.all(low < high):
-        raise ValueError(f"shape_low={low!r}, shape_high={high!r}: each must be below the other, in [-inf, inf]")
-    return low, high
 
 
 def _check_connection(connection, group, s):

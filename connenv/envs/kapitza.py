@@ -11,7 +11,7 @@ from gymnasium import spaces
 
 from connenv.core.segments import check_drift, pivot_segments, pivot_segments_batch, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kapitza import KapitzaPendulum
@@ -266,12 +266,7 @@ class KapitzaPendulumEnv(TaskEnv):
 
     def _pivot_vector(self, name, value, bound):
         """A pivot position or velocity: 2 finite numbers, zero on unactuated axes, within ±bound."""
-        try:
-            vector = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            vector = None
-        if vector is None or vector.shape != (2,):
-            raise ValueError(f"state {name}={value!r} must be a sequence of 2 real numbers (horizontal, vertical)")
+        vector = check_vector(f"state {name} (horizontal, vertical)", value, 2)
         for i, v in enumerate(vector):
             limit = bound if i in self.axes else 0.0
             check_number(f"state {name}[{i}] (pivot={self.pivot!r})", v, -limit, limit)

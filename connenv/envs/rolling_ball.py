@@ -11,32 +11,14 @@ from scipy.spatial.transform import Rotation
 
 from connenv.core.segments import run_segments
 from connenv.core.steppers import StepperError, make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options, finite_action
+from connenv.core.validation import check_keys, check_number, check_rotation, check_stepper_options, finite_action
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d
 
 TIME_COST = 0.01  # reward paid per step until success
-ORTHONORMAL_TOL = 1e-9  # ‖RᵀR − I‖ and |det R − 1| allowed in a reset state or target
 DRIFT_LIMIT = 1e-6  # ‖RᵀR − I‖ past which a stepper has left SO(3): StepperError
 POSITION_BOUND = 3.0  # |observed position| / (4πρ) is clipped here
-
-
-def check_rotation(name: str, value) -> np.ndarray:
-    """value as a 3×3 rotation matrix (float64), or ValueError: never re-orthonormalized."""
-    R = np.asarray(value, dtype=np.float64) if np.size(value) == 9 else None
-    if R is None or R.shape != (3, 3):
-        raise ValueError(f"{name} has shape {np.shape(value)}; expected a 3×3 rotation matrix")
-    if not np.isfinite(R).all():
-        raise ValueError(f"{name}={R.tolist()} is not finite")
-    drift = float(np.linalg.norm(R.T @ R - np.eye(3)))
-    det = float(np.linalg.det(R))
-    if drift > ORTHONORMAL_TOL or abs(det - 1.0) > ORTHONORMAL_TOL:
-        raise ValueError(
-            f"{name}={R.tolist()} is not a rotation: ‖RᵀR − I‖ = {drift:.3g}, det R = {det:.12g}; "
-            f"both must be within {ORTHONORMAL_TOL} of 0 and 1"
-        )
-    return R
 
 
 def check_so3(stepper, R):
