@@ -193,7 +193,7 @@ def rotor():
 '''
 
 
-def test_train_on_a_users_system_named_by_a_factory(tmp_path, monkeypatch):
+def test_train_on_a_users_system_named_by_a_factory(tmp_path, monkeypatch, train):
     """--env-kwargs module:factory is all train.py needs for ActiveConstraint-v0 on a user's own system."""
     (tmp_path / "my_rotor.py").write_text(FACTORY)
     monkeypatch.syspath_prepend(str(tmp_path))
