@@ -11,7 +11,7 @@ import connenv  # noqa: F401
 from agents.kapitza import KapitzaVibration
 from connenv.core import JumpClass, classify, make_stepper, vector_field
 from connenv.systems.kapitza import KapitzaPendulum
-from connenv.core.segments import pivot_segments
+from connenv.core.segments import bounded_segments
 
 rng = np.random.default_rng(2026)
 SYSTEM = KapitzaPendulum(length=0.8, mass=1.3)
@@ -90,7 +90,7 @@ def test_a_jump_of_pivot_velocity_keeps_p_and_kicks_theta_dot():
 
 
 def test_pivot_stops_at_the_end_of_its_travel_without_jumping():
-    segments, u, u_dot = pivot_segments([0.09, -0.1], [5.0, -5.0], 0.1, 0.005)
+    segments, u, u_dot = bounded_segments([0.09, -0.1], [5.0, -5.0], -0.1, 0.1, 0.005)
     assert [tau for *_, tau in segments] == pytest.approx([0.002, 0.003])
     assert u.tolist() == [0.1, -0.1] and u_dot.tolist() == [0.0, 0.0]
     ends = [start + velocity * tau for start, velocity, tau in segments]

@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 import connenv  # noqa: F401  (registers the envs)
 from connenv.core import StepperError, make_stepper
 from connenv.core.batched import EmbeddedRK, RowByRow, batched
-from connenv.core.segments import pivot_segments, pivot_segments_batch
+from connenv.core.segments import bounded_segments, bounded_segments_batch
 from connenv.systems.skier import Skier
 from connenv.systems.trails import make_trail
 
@@ -202,16 +202,19 @@ def test_partial_reset_restarts_only_the_masked_rows():
         env.reset(options={"reset_mask": np.zeros(3, bool)})
 
 
-def test_pivot_segments_of_a_batch_are_each_rows_own():
-    """Pivots at, near and away from their end stops, moving at any speed: the batch cuts each row's step where
-    pivot_segments cuts it alone, to the bit, and ends it at the same (u, u̇)."""
+@pytest.mark.parametrize("low, high", [(-0.1, 0.1), ([-0.1, -0.05], [0.1, np.inf])], ids=["pivot", "asymmetric"])
+def test_bounded_segments_of_a_batch_are_each_rows_own(low, high):
+    """Coordinates at, near and away from their bounds (the Kapitza pivot's ±0.1, or asymmetric and infinite),
+    moving at any speed: the batch cuts each row's step where bounded_segments cuts it alone, to the bit, and ends
+    it at the same (u, u̇)."""
     rng = np.random.default_rng(0)
-    u = rng.choice([-0.1, -0.0999, 0.0, 0.05, 0.099, 0.1], (2000, 2))
+    u = np.clip(rng.choice([-0.1, -0.0999, 0.0, 0.05, 0.099, 0.1], (2000, 2)), low, high)
     u_dot = rng.choice([-10.0, -3.3, 0.0, 5.0, 10.0], (2000, 2)) * rng.uniform(0.2, 1.0, (2000, 2))
-    starts, velocities, durations, u_end, u_dot_end = pivot_segments_batch(u, u_dot, 0.1, 0.005)
-    assert np.all(np.abs(u_end) <= 0.1) and np.allclose(durations.sum(axis=0), 0.005, rtol=0, atol=1e-18)
+    batch, u_end, u_dot_end = bounded_segments_batch(u, u_dot, low, high, 0.005)
+    starts, velocities, durations = (np.stack(parts) for parts in zip(*batch))
+    assert np.all((low <= u_end) & (u_end <= high)) and np.allclose(durations.sum(axis=0), 0.005, rtol=0, atol=1e-18)
     for i in range(len(u)):
-        segments, u_alone, u_dot_alone = pivot_segments(u[i], u_dot[i], 0.1, 0.005)
+        segments, u_alone, u_dot_alone = bounded_segments(u[i], u_dot[i], low, high, 0.005)
         mine = [(s[i], v[i], d[i]) for s, v, d in zip(starts, velocities, durations) if d[i] > 0.0]
         assert len(mine) == len(segments)
         for (s, v, d), (s_alone, v_alone, d_alone) in zip(mine, segments):

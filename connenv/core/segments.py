@@ -93,64 +93,14 @@ def control_segments_batch(u, u_cmd, dt: float, max_speed: float | None = None):
     return [(u, u_dot, ramp), (u_after, np.zeros_like(u_dot), dt - ramp)], u_after
 
 
-def pivot_segments(u, u_dot_cmd, travel: float, dt: float):
-    """Control segments (u at the start, u̇, duration) covering a step of length dt in which the pivot moves at
-    the commanded velocity until an axis meets its end stop at ±travel, where that axis rests for the rest
-    of the step; and (u, u̇) at the end of the step.
-
-    Stopping is a jump of u̇, admissible since only u̇ enters the equations: p is continuous across it and the
-    pivot never leaves [−travel, travel] nor jumps in position.
-    """
-    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
-    u_end = u + u_dot * dt
-    if np.all(np.abs(u_end) <= travel):  # no stop within the step
-        return [(u, u_dot, dt)], u_end, u_dot
-    end_stops = np.copysign(travel, u_dot)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        reach = np.where(u_dot != 0.0, np.maximum((end_stops - u) / u_dot, 0.0), math.inf)
-    segments, start = [], 0.0
-    for end in sorted({float(s) for s in reach if s < dt} | {dt}):
-        if end > start:
-            segments.append((u.copy(), u_dot.copy(), end - start))
-            u = u + u_dot * (end - start)
-        stopped = reach <= end
-        u[stopped], u_dot[stopped] = end_stops[stopped], 0.0
-        start = end
-    return segments, u, u_dot
-
-
-def pivot_segments_batch(u, u_dot_cmd, travel: float, dt: float):
-    """pivot_segments over a batch of pivots (..., 2): the starts (3, ..., 2), velocities (3, ..., 2) and
-    durations (3, ...) of each row's segments in order, a duration 0 where a row has fewer than three, and
-    (u, u̇) at the end of the step. A segment ends where an axis reaches its stop (at most two) or at dt.
-
-    The same arithmetic as pivot_segments, row by row (tests/test_vector.py compares them), written over arrays;
-    pivot_segments keeps its loop, faster on one pivot."""
-    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
-    free = np.all(np.abs(u + u_dot * dt) <= travel, axis=-1, keepdims=True)  # no stop within the step
-    end_stops = np.copysign(travel, u_dot)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        reach = np.where((u_dot != 0.0) & ~free, np.maximum((end_stops - u) / u_dot, 0.0), math.inf)
-    ends = np.concatenate([np.sort(np.minimum(reach, dt), axis=-1), np.full(free.shape, dt)], axis=-1)
-    starts, velocities, durations, start = [], [], [], 0.0
-    for end in np.moveaxis(ends, -1, 0):
-        duration = end - start
-        starts.append(u)
-        velocities.append(u_dot)
-        durations.append(duration)
-        u = np.where(duration[..., None] > 0.0, u + u_dot * duration[..., None], u)
-        stopped = reach <= end[..., None]
-        u, u_dot = np.where(stopped, end_stops, u), np.where(stopped, 0.0, u_dot)
-        start = end
-    return np.stack(starts), np.stack(velocities), np.stack(durations), u, u_dot
-
-
 def bounded_segments(u, u_dot_cmd, low, high, dt: float):
     """Control segments (u at the start, u̇, duration) covering a step of length dt in which u moves at the
-    commanded velocity until a coordinate meets its bound (low below, high above; ±inf: never), where that
-    coordinate rests for the rest of the step; and (u, u̇) at the end of the step. pivot_segments with bounds
-    of their own per coordinate, asymmetric or infinite. A ramp toward a command stops there: low = min(u, u_cmd),
-    high = max(u, u_cmd)."""
+    commanded velocity until a coordinate meets its bound (low below, high above, a number or one per coordinate;
+    ±inf: never), where that coordinate rests for the rest of the step; and (u, u̇) at the end of the step.
+
+    The Kapitza pendulum's pivot (bounds ±travel) and a connection's shape stop at their bounds so. Stopping is a
+    jump of u̇, admissible where only u̇ enters the equations: p is continuous across it and u never leaves its
+    bounds nor jumps. A ramp toward a command stops there: low = min(u, u_cmd), high = max(u, u_cmd)."""
     u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
     u_end = u + u_dot * dt
     if np.all((low <= u_end) & (u_end <= high)):  # no stop within the step

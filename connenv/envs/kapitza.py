@@ -9,7 +9,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.segments import check_drift, pivot_segments, pivot_segments_batch, run_segments
+from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import make_stepper
 from connenv.core.validation import check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
@@ -231,7 +231,7 @@ class KapitzaPendulumEnv(TaskEnv):
         return self.at(y, u, u_dot, 0.0, self._frame_energy(y, u, u_dot), 0.0)
 
     def advance(self, s, u_dot_cmd):
-        segments, u, u_dot = pivot_segments(s.u, u_dot_cmd, self.a_max, self.dt)
+        segments, u, u_dot = bounded_segments(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt)
         y, change = run_segments(self.stepper, self.system, s.y, segments, self._frame_energy)
         self.check_energy_error(s.energy_error + change)
         energy = self._frame_energy(y, *segments[-1][:2])  # in the frame of the last segment's u̇
@@ -405,15 +405,14 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
 class KapitzaPendulumVectorEnv(TaskVectorEnv):
     """KapitzaPendulum-v0 over a batch (``gym.make_vec("connenv/KapitzaPendulum-v0", num_envs=N)``; see
-    ``connenv.envs.vector``). Each row's step is cut at its own end stops (``pivot_segments_batch``), so the
+    ``connenv.envs.vector``). Each row's step is cut at its own end stops (``bounded_segments_batch``), so the
     steppers get one segment length per row."""
 
     single_env = KapitzaPendulumEnv
 
     def advance(self, s, u_dot_cmd):
         env = self.env
-        starts, velocities, durations, u, u_dot = pivot_segments_batch(s.u, u_dot_cmd, env.a_max, env.dt)
-        segments = zip(starts, velocities, durations)
+        segments, u, u_dot = bounded_segments_batch(s.u, u_dot_cmd, -env.a_max, env.a_max, env.dt)
         y, change = run_segments(self.stepper, env.system, s.y, segments, self._frame_energy)
         env.check_energy_error(s.energy_error + change)
         energy = env.system.energy(y, u_dot)
