@@ -306,6 +306,8 @@ def _integration_matrix(nodes):
 
 
 QUADRATURE_POINTS = 8
+BLOCK_BYTES = 1 << 16  # se2_body_flow's temporaries over a batch: below glibc's threshold for a fresh mmap (and
+# the page faults of every new array above it), by taking the rows in blocks
 _x, _w = np.polynomial.legendre.leggauss(QUADRATURE_POINTS)
 NODES, WEIGHTS = 0.5 * (_x + 1.0), 0.5 * _w  # Gauss–Legendre on [0, 1]
 INTEGRATION = _integration_matrix(NODES)
@@ -369,25 +371,46 @@ def se2_body_flow(velocity, g, s, s_dot, tau, pieces: int, points: int = QUADRAT
     """quadrature_flow's g on SE2 in the body frame with a Gauss rule of ``points`` nodes per piece, lean: the
     increment of the whole segment at once (θ at the nodes of piece j offset by the turns of the pieces before it),
     then one product. One state as tuples of Python floats (math, no numpy: velocity(s, ṡ) gets and gives floats),
-    or a batch as arrays over rows (s, ṡ of shape (N, k), tau a float or one per row; velocity gets the shapes at
-    all nodes at once, (nodes, N, k), contiguous along the rows in each component)."""
+    or a batch as arrays over rows (s, ṡ of shape (N, k), tau a float or one per row). velocity(s, ṡ, t) is ξ at
+    s + t ṡ as components: floats at a float t for one state, arrays at all nodes at once for a batch (t of shape
+    (nodes, N) or (nodes, 1): components of shape (nodes, N))."""
     if isinstance(g[0], float):
         return _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points)
+    block = max(1, BLOCK_BYTES // (8 * pieces * points))
+    if len(s) > block:
+        increments = np.empty((3, len(s)))
+        for i in range(0, len(s), block):
+            rows = slice(i, i + block)
+            increments[:, rows] = _se2_body_increment(velocity, s[rows], s_dot[rows], tau[rows] if np.ndim(tau) else
+                                                      tau, pieces, points)  # fmt: skip
+        return GROUPS["SE2"].product(g, tuple(increments))
+    return GROUPS["SE2"].product(g, _se2_body_increment(velocity, s, s_dot, tau, pieces, points))
+
+
+def _se2_body_increment(velocity, s, s_dot, tau, pieces, points):
+    """The body-frame increment (dx, dy, turn) of se2_body_flow over a batch of rows."""
     nodes, weights, Q = gauss_rule(points)[:3]
     h = np.asarray(tau / pieces, float)
     t = (np.arange(pieces)[:, None] + nodes).reshape(-1, 1) * h  # (pieces · points, N) or (pieces · points, 1)
-    shapes = s.T[:, None, :] + t * s_dot.T[:, None, :]  # (k, nodes, N)
-    v1, v2, omega = (np.broadcast_to(c, (len(t), len(s))) for c in velocity(np.moveaxis(shapes, 0, -1), s_dot))
+    shape = (len(t), len(s))
+    v1, v2, omega = (c if np.shape(c) == shape else np.broadcast_to(c, shape) for c in velocity(s, s_dot, t))
     omega = omega.reshape(pieces, points, -1)
     turns = h * (weights @ omega)  # (pieces, N)
-    W = h * (Q @ omega)
+    W = Q @ omega
+    W *= h
     if pieces > 1:
         W[1:] += np.cumsum(turns[:-1], axis=0)[:, None, :]
-    W = W.reshape(v1.shape)
-    c, s_ = np.cos(W), np.sin(W)
-    dx = h * (weights @ (c * v1 - s_ * v2).reshape(omega.shape)).sum(axis=0)
-    dy = h * (weights @ (s_ * v1 + c * v2).reshape(omega.shape)).sum(axis=0)
-    return GROUPS["SE2"].product(g, (dx, dy, turns.sum(axis=0)))
+    W = W.reshape(v1.shape)  # in place from here on: arrays of this size cost a page fault per fresh allocation
+    c = np.cos(W)
+    s_ = np.sin(W, out=W)
+    ax, ay = c * v1, s_ * v1
+    c *= v2
+    s_ *= v2
+    ax -= s_  # cos W v₁ − sin W v₂
+    ay += c  # sin W v₁ + cos W v₂
+    dx = h * (weights @ ax.reshape(omega.shape)).sum(axis=0)
+    dy = h * (weights @ ay.reshape(omega.shape)).sum(axis=0)
+    return dx, dy, turns.sum(axis=0)
 
 
 def _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points):
@@ -395,7 +418,7 @@ def _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points):
     nodes, weights, Q = gauss_rule(points)[3:]
     h, dx, dy, turn = tau / pieces, 0.0, 0.0, 0.0
     for j in range(pieces):
-        xi = [velocity(tuple(a + (j + c) * h * d for a, d in zip(s, s_dot)), s_dot) for c in nodes]
+        xi = [velocity(s, s_dot, (j + c) * h) for c in nodes]
         omega = [w for _, _, w in xi]
         for (v1, v2, _), weight, row in zip(xi, weights, Q):
             W = turn + h * sum(q * w for q, w in zip(row, omega))
@@ -516,7 +539,7 @@ class Magnus:
             return group_velocity(system, s, s_dot)
 
         if group.name == "SE2" and frame == "body":
-            g = se2_body_flow(velocity, g, u, u_dot, tau, self.pieces, self.points)
+            g = se2_body_flow(_along(system), g, u, u_dot, tau, self.pieces, self.points)
         elif group.name == "SO3":
             g = magnus_flow(group, frame, velocity, g, np.asarray(u), np.asarray(u_dot), tau, self.pieces, self.order)[0]
         else:
@@ -567,6 +590,27 @@ def _has_connection(system) -> bool:
     if kind not in _CONNECTION_TYPES:
         _CONNECTION_TYPES[kind] = isinstance(system, ConnectionSystem)
     return _CONNECTION_TYPES[kind]
+
+
+def _along(system):
+    """velocity(s, ṡ, t) of se2_body_flow: ξ at s + t ṡ, the system's own ``segment_velocity`` for a batch if it has
+    one (a closed form along the straight path), else group_velocity at the shapes."""
+    if hasattr(system, "segment_velocity"):
+
+        def velocity(s, s_dot, t):
+            if isinstance(t, float):
+                return group_velocity(system, tuple(a + t * d for a, d in zip(s, s_dot)), s_dot)
+            return system.segment_velocity(s, s_dot, t)
+
+        return velocity
+
+    def velocity(s, s_dot, t):
+        if isinstance(t, float):
+            return group_velocity(system, tuple(a + t * d for a, d in zip(s, s_dot)), s_dot)
+        shapes = np.ascontiguousarray(s.T)[:, None, :] + t * np.ascontiguousarray(s_dot.T)[:, None, :]
+        return group_velocity(system, np.moveaxis(shapes, 0, -1), s_dot)  # components contiguous along the rows
+
+    return velocity
 
 
 def _shape_at(s, s_dot, t):

@@ -24,7 +24,7 @@ TARGET_BOUND = 3.0  # m: the observed target is clipped here
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 TIME_COST = 0.01  # reward paid per step until success
 MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
-DEFAULT_INTEGRATOR = "dop853"
+DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # DOP853's in the full model; atol is the Lie-group step's too
 STATE_KEYS = ("x", "y", "theta", "u", "momentum")
 
