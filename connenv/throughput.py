@@ -13,8 +13,8 @@ Vector envs: ``gym.make_vec(id, N, vectorization_mode="vector_entry_point")`` (n
 ``"sync"`` (Gymnasium's SyncVectorEnv of N single envs), and Gymnasium's native CartPole-v1 vector env at the same N
 (``gym.make_vec("CartPole-v1", N, vectorization_mode="vector_entry_point")``, the reference of issue 15's ratios),
 reset once (untimed), then stepped with random actions in alternating blocks of about ``seconds / ROUNDS`` each;
-autoresets are part of the steps, as in training. The figure is N × steps / time, the median over the blocks. SyncVectorEnv's cost per env hardly depends on N, and at
-N = 4096 its first reset alone takes tens of seconds on the envs whose reset solves for an optimal arc, so it runs
+autoresets are part of the steps, as in training. The figure is N × steps / time, the median over the blocks.
+SyncVectorEnv's cost per env hardly depends on N, and at N = 4096 its first reset alone takes tens of seconds on the envs whose reset solves for an optimal arc, so it runs
 only up to ``--sync-max`` (default 1024). The timed blocks are short beside an episode, so few rows end in them: the
 autoresets' share in a long run is printed by ``--breakdown``, which adds, at the largest N, where a native step's
 time goes: the stepper and the rest (task code: observation, reward, info), the vector-field evaluations per step

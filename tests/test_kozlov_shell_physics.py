@@ -207,7 +207,9 @@ def test_moving_the_mass_along_a_principal_axis_shifts_the_shell_back_by_the_mas
 # -- the reduced model's Lie-group step (the default) --------------------------------------------------------------
 
 
-@pytest.mark.parametrize("kwargs", [{}, {"mass": 5.0, "dt": 0.25}, {"a": 1.5, "b": 0.3, "u1_max": 1.2, "u2_max": 0.15, "dt": 0.05}])
+@pytest.mark.parametrize(
+    "kwargs", [{}, {"mass": 5.0, "dt": 0.25}, {"a": 1.5, "b": 0.3, "u1_max": 1.2, "u2_max": 0.15, "dt": 0.05}]
+)
 def test_default_rule_meets_1e_10_on_corner_to_corner_steps_and_is_the_cheapest(kwargs):
     """The fixed quadrature rule KozlovShell-v0 chooses at construction (pieces × Gauss points, by Richardson)
     steps every straight motion between two corners of the box in one dt, the fastest admissible, to 1e-10 of

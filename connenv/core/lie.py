@@ -26,6 +26,11 @@ solvable, and there the flow is nested quadratures (`quadrature_flow`): θ = ∫
 groups this is the integral of ξ itself). Exponentials are closed forms (Rodrigues for SO(3)), so g stays on its
 group to rounding. Where ξ is the same at every node (A constant along the path, or ṡ = 0) the step is one
 exponential, the exact flow.
+
+By default each segment's substeps come from a Richardson estimate (two extra flows per segment), which serves any
+connection. A caller that knows every segment it can ask for (a box of shapes and a step dt) fixes the rule once
+instead, with `fixed_rule`: the fewest nodes, pieces × Gauss points, that meet the tolerance on its worst segments;
+on SE(2) in the body frame `se2_body_flow` then takes one state on Python floats and a batch in blocks of rows.
 """
 
 from __future__ import annotations
@@ -400,7 +405,7 @@ def _se2_body_increment(velocity, s, s_dot, tau, pieces, points):
     W *= h
     if pieces > 1:
         W[1:] += np.cumsum(turns[:-1], axis=0)[:, None, :]
-    W = W.reshape(v1.shape)  # in place from here on: arrays of this size cost a page fault per fresh allocation
+    W = W.reshape(v1.shape)  # in place from here on: few fresh temporaries
     c = np.cos(W)
     s_ = np.sin(W, out=W)
     ax, ay = c * v1, s_ * v1
@@ -541,7 +546,8 @@ class Magnus:
         if group.name == "SE2" and frame == "body":
             g = se2_body_flow(_along(system), g, u, u_dot, tau, self.pieces, self.points)
         elif group.name == "SO3":
-            g = magnus_flow(group, frame, velocity, g, np.asarray(u), np.asarray(u_dot), tau, self.pieces, self.order)[0]
+            u, u_dot = np.asarray(u), np.asarray(u_dot)
+            g = magnus_flow(group, frame, velocity, g, u, u_dot, tau, self.pieces, self.order)[0]
         else:
             g = quadrature_flow(group, frame, velocity, g, np.asarray(u), np.asarray(u_dot), tau, self.pieces)[0]
         if single:

@@ -136,18 +136,23 @@ class KozlovShellEnv(TaskEnv):
     | u2_max | 0.25 | (0, ∞), likewise |
     | dt | 0.1 | (0, ∞) |
     | success_radius | 0.05 | (0, 0.5) |
-    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "magnus" (atol 1e-10) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-8, atol 1e-10 | see `connenv.core.steppers` |
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters
     (among them the mass ratio m/(M + λ₁)): a non-finite state, or, in the full model, a spatial momentum that
     has moved by more than 0.1 of its norm since reset. Semi-implicit Euler updates μ, then the pose with the
     new μ; in the reduced model μ = 0 and it is explicit Euler.
 
-    The default stepper is on the Pareto front of the work–precision chart (`python -m connenv.bench
-    precision`, docs/precision/shell_precision.csv): over 300 steps of random mass motions it keeps the pose
-    within 5e-9 of a reference (DOP853 at rtol 1e-13) in the reduced and the full model and the spatial
-    momentum within 2.2e-9 relative in the full one; RK4 with 8 substeps is faster and errs by 1.5e-6.
+    The default stepper, `integrator="magnus"`, steps the reduced model by the Lie-group step on SE(2)
+    (`connenv.core.lie`): θ = ∫ω and the translation ∫R(θ) v by Gauss–Legendre quadrature, with a rule
+    (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
+    on the motions in one dt between the corners, edge midpoints and centre of the box (corner to corner is the
+    worst). The full model has no connection and goes to DOP853 (rtol 1e-8, atol 1e-10). It is on the Pareto
+    front of the work–precision chart (`python -m connenv.bench precision`, docs/precision/shell_precision.csv):
+    over 300 steps of random mass motions it keeps the pose within 1.4e-11 of a reference (DOP853 at rtol 1e-13)
+    in the reduced model and 4.7e-9 in the full one, and the spatial momentum within 2.2e-9 relative in the full
+    one; DOP853 at rtol 1e-8 errs by 1.3e-9 on the reduced model at 13× the time per step.
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `u` (2), `momentum` (P₁, P₂, Π, body frame), `t`, in SI),
     `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m),
