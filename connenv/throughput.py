@@ -14,12 +14,13 @@ Vector envs: ``gym.make_vec(id, N, vectorization_mode="vector_entry_point")`` (n
 (``gym.make_vec("CartPole-v1", N, vectorization_mode="vector_entry_point")``, the reference of issue 15's ratios),
 reset once (untimed), then stepped with random actions in alternating blocks of about ``seconds / ROUNDS`` each;
 autoresets are part of the steps, as in training. The figure is N × steps / time, the median over the blocks.
-SyncVectorEnv's cost per env hardly depends on N, and at N = 4096 its first reset alone takes tens of seconds on the envs whose reset solves for an optimal arc, so it runs
-only up to ``--sync-max`` (default 1024). The timed blocks are short beside an episode, so few rows end in them: the
-autoresets' share in a long run is printed by ``--breakdown``, which adds, at the largest N, where a native step's
-time goes: the stepper and the rest (task code: observation, reward, info), the vector-field evaluations per step
-of the adaptive steppers, and the cost of a row's reset (the single env's reset, run with the row's generator)
-with its share per step when every episode runs to the time limit. Targets (issue 7): single-env step ≤ 1.0× Pendulum-v1; native vector ≥ 5 M
+SyncVectorEnv's cost per env hardly depends on N, and at N = 4096 its first reset alone takes tens of seconds on
+the envs whose reset solves for an optimal arc, so it runs only up to ``--sync-max`` (default 1024). The timed blocks
+are short beside an episode, so few rows end in them: the autoresets' share in a long run is printed by
+``--breakdown``, which adds, at the largest N, where a native step's time goes: the stepper and the rest (task code:
+observation, reward, info), the vector-field evaluations per step of the adaptive steppers, and the cost of a row's
+reset (the single env's reset, run with the row's generator) with its share per step when every episode runs to the
+time limit. Targets (issue 7): single-env step ≤ 1.0× Pendulum-v1; native vector ≥ 5 M
 env-steps/s at N = 4096 for Swing and Skier, ≥ 1 M for RollingBall, KozlovShell and the Kapitza pendulum.
 """
 
@@ -183,7 +184,10 @@ def shell_steppers(integrators, n: int, steps: int, seconds: float, seed: int = 
     for name in integrators:
         integrator, _, atol = name.partition(":")  # "magnus:1e-9": the Magnus step with atol 1e-9
         options = {"rtol": 1e-8, "atol": 1e-10} if integrator == "dop853" else {"atol": float(atol)} if atol else {}
-        stepper = make_stepper(integrator, system, **options)
+        if integrator == "default":  # the env's own: the Lie-group step with the rule fixed at construction
+            stepper = gym.make("connenv/KozlovShell-v0").unwrapped.stepper
+        else:
+            stepper = make_stepper(integrator, system, **options)
         y, y_ref, u = np.zeros(3), np.zeros(3), np.zeros(2)
         for u_cmd in np.random.default_rng(seed).uniform(-1.0, 1.0, (300, 2)) * u_max:
             u_dot = (u_cmd - u) / dt
@@ -237,12 +241,13 @@ def main(argv=None):
     parser.add_argument("--breakdown", action="store_true", help="also where a native step goes at the largest N")
     parser.add_argument(
         "--shell-steppers", nargs="*", metavar="INTEGRATOR", help="only the shell's reduced model under these "
-        "integrators (default: dop853 magnus; magnus:ATOL for another atol) against Pendulum-v1 and CartPole-v1's "
-        "native vector env, at the largest N"
+        "integrators (default: dop853 magnus default; magnus:ATOL for another atol; default: the env's own stepper) "
+        "against Pendulum-v1 and CartPole-v1's native vector env, at the largest N"
     )
     args = parser.parse_args(argv)
     if args.shell_steppers is not None:
-        shell_steppers(args.shell_steppers or ["dop853", "magnus"], max(args.sizes), args.single_steps, args.seconds)
+        integrators = args.shell_steppers or ["dop853", "magnus", "default"]
+        shell_steppers(integrators, max(args.sizes), args.single_steps, args.seconds)
         return
     print(
         f"# {datetime.datetime.now():%Y-%m-%d %H:%M}, {platform.machine()}, {os.cpu_count()} cores, "
