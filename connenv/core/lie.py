@@ -36,6 +36,7 @@ on SE(2) in the body frame `se2_body_flow` then takes one state on Python floats
 from __future__ import annotations
 
 import math
+import operator
 import dataclasses
 import functools
 from dataclasses import dataclass, field
@@ -311,8 +312,8 @@ def _integration_matrix(nodes):
 
 
 QUADRATURE_POINTS = 8
-BLOCK_BYTES = 1 << 16  # se2_body_flow's temporaries over a batch: below glibc's threshold for a fresh mmap (and
-# the page faults of every new array above it), by taking the rows in blocks
+BLOCK_BYTES = 120_000  # se2_body_flow's temporaries over a batch: below glibc's default M_MMAP_THRESHOLD (every
+# array above it is a fresh mmap, its pages faulted in anew), by taking the rows in blocks
 _x, _w = np.polynomial.legendre.leggauss(QUADRATURE_POINTS)
 NODES, WEIGHTS = 0.5 * (_x + 1.0), 0.5 * _w  # Gauss–Legendre on [0, 1]
 INTEGRATION = _integration_matrix(NODES)
@@ -426,11 +427,11 @@ def _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points):
         xi = [velocity(s, s_dot, (j + c) * h) for c in nodes]
         omega = [w for _, _, w in xi]
         for (v1, v2, _), weight, row in zip(xi, weights, Q):
-            W = turn + h * sum(q * w for q, w in zip(row, omega))
+            W = turn + h * sum(map(operator.mul, row, omega))
             c, s_ = math.cos(W), math.sin(W)
             dx += weight * (c * v1 - s_ * v2)
             dy += weight * (s_ * v1 + c * v2)
-        turn += h * sum(weight * w for weight, w in zip(weights, omega))
+        turn += h * sum(map(operator.mul, weights, omega))
     return GROUPS["SE2"].product(g, (h * dx, h * dy, turn))
 
 
@@ -602,10 +603,11 @@ def _along(system):
     """velocity(s, ṡ, t) of se2_body_flow: ξ at s + t ṡ, the system's own ``segment_velocity`` for a batch if it has
     one (a closed form along the straight path), else group_velocity at the shapes."""
     if hasattr(system, "segment_velocity"):
+        closed_form = system.group_velocity
 
         def velocity(s, s_dot, t):
             if isinstance(t, float):
-                return group_velocity(system, tuple(a + t * d for a, d in zip(s, s_dot)), s_dot)
+                return closed_form([a + t * d for a, d in zip(s, s_dot)], s_dot)
             return system.segment_velocity(s, s_dot, t)
 
         return velocity
