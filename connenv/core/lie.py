@@ -406,10 +406,8 @@ def _se2_body_increment(velocity, s, s_dot, tau, pieces, points):
     W *= h
     if pieces > 1:
         W[1:] += np.cumsum(turns[:-1], axis=0)[:, None, :]
-    W = W.reshape(v1.shape)  # in place from here on: few fresh temporaries
-    c = np.cos(W)
-    s_ = np.sin(W, out=W)
-    ax, ay = c * v1, s_ * v1
+    c, s_ = _cos_sin(W.reshape(v1.shape))
+    ax, ay = c * v1, s_ * v1  # in place from here on: few fresh temporaries
     c *= v2
     s_ *= v2
     ax -= s_  # cos W v₁ − sin W v₂
@@ -417,6 +415,21 @@ def _se2_body_increment(velocity, s, s_dot, tau, pieces, points):
     dx = h * (weights @ ax.reshape(omega.shape)).sum(axis=0)
     dy = h * (weights @ ay.reshape(omega.shape)).sum(axis=0)
     return dx, dy, turns.sum(axis=0)
+
+
+def _cos_sin(angle):
+    """(cos, sin) of an array of angles (overwritten) from one transcendental call, τ = tan(angle/2):
+    cos = (1 − τ²)/(1 + τ²), sin = 2τ/(1 + τ²), to a few units in the last place (and near angle = ±π, where τ is
+    large, to the spacing of floats there); numpy's cos and sin are the dearest operations of the quadrature."""
+    angle *= 0.5
+    tau = np.tan(angle, out=angle)
+    tau_squared = tau * tau
+    scale = np.divide(1.0, tau_squared + 1.0)
+    cos = 1.0 - tau_squared
+    cos *= scale
+    scale *= 2.0
+    tau *= scale
+    return cos, tau
 
 
 def _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points):

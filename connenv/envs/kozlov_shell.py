@@ -273,14 +273,13 @@ class KozlovShellEnv(TaskEnv):
         return ShellState(pose, s.momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
 
     def spatial_momentum(self, s, ops=SCALAR):
-        """The full system's spatial_momentum; in the reduced model of one state, in floats: zeros, their signs
-        those of numpy's arithmetic on μ = 0 (so that the info's bytes are the same)."""
-        if ops is not SCALAR or s.full:
-            return self.full_system.spatial_momentum(np.concatenate([s.pose, s.momentum], -1))
-        x, y, theta = s.pose.tolist()
-        c, sin = math.cos(theta), math.sin(theta)
-        px, py = c * 0.0 - sin * 0.0, sin * 0.0 + c * 0.0
-        return px, py, 0.0 + x * py - y * px
+        """(R(θ) P, Π + x P_y − y P_x), the arithmetic of the system's spatial_momentum: a tuple of floats for one
+        state, an array (N, 3) for a batch."""
+        (x, y, theta), (p1, p2, pi) = _components(s.pose), _components(s.momentum)
+        c, sin = ops.cos(theta), ops.sin(theta)
+        px, py = c * p1 - sin * p2, sin * p1 + c * p2
+        momentum = px, py, pi + x * py - y * px
+        return momentum if ops is SCALAR else np.stack(momentum, axis=-1)
 
     def check_momentum(self, y, momentum0):
         """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
@@ -330,7 +329,7 @@ class KozlovShellEnv(TaskEnv):
         spatial_momentum = self.spatial_momentum(s, ops)
         return {
             "state": state,
-            "spatial_momentum": ops.vector(spatial_momentum),
+            "spatial_momentum": spatial_momentum,
             "target": ops.vector(s.target),
             "distance": distance,
             "model": ops.where(s.full, "full", "reduced"),
