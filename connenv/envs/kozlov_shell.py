@@ -256,11 +256,14 @@ class KozlovShellEnv(TaskEnv):
         target = distance * np.array([math.cos(angle), math.sin(angle)])
         if "target" in options:
             target = _check_vector("target", options["target"], 2)
-        pose, u, momentum = self._check_state(options.get("state", {}))
-        full = bool(np.any(momentum != 0.0))
-        momentum = momentum if full else np.zeros(3)
-        momentum0 = self.full_system.spatial_momentum(np.concatenate([pose, momentum]))
-        return ShellState(pose, momentum, u, target, 0.0, full, momentum0)
+        if "state" in options:
+            pose, u, momentum = self._check_state(options["state"])
+        else:
+            pose, u, momentum = np.zeros(3), np.zeros(2), np.zeros(3)
+        full = bool(momentum.any())
+        state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, None)
+        state.momentum0 = np.array(self.spatial_momentum(state))
+        return state
 
     def advance(self, s, u_cmd):
         """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum."""
