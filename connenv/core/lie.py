@@ -589,6 +589,8 @@ def fixed_rule(system, segments, atol: float = 1e-10, stepper=None, max_points: 
     one step). The error of a rule is estimated by Richardson, |g(pieces) − g(2 pieces)| (max-norm of the
     coordinates of g from the identity), g(2 pieces) being 2^points times more accurate. StepperError past
     MAX_SUBSTEPS pieces."""
+    if (system.group, system.frame) != ("SE2", "body"):
+        raise ValueError(f"fixed_rule is for SE2 in the body frame; got group={system.group!r}, frame={system.frame!r}")
     stepper = stepper or Magnus(atol)
     identity = np.array(GROUPS[system.group].identity(), float)
     segments = [(np.asarray(u, float), np.asarray(u_dot, float), tau) for u, u_dot, tau in segments]
