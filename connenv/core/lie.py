@@ -549,9 +549,11 @@ class Magnus:
         group, frame = GROUPS[system.group], system.frame
         single = np.ndim(y) == 1
         if single:
-            g, u, u_dot, tau = tuple(y.tolist()), tuple(u.tolist()), tuple(u_dot.tolist()), float(tau)
+            g, u, u_dot = (tuple(np.asarray(a, float).tolist()) for a in (y, u, u_dot))
+            tau = float(tau)
         else:
-            g, u, u_dot = tuple(np.moveaxis(np.asarray(y, float), -1, 0)), np.asarray(u), np.asarray(u_dot)
+            g = tuple(np.moveaxis(np.asarray(y, float), -1, 0))
+            u, u_dot = np.asarray(u, float), np.asarray(u_dot, float)
             tau = np.reshape(tau, -1) if np.ndim(tau) else tau
 
         def velocity(s, s_dot):

@@ -261,9 +261,8 @@ class KozlovShellEnv(TaskEnv):
         else:
             pose, u, momentum = np.zeros(3), np.zeros(2), np.zeros(3)
         full = bool(momentum.any())
-        state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, None)
-        state.momentum0 = np.array(self.spatial_momentum(state))
-        return state
+        state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, np.zeros(3))
+        return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
     def advance(self, s, u_cmd):
         """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum."""
