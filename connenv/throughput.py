@@ -10,15 +10,17 @@ of the timing; the figures are the medians, and the ratio is the env's median st
 measured in the same loop, so that it holds on a machine busy with other work, where the absolute times do not.
 
 Vector envs: ``gym.make_vec(id, N, vectorization_mode="vector_entry_point")`` (native) and the same with
-``"sync"`` (Gymnasium's SyncVectorEnv of N single envs), reset once (untimed), then stepped with random actions in
-alternating blocks of about ``seconds / ROUNDS`` each; autoresets are part of the steps, as in training. The
-figure is N × steps / time, the median over the blocks. SyncVectorEnv's cost per env hardly depends on N, and at
-N = 4096 its first reset alone takes tens of seconds on the envs whose reset solves for an optimal arc, so it runs
-only up to ``--sync-max`` (default 1024). The timed blocks are short beside an episode, so few rows end in them: the
-autoresets' share in a long run is printed by ``--breakdown``, which adds, at the largest N, where a native step's
-time goes: the stepper and the rest (task code: observation, reward, info), the vector-field evaluations per step
-of the adaptive steppers, and the cost of a row's reset (the single env's reset, run with the row's generator)
-with its share per step when every episode runs to the time limit. Targets (issue 7): single-env step ≤ 1.0× Pendulum-v1; native vector ≥ 5 M
+``"sync"`` (Gymnasium's SyncVectorEnv of N single envs), and Gymnasium's native CartPole-v1 vector env at the same N
+(``gym.make_vec("CartPole-v1", N, vectorization_mode="vector_entry_point")``, the reference of issue 15's ratios),
+reset once (untimed), then stepped with random actions in alternating blocks of about ``seconds / ROUNDS`` each;
+autoresets are part of the steps, as in training. The figure is N × steps / time, the median over the blocks.
+SyncVectorEnv's cost per env hardly depends on N, and at N = 4096 its first reset alone takes tens of seconds on
+the envs whose reset solves for an optimal arc, so it runs only up to ``--sync-max`` (default 1024). The timed blocks
+are short beside an episode, so few rows end in them: the autoresets' share in a long run is printed by
+``--breakdown``, which adds, at the largest N, where a native step's time goes: the stepper and the rest (task code:
+observation, reward, info), the vector-field evaluations per step of the adaptive steppers, and the cost of a row's
+reset (the single env's reset, run with the row's generator) with its share per step when every episode runs to the
+time limit. Targets (issue 7): single-env step ≤ 1.0× Pendulum-v1; native vector ≥ 5 M
 env-steps/s at N = 4096 for Swing and Skier, ≥ 1 M for RollingBall, KozlovShell and the Kapitza pendulum.
 """
 
@@ -39,6 +41,7 @@ import connenv  # noqa: F401  (registers the envs)
 from connenv.examples import MAKE_KWARGS
 
 SINGLE_STEPS = 3000
+REFERENCE = "CartPole-v1"  # Gymnasium's native vector env, the vector table's reference (issue 15)
 ROUNDS = 5
 SIZES = (1, 64, 1024, 4096)
 VECTOR_TARGETS = {
@@ -77,20 +80,21 @@ def single_step_times(env_id: str, steps: int, seed: int = 0, **kwargs):
     return statistics.median(times[0]), statistics.median(times[1])
 
 
-def vector_rates(env_id: str, n: int, seconds: float, sync: bool, seed: int = 0, reference=None, **kwargs):
-    """Median env-steps/s of the native vector env (made with kwargs) and of SyncVectorEnv (None unless sync) at
-    N = n; or, with reference an id, of that id's native vector env in place of SyncVectorEnv, stepped alternately."""
-    modes = ["vector_entry_point"] + (["sync"] if sync else [])
+def vector_rates(env_id: str, n: int, seconds: float, sync: bool, seed: int = 0, reference=REFERENCE, **kwargs):
+    """Median env-steps/s at N = n of the native vector env (made with kwargs), of SyncVectorEnv (None unless sync)
+    and of the reference id's native vector env (None without one), stepped alternately."""
     kwargs = kwargs or make_kwargs(env_id)
-    envs = [gym.make_vec(env_id, n, vectorization_mode=mode, **kwargs) for mode in modes]
+    envs = [gym.make_vec(env_id, n, vectorization_mode="vector_entry_point", **kwargs)]
+    if sync:
+        envs.append(gym.make_vec(env_id, n, vectorization_mode="sync", **kwargs))
     if reference is not None:
         envs.append(gym.make_vec(reference, n, vectorization_mode="vector_entry_point"))
-        sync = True
     rng = np.random.default_rng(seed)
-    actions = rng.uniform(-1.0, 1.0, (16, *envs[0].action_space.shape)).astype(np.float32)
-    envs[-1].action_space.seed(seed)
-    own = [actions] * (len(envs) - 1) + [[envs[-1].action_space.sample() for _ in range(16)]]
-    actions = own if reference is not None else [actions] * len(envs)
+    ours = rng.uniform(-1.0, 1.0, (16, *envs[0].action_space.shape)).astype(np.float32)
+    actions = [ours] * (1 + sync)
+    if reference is not None:
+        envs[-1].action_space.seed(seed)
+        actions.append([envs[-1].action_space.sample() for _ in range(16)])
     rates = [[] for _ in envs]
     for k, env in enumerate(envs):
         env.reset(seed=seed)
@@ -105,7 +109,7 @@ def vector_rates(env_id: str, n: int, seconds: float, sync: bool, seed: int = 0,
     for env in envs:
         env.close()
     medians = [statistics.median(r) for r in rates]
-    return medians[0], (medians[1] if sync else None)
+    return medians[0], (medians[1] if sync else None), (medians[-1] if reference is not None else None)
 
 
 class Counted:
@@ -180,7 +184,10 @@ def shell_steppers(integrators, n: int, steps: int, seconds: float, seed: int = 
     for name in integrators:
         integrator, _, atol = name.partition(":")  # "magnus:1e-9": the Magnus step with atol 1e-9
         options = {"rtol": 1e-8, "atol": 1e-10} if integrator == "dop853" else {"atol": float(atol)} if atol else {}
-        stepper = make_stepper(integrator, system, **options)
+        if integrator == "default":  # the env's own: the Lie-group step with the rule fixed at construction
+            stepper = gym.make("connenv/KozlovShell-v0").unwrapped.stepper
+        else:
+            stepper = make_stepper(integrator, system, **options)
         y, y_ref, u = np.zeros(3), np.zeros(3), np.zeros(2)
         for u_cmd in np.random.default_rng(seed).uniform(-1.0, 1.0, (300, 2)) * u_max:
             u_dot = (u_cmd - u) / dt
@@ -234,12 +241,13 @@ def main(argv=None):
     parser.add_argument("--breakdown", action="store_true", help="also where a native step goes at the largest N")
     parser.add_argument(
         "--shell-steppers", nargs="*", metavar="INTEGRATOR", help="only the shell's reduced model under these "
-        "integrators (default: dop853 magnus; magnus:ATOL for another atol) against Pendulum-v1 and CartPole-v1's "
-        "native vector env, at the largest N"
+        "integrators (default: dop853 magnus default; magnus:ATOL for another atol; default: the env's own stepper) "
+        "against Pendulum-v1 and CartPole-v1's native vector env, at the largest N"
     )
     args = parser.parse_args(argv)
     if args.shell_steppers is not None:
-        shell_steppers(args.shell_steppers or ["dop853", "magnus"], max(args.sizes), args.single_steps, args.seconds)
+        integrators = args.shell_steppers or ["dop853", "magnus", "default"]
+        shell_steppers(integrators, max(args.sizes), args.single_steps, args.seconds)
         return
     print(
         f"# {datetime.datetime.now():%Y-%m-%d %H:%M}, {platform.machine()}, {os.cpu_count()} cores, "
@@ -260,18 +268,25 @@ def main(argv=None):
                 f"{ratio:11.2f}  {verdict}"
             )
     if not args.skip_vector:
-        print("\nvector envs, M env-steps/s (median of blocks; autoresets included)")
-        print(f"{'env':28} {'N':>5} {'native':>9} {'sync':>9} {'native/sync':>12}  target at N=4096")
+        print("\nvector envs, M env-steps/s (median of blocks; autoresets included); CartPole-v1's native vector env")
+        print("(Gymnasium's vector_entry_point) stepped alternately at the same N")
+        print(
+            f"{'env':28} {'N':>5} {'native':>9} {'sync':>9} {'native/sync':>12} {'CartPole':>9} {'× CartPole':>11}"
+            "  target at N=4096"
+        )
         for env_id in args.envs:
             for n in args.sizes:
-                native, sync = vector_rates(env_id, n, args.seconds, n <= args.sync_max)
+                native, sync, cartpole = vector_rates(env_id, n, args.seconds, n <= args.sync_max)
                 target = VECTOR_TARGETS.get(env_id) if n == 4096 else None
                 verdict = "" if target is None else f"≥ {target / 1e6:.0f} M: " + ("met" if native >= target else "MISSED")
                 if target is not None and native < target:
                     misses.append(f"{env_id} N=4096 {native / 1e6:.2f} M/s")
                 sync_text = f"{sync / 1e6:9.4f}" if sync else f"{'-':>9}"
                 ratio_text = f"{native / sync:12.1f}" if sync else f"{'-':>12}"
-                print(f"{env_id:28} {n:5} {native / 1e6:9.4f} {sync_text} {ratio_text}  {verdict}")
+                print(
+                    f"{env_id:28} {n:5} {native / 1e6:9.4f} {sync_text} {ratio_text} {cartpole / 1e6:9.3f} "
+                    f"{native / cartpole:11.3f}  {verdict}"
+                )
     if args.breakdown:
         n = max(args.sizes)
         print(

@@ -1,6 +1,7 @@
 """The shell swimming in an ideal fluid: its kinetic energy, Kirchhoff's equations, conservation laws, the
 mechanical connection and its holonomy."""
 
+import dataclasses
 import math
 
 import gymnasium as gym
@@ -9,6 +10,7 @@ import pytest
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv.core import JumpClass, bressan_matrices, classify, make_stepper, vector_field
+from connenv.core.lie import QUADRATURE_POINTS
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 U_MAX = np.array([0.5, 0.25])
@@ -200,3 +202,41 @@ def test_moving_the_mass_along_a_principal_axis_shifts_the_shell_back_by_the_mas
     delta = action[axis] * U_MAX[axis]
     expected = -shell.mass * delta / (shell.shell_mass + shell.mass + shell.added_masses[axis])
     assert g[axis] == pytest.approx(expected, rel=1e-12) and g[1 - axis] == 0.0 and g[2] == 0.0
+
+
+# -- the reduced model's Lie-group step (the default) --------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "kwargs", [{}, {"mass": 5.0, "dt": 0.25}, {"a": 1.5, "b": 0.3, "u1_max": 1.2, "u2_max": 0.15, "dt": 0.05}]
+)
+def test_default_rule_meets_1e_10_on_corner_to_corner_steps_and_is_the_cheapest(kwargs):
+    """The fixed quadrature rule KozlovShell-v0 chooses at construction (pieces × Gauss points, by Richardson)
+    steps every straight motion between two corners of the box in one dt, the fastest admissible, to 1e-10 of
+    DOP853 at rtol 1e-13, one state and a batch alike; the rule with one Gauss point fewer misses 1e-10."""
+    env = gym.make("connenv/KozlovShell-v0", **kwargs).unwrapped
+    stepper, system, dt = env.stepper, env.reduced_system, env.dt
+    reference = make_stepper("dop853", system, rtol=1e-13, atol=1e-15)
+    corners = [np.array([i, j]) * env.u_max for i in (-1, 1) for j in (-1, 1)]
+    u = np.array([a for a in corners for b in corners if np.any(a != b)])
+    u_dot = np.array([(b - a) / dt for a in corners for b in corners if np.any(a != b)])
+    y = np.tile([0.4, -0.3, 2.0], (len(u), 1))
+    exact = np.array([reference(system, *row, dt) for row in zip(y, u, u_dot)])
+    alone = np.array([stepper(system, *row, dt) for row in zip(y, u, u_dot)])
+    assert np.max(np.abs(alone - exact)) <= 1e-10
+    assert np.max(np.abs(stepper(system, y, u, u_dot, dt) - exact)) <= 1e-10
+    coarser = dataclasses.replace(stepper, points=stepper.points - 1)
+    if stepper.points > QUADRATURE_POINTS:
+        assert max(np.max(np.abs(coarser(system, *row, dt) - e)) for *row, e in zip(y, u, u_dot, exact)) > 1e-10
+
+
+def test_connection_along_a_straight_path_is_the_connection_at_its_points():
+    """segment_velocity's rational ω(t) and its (v₁, v₂) along u + t u̇ equal group_velocity at those shapes (to
+    rounding), and group_velocity on floats equals it on arrays."""
+    system, rng = ReducedKozlovShell(a=1.2, b=0.4, mass=0.7), np.random.default_rng(3)
+    u, u_dot, t = rng.uniform(-0.3, 0.3, (6, 2)), rng.normal(size=(6, 2)) * 5, rng.uniform(0, 0.1, (9, 1))
+    along = np.stack(system.segment_velocity(u, u_dot, t))
+    at_points = np.stack(system.group_velocity(u + t[..., None] * u_dot, np.broadcast_to(u_dot, (9, 6, 2))))
+    assert np.max(np.abs(along - at_points)) <= 1e-14
+    floats = [system.group_velocity(tuple(a.tolist()), tuple(b.tolist())) for a, b in zip(u, u_dot)]
+    assert np.max(np.abs(np.array(floats).T - np.stack(system.group_velocity(u, u_dot)))) <= 1e-15

@@ -26,11 +26,19 @@ solvable, and there the flow is nested quadratures (`quadrature_flow`): θ = ∫
 groups this is the integral of ξ itself). Exponentials are closed forms (Rodrigues for SO(3)), so g stays on its
 group to rounding. Where ξ is the same at every node (A constant along the path, or ṡ = 0) the step is one
 exponential, the exact flow.
+
+By default each segment's substeps come from a Richardson estimate (two extra flows per segment), which serves any
+connection. A caller that knows every segment it can ask for (a box of shapes and a step dt) fixes the rule once
+instead, with `fixed_rule`: the fewest nodes, pieces × Gauss points, that meet the tolerance on its worst segments;
+on SE(2) in the body frame `se2_body_flow` then takes one state on Python floats and a batch in blocks of rows.
 """
 
 from __future__ import annotations
 
 import math
+import operator
+import dataclasses
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -304,6 +312,8 @@ def _integration_matrix(nodes):
 
 
 QUADRATURE_POINTS = 8
+BLOCK_BYTES = 120_000  # se2_body_flow's temporaries over a batch: below glibc's default M_MMAP_THRESHOLD (every
+# array above it is a fresh mmap, its pages faulted in anew), by taking the rows in blocks
 _x, _w = np.polynomial.legendre.leggauss(QUADRATURE_POINTS)
 NODES, WEIGHTS = 0.5 * (_x + 1.0), 0.5 * _w  # Gauss–Legendre on [0, 1]
 INTEGRATION = _integration_matrix(NODES)
@@ -353,6 +363,91 @@ def _piece(group, frame, g, xi, h):
     return group.product((ct * a1 - st * a2, st * a1 + ct * a2, turn), g)
 
 
+@functools.cache
+def gauss_rule(points: int):
+    """The Gauss–Legendre rule of that many points on [0, 1]: (nodes, weights, Q) as arrays and as lists of floats,
+    Q the integration matrix of the nodes (``_integration_matrix``)."""
+    x, w = np.polynomial.legendre.leggauss(points)
+    nodes, weights = 0.5 * (x + 1.0), 0.5 * w
+    Q = _integration_matrix(nodes)
+    return nodes, weights, Q, nodes.tolist(), weights.tolist(), Q.tolist()
+
+
+def se2_body_flow(velocity, g, s, s_dot, tau, pieces: int, points: int = QUADRATURE_POINTS):
+    """quadrature_flow's g on SE2 in the body frame with a Gauss rule of ``points`` nodes per piece, lean: the
+    increment of the whole segment at once (θ at the nodes of piece j offset by the turns of the pieces before it),
+    then one product. One state as tuples of Python floats (math, no numpy: velocity(s, ṡ) gets and gives floats),
+    or a batch as arrays over rows (s, ṡ of shape (N, k), tau a float or one per row). velocity(s, ṡ, t) is ξ at
+    s + t ṡ as components: floats at a float t for one state, arrays at all nodes at once for a batch (t of shape
+    (nodes, N) or (nodes, 1): components of shape (nodes, N))."""
+    if isinstance(g[0], float):
+        return _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points)
+    block = max(1, BLOCK_BYTES // (8 * pieces * points))
+    if len(s) > block:
+        increments = np.empty((3, len(s)))
+        for i in range(0, len(s), block):
+            rows = slice(i, i + block)
+            increments[:, rows] = _se2_body_increment(velocity, s[rows], s_dot[rows], tau[rows] if np.ndim(tau) else
+                                                      tau, pieces, points)  # fmt: skip
+        return GROUPS["SE2"].product(g, tuple(increments))
+    return GROUPS["SE2"].product(g, _se2_body_increment(velocity, s, s_dot, tau, pieces, points))
+
+
+def _se2_body_increment(velocity, s, s_dot, tau, pieces, points):
+    """The body-frame increment (dx, dy, turn) of se2_body_flow over a batch of rows."""
+    nodes, weights, Q = gauss_rule(points)[:3]
+    h = np.asarray(tau / pieces, float)
+    t = (np.arange(pieces)[:, None] + nodes).reshape(-1, 1) * h  # (pieces · points, N) or (pieces · points, 1)
+    shape = (len(t), len(s))
+    v1, v2, omega = (c if np.shape(c) == shape else np.broadcast_to(c, shape) for c in velocity(s, s_dot, t))
+    omega = omega.reshape(pieces, points, -1)
+    turns = h * (weights @ omega)  # (pieces, N)
+    W = Q @ omega
+    W *= h
+    if pieces > 1:
+        W[1:] += np.cumsum(turns[:-1], axis=0)[:, None, :]
+    c, s_ = _cos_sin(W.reshape(v1.shape))
+    ax, ay = c * v1, s_ * v1  # in place from here on: few fresh temporaries
+    c *= v2
+    s_ *= v2
+    ax -= s_  # cos W v₁ − sin W v₂
+    ay += c  # sin W v₁ + cos W v₂
+    dx = h * (weights @ ax.reshape(omega.shape)).sum(axis=0)
+    dy = h * (weights @ ay.reshape(omega.shape)).sum(axis=0)
+    return dx, dy, turns.sum(axis=0)
+
+
+def _cos_sin(angle):
+    """(cos, sin) of an array of angles (overwritten) from one transcendental call, τ = tan(angle/2):
+    cos = (1 − τ²)/(1 + τ²), sin = 2τ/(1 + τ²), to a few units in the last place (and near angle = ±π, where τ is
+    large, to the spacing of floats there); numpy's cos and sin are the dearest operations of the quadrature."""
+    angle *= 0.5
+    tau = np.tan(angle, out=angle)
+    tau_squared = tau * tau
+    scale = np.divide(1.0, tau_squared + 1.0)
+    cos = 1.0 - tau_squared
+    cos *= scale
+    scale *= 2.0
+    tau *= scale
+    return cos, tau
+
+
+def _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points):
+    """se2_body_flow on one state of Python floats."""
+    nodes, weights, Q = gauss_rule(points)[3:]
+    h, dx, dy, turn = tau / pieces, 0.0, 0.0, 0.0
+    for j in range(pieces):
+        xi = [velocity(s, s_dot, (j + c) * h) for c in nodes]
+        omega = [w for _, _, w in xi]
+        for (v1, v2, _), weight, row in zip(xi, weights, Q):
+            W = turn + h * sum(map(operator.mul, row, omega))
+            c, s_ = math.cos(W), math.sin(W)
+            dx += weight * (c * v1 - s_ * v2)
+            dy += weight * (s_ * v1 + c * v2)
+        turn += h * sum(map(operator.mul, weights, omega))
+    return GROUPS["SE2"].product(g, (h * dx, h * dy, turn))
+
+
 def _weighted(values):
     """Σ_k w_k values[k] over the nodes (axis 0)."""
     total = WEIGHTS @ values
@@ -372,15 +467,24 @@ class Magnus:
     n = ⌈1.2 · 2 (d/((2^order − 1) atol))^(1/order)⌉ substeps, the count that brings the error to atol. Where ξ is the
     same at every node (A constant along the path) the step is one exponential, the exact flow. Rows of a batch
     choose their substeps alone.
+
+    With ``pieces`` given, every segment is stepped once with that many pieces (substeps on SO3), without the
+    estimate: for a caller that knows its admissible segments and has chosen the rule for them once (`fixed_rule`),
+    as KozlovShell-v0 does. SE2's body frame then takes `se2_body_flow` with ``points`` Gauss nodes per piece, one
+    state on Python floats throughout.
     """
 
     atol: float = 1e-10
     fallback: object = field(default=Scipy(), compare=False)
     order: int = 6
+    pieces: int | None = None
+    points: int = QUADRATURE_POINTS
 
     def __call__(self, system, y, u, u_dot, tau):
         if not _has_connection(system):
             return self.fallback(system, y, u, u_dot, tau)
+        if self.pieces is not None:
+            return self._fixed(system, y, u, u_dot, tau)
         y = np.asarray(y, float)
         if not np.any(u_dot):
             return y.copy()
@@ -440,6 +544,34 @@ class Magnus:
             out[rough] = np.stack(flow(g_rows, u[rough], u_dot[rough], tau_rows, counts)[0], -1)
         return _finite(out, self)
 
+    def _fixed(self, system, y, u, u_dot, tau):
+        """One flow of ``pieces`` pieces: floats for one state, arrays over rows for a batch."""
+        group, frame = GROUPS[system.group], system.frame
+        single = np.ndim(y) == 1
+        if single:
+            g, u, u_dot = (tuple(np.asarray(a, float).tolist()) for a in (y, u, u_dot))
+            tau = float(tau)
+        else:
+            g = tuple(np.moveaxis(np.asarray(y, float), -1, 0))
+            u, u_dot = np.asarray(u, float), np.asarray(u_dot, float)
+            tau = np.reshape(tau, -1) if np.ndim(tau) else tau
+
+        def velocity(s, s_dot):
+            return group_velocity(system, s, s_dot)
+
+        if group.name == "SE2" and frame == "body":
+            g = se2_body_flow(_along(system), g, u, u_dot, tau, self.pieces, self.points)
+        elif group.name == "SO3":
+            u, u_dot = np.asarray(u), np.asarray(u_dot)
+            g = magnus_flow(group, frame, velocity, g, u, u_dot, tau, self.pieces, self.order)[0]
+        else:
+            g = quadrature_flow(group, frame, velocity, g, np.asarray(u), np.asarray(u_dot), tau, self.pieces)[0]
+        if single:
+            if not all(map(math.isfinite, g)):
+                raise StepperError(f"{self} produced a non-finite value {g}")
+            return np.array(g)
+        return _finite(np.stack(g, -1), self)
+
     def _substeps(self, error, order):
         """The substeps for an estimated two-step error (a float, or an array over rows) of a method of that order."""
         n = np.ceil(1.2 * 2.0 * (np.asarray(error) / self.atol) ** (1.0 / order))
@@ -452,12 +584,58 @@ class Magnus:
 _CONNECTION_TYPES: dict = {}
 
 
+def fixed_rule(system, segments, atol: float = 1e-10, stepper=None, max_points: int = 16):
+    """The cheapest fixed rule, (pieces, points) with the fewest nodes pieces × points, with which the Lie-group
+    step of ``system`` (a ConnectionSystem on SE2 in the body frame) meets atol on every control segment (u, u̇, τ)
+    given: those a caller's task admits, its worst among them (for a box of u and a step dt: corner to corner in
+    one step). The error of a rule is estimated by Richardson, |g(pieces) − g(2 pieces)| (max-norm of the
+    coordinates of g from the identity), g(2 pieces) being 2^points times more accurate. StepperError past
+    MAX_SUBSTEPS pieces."""
+    if (system.group, system.frame) != ("SE2", "body"):
+        raise ValueError(f"fixed_rule is for SE2 in the body frame; got group={system.group!r}, frame={system.frame!r}")
+    stepper = stepper or Magnus(atol)
+    identity = np.array(GROUPS[system.group].identity(), float)
+    segments = [(np.asarray(u, float), np.asarray(u_dot, float), tau) for u, u_dot, tau in segments]
+    for nodes in range(QUADRATURE_POINTS, QUADRATURE_POINTS * MAX_SUBSTEPS + 1):
+        for points in range(QUADRATURE_POINTS, max_points + 1):
+            if nodes % points:
+                continue
+            step = dataclasses.replace(stepper, pieces=nodes // points, points=points)
+            finer = dataclasses.replace(step, pieces=2 * step.pieces)
+            error = max(np.max(np.abs(step(system, identity, *s) - finer(system, identity, *s))) for s in segments)
+            if error <= atol:
+                return step.pieces, points
+    raise StepperError(f"the Lie-group step needs > {MAX_SUBSTEPS} pieces for atol {atol} on the segments given")
+
+
 def _has_connection(system) -> bool:
     """Whether the system is a ConnectionSystem, decided once per type (a Protocol's isinstance is slow)."""
     kind = type(system)
     if kind not in _CONNECTION_TYPES:
         _CONNECTION_TYPES[kind] = isinstance(system, ConnectionSystem)
     return _CONNECTION_TYPES[kind]
+
+
+def _along(system):
+    """velocity(s, ṡ, t) of se2_body_flow: ξ at s + t ṡ, the system's own ``segment_velocity`` for a batch if it has
+    one (a closed form along the straight path), else group_velocity at the shapes."""
+    if hasattr(system, "segment_velocity"):
+        closed_form = system.group_velocity
+
+        def velocity(s, s_dot, t):
+            if isinstance(t, float):
+                return closed_form([a + t * d for a, d in zip(s, s_dot)], s_dot)
+            return system.segment_velocity(s, s_dot, t)
+
+        return velocity
+
+    def velocity(s, s_dot, t):
+        if isinstance(t, float):
+            return group_velocity(system, tuple(a + t * d for a, d in zip(s, s_dot)), s_dot)
+        shapes = np.ascontiguousarray(s.T)[:, None, :] + t * np.ascontiguousarray(s_dot.T)[:, None, :]
+        return group_velocity(system, np.moveaxis(shapes, 0, -1), s_dot)  # components contiguous along the rows
+
+    return velocity
 
 
 def _shape_at(s, s_dot, t):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -9,6 +11,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.steppers import make_stepper
 from connenv.core.validation import check_keys, check_number, check_stepper_options
@@ -21,8 +24,8 @@ TARGET_BOUND = 3.0  # m: the observed target is clipped here
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 TIME_COST = 0.01  # reward paid per step until success
 MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
-DEFAULT_INTEGRATOR = "dop853"
-DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # the fastest passing stepper, measured: see the class docstring
+DEFAULT_INTEGRATOR = "magnus"
+DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # DOP853's in the full model; atol is the Lie-group step's too
 STATE_KEYS = ("x", "y", "theta", "u", "momentum")
 
 
@@ -133,18 +136,23 @@ class KozlovShellEnv(TaskEnv):
     | u2_max | 0.25 | (0, ∞), likewise |
     | dt | 0.1 | (0, ∞) |
     | success_radius | 0.05 | (0, 0.5) |
-    | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "magnus" (atol 1e-10) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-8, atol 1e-10 | see `connenv.core.steppers` |
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters
     (among them the mass ratio m/(M + λ₁)): a non-finite state, or, in the full model, a spatial momentum that
     has moved by more than 0.1 of its norm since reset. Semi-implicit Euler updates μ, then the pose with the
     new μ; in the reduced model μ = 0 and it is explicit Euler.
 
-    The default stepper is on the Pareto front of the work–precision chart (`python -m connenv.bench
-    precision`, docs/precision/shell_precision.csv): over 300 steps of random mass motions it keeps the pose
-    within 5e-9 of a reference (DOP853 at rtol 1e-13) in the reduced and the full model and the spatial
-    momentum within 2.2e-9 relative in the full one; RK4 with 8 substeps is faster and errs by 1.5e-6.
+    The default stepper, `integrator="magnus"`, steps the reduced model by the Lie-group step on SE(2)
+    (`connenv.core.lie`): θ = ∫ω and the translation ∫R(θ) v by Gauss–Legendre quadrature, with a rule
+    (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
+    on the motions in one dt between the corners, edge midpoints and centre of the box (corner to corner is the
+    worst). The full model has no connection and goes to DOP853 (rtol 1e-8, atol 1e-10). It is on the Pareto
+    front of the work–precision chart (`python -m connenv.bench precision`, docs/precision/shell_precision.csv):
+    over 300 steps of random mass motions it keeps the pose within 1.4e-11 of a reference (DOP853 at rtol 1e-13)
+    in the reduced model and 4.7e-9 in the full one, and the spatial momentum within 2.2e-9 relative in the full
+    one; DOP853 at rtol 1e-8 errs by 1.3e-9 on the reduced model at 13× the time per step.
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `u` (2), `momentum` (P₁, P₂, Π, body frame), `t`, in SI),
     `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m),
@@ -187,11 +195,15 @@ class KozlovShellEnv(TaskEnv):
         self.full_system, self.reduced_system = KozlovShell(**params), ReducedKozlovShell(**params)
         self.success_radius = check_number("success_radius", success_radius, 0.0, 0.5, open_low=True, open_high=True)
         check_stepper_options("KozlovShell-v0", stepper_options, type(self))
-        if integrator == DEFAULT_INTEGRATOR:
+        if integrator in ("magnus", "dop853"):
             stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
         self.stepper = make_stepper(integrator, self.full_system, **stepper_options)
+        if isinstance(self.stepper, Magnus):
+            pieces, points = shell_rule(self.reduced_system, tuple(self.u_max), self.dt, self.stepper.atol)
+            self.stepper = dataclasses.replace(self.stepper, pieces=pieces, points=points)
 
         self.momentum_scale = np.diag(self.full_system.locked_inertia(np.zeros(2)))  # M + m + λ₁, M + m + λ₂, J + λ₃
+        self.u_bounds, self.momentum_bounds = self.u_max.tolist(), self.momentum_scale.tolist()  # as floats
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
@@ -244,11 +256,13 @@ class KozlovShellEnv(TaskEnv):
         target = distance * np.array([math.cos(angle), math.sin(angle)])
         if "target" in options:
             target = _check_vector("target", options["target"], 2)
-        pose, u, momentum = self._check_state(options.get("state", {}))
-        full = bool(np.any(momentum != 0.0))
-        momentum = momentum if full else np.zeros(3)
-        momentum0 = self.full_system.spatial_momentum(np.concatenate([pose, momentum]))
-        return ShellState(pose, momentum, u, target, 0.0, full, momentum0)
+        if "state" in options:
+            pose, u, momentum = self._check_state(options["state"])
+        else:
+            pose, u, momentum = np.zeros(3), np.zeros(2), np.zeros(3)
+        full = bool(momentum.any())
+        state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, np.zeros(3))
+        return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
     def advance(self, s, u_cmd):
         """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum."""
@@ -259,6 +273,15 @@ class KozlovShellEnv(TaskEnv):
             return ShellState(y[:3], y[3:], u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
         pose, _ = run_segments(self.stepper, self.reduced_system, s.pose, segments)
         return ShellState(pose, s.momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
+
+    def spatial_momentum(self, s, ops=SCALAR):
+        """(R(θ) P, Π + x P_y − y P_x), the arithmetic of the system's spatial_momentum: a tuple of floats for one
+        state, an array (N, 3) for a batch."""
+        (x, y, theta), (p1, p2, pi) = _components(s.pose), _components(s.momentum)
+        c, sin = ops.cos(theta), ops.sin(theta)
+        px, py = c * p1 - sin * p2, sin * p1 + c * p2
+        momentum = px, py, pi + x * py - y * px
+        return momentum if ops is SCALAR else np.stack(momentum, axis=-1)
 
     def check_momentum(self, y, momentum0):
         """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
@@ -284,30 +307,31 @@ class KozlovShellEnv(TaskEnv):
 
     def distance(self, s, ops=SCALAR):
         """From the shell's centre to the target, m."""
-        return ops.hypot(s.target[..., 0] - s.pose[..., 0], s.target[..., 1] - s.pose[..., 1])
+        (x, y, _), (x_target, y_target) = _components(s.pose), _components(s.target)
+        return ops.hypot(x_target - x, y_target - y)
 
     def reward(self, before, after, info, ops=SCALAR):
         return (self.distance(before, ops) - info["distance"]) / self.success_radius - TIME_COST
 
     def observe(self, s, ops=SCALAR):
-        pose, target = s.pose, s.target
-        c, sin = ops.cos(pose[..., 2]), ops.sin(pose[..., 2])
-        dx, dy = target[..., 0] - pose[..., 0], target[..., 1] - pose[..., 1]
+        (x, y, theta), (x_target, y_target) = _components(s.pose), _components(s.target)
+        c, sin = ops.cos(theta), ops.sin(theta)
+        dx, dy = x_target - x, y_target - y
         body_target = [ops.clip(c * dx + sin * dy, -TARGET_BOUND, TARGET_BOUND)]
         body_target.append(ops.clip(-sin * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
-        scaled_u = s.u / self.u_max
-        scaled_momentum = np.clip(s.momentum / self.momentum_scale, -MOMENTUM_BOUND, MOMENTUM_BOUND)
-        parts = [*body_target, c, sin, scaled_u[..., 0], scaled_u[..., 1]]
-        return ops.pack(parts + [scaled_momentum[..., i] for i in range(3)])
+        scaled_u = [u / bound for u, bound in zip(_components(s.u), self.u_bounds)]
+        momentum = zip(_components(s.momentum), self.momentum_bounds)
+        scaled_momentum = [ops.clip(p / scale, -MOMENTUM_BOUND, MOMENTUM_BOUND) for p, scale in momentum]
+        return ops.pack([*body_target, c, sin, *scaled_u, *scaled_momentum])
 
     def describe(self, s, ops=SCALAR):
         x, y, theta = (ops.real(s.pose[..., i]) for i in range(3))
         distance = self.distance(s, ops)
         state = {"x": x, "y": y, "theta": theta, "u": ops.vector(s.u), "momentum": ops.vector(s.momentum), "t": s.t}
-        spatial_momentum = self.full_system.spatial_momentum(np.concatenate([s.pose, s.momentum], -1))
+        spatial_momentum = self.spatial_momentum(s, ops)
         return {
             "state": state,
-            "spatial_momentum": ops.vector(spatial_momentum),
+            "spatial_momentum": spatial_momentum,
             "target": ops.vector(s.target),
             "distance": distance,
             "model": ops.where(s.full, "full", "reduced"),
@@ -335,6 +359,21 @@ class KozlovShellVectorEnv(TaskVectorEnv):
             segments = [(s.u[rest], u_dot[rest], env.dt)]
             y[rest, :3] = run_segments(self.stepper, env.reduced_system, s.pose[rest], segments)[0]
         return ShellState(y[:, :3], y[:, 3:], u_cmd, s.target, s.t + env.dt, s.full, s.momentum0)
+
+
+def _components(a):
+    """The components along the last axis: floats of one state's array, columns of a batch's."""
+    return a.tolist() if a.ndim == 1 else [a[..., i] for i in range(a.shape[-1])]
+
+
+@functools.cache
+def shell_rule(system, u_max, dt, atol):
+    """The Lie-group step's rule (pieces, points) for the shell's reduced model: the cheapest that meets atol on
+    every step the env admits, judged on the straight motions in one step between any two of the box's corners,
+    edge midpoints and centre (corner to corner the fastest and the worst); see `connenv.core.lie.fixed_rule`."""
+    grid = [np.array([i * u_max[0], j * u_max[1]]) for i in (-1, 0, 1) for j in (-1, 0, 1)]
+    segments = [(a, (b - a) / dt, dt) for a in grid for b in grid if np.any(a != b)]
+    return fixed_rule(system, segments, atol)
 
 
 def _check_b(b, a):

@@ -30,6 +30,7 @@ States carry their coordinates on the last axis; everything broadcasts over lead
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -136,10 +137,52 @@ class ReducedKozlovShell(KozlovShell):
         return np.linalg.solve(self.locked_inertia(u), self.coupling(u))
 
     def group_velocity(self, u, u_dot):
-        """ξ = −A(u) u̇ = −I⁻¹ C u̇ in closed form, as components (v₁, v₂, ω): floats for one u, arrays over rows."""
-        if np.ndim(u) == 1:
-            return self._body_velocity((0.0, 0.0, 0.0), tuple(u.tolist()), tuple(u_dot.tolist()))
-        return self._body_velocity((0.0, 0.0, 0.0), _split(u), _split(u_dot))
+        """ξ = −A(u) u̇ = −I⁻¹ C u̇ in closed form, as components (v₁, v₂, ω): floats for one u (a tuple of floats or
+        a 1-D array), arrays over rows for a batch (..., 2). With μ = 0 in `_body_velocity`,
+
+            ω = (b′ u₂ u̇₁ − a′ u₁ u̇₂) / (c + a′ u₁² + b′ u₂²),   v₁ = m (u₂ ω − u̇₁)/α,   v₂ = −m (u₁ ω + u̇₂)/β,
+
+        a′ = m (1 − m/β), b′ = m (1 − m/α), c = J + λ₃, α = M + m + λ₁, β = M + m + λ₂."""
+        if isinstance(u, np.ndarray):
+            u, u_dot = (tuple(u.tolist()), tuple(u_dot.tolist())) if u.ndim == 1 else (_split(u), _split(u_dot))
+        (u1, u2), (u1_dot, u2_dot) = u, u_dot
+        m_alpha, m_beta, a_, b_, c = self._connection_constants
+        omega = (b_ * u2 * u1_dot - a_ * u1 * u2_dot) / (c + a_ * u1 * u1 + b_ * u2 * u2)
+        return m_alpha * (u2 * omega - u1_dot), -m_beta * (u1 * omega + u2_dot), omega
+
+    def segment_velocity(self, u, u_dot, t):
+        """ξ at u + t u̇ over a batch, components of shape t.shape: u, u̇ of shape (N, 2), t (nodes, N) or (nodes, 1).
+        Along the straight path group_velocity's ω is a rational function of t,
+
+            ω(t) = (n₀ + n₁ t) / (C₀ + t (B + A t)),   n₀ = b′ u₂ u̇₁ − a′ u₁ u̇₂,   n₁ = (b′ − a′) u̇₁ u̇₂,
+            C₀ = c + a′ u₁² + b′ u₂²,   B = 2 (a′ u₁ u̇₁ + b′ u₂ u̇₂),   A = a′ u̇₁² + b′ u̇₂²,
+
+        whose coefficients are per row, so that few operations run over the nodes."""
+        m_alpha, m_beta, a_, b_, c = self._connection_constants
+        (u1, u2), (d1, d2) = np.ascontiguousarray(u.T), np.ascontiguousarray(u_dot.T)
+        denominator = (a_ * d1 * d1 + b_ * d2 * d2) * t  # in place over the nodes: see se2_body_flow
+        denominator += 2.0 * (a_ * u1 * d1 + b_ * u2 * d2)
+        denominator *= t
+        denominator += c + a_ * u1 * u1 + b_ * u2 * u2
+        omega = (b_ - a_) * d1 * d2 * t
+        omega += b_ * u2 * d1 - a_ * u1 * d2
+        omega /= denominator
+        v1 = (m_alpha * d2) * t
+        v1 += m_alpha * u2
+        v1 *= omega
+        v1 -= m_alpha * d1
+        v2 = np.multiply(-m_beta * d1, t, out=denominator)
+        v2 -= m_beta * u1
+        v2 *= omega
+        v2 -= m_beta * d2
+        return v1, v2, omega
+
+    @functools.cached_property
+    def _connection_constants(self):
+        """(m/α, m/β, a′, b′, c) of group_velocity."""
+        alpha, beta, _ = self._diagonal(0.0, 0.0)
+        m, lam3 = self.mass, self.added_masses[2]
+        return m / alpha, m / beta, m * (1.0 - m / beta), m * (1.0 - m / alpha), self.J + lam3
 
     def vector_field(self, y, u, u_dot):
         """Reduced model: ẏ for y = (x, y, θ), the connection ξ = −I⁻¹ C u̇ reconstructed on SE(2)."""
