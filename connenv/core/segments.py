@@ -60,7 +60,7 @@ def check_drift(stepper, quantity: str, drift, bound: float, unit: str = "", nor
                 f"{norm[i]:.3g}{unit}"
             )
         return
-    worst = abs(drift) if np.ndim(drift) == 0 else np.max(np.abs(drift))
+    worst = abs(drift) if isinstance(drift, float) or np.ndim(drift) == 0 else np.max(np.abs(drift))
     if not worst <= bound:
         raise StepperError(f"{stepper} diverged: |{quantity}| = {worst:.3g}{unit} > {bound:.3g}{unit}")
 

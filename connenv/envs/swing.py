@@ -194,12 +194,12 @@ class SwingEnv(TaskEnv):
         return self.at(y, r, 0.0, 0.0)
 
     def advance(self, s, r_cmd):
-        segments = control_segments(s.r, r_cmd, self.dt, self.max_radial_speed)
-        segments = [(np.array([r]), np.array([r_dot]), tau) for r, r_dot, tau in segments]
+        cuts = control_segments(s.r, r_cmd, self.dt, self.max_radial_speed)
+        segments = [(np.array([r]), np.array([r_dot]), tau) for r, r_dot, tau in cuts]
         y, change = run_segments(self.stepper, self.system, s.y, segments, self._held_energy)
         self.check_energy_error(s.energy_error + change)
-        r, r_dot, tau = segments[-1]
-        return self.at(y, float(r[0] + r_dot[0] * tau), s.t + self.dt, s.energy_error + change)
+        r, r_dot, tau = cuts[-1]
+        return self.at(y, r + r_dot * tau, s.t + self.dt, s.energy_error + change)
 
     def _held_energy(self, y, r, r_dot):
         """E = p²/(2 m r²) − m g r cos θ where the radius is held, 0 where it moves; on Python floats (the
@@ -239,7 +239,7 @@ class SwingEnv(TaskEnv):
         return ops.log(lift_after / lift_before) - TIME_COST
 
     def observe(self, s, ops=SCALAR):
-        theta, p, r = s.y[..., 0], s.y[..., 1], s.r
+        theta, p, r = (*s.y.T, s.r)  # numpy scalars for one state (faster than y[..., 0], a 0-d array)
         r_mid, r_half = 0.5 * (self.r_max + self.r_min), 0.5 * (self.r_max - self.r_min)
         bound = self.obs_high[2]
         speed = ops.clip(p / (self.system.mass * r**2) / self.theta_dot_scale, -bound, bound)
