@@ -135,8 +135,7 @@ CLONES = {"pickle": lambda env: pickle.loads(pickle.dumps(env)), "deepcopy": cop
     [
         "after reset",
         "after steps",
-        pytest.param("after render", marks=pytest.mark.xfail(strict=True, reason="issue 16: a rendered env holds a"
-                                                             " module (pygame) and cannot be pickled or copied")),
+        "after render",
     ],
 )
 def test_a_copy_continues_identically(case, clone, when):

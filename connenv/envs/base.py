@@ -110,6 +110,11 @@ class RenderedEnv(gym.Env):
             self._renderer = self._make_renderer()
         return self._draw(self._renderer)
 
+    def __getstate__(self):
+        """The env without its renderer (a pygame window or surface, which cannot be pickled or copied): a copy
+        or an unpickled env makes its own on its first render."""
+        return {**self.__dict__, "_renderer": None}
+
     def close(self):
         if self._renderer is not None:
             self._renderer.close()
