@@ -57,7 +57,7 @@ def test_string_and_complex_actions_are_refused_naming_the_action(env_id):
     size = env.action_space.shape[0]
     with pytest.raises(ValueError, match=r"action=.*'a'.* must be real numbers"):
         env.step(["a"] * size)
-    with pytest.raises(ValueError, match=r"action=.*1j.* is complex"):
+    with pytest.raises(ValueError, match=r"action=.*j\]\) is complex"):
         env.step(np.full(size, 0.5 + 1j))
     vector = gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", **make(env_id).spec.kwargs)
     vector.reset(seed=0)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import inspect
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -23,18 +24,39 @@ def check_number(name: str, value, low: float = -math.inf, high: float = math.in
     return value
 
 
+def check_mapping(name: str, given):
+    """Raise ValueError if ``given`` is not a mapping (a dict of named values)."""
+    if not isinstance(given, Mapping):
+        raise ValueError(f"{name}={given!r} must be a mapping (a dict of named values)")
+
+
 def check_keys(name: str, given, allowed):
-    """Raise ValueError if the mapping ``given`` has keys outside ``allowed``."""
+    """Raise ValueError if ``given`` is not a mapping or has keys outside ``allowed``."""
+    check_mapping(name, given)
     unknown = set(given) - set(allowed)
     if unknown:
         raise ValueError(f"unknown key(s) {sorted(unknown)} in {name}; valid keys: {sorted(allowed)}")
+
+
+def init_parameters(env_cls) -> list[str]:
+    """The named parameters of env_cls.__init__, and of its bases' where it passes ``**kwargs`` on to them (the
+    first ``__init__`` whose ``**`` collects the stepper options ends the chain)."""
+    names = []
+    for cls in env_cls.__mro__:
+        if "__init__" not in vars(cls):
+            continue
+        params = inspect.signature(cls.__init__).parameters.values()
+        names += [p.name for p in params if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL) and p.name != "self"]
+        if not any(p.kind is p.VAR_KEYWORD and p.name != "stepper_options" for p in params):
+            break
+    return list(dict.fromkeys(names))
 
 
 def check_stepper_options(env_name: str, options, env_cls):
     """Raise ValueError for make kwargs that are neither the env's parameters nor stepper options."""
     unknown = set(options) - set(STEPPER_OPTIONS)
     if unknown:
-        params = [p for p in inspect.signature(env_cls.__init__).parameters if p not in ("self", "stepper_options")]
+        params = init_parameters(env_cls)
         raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {params + list(STEPPER_OPTIONS)}")
 
 
@@ -45,6 +67,14 @@ def check_action(action, space):
 
 def finite_action(action, space):
     """The action as a float array of the space's shape, finite, else ValueError; not clipped."""
+    try:
+        kind = np.asarray(action).dtype.kind
+    except (TypeError, ValueError):  # a ragged sequence
+        kind = "O"
+    if kind == "c":
+        raise ValueError(f"action={action!r} is complex; expected real numbers in [{space.low}, {space.high}]")
+    if kind not in "biuf":
+        raise ValueError(f"action={action!r} must be real numbers in [{space.low}, {space.high}], shape {space.shape}")
     a = np.asarray(action, dtype=np.float64)
     if a.shape != space.shape:
         raise ValueError(f"action has shape {a.shape}; expected {space.shape} (action={action!r})")

@@ -25,7 +25,7 @@ import gymnasium as gym
 import numpy as np
 
 from connenv.core.steppers import StepperError
-from connenv.core.validation import check_action
+from connenv.core.validation import check_action, check_mapping
 
 SCALAR = SimpleNamespace(
     sin=math.sin,
@@ -136,6 +136,7 @@ class TaskEnv(RenderedEnv):
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
+        check_mapping("reset options", options or {})
         self.state = self.start(dict(options or {}))
         return self.observe(self.state), self.describe(self.state)
 

@@ -161,8 +161,8 @@ class ConnectionEnv(TaskEnv):
         check_keys("reset options", options, {"state"})
         given = dict(self.task.reset(self.np_random)) if self.task is not None else {}
         check_keys("the task's reset state", given, {"g", "s"})
+        check_keys("options['state']", options.get("state", {}), {"g", "s"})
         given.update(options.get("state", {}))
-        check_keys("options['state']", given, {"g", "s"})
         g = self._check_g(given["g"]) if "g" in given else np.array(self.group.identity())
         return ConnectionState(g, self._check_s(given["s"]) if "s" in given else self.start_shape(), 0.0)
 

@@ -189,7 +189,7 @@ class KapitzaPendulumEnv(TaskEnv):
         self.v_max = check_number("v_max", v_max, 0.0, open_low=True)
         self.a_max = check_number("a_max", a_max, 0.0, length, open_low=True, open_high=True)
         self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
-        check_stepper_options(type(self).__name__, stepper_options, KapitzaPendulumEnv)
+        check_stepper_options(type(self).__name__, stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
 
         self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / length)
