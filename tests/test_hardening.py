@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import pickle
+import re
 
 import gymnasium as gym
 import numpy as np
@@ -25,7 +26,10 @@ def make(env_id, **extra):
 # -- item 2: a rendered env pickles and deep-copies ------------------------------------------------------------
 
 
-@pytest.mark.parametrize("clone", [copy.deepcopy, lambda env: pickle.loads(pickle.dumps(env))], ids=["deepcopy", "pickle"])
+CLONES = {"deepcopy": copy.deepcopy, "pickle": lambda env: pickle.loads(pickle.dumps(env))}
+
+
+@pytest.mark.parametrize("clone", CLONES.values(), ids=CLONES.keys())
 def test_a_rendered_env_clones_without_its_renderer_and_the_clone_renders_anew(clone):
     env = gym.make("connenv/Swing-v0", render_mode="rgb_array")
     env.reset(seed=0)
@@ -80,3 +84,39 @@ def test_an_unknown_kwarg_lists_every_valid_name_of_the_class_and_its_bases(env_
     for name in names:
         assert f"'{name}'" in valid
     assert "'kwargs'" not in valid and "'stepper_options'" not in valid
+
+
+# -- item 3: a negative seed is an argparse error --------------------------------------------------------------
+
+
+def test_a_negative_seed_is_a_usage_error_of_evaluate_and_train(train, capsys):
+    from agents import evaluate
+
+    for parse in (evaluate.parse_args, train.parse_args):
+        for flag in ("--seed", "--eval-seed") if parse is train.parse_args else ("--seed",):
+            with pytest.raises(SystemExit) as exit_:
+                parse([flag, "-1"])
+            assert exit_.value.code == 2
+            assert f"argument {flag}: '-1' is not a seed" in capsys.readouterr().err
+    assert evaluate.parse_args(["--seed", "0"]).seed == 0
+
+
+# -- item 4: the benchmark's command line lists its subcommands ------------------------------------------------
+
+
+def test_bench_help_lists_every_subcommand_and_no_arguments_prints_it(capsys):
+    from connenv import bench
+
+    bench.main([])
+    listing = capsys.readouterr().out
+    for command in ("all", "precision", "stability", "steppers", "generic"):
+        assert re.search(rf"^    {command}\b", listing, re.MULTILINE)
+    with pytest.raises(SystemExit):
+        bench.main(["--help"])
+    assert capsys.readouterr().out == listing
+    with pytest.raises(SystemExit) as exit_:
+        bench.main(["nosuch"])
+    assert exit_.value.code == 2 and "invalid choice: 'nosuch'" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        bench.main(["precision", "--help"])
+    assert "--quick" in capsys.readouterr().out

@@ -57,7 +57,8 @@ def check_stepper_options(env_name: str, options, env_cls):
     unknown = set(options) - set(STEPPER_OPTIONS)
     if unknown:
         params = init_parameters(env_cls)
-        raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {params + list(STEPPER_OPTIONS)}")
+        valid = params + list(STEPPER_OPTIONS)
+        raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {valid}")
 
 
 def check_action(action, space):
@@ -74,7 +75,8 @@ def finite_action(action, space):
     if kind == "c":
         raise ValueError(f"action={action!r} is complex; expected real numbers in [{space.low}, {space.high}]")
     if kind not in "biuf":
-        raise ValueError(f"action={action!r} must be real numbers in [{space.low}, {space.high}], shape {space.shape}")
+        expected = f"real numbers in [{space.low}, {space.high}] of shape {space.shape}"
+        raise ValueError(f"action={action!r} must be {expected}")
     a = np.asarray(action, dtype=np.float64)
     if a.shape != space.shape:
         raise ValueError(f"action has shape {a.shape}; expected {space.shape} (action={action!r})")
