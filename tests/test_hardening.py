@@ -4,17 +4,24 @@ SB3's checker and HER, and the test extra."""
 
 from __future__ import annotations
 
+import ast
 import copy
+import importlib.metadata
 import pickle
 import re
+import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import examples
 
+ROOT = Path(__file__).resolve().parents[1]
 IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
 
 
@@ -120,3 +127,47 @@ def test_bench_help_lists_every_subcommand_and_no_arguments_prints_it(capsys):
     with pytest.raises(SystemExit):
         bench.main(["precision", "--help"])
     assert "--quick" in capsys.readouterr().out
+
+
+# -- item 9: the test extra installs what the tests that do not train import -----------------------------------
+
+
+def imported_modules(path):
+    """The top-level names of every module a file imports, at module level or inside functions."""
+    tree = ast.parse(path.read_text())
+    names = {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
+    names |= {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.level == 0}
+    return {name.split(".")[0] for name in names}
+
+
+def closure(requirements):
+    """The normalized names of the distributions these requirements install, their dependencies included (extras
+    of dependencies left out)."""
+    seen, todo = set(), [Requirement(r) for r in requirements]
+    while todo:
+        requirement = todo.pop()
+        name = canonicalize_name(requirement.name)
+        if name in seen or (requirement.marker and not requirement.marker.evaluate({"extra": ""})):
+            continue
+        seen.add(name)
+        todo += [Requirement(r) for r in importlib.metadata.requires(requirement.name) or []]
+    return seen
+
+
+def test_the_test_extra_installs_every_module_the_package_and_the_tests_that_do_not_train_import():
+    tomllib = pytest.importorskip("tomllib")  # Python ≥ 3.11
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    installed = closure(project["dependencies"] + project["optional-dependencies"]["test"])
+    files = [*ROOT.glob("connenv/**/*.py"), *ROOT.glob("agents/**/*.py"), *ROOT.glob("tests/**/*.py")]
+    modules = set().union(*(imported_modules(f) for f in files if f.name != "test_training.py"))
+    local = {"connenv", "agents", "golden", "train", "conftest"}
+    third_party = modules - set(sys.stdlib_module_names) - local
+    providers = importlib.metadata.packages_distributions()
+    missing = {m for m in third_party if not {canonicalize_name(d) for d in providers.get(m, [m])} & installed}
+    assert not missing, f"imported by the package or the tests but not installed by .[test]: {sorted(missing)}"
+
+
+def test_ci_runs_the_readmes_test_command():
+    command = 'pip install "torch==2.13.0" -e ".[train,test]" && python -m pytest'
+    assert f"\n    {command}\n" in (ROOT / "README.md").read_text()
+    assert (ROOT / ".ci" / "run").read_text().splitlines()[-1] == command
