@@ -171,3 +171,31 @@ def test_ci_runs_the_readmes_test_command():
     command = 'pip install "torch==2.13.0" -e ".[train,test]" && python -m pytest'
     assert f"\n    {command}\n" in (ROOT / "README.md").read_text()
     assert (ROOT / ".ci" / "run").read_text().splitlines()[-1] == command
+
+
+# -- item 8: the goal env under SB3's checker and HER ----------------------------------------------------------
+
+
+def test_the_goal_env_passes_sb3s_checker_unwrapped_and_trains_with_her():
+    """SB3's checker calls compute_reward on the env it is given, which Gymnasium's wrappers do not forward (the
+    docstring says so); HER reaches it through the vec env's env_method, and relabels with it."""
+    from stable_baselines3 import SAC, HerReplayBuffer
+    from stable_baselines3.common.env_checker import check_env
+
+    from connenv.envs.rolling_ball import RollingBallGoalEnv
+
+    env = gym.make("connenv/RollingBallGoal-v0")
+    with pytest.raises(AttributeError, match="compute_reward"):
+        check_env(env)
+    check_env(env.unwrapped)
+    assert "check_env(env.unwrapped)" in RollingBallGoalEnv.__doc__ and "env_method" in RollingBallGoalEnv.__doc__
+    kwargs = {"n_sampled_goal": 4, "goal_selection_strategy": "future"}
+    short = gym.make("connenv/RollingBallGoal-v0", max_episode_steps=20)
+    model = SAC("MultiInputPolicy", short, replay_buffer_class=HerReplayBuffer, replay_buffer_kwargs=kwargs,
+                learning_starts=50, batch_size=32, policy_kwargs={"net_arch": [16]}, seed=0)
+    model.learn(150)
+    batch = model.replay_buffer.sample(256)
+    goals = (batch.next_observations["achieved_goal"], batch.observations["desired_goal"])
+    expected = env.unwrapped.compute_reward(*(g.cpu().numpy() for g in goals), None)
+    assert np.array_equal(batch.rewards.cpu().numpy()[:, 0], expected)
+    assert 0 < np.count_nonzero(expected == 0.0) < len(expected)  # relabelled goals reached, and others not

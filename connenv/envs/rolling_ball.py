@@ -343,6 +343,11 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     Everything else is RollingBall-v0's; `compute_terminated` is success, `compute_truncated` False (the time
     limit truncates).
+
+    `compute_reward` is a method of this env, not of the wrappers `gym.make` puts around it: Gymnasium 1.x
+    wrappers no longer forward unknown attributes. HER is unaffected (SB3's vec envs reach it through
+    `env_method`, which unwraps), but SB3's `check_env(gym.make(...))` raises AttributeError on it: check the env
+    itself, `check_env(env.unwrapped)`.
     """
 
     def _observation_space(self):
