@@ -27,7 +27,7 @@ IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
 
 def make(env_id, **extra):
     kwargs = examples.MAKE_KWARGS[env_id]() if env_id in examples.MAKE_KWARGS else {}
-    return gym.make(env_id, **kwargs, **extra)
+    return gym.make(env_id, **{**kwargs, **extra})
 
 
 # -- item 2: a rendered env pickles and deep-copies ------------------------------------------------------------
@@ -199,3 +199,52 @@ def test_the_goal_env_passes_sb3s_checker_unwrapped_and_trains_with_her():
     expected = env.unwrapped.compute_reward(*(g.cpu().numpy() for g in goals), None)
     assert np.array_equal(batch.rewards.cpu().numpy()[:, 0], expected)
     assert 0 < np.count_nonzero(expected == 0.0) < len(expected)  # relabelled goals reached, and others not
+
+
+# -- item 1: reset states have physical bounds, refused at reset -----------------------------------------------
+
+HUGE_STATES = [  # (env_id, reset options, the key and range the message names)
+    ("connenv/KozlovShell-v0", {"state": {"momentum": (1e5, 0, 0)}}, r"state momentum\[0\]=100000.0 .*\[-"),
+    ("connenv/KozlovShell-v0", {"state": {"x": 1.5e308}}, r"state x=1.5e\+308 .*\[-100.0, 100.0\]"),
+    ("connenv/KozlovShell-v0", {"target": (-1.5e308, 0)}, r"target\[0\]=-1.5e\+308 .*\[-100.0, 100.0\]"),
+    ("connenv/KozlovShell-v0", {"state": {"theta": 1e10}}, r"state theta=10000000000.0 .*\[-6.28"),
+    ("connenv/RollingBallPose-v0", {"state": {"x": 1.7e308, "y": 1.7e308}}, r"state x=1.7e\+308 .*\[-37.69"),
+    ("connenv/Skier-v0", {"state": {"x_dot": 1e6}}, r"state x_dot=1000000.0 .*\[-"),
+    ("connenv/Skier-v0", {"state": {"p": 1e200}}, r"state p=1e\+200 .*\[-"),
+    ("connenv/Swing-v0", {"state": {"theta": 1e10}}, r"state theta=10000000000.0 .*\[-6.28"),
+    ("connenv/Swing-v0", {"state": {"p": 1e200}}, r"state p=1e\+200 .*\[-"),
+    ("connenv/KapitzaPendulum-v0", {"state": {"theta": 1e10}}, r"state theta=10000000000.0 .*\[-6.28"),
+    ("connenv/KapitzaPendulum-v0", {"state": {"theta_dot": 1e6}}, r"state theta_dot=1000000.0 .*\[-31.3"),
+    ("connenv/KapitzaSwingUp-v0", {"state": {"p": 1e200}}, r"state p=1e\+200 .*\[-"),
+    ("connenv/ActiveConstraint-v0", {"state": {"p": [1e200]}}, r"state p\[0\]=1e\+200 .*\[-1000.0, 1000.0\]"),
+    ("connenv/Connection-v0", {"state": {"s": [-5e167]}}, r"state s\[0\]=-5e\+167 .*\[-1000.0, 1000.0\]"),
+]
+
+
+@pytest.mark.parametrize(("env_id", "options", "message"), HUGE_STATES, ids=[f"{c[0][8:]}-{c[1]}" for c in HUGE_STATES])
+def test_a_reset_state_beyond_its_physical_bounds_is_refused_naming_key_value_and_range(env_id, options, message):
+    with pytest.raises(ValueError, match=message):
+        make(env_id).reset(options=options)
+
+
+@pytest.mark.parametrize("env_id", ["connenv/ActiveConstraint-v0"])
+def test_a_finite_bound_of_a_users_coordinate_beyond_1e3_is_refused(env_id):
+    with pytest.raises(ValueError, match=r"u_low=-1e\+307.* within ±1000.0"):
+        make(env_id, u_low=-1e307)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "state"),
+    [
+        ("connenv/Swing-v0", {"theta": 2 * np.pi, "p": -(2.0**2) * (2.0 / 1.6) ** 2 * 2 * (9.81 / 1.6) ** 0.5}),
+        ("connenv/KapitzaPendulum-v0", {"theta": -2 * np.pi, "theta_dot": 10 * 9.81**0.5}),
+        ("connenv/KozlovShell-v0", {"x": 100.0, "y": -100.0, "momentum": (0.0, 0.0, 0.01)}),
+        ("connenv/RollingBallPose-v0", {"x": 12 * np.pi, "y": -12 * np.pi}),
+    ],
+)
+def test_a_reset_state_at_its_bounds_is_accepted_and_steps_finite(env_id, state):
+    env = make(env_id)
+    env.reset(seed=0, options={"state": state})
+    for _ in range(5):
+        obs, reward, *_, info = env.step(env.action_space.sample())
+        assert np.isfinite(obs).all() and np.isfinite(reward) and np.isfinite(info["state"]["t"])

@@ -24,6 +24,15 @@ def check_number(name: str, value, low: float = -math.inf, high: float = math.in
     return value
 
 
+ANGLE_BOUND = 2.0 * math.pi  # |an angle| given at reset: every configuration lies within it
+MAGNITUDE_BOUND = 1e3  # |a coordinate or momentum of a user's system| given at reset, or a finite bound of one
+
+
+def check_angle(name: str, value) -> float:
+    """An angle given at reset, rad: a finite real in [−2π, 2π] (every configuration lies within it)."""
+    return check_number(name, value, -ANGLE_BOUND, ANGLE_BOUND)
+
+
 def check_mapping(name: str, given):
     """Raise ValueError if ``given`` is not a mapping (a dict of named values)."""
     if not isinstance(given, Mapping):
@@ -96,13 +105,15 @@ def check_vector(name: str, value, size: int, low=-math.inf, high=math.inf):
         raise ValueError(f"{name}={value!r} must be a sequence of {size} finite real numbers")
     low, high = np.broadcast_to(low, (size,)), np.broadcast_to(high, (size,))
     for i in np.flatnonzero((vector < low) | (vector > high)):
-        raise ValueError(f"{name}[{i}]={vector[i]!r} is out of range: must be in [{low[i]}, {high[i]}]")
+        interval = f"[{float(low[i])}, {float(high[i])}]"
+        raise ValueError(f"{name}[{i}]={float(vector[i])!r} is out of range: must be in {interval}")
     return vector
 
 
 def check_bounds(low_name: str, low, high_name: str, high, size: int | None = None):
     """(low, high) as float arrays of one shape (k,), k ≥ 1 (with size, a number broadcasts to (size,)), low < high
-    in every coordinate, ±inf allowed for no bound, NaN not; else ValueError naming both as given."""
+    in every coordinate, finite ones within ±MAGNITUDE_BOUND, ±inf allowed for no bound, NaN not; else ValueError
+    naming both as given."""
     given = f"{low_name}={low!r}, {high_name}={high!r}"
     try:
         lows, highs = (np.array(v, dtype=float) for v in (low, high))
@@ -117,6 +128,9 @@ def check_bounds(low_name: str, low, high_name: str, high, size: int | None = No
         raise ValueError(f"{given} hold NaN; give numbers (±inf for no bound)")
     if not np.all(lows < highs):
         raise ValueError(f"{low_name}={low!r} must be below {high_name}={high!r} in every coordinate")
+    finite = np.concatenate([lows, highs])
+    if np.any(np.abs(finite[np.isfinite(finite)]) > MAGNITUDE_BOUND):
+        raise ValueError(f"{given}: a finite bound must lie within ±{MAGNITUDE_BOUND} (±inf for no bound)")
     return lows, highs
 
 

@@ -11,7 +11,14 @@ from connenv.core.batched import batched
 from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import Scipy, make_stepper
-from connenv.core.validation import check_bounds, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_bounds,
+    check_keys,
+    check_number,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
@@ -122,7 +129,8 @@ class ActiveConstraintEnv(TaskEnv):
     Default q = 0, p = 0, u at the midpoint of finite bounds (0 on a coordinate with an infinite bound), t = 0.
     With `task`, `task.reset(np_random)` returns a state dict with any of q, p, u (the rest default).
     `reset(options={"state": {...}})` sets any of `q`, `p`, `u` exactly (arrays of n, n, m finite numbers; u
-    within its bounds).
+    within its bounds; every entry within ±1e3, beyond which a user's system may outrun any stepper), else
+    ValueError. Finite bounds `u_low`, `u_high` lie within ±1e3 too.
 
     ## Episode End
 
@@ -286,6 +294,7 @@ class ActiveConstraintEnv(TaskEnv):
         for key, value in state.items():
             value = np.ravel(value) if np.ndim(value) == 0 else value  # a number for a single coordinate
             bounds = (self.u_low, self.u_high) if key == "u" else (-np.inf, np.inf)
+            bounds = np.maximum(bounds[0], -MAGNITUDE_BOUND), np.minimum(bounds[1], MAGNITUDE_BOUND)
             values[key] = check_vector(f"state {key}", value, self.m if key == "u" else self.n, *bounds)
         return values
 

@@ -11,7 +11,14 @@ from gymnasium import spaces
 from connenv.core.lie import FRAMES, GROUPS, Connection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
 from connenv.core.steppers import StepperError, make_stepper
-from connenv.core.validation import check_bounds, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_bounds,
+    check_keys,
+    check_number,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
@@ -72,7 +79,8 @@ class ConnectionEnv(TaskEnv):
     g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0. With
     a `task`: `task.reset(np_random)` returns a dict with any of "g" and "s" (np_random is the env's generator: all
     randomness from it). `reset(options={"state": {"g": ..., "s": ...}})` sets either exactly (checked: g on its
-    group to 1e-9, s of shape (k,) within the bounds).
+    group to 1e-9, s of shape (k,) within the bounds, every entry of both within ±1e3), else ValueError. Finite
+    shape bounds lie within ±1e3 too.
 
     ## Episode End
 
@@ -193,13 +201,16 @@ class ConnectionEnv(TaskEnv):
             g = None
         if g is None or g.shape != shape or not np.all(np.isfinite(g)):
             raise ValueError(f"state g={value!r} must be a finite array of shape {shape} for group {self.group.name}")
+        if np.any(np.abs(g) > MAGNITUDE_BOUND):
+            raise ValueError(f"state g={value!r} has an entry beyond ±{MAGNITUDE_BOUND}")
         off = float(self.group.off_group(g))
         if not off <= ON_GROUP:
             raise ValueError(f"state g={value!r} is {off:.3g} off {self.group.name}; it must be on it to {ON_GROUP}")
         return self.group.coordinates(g)
 
     def _check_s(self, value):
-        return check_vector("state s", value, self.low.size, self.low, self.high)
+        low, high = np.maximum(self.low, -MAGNITUDE_BOUND), np.minimum(self.high, MAGNITUDE_BOUND)
+        return check_vector("state s", value, self.low.size, low, high)
 
     # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 

@@ -11,7 +11,7 @@ from gymnasium import spaces
 
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import check_angle, check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kapitza import KapitzaPendulum
@@ -110,8 +110,9 @@ class KapitzaPendulumEnv(TaskEnv):
     ## Starting State
 
     θ₀ = π + uniform(−0.2, 0.2) rad (np_random), at rest, pivot at rest at the centre, t = 0.
-    `reset(options={"state": {...}})` sets any of `theta`, `theta_dot` or `p`, `u` (2), `u_dot` (2) exactly;
-    u and u̇ are zero along unactuated axes, |uᵢ| ≤ a_max and |u̇ᵢ| ≤ v_max.
+    `reset(options={"state": {...}})` sets any of `theta`, `theta_dot` or `p`, `u` (2), `u_dot` (2) exactly:
+    θ in [−2π, 2π], |θ̇| ≤ 10√(g/l) (the observed bound; p is bounded through θ̇), u and u̇ zero along
+    unactuated axes, |uᵢ| ≤ a_max and |u̇ᵢ| ≤ v_max. A value outside is refused (ValueError).
 
     ## Episode End
 
@@ -256,11 +257,13 @@ class KapitzaPendulumEnv(TaskEnv):
             raise ValueError("options['state'] gives both theta_dot and p; give one of them")
         u = self._pivot_vector("u", state.get("u", (0.0, 0.0)), self.a_max)
         u_dot = self._pivot_vector("u_dot", state.get("u_dot", (0.0, 0.0)), self.v_max)
-        theta = check_number("state theta", state.get("theta", theta))
-        if "p" in state:
-            p = check_number("state p", state["p"])
+        theta = check_angle("state theta", state.get("theta", theta))
+        bound = SPEED_BOUND * self.theta_dot_scale  # |θ̇| the observation holds
+        if "p" in state:  # p = m l² θ̇ + m l u̇·n: the same bound on θ̇
+            low, high = (float(self.system.momentum(np.float64(theta), v, u_dot)) for v in (-bound, bound))
+            p = check_number("state p", state["p"], low, high)
         else:
-            theta_dot = check_number("state theta_dot", state.get("theta_dot", 0.0))
+            theta_dot = check_number("state theta_dot", state.get("theta_dot", 0.0), -bound, bound)
             p = float(self.system.momentum(np.float64(theta), theta_dot, u_dot))
         return np.array([theta, p]), u, u_dot
 

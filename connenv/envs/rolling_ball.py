@@ -100,8 +100,9 @@ class RollingBallEnv(TaskEnv):
     ## Starting State
 
     R = I at the origin, t = 0, and R* uniform on SO(3) (scipy's `Rotation.random` on np_random).
-    `reset(options={"state": {"x", "y", "R"}, "target": R*})` sets any of them; R and R* must be rotation
-    matrices to 1e-9 (‖RᵀR − I‖, |det R − 1|), else ValueError: they are never re-orthonormalized.
+    `reset(options={"state": {"x", "y", "R"}, "target": R*})` sets any of them; x and y must lie in
+    [−12πρ, 12πρ] (RollingBallPose-v0's observed range), R and R* must be rotation matrices to 1e-9
+    (‖RᵀR − I‖, |det R − 1|), else ValueError: they are never re-orthonormalized.
 
     ## Episode End
 
@@ -219,8 +220,9 @@ class RollingBallEnv(TaskEnv):
     def _check_state(self, state):
         """(R, position) of options["state"]: R = I and the origin where not given."""
         check_keys("options['state']", state, {"x", "y", "R"})
-        x = check_number("state x", state.get("x", 0.0))
-        y = check_number("state y", state.get("y", 0.0))
+        bound = POSITION_BOUND * 4 * math.pi * self.system.radius  # the position the Pose env observes
+        x = check_number("state x", state.get("x", 0.0), -bound, bound)
+        y = check_number("state y", state.get("y", 0.0), -bound, bound)
         return (check_rotation("state R", state["R"]) if "R" in state else np.eye(3)), np.array([x, y])
 
     # -- task: one state (Python floats and one R), or a batch with ops=BATCH (the vector env) ----------------

@@ -101,8 +101,10 @@ class SkierEnv(TaskEnv):
 
     At rest with h = h_min, x₀ uniform on 0.5 ≤ |x₀ − x_b| ≤ 2.0 m (np_random),
     x_b the trail's lowest point (x = 0 on the valley). From there escape is
-    impossible at constant h. `reset(options={"state": {...}})` sets any of `x`,
-    `x_dot` or `p`, `h` exactly.
+    impossible at constant h. `reset(options={"state": {...}})` sets any of `x`
+    (in the trail's domain), `x_dot` (within the observed speed, |σẋ| ≤ 3 v*) or
+    `p` (the same bound times m (1 − κh)² σ²), `h` (in [h_min, h_max]) exactly; a
+    value outside is refused (ValueError).
 
     ## Episode End
 
@@ -266,11 +268,14 @@ class SkierEnv(TaskEnv):
             raise ValueError("options['state'] gives both x_dot and p; give one of them")
         x = check_number("state x", state.get("x", x), self.trail.lo, self.trail.hi)
         h = check_number("state h", state.get("h", self.h_min), self.h_min, self.h_max)
+        _, _, sigma, _, _, w, _ = self.system.geometry(x, h)
+        x_dot_bound = SPEED_BOUND * self.speed_scale / sigma  # |σẋ| the observation holds
         if "p" in state:
-            p = check_number("state p", state["p"])
+            p_bound = self.system.mass * w * w * x_dot_bound
+            p = check_number("state p", state["p"], -p_bound, p_bound)
         else:
-            w = self.system.geometry(x, h)[5]
-            p = self.system.mass * w * w * check_number("state x_dot", state.get("x_dot", 0.0))
+            x_dot = check_number("state x_dot", state.get("x_dot", 0.0), -x_dot_bound, x_dot_bound)
+            p = self.system.mass * w * w * x_dot
         return np.array([x, p]), h
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_angle, check_keys, check_number, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.swing import Swing
@@ -93,7 +93,9 @@ class SwingEnv(TaskEnv):
 
     θ₀ uniform on ±[0.05, 0.1] rad (np_random), θ̇₀ = 0, r = r_max, t = 0. A
     swing exactly at rest at the bottom cannot be pumped. `reset(options={"state":
-    {...}})` sets any of `theta`, `theta_dot` or `p`, `r` exactly.
+    {...}})` sets any of `theta` (in [−2π, 2π]), `theta_dot` (within the observed
+    bound, |θ̇| ≤ 2ρ² √(g/r_min)) or `p` (the same bound times m r²), `r` (in
+    [r_min, r_max]) exactly; a value outside is refused (ValueError).
 
     ## Episode End
 
@@ -219,13 +221,13 @@ class SwingEnv(TaskEnv):
         if "theta_dot" in state and "p" in state:
             raise ValueError("options['state'] gives both theta_dot and p; give one of them")
         r = check_number("state r", state.get("r", self.r_max), self.r_min, self.r_max)
-        theta = check_number("state theta", state.get("theta", theta))
+        theta = check_angle("state theta", state.get("theta", theta))
+        bound = self.obs_high[2] * self.theta_dot_scale  # |θ̇| the observation holds
         if "p" in state:
-            p = check_number("state p", state["p"])
+            p_bound = self.system.mass * r**2 * bound
+            p = check_number("state p", state["p"], -p_bound, p_bound)
         else:
-            p = self.system.mass * r**2 * check_number("state theta_dot", state.get("theta_dot", 0.0))
-        bound = self.obs_high[2] * self.theta_dot_scale
-        check_number("state theta_dot", p / (self.system.mass * r**2), -bound, bound)
+            p = self.system.mass * r**2 * check_number("state theta_dot", state.get("theta_dot", 0.0), -bound, bound)
         return np.array([theta, p]), r
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
