@@ -248,3 +248,23 @@ def test_a_reset_state_at_its_bounds_is_accepted_and_steps_finite(env_id, state)
     for _ in range(5):
         obs, reward, *_, info = env.step(env.action_space.sample())
         assert np.isfinite(obs).all() and np.isfinite(reward) and np.isfinite(info["state"]["t"])
+
+
+# -- item 7: KapitzaPendulum-v0's reward, on every step --------------------------------------------------------
+
+
+def test_kapitza_pendulums_reward_is_documented_on_every_step_and_keeps_its_documented_bounds():
+    from connenv.envs.kapitza import KapitzaPendulumEnv
+
+    env = gym.make("connenv/KapitzaPendulum-v0")
+    floor = 1 - (np.pi / 0.3) ** 2
+    assert "on every step" in KapitzaPendulumEnv.__doc__ and f"−{-floor:.1f}" in KapitzaPendulumEnv.__doc__
+    env.reset(seed=0)
+    _, reward, terminated, _, info = env.step([0.0])
+    assert 0 <= reward <= 1 and not terminated  # held
+    env.reset(options={"state": {"theta": np.pi + 0.299, "theta_dot": 3.0}})
+    _, reward, terminated, _, info = env.step([0.0])
+    assert terminated and floor < reward < 0  # the step that falls
+    env.reset(options={"state": {"theta": 2 * np.pi}})  # hanging: δ = π
+    _, reward, terminated, _, _ = env.step([0.0])
+    assert terminated and reward == pytest.approx(floor, abs=1e-3)

@@ -105,7 +105,12 @@ class KapitzaPendulumEnv(TaskEnv):
 
     ## Rewards
 
-    With δ = |θ − π| (θ wrapped) after the step: `reward = 1 − (δ/tolerance)²` while held, in [0, 1].
+    With δ = |θ − π| (θ wrapped to (−π, π]) after the step, on every step:
+
+        reward = 1 − (δ/tolerance)²
+
+    in [0, 1] while held (δ ≤ tolerance), negative on the step that falls (δ > tolerance, which ends the
+    episode), and never below 1 − (π/tolerance)² (δ ≤ π): −108.7 at the default tolerance.
 
     ## Starting State
 
