@@ -268,3 +268,39 @@ def test_kapitza_pendulums_reward_is_documented_on_every_step_and_keeps_its_docu
     env.reset(options={"state": {"theta": 2 * np.pi}})  # hanging: δ = π
     _, reward, terminated, _, _ = env.step([0.0])
     assert terminated and reward == pytest.approx(floor, abs=1e-3)
+
+
+# -- item 6: dt has a documented range, within which the default stepper keeps up ------------------------------
+
+FAST_STARTS = {  # the fastest reset states allowed (item 1), where a long step costs the stepper most
+    "connenv/Swing-v0": {"state": {"theta": 3.0, "theta_dot": 7.7, "r": 1.6}},
+    "connenv/Skier-v0": {"state": {"x": 0.0, "x_dot": 23.0}},
+    "connenv/KozlovShell-v0": {"state": {"momentum": (27.0, 20.0, 5.0)}},
+    "connenv/KapitzaPendulum-v0": {"state": {"theta": np.pi}},  # on the separatrix: the exact step's RK4 branch
+    "connenv/KapitzaSwingUp-v0": {"state": {"theta": np.pi}},
+    "connenv/ActiveConstraint-v0": {"state": {"p": [1000.0]}},
+    "connenv/Connection-v0": {"state": {"s": [1000.0]}},
+}
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_dt_is_checked_against_its_documented_range_and_steps_at_both_ends(env_id):
+    env_cls = gym.spec(env_id).entry_point
+    module = importlib.import_module(env_cls.split(":")[0])
+    high = module.DT_MAX
+    docstring = getattr(module, env_cls.split(":")[1]).__doc__ or ""
+    for base in getattr(module, env_cls.split(":")[1]).__mro__:
+        docstring += base.__doc__ or ""
+    assert f"[1e-6, {high:g}] s |" in docstring
+    for bad in (high * 1.001, 1e6, 0.99e-6, 0.0, -0.05, np.nan):
+        with pytest.raises(ValueError, match=r"dt=.* must be finite and in \[1e-06, "):
+            make(env_id, dt=bad)
+    for dt in (1e-6, high):
+        env = make(env_id, dt=dt)
+        env.reset(seed=0, options=FAST_STARTS.get(env_id))
+        env.action_space.seed(0)
+        for _ in range(3):
+            obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+            assert np.isfinite(reward) and np.isfinite(info["state"]["t"])
+            if terminated:
+                env.reset()

@@ -33,6 +33,14 @@ def check_angle(name: str, value) -> float:
     return check_number(name, value, -ANGLE_BOUND, ANGLE_BOUND)
 
 
+DT_MIN = 1e-6  # s: the shortest control step an env takes (1/dt sets the render frame rate)
+
+
+def check_dt(dt, high: float) -> float:
+    """The control step dt, s: a finite real in [DT_MIN, high], high the env's measured limit."""
+    return check_number("dt", dt, DT_MIN, high)
+
+
 def check_mapping(name: str, given):
     """Raise ValueError if ``given`` is not a mapping (a dict of named values)."""
     if not isinstance(given, Mapping):

@@ -14,6 +14,7 @@ from connenv.core.steppers import Scipy, make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
+    check_dt,
     check_keys,
     check_number,
     check_stepper_options,
@@ -22,6 +23,7 @@ from connenv.core.validation import (
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
+DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
 JUMP_STEPPER = Scipy("DOP853", rtol=1e-13, atol=1e-13)  # the jump flow over s ∈ [0, 1]
 
@@ -144,7 +146,7 @@ class ActiveConstraintEnv(TaskEnv):
     |---|---|---|
     | system | required | n, m, metric, potential (above) |
     | u_low, u_high | required | numbers or m of them, u_low < u_high; ±inf allowed (velocity control) |
-    | dt | 0.05 | (0, ∞) s |
+    | dt | 0.05 | [1e-6, 1] s |
     | control | by jump_class (above) | "position", "velocity" |
     | max_control_speed | None | None or (0, ∞), per unit of u per second |
     | integrator | "dop853" | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -204,7 +206,7 @@ class ActiveConstraintEnv(TaskEnv):
         draw=None,
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         if system is None or not all(hasattr(system, key) for key in ("n", "m", "metric", "potential")):
             raise ValueError(
                 f"system={system!r} must have integer attributes n, m and methods metric(q, u) -> (G11, G12, G22) "

@@ -14,6 +14,7 @@ from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
+    check_dt,
     check_keys,
     check_number,
     check_stepper_options,
@@ -22,6 +23,7 @@ from connenv.core.validation import (
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
+DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
 GROUP_BOUND = 1e-9  # how far a stepped g may drift from its group before the step raises StepperError
 
@@ -94,7 +96,7 @@ class ConnectionEnv(TaskEnv):
     | group | (required) | "SO2", "SE2", "SO3", "R2" |
     | connection | (required) | callable s -> A(s) of shape (dim 𝔤, k), finite |
     | shape_low, shape_high | (required) | arrays of shape (k,), low < high, ±inf allowed |
-    | dt | 0.1 | (0, ∞) s |
+    | dt | 0.1 | [1e-6, 100] s |
     | frame | "body" | "body", "space" |
     | max_shape_speed | 1.0 | (0, ∞) |
     | task | None | an object with reset, reward, terminated and optionally observation (above) |
@@ -129,7 +131,7 @@ class ConnectionEnv(TaskEnv):
         integrator: str = "magnus",
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         if group not in GROUPS:
             raise ValueError(f"group={group!r} is not one of {list(GROUPS)}")
         if frame not in FRAMES:

@@ -11,11 +11,12 @@ from gymnasium import spaces
 
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_angle, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kapitza import KapitzaPendulum
 
+DT_MAX = 10.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 PIVOTS = {"vertical": (1,), "horizontal": (0,), "planar": (0, 1)}  # actuated axes of u = (u₁, u₂)
 SPEED_BOUND = 5.0  # |observed θ̇| in units of 2√(g/l) is clipped here
 HOLD_START = 0.2  # rad: KapitzaPendulum-v0 starts within this of inverted, at rest
@@ -135,7 +136,7 @@ class KapitzaPendulumEnv(TaskEnv):
     | g | 9.81 | (0, ∞) |
     | v_max | 10.0 | (0, ∞) m/s |
     | a_max | 0.1 | (0, length) m |
-    | dt | 0.005 | (0, ∞) |
+    | dt | 0.005 | [1e-6, 10] s |
     | tolerance | 0.3 | (0, π) rad |
     | damping | 0.0 | [0, ∞) N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -180,7 +181,7 @@ class KapitzaPendulumEnv(TaskEnv):
         integrator: str = "exact",
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         if pivot not in PIVOTS:
             raise ValueError(f"pivot={pivot!r} is not one of {list(PIVOTS)}")
         self.pivot, self.axes = pivot, list(PIVOTS[pivot])

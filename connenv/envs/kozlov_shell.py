@@ -11,11 +11,12 @@ from gymnasium import spaces
 
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_angle, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
+DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform direction
 TARGET_BOUND = 3.0  # m: the observed target is clipped here
 POSITION_BOUND = 100.0  # m: |x|, |y| of the shell and of the target given at reset
@@ -134,7 +135,7 @@ class KozlovShellEnv(TaskEnv):
     | mass | 1.0 | (0, ∞), the inner mass |
     | u1_max | 0.5 | (0, ∞), with the box's corners inside the ellipse |
     | u2_max | 0.25 | (0, ∞), likewise |
-    | dt | 0.1 | (0, ∞) |
+    | dt | 0.1 | [1e-6, 1] s |
     | success_radius | 0.05 | (0, 0.5) |
     | integrator | "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
@@ -173,7 +174,7 @@ class KozlovShellEnv(TaskEnv):
         integrator: str = DEFAULT_INTEGRATOR,
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         a = check_number("a", a, 0.0, open_low=True)
         b = _check_b(b, a)
         self.u_max = np.array(_check_box(u1_max, u2_max, a, b))

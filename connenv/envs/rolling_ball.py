@@ -11,11 +11,19 @@ from scipy.spatial.transform import Rotation
 
 from connenv.core.segments import run_segments
 from connenv.core.steppers import StepperError, make_stepper
-from connenv.core.validation import check_keys, check_number, check_rotation, check_stepper_options, finite_action
+from connenv.core.validation import (
+    check_dt,
+    check_keys,
+    check_number,
+    check_rotation,
+    check_stepper_options,
+    finite_action,
+)
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d
 
+DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until success
 DRIFT_LIMIT = 1e-6  # ‖RᵀR − I‖ past which a stepper has left SO(3): StepperError
 POSITION_BOUND = 3.0  # |observed position| / (4πρ) is clipped here
@@ -116,7 +124,7 @@ class RollingBallEnv(TaskEnv):
     |---|---|---|
     | radius | 1.0 | (0, ∞) m |
     | v_max | 1.0 | (0, ∞) m/s |
-    | dt | 0.1 | (0, ∞) s |
+    | dt | 0.1 | [1e-6, 100] s |
     | tolerance | 0.05 | (0, π) rad |
     | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
     | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
@@ -147,7 +155,7 @@ class RollingBallEnv(TaskEnv):
         integrator: str = "exact",
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.v_max = check_number("v_max", v_max, 0.0, open_low=True)
         self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
         self.system = RollingBall(check_number("radius", radius, 0.0, open_low=True))

@@ -10,12 +10,13 @@ from gymnasium import spaces
 
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_dt, check_keys, check_number, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
 
+DT_MAX = 10.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 PROGRESS_FLOOR = 1e-4  # floor of the progress in the reward's logarithm
 TIME_COST = 0.01  # reward paid per step until success
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g Δz) past which it has diverged: StepperError
@@ -121,7 +122,7 @@ class SkierEnv(TaskEnv):
     | h_max | 1.0 | (h_min, ∞), with 1 − κ h_max > 0 on the whole trail |
     | mass | 70.0 | (0, ∞) |
     | g | 9.81 | (0, ∞) |
-    | dt | 0.05 | (0, ∞) |
+    | dt | 0.05 | [1e-6, 10] s |
     | trail | "valley" | "valley", "halfpipe", a sympy expression in x (or its text), or four callables (f, f′, f″, f‴) |
     | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; user trails: domain=(lo, hi) and the expression's other symbols |
     | target_x | None | required for a trail without rims: a point of the domain above the bottom |
@@ -160,7 +161,7 @@ class SkierEnv(TaskEnv):
         integrator: str = DEFAULT_INTEGRATOR,
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.h_min = check_number("h_min", h_min, 0.0, open_low=True)
         self.h_max = check_number("h_max", h_max, self.h_min, open_low=True)
         self.max_height_speed = (

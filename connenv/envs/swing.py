@@ -11,11 +11,12 @@ from dataclasses import dataclass
 
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_angle, check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.swing import Swing
 
+DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 LIFT_FLOOR = 1e-4  # floor of h in the reward's logarithm: amplitude ≈ 0.014 rad
 TIME_COST = 0.01  # reward paid per step until success
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g r_max) past which it has diverged: StepperError
@@ -112,7 +113,7 @@ class SwingEnv(TaskEnv):
     | r_max | 2.0 | (r_min, ∞) |
     | g | 9.81 | (0, ∞) |
     | mass | 1.0 | (0, ∞) |
-    | dt | 0.05 | (0, ∞) |
+    | dt | 0.05 | [1e-6, 100] s |
     | target_amplitude | π/2 | (0, π]; π means going over the top |
     | max_radial_speed | None | None or (0, ∞) m/s |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -148,7 +149,7 @@ class SwingEnv(TaskEnv):
         integrator: str = "exact",
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.r_min = check_number("r_min", r_min, 0.0, open_low=True)
         self.r_max = check_number("r_max", r_max, self.r_min, open_low=True)
         self.target_amplitude = check_number("target_amplitude", target_amplitude, 0.0, math.pi, open_low=True)
