@@ -11,9 +11,21 @@ import numpy as np
 from connenv.core.steppers import STEPPER_OPTIONS
 
 
-def check_number(name: str, value, low: float = -math.inf, high: float = math.inf, *, open_low=False, open_high=False):
-    """Return value as a float if it is a finite real in the interval, else raise ValueError."""
-    interval = f"{'(' if open_low else '['}{low}, {high}{')' if open_high else ']'}"
+def check_number(
+    name: str,
+    value,
+    low: float = -math.inf,
+    high: float = math.inf,
+    *,
+    open_low=False,
+    open_high=False,
+    low_name: str | None = None,
+    high_name: str | None = None,
+):
+    """Return value as a float if it is a finite real in the interval, else raise ValueError; low_name and
+    high_name name the parameters that set a bound, if any."""
+    ends = [low if low_name is None else f"{low_name}={low}", high if high_name is None else f"{high_name}={high}"]
+    interval = f"{'(' if open_low else '['}{ends[0]}, {ends[1]}{')' if open_high else ']'}"
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name}={value!r} must be a real number in {interval}")
     value = float(value)

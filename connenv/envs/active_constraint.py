@@ -227,7 +227,10 @@ class ActiveConstraintEnv(TaskEnv):
         midpoint = 0.5 * (np.where(finite, self.u_low, 0.0) + np.where(finite, self.u_high, 0.0))
         self.u_start = np.where(finite, midpoint, np.clip(0.0, self.u_low, self.u_high))
         q_samples, u_samples = self._samples()
-        check_metric(system, q_samples, u_samples)
+        try:
+            check_metric(system, q_samples, u_samples)
+        except ValueError as error:  # u is sampled within [u_low, u_high], which may hold the fault
+            raise ValueError(f"{error}; u sampled within u_low={self.u_low.tolist()}, u_high={self.u_high.tolist()}")
         self.jump_class = getattr(system, "jump_class", None) or classify(system, q_samples, u_samples)
         self.control = self._check_control(control)
         self.field = system if hasattr(system, "vector_field") else MetricField(system)

@@ -194,7 +194,7 @@ class KapitzaPendulumEnv(TaskEnv):
             damping=check_number("damping", damping, 0.0),
         )
         self.v_max = check_number("v_max", v_max, 0.0, open_low=True)
-        self.a_max = check_number("a_max", a_max, 0.0, length, open_low=True, open_high=True)
+        self.a_max = check_number("a_max", a_max, 0.0, length, open_low=True, open_high=True, high_name="length")
         self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
         check_stepper_options(type(self).__name__, stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)

@@ -163,7 +163,7 @@ class SkierEnv(TaskEnv):
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.h_min = check_number("h_min", h_min, 0.0, open_low=True)
-        self.h_max = check_number("h_max", h_max, self.h_min, open_low=True)
+        self.h_max = check_number("h_max", h_max, self.h_min, open_low=True, low_name="h_min")
         self.max_height_speed = (
             None if max_height_speed is None else check_number("max_height_speed", max_height_speed, 0.0, open_low=True)
         )

@@ -151,7 +151,7 @@ class SwingEnv(TaskEnv):
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.r_min = check_number("r_min", r_min, 0.0, open_low=True)
-        self.r_max = check_number("r_max", r_max, self.r_min, open_low=True)
+        self.r_max = check_number("r_max", r_max, self.r_min, open_low=True, low_name="r_min")
         self.target_amplitude = check_number("target_amplitude", target_amplitude, 0.0, math.pi, open_low=True)
         self.max_radial_speed = (
             None if max_radial_speed is None else check_number("max_radial_speed", max_radial_speed, 0.0, open_low=True)
