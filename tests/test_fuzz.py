@@ -150,8 +150,8 @@ def test_bad_kwargs_states_and_actions_are_refused_naming_the_key_or_leave_every
             key = list(numeric)[rng.integers(len(numeric))]
             value = bad_kwarg(rng, key, numeric[key])
             what = f"{env_id} with {key}={value!r}"
-            made = []
-            if not refused(lambda: made.append(gym.make(env_id, disable_env_checker=True, **{**kwargs, key: value})), key):
+            made, changed = [], {**kwargs, key: value}
+            if not refused(lambda: made.append(gym.make(env_id, disable_env_checker=True, **changed)), key):
                 run(made[0], rng, what)
         elif kind == 1:
             key = list({**state_keys, **option_keys})[rng.integers(len(state_keys) + len(option_keys))]
