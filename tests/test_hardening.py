@@ -304,3 +304,9 @@ def test_dt_is_checked_against_its_documented_range_and_steps_at_both_ends(env_i
             assert np.isfinite(reward) and np.isfinite(info["state"]["t"])
             if terminated:
                 env.reset()
+
+
+def test_a_ball_started_at_its_target_reports_a_finite_path_ratio():
+    env = gym.make("connenv/RollingBall-v0")
+    _, info = env.reset(seed=0, options={"target": np.eye(3)})
+    assert info["distance"] == 0.0 and info["path_ratio"] == 1.0

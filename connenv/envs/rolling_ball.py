@@ -138,7 +138,7 @@ class RollingBallEnv(TaskEnv):
 
     Every `info` has `"state"` (`x`, `y`, `R` (3×3), `t`), `"angle_error"` (e, rad), `"path_length"` (m rolled
     since reset), `"distance"` (the optimal arc's length from the start attitude, m), `"path_ratio"` (path
-    length / distance) and `"is_success"`.
+    length / distance; 1 where the start is the target, distance 0) and `"is_success"`.
     """
 
     metadata = {**TaskEnv.metadata, "measures": ("angle_error", "path_ratio")}
@@ -260,7 +260,7 @@ class RollingBallEnv(TaskEnv):
             "path_length": s.path_length,
         }
         if self.measures_distance:  # else not known: left out rather than NaN
-            ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
+            ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), 1.0)
             info |= {"distance": s.distance, "path_ratio": ratio}
         return {**info, "is_success": ops.flag(self.success(s, ops))}
 
