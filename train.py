@@ -53,11 +53,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--env", default="connenv/Swing-v0", choices=evaluate.ENV_IDS)
     parser.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
     parser.add_argument("--timesteps", type=evaluate.positive_int, help="default: n_timesteps of the hyperparameters")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=evaluate.seed_int, default=0)
     parser.add_argument("--hyperparams", help="rl-zoo3 YAML file (default: agents/hyperparams/{algo}.yml)")
     parser.add_argument("--eval-freq", type=int, default=25_000, help="steps between periodic evaluations, ≤ 0: none")
     parser.add_argument("--eval-episodes", type=evaluate.positive_int, default=100, help="episodes of the final table")
-    parser.add_argument("--eval-seed", type=int, default=0, help="final episode i is reset with eval-seed + i")
+    parser.add_argument(
+        "--eval-seed", type=evaluate.seed_int, default=0, help="final episode i is reset with eval-seed + i"
+    )
     parser.add_argument("--runs", default="runs", help="folder of the run folders")
     parser.add_argument("--num-threads", type=evaluate.positive_int, default=1, help="torch threads")
     parser.add_argument("--vector-env", action="store_true", help="train on the env's native vector env")

@@ -81,6 +81,20 @@ def positive_int(text: str) -> int:
     return int(value)
 
 
+SEED_MAX = 2**32 - 1  # numpy's global seed, which SB3's set_random_seed sets, takes at most this
+
+
+def seed_int(text: str) -> int:
+    """argparse type: a seed, an integer in [0, 2³² − 1]."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= SEED_MAX:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a seed (valid: an integer in [0, {SEED_MAX}])")
+    return value
+
+
 def policy_spec(text: str) -> str:
     """argparse type: a controller name, 'random', 'pretrained' or an existing model zip."""
     if text in (*CONTROLLER_NAMES, "random", "pretrained") or (text.endswith(".zip") and Path(text).is_file()):
@@ -293,7 +307,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)
-    parser.add_argument("--seed", type=int, default=0, help="episode i is reset with seed + i")
+    parser.add_argument("--seed", type=seed_int, default=0, help="episode i is reset with seed + i")
     parser.add_argument("--json", help="default: runs/eval_{env}_s{seed}.json")
     parser.add_argument("--video", help="GIF of the first policy's first episode")
     parser.add_argument("--env-kwargs", help="module:factory returning the make kwargs (or the system) of --env")

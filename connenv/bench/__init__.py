@@ -7,6 +7,7 @@ smoke version of each); every figure the README or docs/ quote is printed by one
     python -m connenv.bench steppers [--env swing|skier|ball]      the energy-drift table that chose the defaults
     python -m connenv.bench generic [--quick]                      ActiveConstraint-v0's steppers on two Lagrangians
     python -m connenv.bench [--env swing|skier|ball]               the same (the command the older docs quote)
+    python -m connenv.bench [--help]                               the list of commands
 
 Times are medians of env.step on unwrapped envs, each step timed right after a step of Gymnasium's Pendulum-v1
 in the same process; the ratio of the two medians is the figure to read on a shared machine.
@@ -14,25 +15,50 @@ in the same process; the ratio of the two medians is the figure to read on a sha
 
 from __future__ import annotations
 
+import argparse
 import sys
 
-COMMANDS = ("all", "precision", "stability", "steppers", "generic")
+COMMANDS = {
+    "all": "precision, then stability: every chart in docs/precision/",
+    "precision": "work-precision charts of every env's steppers, docs/precision/",
+    "stability": "stability maps of the explicit steppers, docs/precision/",
+    "steppers": "the energy-drift table that chose the defaults (also with no command and --env)",
+    "generic": "ActiveConstraint-v0's steppers on two Lagrangians",
+}
+
+
+def parser() -> argparse.ArgumentParser:
+    """The top-level command line: the subcommands with their descriptions; each parses its own options."""
+    top = argparse.ArgumentParser(
+        prog="python -m connenv.bench",
+        description=__doc__.split(". ")[0] + ".",
+        formatter_class=lambda prog: argparse.HelpFormatter(prog, width=120),
+    )
+    commands = top.add_subparsers(dest="command", metavar="COMMAND", title="commands (COMMAND --help: its options)")
+    for name, description in COMMANDS.items():
+        commands.add_parser(name, help=description, add_help=False)
+    return top
 
 
 def main(argv=None):
     argv = list(sys.argv[1:] if argv is None else argv)
-    command = argv.pop(0) if argv and argv[0] in COMMANDS else "steppers"
-    if command == "all":
+    if not argv:
+        parser().print_help()
+        return
+    if argv[0].startswith("-") and argv[0] not in ("-h", "--help"):
+        argv.insert(0, "steppers")  # the older form: python -m connenv.bench --env NAME
+    args, argv = parser().parse_known_args(argv)
+    if args.command == "all":
         from connenv.bench import precision, stability
 
         precision.main(argv)
         stability.main(argv)
         return
-    if command == "precision":
+    if args.command == "precision":
         from connenv.bench.precision import main as run
-    elif command == "stability":
+    elif args.command == "stability":
         from connenv.bench.stability import main as run
-    elif command == "generic":
+    elif args.command == "generic":
         from connenv.bench.generic import main as run
     else:
         from connenv.bench.steppers import main as run

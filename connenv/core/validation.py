@@ -4,15 +4,28 @@ from __future__ import annotations
 
 import inspect
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
 from connenv.core.steppers import STEPPER_OPTIONS
 
 
-def check_number(name: str, value, low: float = -math.inf, high: float = math.inf, *, open_low=False, open_high=False):
-    """Return value as a float if it is a finite real in the interval, else raise ValueError."""
-    interval = f"{'(' if open_low else '['}{low}, {high}{')' if open_high else ']'}"
+def check_number(
+    name: str,
+    value,
+    low: float = -math.inf,
+    high: float = math.inf,
+    *,
+    open_low=False,
+    open_high=False,
+    low_name: str | None = None,
+    high_name: str | None = None,
+):
+    """Return value as a float if it is a finite real in the interval, else raise ValueError; low_name and
+    high_name name the parameters that set a bound, if any."""
+    ends = [low if low_name is None else f"{low_name}={low}", high if high_name is None else f"{high_name}={high}"]
+    interval = f"{'(' if open_low else '['}{ends[0]}, {ends[1]}{')' if open_high else ']'}"
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name}={value!r} must be a real number in {interval}")
     value = float(value)
@@ -23,19 +36,58 @@ def check_number(name: str, value, low: float = -math.inf, high: float = math.in
     return value
 
 
+ANGLE_BOUND = 2.0 * math.pi  # |an angle| given at reset: every configuration lies within it
+MAGNITUDE_BOUND = 1e3  # |a coordinate or momentum of a user's system| given at reset, or a finite bound of one
+
+
+def check_angle(name: str, value) -> float:
+    """An angle given at reset, rad: a finite real in [−2π, 2π] (every configuration lies within it)."""
+    return check_number(name, value, -ANGLE_BOUND, ANGLE_BOUND)
+
+
+DT_MIN = 1e-6  # s: the shortest control step an env takes (1/dt sets the render frame rate)
+
+
+def check_dt(dt, high: float) -> float:
+    """The control step dt, s: a finite real in [DT_MIN, high], high the env's measured limit."""
+    return check_number("dt", dt, DT_MIN, high)
+
+
+def check_mapping(name: str, given):
+    """Raise ValueError if ``given`` is not a mapping (a dict of named values)."""
+    if not isinstance(given, Mapping):
+        raise ValueError(f"{name}={given!r} must be a mapping (a dict of named values)")
+
+
 def check_keys(name: str, given, allowed):
-    """Raise ValueError if the mapping ``given`` has keys outside ``allowed``."""
+    """Raise ValueError if ``given`` is not a mapping or has keys outside ``allowed``."""
+    check_mapping(name, given)
     unknown = set(given) - set(allowed)
     if unknown:
         raise ValueError(f"unknown key(s) {sorted(unknown)} in {name}; valid keys: {sorted(allowed)}")
+
+
+def init_parameters(env_cls) -> list[str]:
+    """The named parameters of env_cls.__init__, and of its bases' where it passes ``**kwargs`` on to them (the
+    first ``__init__`` whose ``**`` collects the stepper options ends the chain)."""
+    names = []
+    for cls in env_cls.__mro__:
+        if "__init__" not in vars(cls):
+            continue
+        params = inspect.signature(cls.__init__).parameters.values()
+        names += [p.name for p in params if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL) and p.name != "self"]
+        if not any(p.kind is p.VAR_KEYWORD and p.name != "stepper_options" for p in params):
+            break
+    return list(dict.fromkeys(names))
 
 
 def check_stepper_options(env_name: str, options, env_cls):
     """Raise ValueError for make kwargs that are neither the env's parameters nor stepper options."""
     unknown = set(options) - set(STEPPER_OPTIONS)
     if unknown:
-        params = [p for p in inspect.signature(env_cls.__init__).parameters if p not in ("self", "stepper_options")]
-        raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {params + list(STEPPER_OPTIONS)}")
+        params = init_parameters(env_cls)
+        valid = params + list(STEPPER_OPTIONS)
+        raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {valid}")
 
 
 def check_action(action, space):
@@ -45,6 +97,15 @@ def check_action(action, space):
 
 def finite_action(action, space):
     """The action as a float array of the space's shape, finite, else ValueError; not clipped."""
+    try:
+        kind = np.asarray(action).dtype.kind
+    except (TypeError, ValueError):  # a ragged sequence
+        kind = "O"
+    if kind == "c":
+        raise ValueError(f"action={action!r} is complex; expected real numbers in [{space.low}, {space.high}]")
+    if kind not in "biuf":
+        expected = f"real numbers in [{space.low}, {space.high}] of shape {space.shape}"
+        raise ValueError(f"action={action!r} must be {expected}")
     a = np.asarray(action, dtype=np.float64)
     if a.shape != space.shape:
         raise ValueError(f"action has shape {a.shape}; expected {space.shape} (action={action!r})")
@@ -64,13 +125,15 @@ def check_vector(name: str, value, size: int, low=-math.inf, high=math.inf):
         raise ValueError(f"{name}={value!r} must be a sequence of {size} finite real numbers")
     low, high = np.broadcast_to(low, (size,)), np.broadcast_to(high, (size,))
     for i in np.flatnonzero((vector < low) | (vector > high)):
-        raise ValueError(f"{name}[{i}]={vector[i]!r} is out of range: must be in [{low[i]}, {high[i]}]")
+        interval = f"[{float(low[i])}, {float(high[i])}]"
+        raise ValueError(f"{name}[{i}]={float(vector[i])!r} is out of range: must be in {interval}")
     return vector
 
 
 def check_bounds(low_name: str, low, high_name: str, high, size: int | None = None):
     """(low, high) as float arrays of one shape (k,), k ≥ 1 (with size, a number broadcasts to (size,)), low < high
-    in every coordinate, ±inf allowed for no bound, NaN not; else ValueError naming both as given."""
+    in every coordinate, finite ones within ±MAGNITUDE_BOUND, ±inf allowed for no bound, NaN not; else ValueError
+    naming both as given."""
     given = f"{low_name}={low!r}, {high_name}={high!r}"
     try:
         lows, highs = (np.array(v, dtype=float) for v in (low, high))
@@ -85,6 +148,9 @@ def check_bounds(low_name: str, low, high_name: str, high, size: int | None = No
         raise ValueError(f"{given} hold NaN; give numbers (±inf for no bound)")
     if not np.all(lows < highs):
         raise ValueError(f"{low_name}={low!r} must be below {high_name}={high!r} in every coordinate")
+    finite = np.concatenate([lows, highs])
+    if np.any(np.abs(finite[np.isfinite(finite)]) > MAGNITUDE_BOUND):
+        raise ValueError(f"{given}: a finite bound must lie within ±{MAGNITUDE_BOUND} (±inf for no bound)")
     return lows, highs
 
 

@@ -11,10 +11,19 @@ from connenv.core.batched import batched
 from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import Scipy, make_stepper
-from connenv.core.validation import check_bounds, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_bounds,
+    check_dt,
+    check_keys,
+    check_number,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
+DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
 JUMP_STEPPER = Scipy("DOP853", rtol=1e-13, atol=1e-13)  # the jump flow over s ∈ [0, 1]
 
@@ -122,7 +131,8 @@ class ActiveConstraintEnv(TaskEnv):
     Default q = 0, p = 0, u at the midpoint of finite bounds (0 on a coordinate with an infinite bound), t = 0.
     With `task`, `task.reset(np_random)` returns a state dict with any of q, p, u (the rest default).
     `reset(options={"state": {...}})` sets any of `q`, `p`, `u` exactly (arrays of n, n, m finite numbers; u
-    within its bounds).
+    within its bounds; every entry within ±1e3, beyond which a user's system may outrun any stepper), else
+    ValueError. Finite bounds `u_low`, `u_high` lie within ±1e3 too.
 
     ## Episode End
 
@@ -136,7 +146,7 @@ class ActiveConstraintEnv(TaskEnv):
     |---|---|---|
     | system | required | n, m, metric, potential (above) |
     | u_low, u_high | required | numbers or m of them, u_low < u_high; ±inf allowed (velocity control) |
-    | dt | 0.05 | (0, ∞) s |
+    | dt | 0.05 | [1e-6, 1] s |
     | control | by jump_class (above) | "position", "velocity" |
     | max_control_speed | None | None or (0, ∞), per unit of u per second |
     | integrator | "dop853" | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -196,7 +206,7 @@ class ActiveConstraintEnv(TaskEnv):
         draw=None,
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         if system is None or not all(hasattr(system, key) for key in ("n", "m", "metric", "potential")):
             raise ValueError(
                 f"system={system!r} must have integer attributes n, m and methods metric(q, u) -> (G11, G12, G22) "
@@ -217,7 +227,10 @@ class ActiveConstraintEnv(TaskEnv):
         midpoint = 0.5 * (np.where(finite, self.u_low, 0.0) + np.where(finite, self.u_high, 0.0))
         self.u_start = np.where(finite, midpoint, np.clip(0.0, self.u_low, self.u_high))
         q_samples, u_samples = self._samples()
-        check_metric(system, q_samples, u_samples)
+        try:
+            check_metric(system, q_samples, u_samples)
+        except ValueError as error:  # u is sampled within [u_low, u_high], which may hold the fault
+            raise ValueError(f"{error}; u sampled within u_low={self.u_low.tolist()}, u_high={self.u_high.tolist()}")
         self.jump_class = getattr(system, "jump_class", None) or classify(system, q_samples, u_samples)
         self.control = self._check_control(control)
         self.field = system if hasattr(system, "vector_field") else MetricField(system)
@@ -286,6 +299,7 @@ class ActiveConstraintEnv(TaskEnv):
         for key, value in state.items():
             value = np.ravel(value) if np.ndim(value) == 0 else value  # a number for a single coordinate
             bounds = (self.u_low, self.u_high) if key == "u" else (-np.inf, np.inf)
+            bounds = np.maximum(bounds[0], -MAGNITUDE_BOUND), np.minimum(bounds[1], MAGNITUDE_BOUND)
             values[key] = check_vector(f"state {key}", value, self.m if key == "u" else self.n, *bounds)
         return values
 

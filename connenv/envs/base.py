@@ -25,7 +25,7 @@ import gymnasium as gym
 import numpy as np
 
 from connenv.core.steppers import StepperError
-from connenv.core.validation import check_action
+from connenv.core.validation import check_action, check_mapping
 
 SCALAR = SimpleNamespace(
     sin=math.sin,
@@ -110,6 +110,11 @@ class RenderedEnv(gym.Env):
             self._renderer = self._make_renderer()
         return self._draw(self._renderer)
 
+    def __getstate__(self):
+        """The env without its renderer (a pygame window or surface, which cannot be pickled or copied): a copy
+        or an unpickled env makes its own on its first render."""
+        return {**self.__dict__, "_renderer": None}
+
     def close(self):
         if self._renderer is not None:
             self._renderer.close()
@@ -131,6 +136,7 @@ class TaskEnv(RenderedEnv):
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
+        check_mapping("reset options", options or {})
         self.state = self.start(dict(options or {}))
         return self.observe(self.state), self.describe(self.state)
 

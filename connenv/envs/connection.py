@@ -11,10 +11,19 @@ from gymnasium import spaces
 from connenv.core.lie import FRAMES, GROUPS, Connection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
 from connenv.core.steppers import StepperError, make_stepper
-from connenv.core.validation import check_bounds, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_bounds,
+    check_dt,
+    check_keys,
+    check_number,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 
+DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
 GROUP_BOUND = 1e-9  # how far a stepped g may drift from its group before the step raises StepperError
 
@@ -72,7 +81,8 @@ class ConnectionEnv(TaskEnv):
     g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0. With
     a `task`: `task.reset(np_random)` returns a dict with any of "g" and "s" (np_random is the env's generator: all
     randomness from it). `reset(options={"state": {"g": ..., "s": ...}})` sets either exactly (checked: g on its
-    group to 1e-9, s of shape (k,) within the bounds).
+    group to 1e-9, s of shape (k,) within the bounds, every entry of both within ±1e3), else ValueError. Finite
+    shape bounds lie within ±1e3 too.
 
     ## Episode End
 
@@ -86,7 +96,7 @@ class ConnectionEnv(TaskEnv):
     | group | (required) | "SO2", "SE2", "SO3", "R2" |
     | connection | (required) | callable s -> A(s) of shape (dim 𝔤, k), finite |
     | shape_low, shape_high | (required) | arrays of shape (k,), low < high, ±inf allowed |
-    | dt | 0.1 | (0, ∞) s |
+    | dt | 0.1 | [1e-6, 100] s |
     | frame | "body" | "body", "space" |
     | max_shape_speed | 1.0 | (0, ∞) |
     | task | None | an object with reset, reward, terminated and optionally observation (above) |
@@ -121,7 +131,7 @@ class ConnectionEnv(TaskEnv):
         integrator: str = "magnus",
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         if group not in GROUPS:
             raise ValueError(f"group={group!r} is not one of {list(GROUPS)}")
         if frame not in FRAMES:
@@ -161,8 +171,8 @@ class ConnectionEnv(TaskEnv):
         check_keys("reset options", options, {"state"})
         given = dict(self.task.reset(self.np_random)) if self.task is not None else {}
         check_keys("the task's reset state", given, {"g", "s"})
+        check_keys("options['state']", options.get("state", {}), {"g", "s"})
         given.update(options.get("state", {}))
-        check_keys("options['state']", given, {"g", "s"})
         g = self._check_g(given["g"]) if "g" in given else np.array(self.group.identity())
         return ConnectionState(g, self._check_s(given["s"]) if "s" in given else self.start_shape(), 0.0)
 
@@ -193,13 +203,16 @@ class ConnectionEnv(TaskEnv):
             g = None
         if g is None or g.shape != shape or not np.all(np.isfinite(g)):
             raise ValueError(f"state g={value!r} must be a finite array of shape {shape} for group {self.group.name}")
+        if np.any(np.abs(g) > MAGNITUDE_BOUND):
+            raise ValueError(f"state g={value!r} has an entry beyond ±{MAGNITUDE_BOUND}")
         off = float(self.group.off_group(g))
         if not off <= ON_GROUP:
             raise ValueError(f"state g={value!r} is {off:.3g} off {self.group.name}; it must be on it to {ON_GROUP}")
         return self.group.coordinates(g)
 
     def _check_s(self, value):
-        return check_vector("state s", value, self.low.size, self.low, self.high)
+        low, high = np.maximum(self.low, -MAGNITUDE_BOUND), np.minimum(self.high, MAGNITUDE_BOUND)
+        return check_vector("state s", value, self.low.size, low, high)
 
     # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 

@@ -11,11 +11,12 @@ from gymnasium import spaces
 
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kapitza import KapitzaPendulum
 
+DT_MAX = 10.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 PIVOTS = {"vertical": (1,), "horizontal": (0,), "planar": (0, 1)}  # actuated axes of u = (u₁, u₂)
 SPEED_BOUND = 5.0  # |observed θ̇| in units of 2√(g/l) is clipped here
 HOLD_START = 0.2  # rad: KapitzaPendulum-v0 starts within this of inverted, at rest
@@ -105,13 +106,19 @@ class KapitzaPendulumEnv(TaskEnv):
 
     ## Rewards
 
-    With δ = |θ − π| (θ wrapped) after the step: `reward = 1 − (δ/tolerance)²` while held, in [0, 1].
+    With δ = |θ − π| (θ wrapped to (−π, π]) after the step, on every step:
+
+        reward = 1 − (δ/tolerance)²
+
+    in [0, 1] while held (δ ≤ tolerance), negative on the step that falls (δ > tolerance, which ends the
+    episode), and never below 1 − (π/tolerance)² (δ ≤ π): −108.7 at the default tolerance.
 
     ## Starting State
 
     θ₀ = π + uniform(−0.2, 0.2) rad (np_random), at rest, pivot at rest at the centre, t = 0.
-    `reset(options={"state": {...}})` sets any of `theta`, `theta_dot` or `p`, `u` (2), `u_dot` (2) exactly;
-    u and u̇ are zero along unactuated axes, |uᵢ| ≤ a_max and |u̇ᵢ| ≤ v_max.
+    `reset(options={"state": {...}})` sets any of `theta`, `theta_dot` or `p`, `u` (2), `u_dot` (2) exactly:
+    θ in [−2π, 2π], |θ̇| ≤ 10√(g/l) (the observed bound; p is bounded through θ̇), u and u̇ zero along
+    unactuated axes, |uᵢ| ≤ a_max and |u̇ᵢ| ≤ v_max. A value outside is refused (ValueError).
 
     ## Episode End
 
@@ -129,7 +136,7 @@ class KapitzaPendulumEnv(TaskEnv):
     | g | 9.81 | (0, ∞) |
     | v_max | 10.0 | (0, ∞) m/s |
     | a_max | 0.1 | (0, length) m |
-    | dt | 0.005 | (0, ∞) |
+    | dt | 0.005 | [1e-6, 10] s |
     | tolerance | 0.3 | (0, π) rad |
     | damping | 0.0 | [0, ∞) N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -174,7 +181,7 @@ class KapitzaPendulumEnv(TaskEnv):
         integrator: str = "exact",
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         if pivot not in PIVOTS:
             raise ValueError(f"pivot={pivot!r} is not one of {list(PIVOTS)}")
         self.pivot, self.axes = pivot, list(PIVOTS[pivot])
@@ -187,9 +194,9 @@ class KapitzaPendulumEnv(TaskEnv):
             damping=check_number("damping", damping, 0.0),
         )
         self.v_max = check_number("v_max", v_max, 0.0, open_low=True)
-        self.a_max = check_number("a_max", a_max, 0.0, length, open_low=True, open_high=True)
+        self.a_max = check_number("a_max", a_max, 0.0, length, open_low=True, open_high=True, high_name="length")
         self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
-        check_stepper_options(type(self).__name__, stepper_options, KapitzaPendulumEnv)
+        check_stepper_options(type(self).__name__, stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
 
         self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / length)
@@ -256,11 +263,13 @@ class KapitzaPendulumEnv(TaskEnv):
             raise ValueError("options['state'] gives both theta_dot and p; give one of them")
         u = self._pivot_vector("u", state.get("u", (0.0, 0.0)), self.a_max)
         u_dot = self._pivot_vector("u_dot", state.get("u_dot", (0.0, 0.0)), self.v_max)
-        theta = check_number("state theta", state.get("theta", theta))
-        if "p" in state:
-            p = check_number("state p", state["p"])
+        theta = check_angle("state theta", state.get("theta", theta))
+        bound = SPEED_BOUND * self.theta_dot_scale  # |θ̇| the observation holds
+        if "p" in state:  # p = m l² θ̇ + m l u̇·n: the same bound on θ̇
+            low, high = (float(self.system.momentum(np.float64(theta), v, u_dot)) for v in (-bound, bound))
+            p = check_number("state p", state["p"], low, high)
         else:
-            theta_dot = check_number("state theta_dot", state.get("theta_dot", 0.0))
+            theta_dot = check_number("state theta_dot", state.get("theta_dot", 0.0), -bound, bound)
             p = float(self.system.momentum(np.float64(theta), theta_dot, u_dot))
         return np.array([theta, p]), u, u_dot
 

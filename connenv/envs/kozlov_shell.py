@@ -14,13 +14,15 @@ from gymnasium import spaces
 from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
+DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform direction
 TARGET_BOUND = 3.0  # m: the observed target is clipped here
+POSITION_BOUND = 100.0  # m: |x|, |y| of the shell and of the target given at reset
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 TIME_COST = 0.01  # reward paid per step until success
 MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
@@ -112,8 +114,10 @@ class KozlovShellEnv(TaskEnv):
 
     At rest, μ = 0, at the origin with θ = 0 and the mass at the centre, u = 0, t = 0. The target is drawn by
     np_random at a distance uniform in [0.5, 1.0] m, in a uniform direction. `reset(options={"state": {...},
-    "target": (x, y)})` sets any of `x`, `y`, `theta`, `u` (2, inside the box |u₁| ≤ u1_max, |u₂| ≤ u2_max),
-    `momentum` (P₁, P₂, Π in the body frame) and the target exactly.
+    "target": (x, y)})` sets any of `x`, `y` (within ±100 m), `theta` (in [−2π, 2π]), `u` (2, inside the box
+    |u₁| ≤ u1_max, |u₂| ≤ u2_max), `momentum` (P₁, P₂, Π in the body frame, within the observed bounds
+    |P₁| ≤ 10 (M + m + λ₁), |P₂| ≤ 10 (M + m + λ₂), |Π| ≤ 10 (J + λ₃)) and the target (within ±100 m) exactly;
+    a value outside is refused (ValueError).
 
     ## Episode End
 
@@ -134,7 +138,7 @@ class KozlovShellEnv(TaskEnv):
     | mass | 1.0 | (0, ∞), the inner mass |
     | u1_max | 0.5 | (0, ∞), with the box's corners inside the ellipse |
     | u2_max | 0.25 | (0, ∞), likewise |
-    | dt | 0.1 | (0, ∞) |
+    | dt | 0.1 | [1e-6, 1] s |
     | success_radius | 0.05 | (0, 0.5) |
     | integrator | "magnus" (atol 1e-10) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-8, atol 1e-10 | see `connenv.core.steppers` |
@@ -178,7 +182,7 @@ class KozlovShellEnv(TaskEnv):
         integrator: str = DEFAULT_INTEGRATOR,
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         a = check_number("a", a, 0.0, open_low=True)
         b = _check_b(b, a)
         self.u_max = np.array(_check_box(u1_max, u2_max, a, b))
@@ -255,7 +259,7 @@ class KozlovShellEnv(TaskEnv):
         distance, angle = self.np_random.uniform(*TARGET_DISTANCES), self.np_random.uniform(-math.pi, math.pi)
         target = distance * np.array([math.cos(angle), math.sin(angle)])
         if "target" in options:
-            target = _check_vector("target", options["target"], 2)
+            target = check_vector("target", options["target"], 2, -POSITION_BOUND, POSITION_BOUND)
         if "state" in options:
             pose, u, momentum = self._check_state(options["state"])
         else:
@@ -293,11 +297,11 @@ class KozlovShellEnv(TaskEnv):
     def _check_state(self, state):
         """(pose, u, momentum) from options['state'], default at rest at the origin with the mass at the centre."""
         check_keys("options['state']", state, STATE_KEYS)
-        pose = np.array([check_number(f"state {key}", state.get(key, 0.0)) for key in ("x", "y", "theta")])
-        u = _check_vector("state u", state.get("u", (0.0, 0.0)), 2)
-        for i, (value, bound) in enumerate(zip(u, self.u_max)):
-            check_number(f"state u[{i}]", value, -bound, bound)
-        return pose, u, _check_vector("state momentum", state.get("momentum", (0.0, 0.0, 0.0)), 3)
+        x, y = (check_number(f"state {key}", state.get(key, 0.0), -POSITION_BOUND, POSITION_BOUND) for key in "xy")
+        pose = np.array([x, y, check_angle("state theta", state.get("theta", 0.0))])
+        u = check_vector("state u", state.get("u", (0.0, 0.0)), 2, -self.u_max, self.u_max)
+        bound = MOMENTUM_BOUND * self.momentum_scale  # the momentum the observation holds
+        return pose, u, check_vector("state momentum", state.get("momentum", (0.0, 0.0, 0.0)), 3, -bound, bound)
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
@@ -398,15 +402,3 @@ def _check_box(u1_max, u2_max, a, b):
         )
     return u1_max, u2_max
 
-
-def _check_vector(name, value, size):
-    """value as a float array of the given size, every entry finite, else ValueError naming it."""
-    try:
-        vector = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        vector = None
-    if vector is None or vector.shape != (size,):
-        raise ValueError(f"{name}={value!r} must be a sequence of {size} finite real numbers")
-    if not np.all(np.isfinite(vector)):
-        raise ValueError(f"{name}={value!r} is out of range: every entry must be finite")
-    return vector

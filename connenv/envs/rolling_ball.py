@@ -11,11 +11,19 @@ from scipy.spatial.transform import Rotation
 
 from connenv.core.segments import run_segments
 from connenv.core.steppers import StepperError, make_stepper
-from connenv.core.validation import check_keys, check_number, check_rotation, check_stepper_options, finite_action
+from connenv.core.validation import (
+    check_dt,
+    check_keys,
+    check_number,
+    check_rotation,
+    check_stepper_options,
+    finite_action,
+)
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d
 
+DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until success
 DRIFT_LIMIT = 1e-6  # ‖RᵀR − I‖ past which a stepper has left SO(3): StepperError
 POSITION_BOUND = 3.0  # |observed position| / (4πρ) is clipped here
@@ -100,8 +108,9 @@ class RollingBallEnv(TaskEnv):
     ## Starting State
 
     R = I at the origin, t = 0, and R* uniform on SO(3) (scipy's `Rotation.random` on np_random).
-    `reset(options={"state": {"x", "y", "R"}, "target": R*})` sets any of them; R and R* must be rotation
-    matrices to 1e-9 (‖RᵀR − I‖, |det R − 1|), else ValueError: they are never re-orthonormalized.
+    `reset(options={"state": {"x", "y", "R"}, "target": R*})` sets any of them; x and y must lie in
+    [−12πρ, 12πρ] (RollingBallPose-v0's observed range), R and R* must be rotation matrices to 1e-9
+    (‖RᵀR − I‖, |det R − 1|), else ValueError: they are never re-orthonormalized.
 
     ## Episode End
 
@@ -115,7 +124,7 @@ class RollingBallEnv(TaskEnv):
     |---|---|---|
     | radius | 1.0 | (0, ∞) m |
     | v_max | 1.0 | (0, ∞) m/s |
-    | dt | 0.1 | (0, ∞) s |
+    | dt | 0.1 | [1e-6, 100] s |
     | tolerance | 0.05 | (0, π) rad |
     | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
     | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
@@ -129,7 +138,7 @@ class RollingBallEnv(TaskEnv):
 
     Every `info` has `"state"` (`x`, `y`, `R` (3×3), `t`), `"angle_error"` (e, rad), `"path_length"` (m rolled
     since reset), `"distance"` (the optimal arc's length from the start attitude, m), `"path_ratio"` (path
-    length / distance) and `"is_success"`.
+    length / distance; 1 where the start is the target, distance 0) and `"is_success"`.
     """
 
     metadata = {**TaskEnv.metadata, "measures": ("angle_error", "path_ratio")}
@@ -146,7 +155,7 @@ class RollingBallEnv(TaskEnv):
         integrator: str = "exact",
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.v_max = check_number("v_max", v_max, 0.0, open_low=True)
         self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
         self.system = RollingBall(check_number("radius", radius, 0.0, open_low=True))
@@ -219,8 +228,9 @@ class RollingBallEnv(TaskEnv):
     def _check_state(self, state):
         """(R, position) of options["state"]: R = I and the origin where not given."""
         check_keys("options['state']", state, {"x", "y", "R"})
-        x = check_number("state x", state.get("x", 0.0))
-        y = check_number("state y", state.get("y", 0.0))
+        bound = POSITION_BOUND * 4 * math.pi * self.system.radius  # the position the Pose env observes
+        x = check_number("state x", state.get("x", 0.0), -bound, bound)
+        y = check_number("state y", state.get("y", 0.0), -bound, bound)
         return (check_rotation("state R", state["R"]) if "R" in state else np.eye(3)), np.array([x, y])
 
     # -- task: one state (Python floats and one R), or a batch with ops=BATCH (the vector env) ----------------
@@ -250,7 +260,7 @@ class RollingBallEnv(TaskEnv):
             "path_length": s.path_length,
         }
         if self.measures_distance:  # else not known: left out rather than NaN
-            ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), math.nan)
+            ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), 1.0)
             info |= {"distance": s.distance, "path_ratio": ratio}
         return {**info, "is_success": ops.flag(self.success(s, ops))}
 
@@ -343,6 +353,11 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     Everything else is RollingBall-v0's; `compute_terminated` is success, `compute_truncated` False (the time
     limit truncates).
+
+    `compute_reward` is a method of this env, not of the wrappers `gym.make` puts around it: Gymnasium 1.x
+    wrappers no longer forward unknown attributes. HER is unaffected (SB3's vec envs reach it through
+    `env_method`, which unwraps), but SB3's `check_env(gym.make(...))` raises AttributeError on it: check the env
+    itself, `check_env(env.unwrapped)`.
     """
 
     def _observation_space(self):

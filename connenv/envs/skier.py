@@ -10,12 +10,13 @@ from gymnasium import spaces
 
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_dt, check_keys, check_number, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
 
+DT_MAX = 10.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 PROGRESS_FLOOR = 1e-4  # floor of the progress in the reward's logarithm
 TIME_COST = 0.01  # reward paid per step until success
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g Δz) past which it has diverged: StepperError
@@ -101,8 +102,10 @@ class SkierEnv(TaskEnv):
 
     At rest with h = h_min, x₀ uniform on 0.5 ≤ |x₀ − x_b| ≤ 2.0 m (np_random),
     x_b the trail's lowest point (x = 0 on the valley). From there escape is
-    impossible at constant h. `reset(options={"state": {...}})` sets any of `x`,
-    `x_dot` or `p`, `h` exactly.
+    impossible at constant h. `reset(options={"state": {...}})` sets any of `x`
+    (in the trail's domain), `x_dot` (within the observed speed, |σẋ| ≤ 3 v*) or
+    `p` (the same bound times m (1 − κh)² σ²), `h` (in [h_min, h_max]) exactly; a
+    value outside is refused (ValueError).
 
     ## Episode End
 
@@ -119,7 +122,7 @@ class SkierEnv(TaskEnv):
     | h_max | 1.0 | (h_min, ∞), with 1 − κ h_max > 0 on the whole trail |
     | mass | 70.0 | (0, ∞) |
     | g | 9.81 | (0, ∞) |
-    | dt | 0.05 | (0, ∞) |
+    | dt | 0.05 | [1e-6, 10] s |
     | trail | "valley" | "valley", "halfpipe", a sympy expression in x (or its text), or four callables (f, f′, f″, f‴) |
     | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; user trails: domain=(lo, hi) and the expression's other symbols |
     | target_x | None | required for a trail without rims: a point of the domain above the bottom |
@@ -158,9 +161,9 @@ class SkierEnv(TaskEnv):
         integrator: str = DEFAULT_INTEGRATOR,
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.h_min = check_number("h_min", h_min, 0.0, open_low=True)
-        self.h_max = check_number("h_max", h_max, self.h_min, open_low=True)
+        self.h_max = check_number("h_max", h_max, self.h_min, open_low=True, low_name="h_min")
         self.max_height_speed = (
             None if max_height_speed is None else check_number("max_height_speed", max_height_speed, 0.0, open_low=True)
         )
@@ -266,11 +269,14 @@ class SkierEnv(TaskEnv):
             raise ValueError("options['state'] gives both x_dot and p; give one of them")
         x = check_number("state x", state.get("x", x), self.trail.lo, self.trail.hi)
         h = check_number("state h", state.get("h", self.h_min), self.h_min, self.h_max)
+        _, _, sigma, _, _, w, _ = self.system.geometry(x, h)
+        x_dot_bound = SPEED_BOUND * self.speed_scale / sigma  # |σẋ| the observation holds
         if "p" in state:
-            p = check_number("state p", state["p"])
+            p_bound = self.system.mass * w * w * x_dot_bound
+            p = check_number("state p", state["p"], -p_bound, p_bound)
         else:
-            w = self.system.geometry(x, h)[5]
-            p = self.system.mass * w * w * check_number("state x_dot", state.get("x_dot", 0.0))
+            x_dot = check_number("state x_dot", state.get("x_dot", 0.0), -x_dot_bound, x_dot_bound)
+            p = self.system.mass * w * w * x_dot
         return np.array([x, p]), h
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------

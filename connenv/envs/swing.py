@@ -11,11 +11,12 @@ from dataclasses import dataclass
 
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.swing import Swing
 
+DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 LIFT_FLOOR = 1e-4  # floor of h in the reward's logarithm: amplitude ≈ 0.014 rad
 TIME_COST = 0.01  # reward paid per step until success
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g r_max) past which it has diverged: StepperError
@@ -93,7 +94,9 @@ class SwingEnv(TaskEnv):
 
     θ₀ uniform on ±[0.05, 0.1] rad (np_random), θ̇₀ = 0, r = r_max, t = 0. A
     swing exactly at rest at the bottom cannot be pumped. `reset(options={"state":
-    {...}})` sets any of `theta`, `theta_dot` or `p`, `r` exactly.
+    {...}})` sets any of `theta` (in [−2π, 2π]), `theta_dot` (within the observed
+    bound, |θ̇| ≤ 2ρ² √(g/r_min)) or `p` (the same bound times m r²), `r` (in
+    [r_min, r_max]) exactly; a value outside is refused (ValueError).
 
     ## Episode End
 
@@ -110,7 +113,7 @@ class SwingEnv(TaskEnv):
     | r_max | 2.0 | (r_min, ∞) |
     | g | 9.81 | (0, ∞) |
     | mass | 1.0 | (0, ∞) |
-    | dt | 0.05 | (0, ∞) |
+    | dt | 0.05 | [1e-6, 100] s |
     | target_amplitude | π/2 | (0, π]; π means going over the top |
     | max_radial_speed | None | None or (0, ∞) m/s |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -146,9 +149,9 @@ class SwingEnv(TaskEnv):
         integrator: str = "exact",
         **stepper_options,
     ):
-        super().__init__(render_mode, check_number("dt", dt, 0.0, open_low=True))
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.r_min = check_number("r_min", r_min, 0.0, open_low=True)
-        self.r_max = check_number("r_max", r_max, self.r_min, open_low=True)
+        self.r_max = check_number("r_max", r_max, self.r_min, open_low=True, low_name="r_min")
         self.target_amplitude = check_number("target_amplitude", target_amplitude, 0.0, math.pi, open_low=True)
         self.max_radial_speed = (
             None if max_radial_speed is None else check_number("max_radial_speed", max_radial_speed, 0.0, open_low=True)
@@ -219,13 +222,13 @@ class SwingEnv(TaskEnv):
         if "theta_dot" in state and "p" in state:
             raise ValueError("options['state'] gives both theta_dot and p; give one of them")
         r = check_number("state r", state.get("r", self.r_max), self.r_min, self.r_max)
-        theta = check_number("state theta", state.get("theta", theta))
+        theta = check_angle("state theta", state.get("theta", theta))
+        bound = self.obs_high[2] * self.theta_dot_scale  # |θ̇| the observation holds
         if "p" in state:
-            p = check_number("state p", state["p"])
+            p_bound = self.system.mass * r**2 * bound
+            p = check_number("state p", state["p"], -p_bound, p_bound)
         else:
-            p = self.system.mass * r**2 * check_number("state theta_dot", state.get("theta_dot", 0.0))
-        bound = self.obs_high[2] * self.theta_dot_scale
-        check_number("state theta_dot", p / (self.system.mass * r**2), -bound, bound)
+            p = self.system.mass * r**2 * check_number("state theta_dot", state.get("theta_dot", 0.0), -bound, bound)
         return np.array([theta, p]), r
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------

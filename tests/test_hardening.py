@@ -1,0 +1,312 @@
+"""Bad input at every boundary (issue 16): reset states and make kwargs out of range, actions that are no real
+array, clones of a rendered env, negative seeds on the command lines, the benchmark's help, the goal env under
+SB3's checker and HER, and the test extra."""
+
+from __future__ import annotations
+
+import ast
+import copy
+import importlib.metadata
+import pickle
+import re
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
+
+import connenv  # noqa: F401  (registers the envs)
+from connenv import examples
+
+ROOT = Path(__file__).resolve().parents[1]
+IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+
+
+def make(env_id, **extra):
+    kwargs = examples.MAKE_KWARGS[env_id]() if env_id in examples.MAKE_KWARGS else {}
+    return gym.make(env_id, **{**kwargs, **extra})
+
+
+# -- item 2: a rendered env pickles and deep-copies ------------------------------------------------------------
+
+
+CLONES = {"deepcopy": copy.deepcopy, "pickle": lambda env: pickle.loads(pickle.dumps(env))}
+
+
+@pytest.mark.parametrize("clone", CLONES.values(), ids=CLONES.keys())
+def test_a_rendered_env_clones_without_its_renderer_and_the_clone_renders_anew(clone):
+    env = gym.make("connenv/Swing-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    frame = env.render()
+    twin = clone(env)
+    assert twin.unwrapped._renderer is None and env.unwrapped._renderer is not None
+    assert np.array_equal(twin.render(), frame)
+    env.close()
+    twin.close()
+
+
+# -- item 5: messages that name the thing ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("bad", [5, "x", [1.0]], ids=["int", "str", "list"])
+def test_a_reset_state_that_is_no_mapping_is_refused_naming_it(env_id, bad):
+    env = make(env_id)
+    with pytest.raises(ValueError, match=r"options\['state'\]=.* must be a mapping"):
+        env.reset(options={"state": bad})
+    with pytest.raises(ValueError, match=r"reset options=.* must be a mapping"):
+        env.reset(options=bad)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_string_and_complex_actions_are_refused_naming_the_action(env_id):
+    env = make(env_id)
+    env.reset(seed=0)
+    size = env.action_space.shape[0]
+    with pytest.raises(ValueError, match=r"action=.*'a'.* must be real numbers"):
+        env.step(["a"] * size)
+    with pytest.raises(ValueError, match=r"action=.*j\]\) is complex"):
+        env.step(np.full(size, 0.5 + 1j))
+    vector = gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", **make(env_id).spec.kwargs)
+    vector.reset(seed=0)
+    with pytest.raises(ValueError, match="is complex"):
+        vector.step(np.full((2, size), 0.5 + 1j))
+
+
+@pytest.mark.parametrize(
+    ("env_id", "names"),
+    [
+        ("connenv/RollingBallPose-v0", ["position_tolerance", "radius", "v_max", "dt", "tolerance", "integrator"]),
+        ("connenv/KapitzaSwingUp-v0", ["hold_time", "pivot", "v_max", "a_max", "dt", "tolerance", "integrator"]),
+        ("connenv/Swing-v0", ["r_min", "r_max", "dt", "integrator", "substeps"]),
+    ],
+)
+def test_an_unknown_kwarg_lists_every_valid_name_of_the_class_and_its_bases(env_id, names):
+    with pytest.raises(ValueError, match="unknown parameter") as error:
+        gym.make(env_id, nosuch=1.0)
+    valid = error.value.args[0].split("valid: ")[1]
+    for name in names:
+        assert f"'{name}'" in valid
+    assert "'kwargs'" not in valid and "'stepper_options'" not in valid
+
+
+# -- item 3: a negative seed is an argparse error --------------------------------------------------------------
+
+
+def test_a_negative_seed_is_a_usage_error_of_evaluate_and_train(train, capsys):
+    from agents import evaluate
+
+    for parse in (evaluate.parse_args, train.parse_args):
+        for flag in ("--seed", "--eval-seed") if parse is train.parse_args else ("--seed",):
+            with pytest.raises(SystemExit) as exit_:
+                parse([flag, "-1"])
+            assert exit_.value.code == 2
+            assert f"argument {flag}: '-1' is not a seed" in capsys.readouterr().err
+    assert evaluate.parse_args(["--seed", "0"]).seed == 0
+
+
+# -- item 4: the benchmark's command line lists its subcommands ------------------------------------------------
+
+
+def test_bench_help_lists_every_subcommand_and_no_arguments_prints_it(capsys):
+    from connenv import bench
+
+    bench.main([])
+    listing = capsys.readouterr().out
+    for command in ("all", "precision", "stability", "steppers", "generic"):
+        assert re.search(rf"^    {command}\b", listing, re.MULTILINE)
+    with pytest.raises(SystemExit):
+        bench.main(["--help"])
+    assert capsys.readouterr().out == listing
+    with pytest.raises(SystemExit) as exit_:
+        bench.main(["nosuch"])
+    assert exit_.value.code == 2 and "invalid choice: 'nosuch'" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        bench.main(["precision", "--help"])
+    assert "--quick" in capsys.readouterr().out
+
+
+# -- item 9: the test extra installs what the tests that do not train import -----------------------------------
+
+
+def imported_modules(path):
+    """The top-level names of every module a file imports, at module level or inside functions."""
+    tree = ast.parse(path.read_text())
+    names = {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
+    names |= {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.level == 0}
+    return {name.split(".")[0] for name in names}
+
+
+def closure(requirements):
+    """The normalized names of the distributions these requirements install, their dependencies included (extras
+    of dependencies left out)."""
+    seen, todo = set(), [Requirement(r) for r in requirements]
+    while todo:
+        requirement = todo.pop()
+        name = canonicalize_name(requirement.name)
+        if name in seen or (requirement.marker and not requirement.marker.evaluate({"extra": ""})):
+            continue
+        seen.add(name)
+        todo += [Requirement(r) for r in importlib.metadata.requires(requirement.name) or []]
+    return seen
+
+
+def test_the_test_extra_installs_every_module_the_package_and_the_tests_that_do_not_train_import():
+    tomllib = pytest.importorskip("tomllib")  # Python ≥ 3.11
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    installed = closure(project["dependencies"] + project["optional-dependencies"]["test"])
+    files = [*ROOT.glob("connenv/**/*.py"), *ROOT.glob("agents/**/*.py"), *ROOT.glob("tests/**/*.py")]
+    modules = set().union(*(imported_modules(f) for f in files if f.name != "test_training.py"))
+    local = {"connenv", "agents", "golden", "train", "conftest"}
+    third_party = modules - set(sys.stdlib_module_names) - local
+    providers = importlib.metadata.packages_distributions()
+    missing = {m for m in third_party if not {canonicalize_name(d) for d in providers.get(m, [m])} & installed}
+    assert not missing, f"imported by the package or the tests but not installed by .[test]: {sorted(missing)}"
+
+
+def test_ci_runs_the_readmes_test_command():
+    command = 'pip install "torch==2.13.0" -e ".[train,test]" && python -m pytest'
+    assert f"\n    {command}\n" in (ROOT / "README.md").read_text()
+    assert (ROOT / ".ci" / "run").read_text().splitlines()[-1] == command
+
+
+# -- item 8: the goal env under SB3's checker and HER ----------------------------------------------------------
+
+
+def test_the_goal_env_passes_sb3s_checker_unwrapped_and_trains_with_her():
+    """SB3's checker calls compute_reward on the env it is given, which Gymnasium's wrappers do not forward (the
+    docstring says so); HER reaches it through the vec env's env_method, and relabels with it."""
+    from stable_baselines3 import SAC, HerReplayBuffer
+    from stable_baselines3.common.env_checker import check_env
+
+    from connenv.envs.rolling_ball import RollingBallGoalEnv
+
+    env = gym.make("connenv/RollingBallGoal-v0")
+    with pytest.raises(AttributeError, match="compute_reward"):
+        check_env(env)
+    check_env(env.unwrapped)
+    assert "check_env(env.unwrapped)" in RollingBallGoalEnv.__doc__ and "env_method" in RollingBallGoalEnv.__doc__
+    kwargs = {"n_sampled_goal": 4, "goal_selection_strategy": "future"}
+    short = gym.make("connenv/RollingBallGoal-v0", max_episode_steps=20)
+    model = SAC("MultiInputPolicy", short, replay_buffer_class=HerReplayBuffer, replay_buffer_kwargs=kwargs,
+                learning_starts=50, batch_size=32, policy_kwargs={"net_arch": [16]}, seed=0)
+    model.learn(150)
+    batch = model.replay_buffer.sample(256)
+    goals = (batch.next_observations["achieved_goal"], batch.observations["desired_goal"])
+    expected = env.unwrapped.compute_reward(*(g.cpu().numpy() for g in goals), None)
+    assert np.array_equal(batch.rewards.cpu().numpy()[:, 0], expected)
+    assert 0 < np.count_nonzero(expected == 0.0) < len(expected)  # relabelled goals reached, and others not
+
+
+# -- item 1: reset states have physical bounds, refused at reset -----------------------------------------------
+
+HUGE_STATES = [  # (env_id, reset options, the key and range the message names)
+    ("connenv/KozlovShell-v0", {"state": {"momentum": (1e5, 0, 0)}}, r"state momentum\[0\]=100000.0 .*\[-"),
+    ("connenv/KozlovShell-v0", {"state": {"x": 1.5e308}}, r"state x=1.5e\+308 .*\[-100.0, 100.0\]"),
+    ("connenv/KozlovShell-v0", {"target": (-1.5e308, 0)}, r"target\[0\]=-1.5e\+308 .*\[-100.0, 100.0\]"),
+    ("connenv/KozlovShell-v0", {"state": {"theta": 1e10}}, r"state theta=10000000000.0 .*\[-6.28"),
+    ("connenv/RollingBallPose-v0", {"state": {"x": 1.7e308, "y": 1.7e308}}, r"state x=1.7e\+308 .*\[-37.69"),
+    ("connenv/Skier-v0", {"state": {"x_dot": 1e6}}, r"state x_dot=1000000.0 .*\[-"),
+    ("connenv/Skier-v0", {"state": {"p": 1e200}}, r"state p=1e\+200 .*\[-"),
+    ("connenv/Swing-v0", {"state": {"theta": 1e10}}, r"state theta=10000000000.0 .*\[-6.28"),
+    ("connenv/Swing-v0", {"state": {"p": 1e200}}, r"state p=1e\+200 .*\[-"),
+    ("connenv/KapitzaPendulum-v0", {"state": {"theta": 1e10}}, r"state theta=10000000000.0 .*\[-6.28"),
+    ("connenv/KapitzaPendulum-v0", {"state": {"theta_dot": 1e6}}, r"state theta_dot=1000000.0 .*\[-31.3"),
+    ("connenv/KapitzaSwingUp-v0", {"state": {"p": 1e200}}, r"state p=1e\+200 .*\[-"),
+    ("connenv/ActiveConstraint-v0", {"state": {"p": [1e200]}}, r"state p\[0\]=1e\+200 .*\[-1000.0, 1000.0\]"),
+    ("connenv/Connection-v0", {"state": {"s": [-5e167]}}, r"state s\[0\]=-5e\+167 .*\[-1000.0, 1000.0\]"),
+]
+
+
+@pytest.mark.parametrize(("env_id", "options", "message"), HUGE_STATES, ids=[f"{c[0][8:]}-{c[1]}" for c in HUGE_STATES])
+def test_a_reset_state_beyond_its_physical_bounds_is_refused_naming_key_value_and_range(env_id, options, message):
+    with pytest.raises(ValueError, match=message):
+        make(env_id).reset(options=options)
+
+
+@pytest.mark.parametrize("env_id", ["connenv/ActiveConstraint-v0"])
+def test_a_finite_bound_of_a_users_coordinate_beyond_1e3_is_refused(env_id):
+    with pytest.raises(ValueError, match=r"u_low=-1e\+307.* within ±1000.0"):
+        make(env_id, u_low=-1e307)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "state"),
+    [
+        ("connenv/Swing-v0", {"theta": 2 * np.pi, "p": -(2.0**2) * (2.0 / 1.6) ** 2 * 2 * (9.81 / 1.6) ** 0.5}),
+        ("connenv/KapitzaPendulum-v0", {"theta": -2 * np.pi, "theta_dot": 10 * 9.81**0.5}),
+        ("connenv/KozlovShell-v0", {"x": 100.0, "y": -100.0, "momentum": (0.0, 0.0, 0.01)}),
+        ("connenv/RollingBallPose-v0", {"x": 12 * np.pi, "y": -12 * np.pi}),
+    ],
+)
+def test_a_reset_state_at_its_bounds_is_accepted_and_steps_finite(env_id, state):
+    env = make(env_id)
+    env.reset(seed=0, options={"state": state})
+    for _ in range(5):
+        obs, reward, *_, info = env.step(env.action_space.sample())
+        assert np.isfinite(obs).all() and np.isfinite(reward) and np.isfinite(info["state"]["t"])
+
+
+# -- item 7: KapitzaPendulum-v0's reward, on every step --------------------------------------------------------
+
+
+def test_kapitza_pendulums_reward_is_documented_on_every_step_and_keeps_its_documented_bounds():
+    from connenv.envs.kapitza import KapitzaPendulumEnv
+
+    env = gym.make("connenv/KapitzaPendulum-v0")
+    floor = 1 - (np.pi / 0.3) ** 2
+    assert "on every step" in KapitzaPendulumEnv.__doc__ and f"−{-floor:.1f}" in KapitzaPendulumEnv.__doc__
+    env.reset(seed=0)
+    _, reward, terminated, _, info = env.step([0.0])
+    assert 0 <= reward <= 1 and not terminated  # held
+    env.reset(options={"state": {"theta": np.pi + 0.299, "theta_dot": 3.0}})
+    _, reward, terminated, _, info = env.step([0.0])
+    assert terminated and floor < reward < 0  # the step that falls
+    env.reset(options={"state": {"theta": 2 * np.pi}})  # hanging: δ = π
+    _, reward, terminated, _, _ = env.step([0.0])
+    assert terminated and reward == pytest.approx(floor, abs=1e-3)
+
+
+# -- item 6: dt has a documented range, within which the default stepper keeps up ------------------------------
+
+FAST_STARTS = {  # the fastest reset states allowed (item 1), where a long step costs the stepper most
+    "connenv/Swing-v0": {"state": {"theta": 3.0, "theta_dot": 7.7, "r": 1.6}},
+    "connenv/Skier-v0": {"state": {"x": 0.0, "x_dot": 23.0}},
+    "connenv/KozlovShell-v0": {"state": {"momentum": (27.0, 20.0, 5.0)}},
+    "connenv/KapitzaPendulum-v0": {"state": {"theta": np.pi}},  # on the separatrix: the exact step's RK4 branch
+    "connenv/KapitzaSwingUp-v0": {"state": {"theta": np.pi}},
+    "connenv/ActiveConstraint-v0": {"state": {"p": [1000.0]}},
+    "connenv/Connection-v0": {"state": {"s": [1000.0]}},
+}
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_dt_is_checked_against_its_documented_range_and_steps_at_both_ends(env_id):
+    env_cls = gym.spec(env_id).entry_point
+    module = importlib.import_module(env_cls.split(":")[0])
+    high = module.DT_MAX
+    docstring = getattr(module, env_cls.split(":")[1]).__doc__ or ""
+    for base in getattr(module, env_cls.split(":")[1]).__mro__:
+        docstring += base.__doc__ or ""
+    assert f"[1e-6, {high:g}] s |" in docstring
+    for bad in (high * 1.001, 1e6, 0.99e-6, 0.0, -0.05, np.nan):
+        with pytest.raises(ValueError, match=r"dt=.* must be finite and in \[1e-06, "):
+            make(env_id, dt=bad)
+    for dt in (1e-6, high):
+        env = make(env_id, dt=dt)
+        env.reset(seed=0, options=FAST_STARTS.get(env_id))
+        env.action_space.seed(0)
+        for _ in range(3):
+            obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+            assert np.isfinite(reward) and np.isfinite(info["state"]["t"])
+            if terminated:
+                env.reset()
+
+
+def test_a_ball_started_at_its_target_reports_a_finite_path_ratio():
+    env = gym.make("connenv/RollingBall-v0")
+    _, info = env.reset(seed=0, options={"target": np.eye(3)})
+    assert info["distance"] == 0.0 and info["path_ratio"] == 1.0
