@@ -20,6 +20,7 @@ from packaging.utils import canonicalize_name
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import examples
+from connenv.core.validation import DT_MIN
 
 ROOT = Path(__file__).resolve().parents[1]
 IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
@@ -291,11 +292,11 @@ def test_dt_is_checked_against_its_documented_range_and_steps_at_both_ends(env_i
     docstring = getattr(module, env_cls.split(":")[1]).__doc__ or ""
     for base in getattr(module, env_cls.split(":")[1]).__mro__:
         docstring += base.__doc__ or ""
-    assert f"[1e-6, {high:g}] s |" in docstring
-    for bad in (high * 1.001, 1e6, 0.99e-6, 0.0, -0.05, np.nan):
-        with pytest.raises(ValueError, match=r"dt=.* must be finite and in \[1e-06, "):
+    assert f"[{DT_MIN:g}, {high:g}] s |" in docstring
+    for bad in (high * 1.001, 1e6, 0.99 * DT_MIN, 0.0, -0.05, np.nan):
+        with pytest.raises(ValueError, match=rf"dt=.* must be finite and in \[{DT_MIN:g}, "):
             make(env_id, dt=bad)
-    for dt in (1e-6, high):
+    for dt in (DT_MIN, high):
         env = make(env_id, dt=dt)
         env.reset(seed=0, options=FAST_STARTS.get(env_id))
         env.action_space.seed(0)

@@ -146,7 +146,7 @@ class ActiveConstraintEnv(TaskEnv):
     |---|---|---|
     | system | required | n, m, metric, potential (above) |
     | u_low, u_high | required | numbers or m of them, u_low < u_high; ±inf allowed (velocity control) |
-    | dt | 0.05 | [1e-6, 1] s |
+    | dt | 0.05 | [1e-12, 1] s |
     | control | by jump_class (above) | "position", "velocity" |
     | max_control_speed | None | None or (0, ∞), per unit of u per second |
     | integrator | "dop853" | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |

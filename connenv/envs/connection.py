@@ -96,7 +96,7 @@ class ConnectionEnv(TaskEnv):
     | group | (required) | "SO2", "SE2", "SO3", "R2" |
     | connection | (required) | callable s -> A(s) of shape (dim 𝔤, k), finite |
     | shape_low, shape_high | (required) | arrays of shape (k,), low < high, ±inf allowed |
-    | dt | 0.1 | [1e-6, 100] s |
+    | dt | 0.1 | [1e-12, 100] s |
     | frame | "body" | "body", "space" |
     | max_shape_speed | 1.0 | (0, ∞) |
     | task | None | an object with reset, reward, terminated and optionally observation (above) |

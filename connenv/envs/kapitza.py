@@ -136,7 +136,7 @@ class KapitzaPendulumEnv(TaskEnv):
     | g | 9.81 | (0, ∞) |
     | v_max | 10.0 | (0, ∞) m/s |
     | a_max | 0.1 | (0, length) m |
-    | dt | 0.005 | [1e-6, 10] s |
+    | dt | 0.005 | [1e-12, 10] s |
     | tolerance | 0.3 | (0, π) rad |
     | damping | 0.0 | [0, ∞) N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |

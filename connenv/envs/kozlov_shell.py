@@ -138,7 +138,7 @@ class KozlovShellEnv(TaskEnv):
     | mass | 1.0 | (0, ∞), the inner mass |
     | u1_max | 0.5 | (0, ∞), with the box's corners inside the ellipse |
     | u2_max | 0.25 | (0, ∞), likewise |
-    | dt | 0.1 | [1e-6, 1] s |
+    | dt | 0.1 | [1e-12, 1] s |
     | success_radius | 0.05 | (0, 0.5) |
     | integrator | "magnus" (atol 1e-10) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-8, atol 1e-10 | see `connenv.core.steppers` |

@@ -124,7 +124,7 @@ class RollingBallEnv(TaskEnv):
     |---|---|---|
     | radius | 1.0 | (0, ∞) m |
     | v_max | 1.0 | (0, ∞) m/s |
-    | dt | 0.1 | [1e-6, 100] s |
+    | dt | 0.1 | [1e-12, 100] s |
     | tolerance | 0.05 | (0, π) rad |
     | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
     | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |

@@ -122,7 +122,7 @@ class SkierEnv(TaskEnv):
     | h_max | 1.0 | (h_min, ∞), with 1 − κ h_max > 0 on the whole trail |
     | mass | 70.0 | (0, ∞) |
     | g | 9.81 | (0, ∞) |
-    | dt | 0.05 | [1e-6, 10] s |
+    | dt | 0.05 | [1e-12, 10] s |
     | trail | "valley" | "valley", "halfpipe", a sympy expression in x (or its text), or four callables (f, f′, f″, f‴) |
     | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; user trails: domain=(lo, hi) and the expression's other symbols |
     | target_x | None | required for a trail without rims: a point of the domain above the bottom |

@@ -113,7 +113,7 @@ class SwingEnv(TaskEnv):
     | r_max | 2.0 | (r_min, ∞) |
     | g | 9.81 | (0, ∞) |
     | mass | 1.0 | (0, ∞) |
-    | dt | 0.05 | [1e-6, 100] s |
+    | dt | 0.05 | [1e-12, 100] s |
     | target_amplitude | π/2 | (0, π]; π means going over the top |
     | max_radial_speed | None | None or (0, ∞) m/s |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
