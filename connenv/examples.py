@@ -64,7 +64,8 @@ def beanie_connection(s, body_inertia: float, beanie_inertia: float):
 def beanie(body_inertia: float = 3.0, beanie_inertia: float = 1.0) -> dict:
     """Elroy's beanie: group SO2 (the body's angle θ₁), shape ψ, the beanie's angle relative to the body."""
     connection = functools.partial(beanie_connection, body_inertia=body_inertia, beanie_inertia=beanie_inertia)
-    return {"group": "SO2", "connection": connection, "shape_low": [-np.inf], "shape_high": [np.inf], "vectorized": True}
+    return {"group": "SO2", "connection": connection, "shape_low": [-np.inf], "shape_high": [np.inf],
+            "vectorized": True}
 
 
 def rolling_ball_connection(s, radius: float):

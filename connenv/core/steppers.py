@@ -63,7 +63,8 @@ class ConnectionSystem(Protocol):
     ``group`` ("SO2", "SE2", "SO3", "R2"), its assigned coordinates the shape s, and ξ = −A(s) ṡ with
     ``connection(s)`` = A(s) of shape (…, dim 𝔤, dim S) moves g in ``frame`` ("body": ġ = g ξ^, "space":
     ġ = ξ^ g). It may give ``group_velocity(s, ṡ)``, ξ as components, in closed form (the Magnus stepper's fast
-    path), and with it ``segment_velocity(s, ṡ, t)``, ξ at s + t ṡ over a batch at the nodes t (``lie.se2_body_flow``)."""
+    path), and with it ``segment_velocity(s, ṡ, t)``, ξ at s + t ṡ over a batch at the nodes t
+    (``lie.se2_body_flow``)."""
 
     group: str
     frame: str
