@@ -20,7 +20,7 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv, each_row
 from connenv.envs.vector import TaskVectorEnv
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -367,32 +367,23 @@ class ActiveConstraintEnv(TaskEnv):
         q, p = s.y[..., :n].copy(), s.y[..., n:].copy()
         return {"q": q, "p": p, "u": np.array(s.u, float), "t": ops.real(s.t)}
 
-    def _rows(self, s):
-        """The state dicts of the rows of a batch."""
-        return [self.state_dict(self.at(s.y[i], s.u[i], float(s.t[i]), 0.0)) for i in range(len(s.t))]
-
     def observe(self, s, ops=SCALAR):
         if self.task is not None and hasattr(self.task, "observation"):
-            if ops is BATCH:
-                return np.stack([np.asarray(self.task.observation(d), np.float32) for d in self._rows(s)])
-            return np.asarray(self.task.observation(self.state_dict(s)), np.float32)
+            return each_row(lambda d: np.asarray(self.task.observation(d), np.float32), [self.state_dict(s, ops)], ops)
         return np.concatenate([s.y, s.u], axis=-1).astype(np.float32)
 
     def reward(self, before, after, info, ops=SCALAR):
         if self.task is None:
             return ops.real(0.0 * after.t)
-        if ops is BATCH:
-            return np.array([self.task.reward(a, b) for a, b in zip(self._rows(before), self._rows(after))], float)
-        return float(self.task.reward(self.state_dict(before), self.state_dict(after)))
+        return each_row(lambda b, a: float(self.task.reward(b, a)), [self.state_dict(before, ops), info["state"]], ops)
 
     def describe(self, s, ops=SCALAR):
+        state = self.state_dict(s, ops)
         if self.task is None:
             success = ops.flag(0.0 * s.t != 0.0)
-        elif ops is BATCH:
-            success = np.array([bool(self.task.terminated(d)) for d in self._rows(s)])
         else:
-            success = bool(self.task.terminated(self.state_dict(s)))
-        return {"state": self.state_dict(s, ops), "is_success": success}
+            success = each_row(lambda d: bool(self.task.terminated(d)), [state], ops)
+        return {"state": state, "is_success": success}
 
     # -- rendering -------------------------------------------------------------
 

@@ -87,6 +87,16 @@ class State:
         return dataclasses.replace(self, **changes)
 
 
+def each_row(function, states, ops):
+    """function(*states) of state dicts (as ``info["state"]``) on one state (ops=SCALAR); over a batch, function of
+    each row's dicts (every value indexed by the row), stacked: a user's task code, written for one state, run by
+    a vector env."""
+    if ops is SCALAR:
+        return function(*states)
+    rows = range(len(states[0]["t"]))
+    return np.stack([np.asarray(function(*({k: v[i] for k, v in d.items()} for d in states))) for i in rows])
+
+
 class RenderedEnv(gym.Env):
     """A Gymnasium env whose subclasses give ``_make_renderer()`` and ``_draw(renderer)``; pygame loads on first
     render, as in classic control."""

@@ -20,7 +20,7 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv, each_row
 from connenv.envs.vector import TaskVectorEnv
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -222,7 +222,7 @@ class ConnectionEnv(TaskEnv):
 
     def observe(self, state, ops=SCALAR):
         if self.task is not None and hasattr(self.task, "observation"):
-            return _rows(lambda d: np.asarray(self.task.observation(d), np.float32), self.state_dict(state), ops)
+            return each_row(lambda d: np.asarray(self.task.observation(d), np.float32), [self.state_dict(state)], ops)
         g = self.group.matrix(state.g)
         return np.concatenate([g.reshape(*np.shape(state.s)[:-1], -1), state.s], axis=-1).astype(np.float32)
 
@@ -232,13 +232,12 @@ class ConnectionEnv(TaskEnv):
     def reward(self, before, after, info, ops=SCALAR):
         if self.task is None:
             return ops.real(0.0) if ops is SCALAR else np.zeros(len(after.t))
-        pairs = {"before": self.state_dict(before), "after": info["state"]}
-        return _rows(lambda d: float(self.task.reward(d["before"], d["after"])), pairs, ops, nested=True)
+        return each_row(lambda b, a: float(self.task.reward(b, a)), [self.state_dict(before), info["state"]], ops)
 
     def terminated(self, state, info, ops=SCALAR):
         if self.task is None:
             return False if ops is SCALAR else np.zeros(len(state.t), bool)
-        return _rows(lambda d: bool(self.task.terminated(d)), info["state"], ops)
+        return each_row(lambda d: bool(self.task.terminated(d)), [info["state"]], ops)
 
     # -- rendering ---------------------------------------------------------------
 
@@ -298,18 +297,6 @@ def draw_plain(canvas, group: str, state: dict, low, high):
         pg.draw.rect(screen, (70, 110, 160), (x, size - 10 - int(100 * fraction), width, int(100 * fraction)))
     screen.blit(canvas.font.render(f"t = {state['t']:5.2f}   s = {np.round(state['s'], 2)}", True, (0, 0, 0)), (10, 10))
     return canvas.show()
-
-
-def _rows(function, state, ops, nested=False):
-    """function(state) on one state; on a batch (ops=BATCH), function of each row's state, stacked."""
-    if ops is SCALAR:
-        return function(state)
-    if nested:
-        rows = [{k: {key: value[i] for key, value in d.items()} for k, d in state.items()}
-                for i in range(len(state["after"]["t"]))]
-    else:
-        rows = [{key: value[i] for key, value in state.items()} for i in range(len(state["t"]))]
-    return np.stack([np.asarray(function(row)) for row in rows])
 
 
 def _check_connection(connection, group, s):
