@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from connenv.core.steppers import ConnectionSystem, Scipy, StepperError
+from connenv.core.steppers import ConnectionSystem, Scipy, StepperError, conforms
 
 GAUSS = (0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0)  # the Gauss–Legendre nodes on [0, 1]
 BRACKET_WEIGHT = math.sqrt(3.0) / 12.0
@@ -481,7 +481,7 @@ class Magnus:
     points: int = QUADRATURE_POINTS
 
     def __call__(self, system, y, u, u_dot, tau):
-        if not _has_connection(system):
+        if not conforms(system, ConnectionSystem):
             return self.fallback(system, y, u, u_dot, tau)
         if self.pieces is not None:
             return self._fixed(system, y, u, u_dot, tau)
@@ -581,9 +581,6 @@ class Magnus:
         return n.astype(int) if np.ndim(n) else int(n)
 
 
-_CONNECTION_TYPES: dict = {}
-
-
 def fixed_rule(system, segments, atol: float = 1e-10, stepper=None, max_points: int = 16):
     """The cheapest fixed rule, (pieces, points) with the fewest nodes pieces × points, with which the Lie-group
     step of ``system`` (a ConnectionSystem on SE2 in the body frame) meets atol on every control segment (u, u̇, τ)
@@ -606,14 +603,6 @@ def fixed_rule(system, segments, atol: float = 1e-10, stepper=None, max_points: 
             if error <= atol:
                 return step.pieces, points
     raise StepperError(f"the Lie-group step needs > {MAX_SUBSTEPS} pieces for atol {atol} on the segments given")
-
-
-def _has_connection(system) -> bool:
-    """Whether the system is a ConnectionSystem, decided once per type (a Protocol's isinstance is slow)."""
-    kind = type(system)
-    if kind not in _CONNECTION_TYPES:
-        _CONNECTION_TYPES[kind] = isinstance(system, ConnectionSystem)
-    return _CONNECTION_TYPES[kind]
 
 
 def _along(system):

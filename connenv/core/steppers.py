@@ -19,7 +19,6 @@ first order, and written here because scipy has no fixed-step methods.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
@@ -176,7 +175,7 @@ class Exact:
     fallback: Scipy = Scipy()
 
     def __call__(self, system, y, u, u_dot, tau):
-        if _has_exact_segment(type(system)):
+        if conforms(system, ExactSegment):
             flow = system.exact_segment(y, u, u_dot, tau)
         elif np.any(u_dot != 0.0):
             return self.fallback(system, y, u, u_dot, tau)
@@ -242,11 +241,16 @@ def make_stepper(integrator: str, system: SteppedSystem | None = None, **options
     return Scipy(SCIPY_METHODS[integrator], **options)
 
 
-@functools.cache
-def _has_exact_segment(system_type) -> bool:
-    """Whether a system type has ExactSegment's method, decided once per type (a Protocol's isinstance is slow for
-    a step's hot path)."""
-    return issubclass(system_type, ExactSegment)
+_CONFORMS: dict = {}
+
+
+def conforms(system, protocol) -> bool:
+    """isinstance(system, protocol), decided once per (type of system, protocol): a Protocol's isinstance is slow
+    for a step's hot path."""
+    key = (type(system), protocol)
+    if key not in _CONFORMS:
+        _CONFORMS[key] = isinstance(system, protocol)
+    return _CONFORMS[key]
 
 
 def _finite(y, stepper):
