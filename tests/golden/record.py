@@ -60,13 +60,9 @@ def split(kwargs):
     return kwargs.pop("max_episode_steps"), kwargs
 
 
-def single_run(env_id, kwargs, options, seed):
-    """STEPS uniform random actions on gym.make(id), reset (with options) whenever an episode ends. The time limit
-    is Gymnasium's own TimeLimit: rl_zoo3, once imported (by other tests), replaces gym.make's by one that adds an
-    info key and reports no truncation on a step that also terminates."""
-    limit, kwargs = split(kwargs)
-    time_limit = next(c for c in gym.wrappers.TimeLimit.__mro__ if c.__module__.startswith("gymnasium"))
-    env = time_limit(gym.make(env_id, **kwargs).unwrapped, limit)
+def rollout(env, seed, options, reset_at_end):
+    """STEPS uniform random actions from reset(seed, options); with reset_at_end, a reset (with options) whenever an
+    episode ends (a vector env resets its rows itself)."""
     actions = np.random.default_rng(seed).uniform(-1, 1, (STEPS, *env.action_space.shape)).astype(np.float32)
     out = {}
     obs, info = env.reset(seed=seed, options=options)
@@ -74,24 +70,26 @@ def single_run(env_id, kwargs, options, seed):
     for action in actions:
         obs, reward, terminated, truncated, info = env.step(action)
         flatten({"obs": obs, "reward": reward, "flags": [terminated, truncated], "info": info}, "step", out)
-        if terminated or truncated:
+        if reset_at_end and (terminated or truncated):
             obs, info = env.reset(options=options)
             flatten({"obs": obs, "info": info}, "reset", out)
     return out
 
 
+def single_run(env_id, kwargs, options, seed):
+    """The rollout of gym.make(id). The time limit is Gymnasium's own TimeLimit: rl_zoo3, once imported (by other
+    tests), replaces gym.make's by one that adds an info key and reports no truncation on a step that also
+    terminates."""
+    limit, kwargs = split(kwargs)
+    time_limit = next(c for c in gym.wrappers.TimeLimit.__mro__ if c.__module__.startswith("gymnasium"))
+    return rollout(time_limit(gym.make(env_id, **kwargs).unwrapped, limit), seed, options, True)
+
+
 def vector_run(env_id, kwargs, options, seed):
-    """STEPS uniform random actions on the native vector env of ROWS rows, autoresets included."""
+    """The rollout of the native vector env of ROWS rows, autoresets included."""
     limit, kwargs = split(kwargs)
     env = gym.make_vec(env_id, ROWS, vectorization_mode="vector_entry_point", max_episode_steps=limit, **kwargs)
-    actions = np.random.default_rng(seed).uniform(-1, 1, (STEPS, *env.action_space.shape)).astype(np.float32)
-    out = {}
-    obs, info = env.reset(seed=seed, options=options)
-    flatten({"obs": obs, "info": info}, "reset", out)
-    for action in actions:
-        obs, reward, terminated, truncated, info = env.step(action)
-        flatten({"obs": obs, "reward": reward, "flags": [terminated, truncated], "info": info}, "step", out)
-    return out
+    return rollout(env, seed, options, False)
 
 
 def digest(array):
