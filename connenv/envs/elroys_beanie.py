@@ -52,14 +52,14 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     ## Observation Space
 
-    `Box(-inf, inf, (4,), float32)`:
+    `Box(4,) float32`, with μ_max = 0.9 I₂ · max_beanie_speed the largest momentum a reset takes:
 
-    | Num | Observation | Unit |
-    |-----|-------------|------|
-    | 0 | sin(θ* − θ) | |
-    | 1 | cos(θ* − θ) | |
-    | 2 | μ | kg m²/s |
-    | 3 | time held within the tolerance / hold_time | |
+    | Num | Observation | Min | Max | Unit |
+    |-----|-------------|-----|-----|------|
+    | 0 | sin(θ* − θ) | -1 | 1 | |
+    | 1 | cos(θ* − θ) | -1 | 1 | |
+    | 2 | μ | -μ_max | μ_max | kg m²/s |
+    | 3 | time held within the tolerance / hold_time, at most 1 | 0 | 1 | |
 
     ## Rewards
 
@@ -140,7 +140,12 @@ class ElroysBeanieEnv(ConnectionEnv):
                 "max_beanie_speed": self.max_beanie_speed}  # fmt: skip
 
     def _observation_space(self):
-        return spaces.Box(-np.inf, np.inf, (4,), np.float32)
+        mu = self.momentum_bound()
+        return spaces.Box(np.array([-1.0, -1.0, -mu, 0.0], np.float32), np.array([1.0, 1.0, mu, 1.0], np.float32))
+
+    def momentum_bound(self):
+        """The largest |μ| a reset takes: 0.9 I₂ · max_beanie_speed, so that the beanie can still hold the body."""
+        return 0.9 * self.beanie_inertia * self.max_beanie_speed
 
     # -- physics ---------------------------------------------------------------
 
@@ -153,7 +158,7 @@ class ElroysBeanieEnv(ConnectionEnv):
         momentum = rng.uniform(*MOMENTUM_RANGE) * rng.choice((-1.0, 1.0))
         target = rng.uniform(-math.pi, math.pi)
         if "momentum" in given:
-            bound = 0.9 * self.beanie_inertia * self.max_beanie_speed
+            bound = self.momentum_bound()
             momentum = check_number("state momentum", given["momentum"], -bound, bound)
         if "target" in options:
             target = check_angle("target", options["target"])
@@ -182,7 +187,8 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     def observe(self, state, ops=SCALAR):
         e = self.error(state, ops)
-        return ops.pack([ops.sin(e), ops.cos(e), state.momentum, state.held / self.hold_time])
+        held = ops.clip(state.held / self.hold_time, 0.0, 1.0)
+        return ops.pack([ops.sin(e), ops.cos(e), state.momentum, held])
 
     def reward(self, before, after, info, ops=SCALAR):
         e_before, e_after = abs(self.error(before, ops)), abs(info["error"])

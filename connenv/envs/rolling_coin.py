@@ -17,6 +17,7 @@ from connenv.systems import rolling_coin
 TIME_COST = 0.01  # reward paid per step until success
 SUCCESS_BONUS = 1.0  # reward on the step that parks
 TARGET_DISTANCE = (1.0, 3.0)  # m: the target's distance from the start is drawn uniformly in this range
+OFFSET_BOUND = 10.0  # m: the observed offsets are clipped here
 
 
 @dataclass
@@ -48,15 +49,15 @@ class RollingCoinEnv(ConnectionEnv):
 
     ## Observation Space
 
-    `Box(-inf, inf, (4,), float32)`: the target seen from the coin, with d = (x* − x, y* − y), the heading
-    f = (sin θ, cos θ) and its right-hand side r = (cos θ, −sin θ):
+    `Box(4,) float32`: the target seen from the coin, with d = (x* − x, y* − y), the heading f = (sin θ, cos θ)
+    and its right-hand side r = (cos θ, −sin θ):
 
-    | Num | Observation | Unit |
-    |-----|-------------|------|
-    | 0 | d · f, the target's distance ahead | m |
-    | 1 | d · r, the target's distance to the right | m |
-    | 2 | sin(θ* − θ) | |
-    | 3 | cos(θ* − θ) | |
+    | Num | Observation | Min | Max | Unit |
+    |-----|-------------|-----|-----|------|
+    | 0 | d · f, the target's distance ahead, clipped | -10 | 10 | m |
+    | 1 | d · r, the target's distance to the right, clipped | -10 | 10 | m |
+    | 2 | sin(θ* − θ) | -1 | 1 | |
+    | 3 | cos(θ* − θ) | -1 | 1 | |
 
     ## Rewards
 
@@ -76,7 +77,7 @@ class RollingCoinEnv(ConnectionEnv):
 
     Terminated when parked (`info["is_success"]`): |d| ≤ `position_tolerance` (0.05 m) and |θ* − θ| ≤
     `heading_tolerance` (0.05 rad, wrapped); φ is free. Truncated after 200 steps (20 s) by the registration's
-    time limit; the reference planner (`agents.coin`) needs at most π/2 + 3/(R · 2) + π s, 78 steps.
+    time limit; the reference planner (`agents.lawton.CoinPlanner`) needs at most π/2 + 3/(R · 2) + π s, 78 steps.
 
     ## Arguments
 
@@ -137,7 +138,8 @@ class RollingCoinEnv(ConnectionEnv):
         return {"radius": self.radius, "max_steer_rate": self.rates[0], "max_roll_rate": self.rates[1]}
 
     def _observation_space(self):
-        return spaces.Box(-np.inf, np.inf, (4,), np.float32)
+        high = np.array([OFFSET_BOUND, OFFSET_BOUND, 1.0, 1.0], np.float32)
+        return spaces.Box(-high, high, dtype=np.float32)
 
     def reset(self, *, seed=None, options=None):
         self.track = []
@@ -184,7 +186,9 @@ class RollingCoinEnv(ConnectionEnv):
 
     def observe(self, state, ops=SCALAR):
         dx, dy, sin, cos, heading = self.errors(state, ops)
-        return ops.pack([dx * sin + dy * cos, dx * cos - dy * sin, ops.sin(heading), ops.cos(heading)])
+        ahead = ops.clip(dx * sin + dy * cos, -OFFSET_BOUND, OFFSET_BOUND)
+        right = ops.clip(dx * cos - dy * sin, -OFFSET_BOUND, OFFSET_BOUND)
+        return ops.pack([ahead, right, ops.sin(heading), ops.cos(heading)])
 
     def success(self, state, ops=SCALAR):
         dx, dy, _, _, heading = self.errors(state, ops)
