@@ -17,6 +17,7 @@ from connenv.systems import elroys_beanie
 MOMENTUM_RANGE = (0.25, 1.0)  # |μ| drawn at reset (kg m²/s), with a random sign
 OFF_TARGET_COST = 0.05  # reward paid per step the body is off the target by more than the tolerance
 SUCCESS_BONUS = 1.0  # reward on the step that completes the hold
+FINE_SCALE = 10.0  # the observed fine error is (θ* − θ)/(FINE_SCALE · tolerance), clipped to [−1, 1]
 HOLD_SLACK = 1e-9  # s: a hold of hold_time − HOLD_SLACK counts (the sum of dt's rounds)
 
 
@@ -52,7 +53,7 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     ## Observation Space
 
-    `Box(4,) float32`, with μ_max = 0.9 I₂ · max_beanie_speed the largest momentum a reset takes:
+    `Box(5,) float32`, with μ_max = 0.9 I₂ · max_beanie_speed the largest momentum a reset takes:
 
     | Num | Observation | Min | Max | Unit |
     |-----|-------------|-----|-----|------|
@@ -60,6 +61,7 @@ class ElroysBeanieEnv(ConnectionEnv):
     | 1 | cos(θ* − θ) | -1 | 1 | |
     | 2 | μ | -μ_max | μ_max | kg m²/s |
     | 3 | time held within the tolerance / hold_time, at most 1 | 0 | 1 | |
+    | 4 | (θ* − θ)/(10 · tolerance), clipped: the error at the resolution the hold needs | -1 | 1 | |
 
     ## Rewards
 
@@ -141,7 +143,8 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     def _observation_space(self):
         mu = self.momentum_bound()
-        return spaces.Box(np.array([-1.0, -1.0, -mu, 0.0], np.float32), np.array([1.0, 1.0, mu, 1.0], np.float32))
+        low, high = np.array([-1.0, -1.0, -mu, 0.0, -1.0], np.float32), np.array([1.0, 1.0, mu, 1.0, 1.0], np.float32)
+        return spaces.Box(low, high)
 
     def momentum_bound(self):
         """The largest |μ| a reset takes: 0.9 I₂ · max_beanie_speed, so that the beanie can still hold the body."""
@@ -188,7 +191,8 @@ class ElroysBeanieEnv(ConnectionEnv):
     def observe(self, state, ops=SCALAR):
         e = self.error(state, ops)
         held = ops.clip(state.held / self.hold_time, 0.0, 1.0)
-        return ops.pack([ops.sin(e), ops.cos(e), state.momentum, held])
+        fine = ops.clip(e / (FINE_SCALE * self.tolerance), -1.0, 1.0)
+        return ops.pack([ops.sin(e), ops.cos(e), state.momentum, held, fine])
 
     def reward(self, before, after, info, ops=SCALAR):
         e_before, e_after = abs(self.error(before, ops)), abs(info["error"])
