@@ -182,7 +182,7 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     def error(self, state, ops=SCALAR):
         """θ* − θ wrapped into [−π, π]."""
-        turn = state.target - state.g[..., 0]
+        turn = state.target - (float(state.g[0]) if ops is SCALAR else state.g[..., 0])
         return ops.atan2(ops.sin(turn), ops.cos(turn))
 
     def success(self, state, ops=SCALAR):
@@ -202,10 +202,11 @@ class ElroysBeanieEnv(ConnectionEnv):
     def describe(self, state, ops=SCALAR):
         state_dict = {"theta": ops.real(state.g[..., 0]), "psi": ops.real(state.s[..., 0]),
                       "momentum": ops.real(state.momentum), "t": state.t}  # fmt: skip
+        error = self.error(state, ops)
         return {
             "state": state_dict,
             "target": ops.real(state.target),
-            "error": ops.real(self.error(state, ops)),
+            "error": ops.real(error),
             "held": ops.real(state.held),
             "is_success": ops.flag(self.success(state, ops)),
         }

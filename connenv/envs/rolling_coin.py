@@ -173,16 +173,22 @@ class RollingCoinEnv(ConnectionEnv):
 
     # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
+    @staticmethod
+    def coordinates(state, ops=SCALAR):
+        """x, y, θ, φ, x*, y*, θ*: Python floats for one state, arrays over the rows of a batch."""
+        if ops is SCALAR:
+            return (*state.g.tolist(), *state.s.tolist(), *state.target.tolist())
+        return (*state.g.T, *state.s.T, *state.target.T)
+
     def errors(self, state, ops=SCALAR):
         """d (the target's offset, x and y), the heading f's components (sin θ, cos θ), and θ* − θ wrapped."""
-        theta = state.s[..., 0]
-        dx, dy = state.target[..., 0] - state.g[..., 0], state.target[..., 1] - state.g[..., 1]
-        turn = state.target[..., 2] - theta
-        return dx, dy, ops.sin(theta), ops.cos(theta), ops.atan2(ops.sin(turn), ops.cos(turn))
+        x, y, theta, _, x_target, y_target, theta_target = self.coordinates(state, ops)
+        turn = theta_target - theta
+        return x_target - x, y_target - y, ops.sin(theta), ops.cos(theta), ops.atan2(ops.sin(turn), ops.cos(turn))
 
-    def cost(self, state, ops=SCALAR):
-        dx, dy, _, _, heading = self.errors(state, ops)
-        return ops.hypot(dx, dy) + self.radius * abs(heading)
+    def cost(self, distance, heading_error):
+        """c = |d| + R |θ* − θ|."""
+        return distance + self.radius * abs(heading_error)
 
     def observe(self, state, ops=SCALAR):
         dx, dy, sin, cos, heading = self.errors(state, ops)
@@ -190,23 +196,24 @@ class RollingCoinEnv(ConnectionEnv):
         right = ops.clip(dx * cos - dy * sin, -OFFSET_BOUND, OFFSET_BOUND)
         return ops.pack([ahead, right, ops.sin(heading), ops.cos(heading)])
 
-    def success(self, state, ops=SCALAR):
-        dx, dy, _, _, heading = self.errors(state, ops)
-        return (ops.hypot(dx, dy) <= self.position_tolerance) & (abs(heading) <= self.heading_tolerance)
+    def success(self, distance, heading_error):
+        return (distance <= self.position_tolerance) & (abs(heading_error) <= self.heading_tolerance)
 
     def reward(self, before, after, info, ops=SCALAR):
-        parked = ops.real(info["is_success"])
-        return self.cost(before, ops) - self.cost(after, ops) - TIME_COST + SUCCESS_BONUS * parked
+        dx, dy, _, _, heading = self.errors(before, ops)
+        progress = self.cost(ops.hypot(dx, dy), heading) - self.cost(info["distance"], info["heading_error"])
+        return progress - TIME_COST + SUCCESS_BONUS * ops.real(info["is_success"])
 
     def describe(self, state, ops=SCALAR):
         dx, dy, _, _, heading = self.errors(state, ops)
-        x, y, theta, phi = state.g[..., 0], state.g[..., 1], state.s[..., 0], state.s[..., 1]
+        x, y, theta, phi = self.coordinates(state, ops)[:4]
+        distance = ops.hypot(dx, dy)
         return {
             "state": {"x": ops.real(x), "y": ops.real(y), "theta": ops.real(theta), "phi": ops.real(phi), "t": state.t},
             "target": state.target.copy(),
-            "distance": ops.real(ops.hypot(dx, dy)),
+            "distance": ops.real(distance),
             "heading_error": ops.real(heading),
-            "is_success": ops.flag(self.success(state, ops)),
+            "is_success": ops.flag(self.success(distance, heading)),
         }
 
     def terminated(self, state, info, ops=SCALAR):
