@@ -15,7 +15,7 @@ from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVe
 from connenv.systems import elroys_beanie
 
 MOMENTUM_RANGE = (0.25, 1.0)  # |μ| drawn at reset (kg m²/s), with a random sign
-OFF_TARGET_COST = 0.05  # reward paid per step the body is off the target by more than the tolerance
+OFF_TARGET_COST = 0.05  # reward paid per step the body is off the target by 10 tolerances or more (graded below)
 SUCCESS_BONUS = 1.0  # reward on the step that completes the hold
 FINE_SCALE = 10.0  # the observed fine error is (θ* − θ)/(FINE_SCALE · tolerance), clipped to [−1, 1]
 HOLD_SLACK = 1e-9  # s: a hold of hold_time − HOLD_SLACK counts (the sum of dt's rounds)
@@ -67,7 +67,10 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     With e = θ* − θ wrapped into [−π, π], e before the step and e′ after it:
 
-        reward = |e| − |e′| − 0.05 · (|e′| > tolerance) + 1 · (hold completed after the step)
+        reward = |e| − |e′| − 0.05 · min(1, |e′|/(10 · tolerance)) · (|e′| > tolerance) + 1 · (hold completed)
+
+    The cost off the target grows with the error up to ten tolerances, so that the reward tells a near miss from a
+    far one; inside the tolerance there is none, so that staying there earns less than completing the hold.
 
     ## Starting State
 
@@ -196,7 +199,7 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     def reward(self, before, after, info, ops=SCALAR):
         e_before, e_after = abs(self.error(before, ops)), abs(info["error"])
-        off = ops.real(e_after > self.tolerance)
+        off = ops.real(e_after > self.tolerance) * ops.clip(e_after / (FINE_SCALE * self.tolerance), 0.0, 1.0)
         return e_before - e_after - OFF_TARGET_COST * off + SUCCESS_BONUS * ops.real(info["is_success"])
 
     def describe(self, state, ops=SCALAR):
