@@ -11,6 +11,7 @@ from gymnasium import spaces
 
 from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number, check_vector
 from connenv.envs.base import SCALAR
+from connenv.envs.connection import DT_MAX  # noqa: F401  (ConnectionEnv's dt range, this env's)
 from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
 from connenv.systems import rolling_coin
 
