@@ -59,9 +59,8 @@ class BeanieRenderer:
 
         pg.draw.circle(c.screen, (225, 225, 235), c.px(0.0, 0.0), int(1.0 * c.scale))
         pg.draw.circle(c.screen, (60, 60, 60), c.px(0.0, 0.0), int(1.0 * c.scale), 2)
-        for k in range(12):  # dashes toward the target
-            a, b = 0.1 * k, 0.1 * k + 0.05
-            pg.draw.line(c.screen, (90, 170, 90), ray(target, a * 1.2), ray(target, b * 1.2), 3)
+        for k in range(12):  # dashes toward the target, past the body's rim
+            pg.draw.line(c.screen, (90, 170, 90), ray(target, 0.1 * k), ray(target, 0.1 * k + 0.05), 3)
         pg.draw.line(c.screen, (60, 60, 120), c.px(0.0, 0.0), ray(theta, 1.0), 5)  # the body's mark
         pg.draw.circle(c.screen, (250, 230, 120), c.px(0.0, 0.0), int(0.4 * c.scale))
         pg.draw.circle(c.screen, (150, 120, 40), c.px(0.0, 0.0), int(0.4 * c.scale), 2)
