@@ -48,6 +48,8 @@ ENVS = (
     "connenv/RollingBallPose-v0",
     "connenv/RollingBallGoal-v0",
     "connenv/KapitzaSwingUp-v0",
+    "connenv/RollingCoin-v0",
+    "connenv/ElroysBeanie-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
@@ -201,6 +203,8 @@ MEASURES = {
     "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),
     "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
     "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
+    "connenv/RollingCoin-v0": ("time to park", "s", lambda row: row["time_to_success_mean"]),
+    "connenv/ElroysBeanie-v0": ("time to hold", "s", lambda row: row["time_to_success_mean"]),
 }
 
 

@@ -7,6 +7,7 @@ import numpy as np
 
 from agents.gaits import GaitPlanner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
+from agents.lawton import BeanieDeadBeat, CoinPlanner
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
 
 
@@ -67,6 +68,8 @@ CONTROLLERS = {
         "damped": lambda env: KapitzaVibration(env, modulation=DAMPING_MODULATION),
     },
     "connenv/KapitzaSwingUp-v0": {"swingup": KapitzaSwingUp},
+    "connenv/RollingCoin-v0": {"turn_roll_turn": CoinPlanner},
+    "connenv/ElroysBeanie-v0": {"dead_beat": BeanieDeadBeat},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

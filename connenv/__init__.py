@@ -80,3 +80,15 @@ register(
     vector_entry_point="connenv.envs.connection:ConnectionVectorEnv",
     max_episode_steps=1000,
 )
+register(
+    id="connenv/RollingCoin-v0",
+    entry_point="connenv.envs.rolling_coin:RollingCoinEnv",
+    vector_entry_point="connenv.envs.rolling_coin:RollingCoinVectorEnv",
+    max_episode_steps=200,
+)
+register(
+    id="connenv/ElroysBeanie-v0",
+    entry_point="connenv.envs.elroys_beanie:ElroysBeanieEnv",
+    vector_entry_point="connenv.envs.elroys_beanie:ElroysBeanieVectorEnv",
+    max_episode_steps=200,
+)

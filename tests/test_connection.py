@@ -348,3 +348,25 @@ def test_quadrature_flow_on_se2_converges_at_least_at_order_8(frame):
     errors = [np.max(np.abs(np.array(quadrature_flow(GROUPS["SE2"], frame, system.group_velocity, tuple(g0), s0,
                                                      s_dot, tau, n)[0]) - reference)) for n in (1, 2)]  # fmt: skip
     assert errors[0] > 1e-9 and errors[1] <= errors[0] / 2**8, errors
+
+
+def test_a_closed_form_exact_segment_is_the_default_step_and_the_flow_magnus_integrates():
+    """Connection-v0 with the coin's exact_segment: integrator "exact" by default, on a bounded shape space whose
+    stops cut the step into segments, and Magnus's quadrature of the same connection agrees to its tolerance; a
+    non-callable exact_segment is refused."""
+    import functools
+
+    from connenv.systems import rolling_coin
+
+    kwargs = {"group": "R2", "connection": functools.partial(rolling_coin.connection, radius=0.5),
+              "shape_low": [-1.0, -2.0], "shape_high": [1.0, 2.0], "vectorized": True}  # fmt: skip
+    exact = gym.make(ID, exact_segment=functools.partial(rolling_coin.exact_segment, radius=0.5), **kwargs).unwrapped
+    magnus = gym.make(ID, integrator="magnus", atol=1e-12, **kwargs).unwrapped
+    assert type(exact.stepper).__name__ == "Exact"
+    for env in (exact, magnus):
+        env.reset(seed=0)
+        for a in np.random.default_rng(1).uniform(-1, 1, (60, 2)):
+            env.step(a)
+    assert np.max(np.abs(exact.state.g - magnus.state.g)) <= 1e-11
+    with pytest.raises(ValueError, match="exact_segment"):
+        gym.make(ID, exact_segment=3.0, **kwargs)

@@ -1,7 +1,7 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball kapitza shell connection] [--quick]
+    python -m connenv.bench precision [--env swing skier ball kapitza shell coin beanie connection] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -23,6 +23,12 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
   1e-13, atol 1e-15. State error: max-norm of the pose (x, y, θ) error at the end (m, rad), for each model.
   Invariant: max |S(t) − S(0)| / |S(0)| of the spatial momentum S in the full model. Besides the common
   candidates, the Magnus step (`integrator="magnus"`: the reduced model's connection; DOP853 on the full model).
+- coin: RollingCoin-v0 from the origin, 200 steps (one episode) of seeded random rates; reference: the exact
+  step (the chord of each arc). State error: |(x, y) − the reference's| at the end (m). Invariant: the largest
+  distance of the track from the reference's over the episode (m): rolling has no conserved quantity.
+- beanie: ElroysBeanie-v0 at μ = 0.7, 200 steps of seeded random beanie speeds; reference: the exact step.
+  State error: |θ − θ_ref| at the end (rad). Invariant: the integrated momentum balance
+  |(I₁ + I₂)(θ − θ₀) + I₂ (ψ − ψ₀) − μ t| / (I₁ + I₂) (rad), 0 for the flow.
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
@@ -117,6 +123,35 @@ def momentum_drift(env, info, start):
     return float(np.linalg.norm(np.asarray(info["spatial_momentum"]) - s0) / np.linalg.norm(s0))
 
 
+def coin_track_error(env, info, start):
+    """The distance of the coin from the exact step's track at this step (the episode's seeded actions)."""
+    steps = round(info["state"]["t"] / env.dt)
+    track = _coin_track(env.dt, max(steps, 1))
+    return float(np.hypot(info["state"]["x"] - track[steps - 1, 0], info["state"]["y"] - track[steps - 1, 1]))
+
+
+_TRACKS: dict = {}
+
+
+def _coin_track(dt, steps):
+    """(x, y) after each of the first `steps` steps of the coin case's episode, by the exact step."""
+    key = (dt, "coin")
+    if key not in _TRACKS or len(_TRACKS[key]) < steps:
+        env = make_env("connenv/RollingCoin-v0", *EXACT)
+        env.reset(seed=0, options={"state": {}})
+        track = [env.step(a)[4]["state"] for a in uniform(2)(max(steps, 200), np.random.default_rng(0))]
+        _TRACKS[key] = np.array([(s["x"], s["y"]) for s in track])
+    return _TRACKS[key]
+
+
+def beanie_balance(env, info, start):
+    """|(I₁ + I₂)(θ − θ₀) + I₂ (ψ − ψ₀) − μ t| / (I₁ + I₂): the momentum balance integrated, rad."""
+    s, s0 = info["state"], start["state"]
+    total = env.body_inertia + env.beanie_inertia
+    balance = total * (s["theta"] - s0["theta"]) + env.beanie_inertia * (s["psi"] - s0["psi"]) - s["momentum"] * s["t"]
+    return abs(balance) / total
+
+
 CASES = {
     "swing": Case(
         "connenv/Swing-v0",
@@ -172,6 +207,26 @@ CASES = {
         "max |S − S(0)| / |S(0)| (full model)",
         momentum_drift,
         "m, rad",
+        steppers=MAGNUS,
+    ),
+    "coin": Case(
+        "connenv/RollingCoin-v0",
+        EXACT,
+        (Episode("random rates", {"state": {}}, uniform(2), 200),),
+        lambda env, ref: float(np.hypot(*(env.state.g - ref.state.g))),
+        "max distance from the exact track (m)",
+        coin_track_error,
+        "m",
+        steppers=MAGNUS,
+    ),
+    "beanie": Case(
+        "connenv/ElroysBeanie-v0",
+        EXACT,
+        (Episode("μ=0.7", {"state": {"momentum": 0.7}}, uniform(1), 200),),
+        lambda env, ref: abs(env.state.g[0] - ref.state.g[0]),
+        "max |momentum balance| / (I₁ + I₂) (rad)",
+        beanie_balance,
+        "rad",
         steppers=MAGNUS,
     ),
     "connection": Case(

@@ -1,7 +1,7 @@
 """Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
-    python -m connenv.bench stability [--env swing skier ball kapitza shell] [--quick]
+    python -m connenv.bench stability [--env swing skier ball kapitza shell coin beanie] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -23,6 +23,12 @@ StepperError and the invariant's error stayed within the bound below at every st
   u2_max sin 2πt/T), T = 2 s, for 10 s; parameter the mass ratio m/(M + λ₁), set by m; bounded: the spatial
   momentum within 0.1 of its norm (the env's own bound). The reduced model is not mapped: its motion is
   geometric, so a step's error depends on the path of u over the step and not on dt.
+- coin: RollingCoin-v0 steered and rolled at full rates (action (1, 1)) from the origin, 10 s: the contact point
+  runs round a circle of radius ρ = R φ̇/θ̇ at θ̇ = max_steer_rate; parameter max_steer_rate (the circle's angular
+  rate); bounded: within 0.1 ρ of the exact circle at every step. The exact step is the circle's chord.
+- beanie: ElroysBeanie-v0 at μ = 0.7 with seeded random beanie speeds, 10 s; parameter I₂/I₁ (beanie_inertia,
+  body_inertia 1); bounded: the integrated momentum balance within 1e-9 rad. θ̇ is constant over a step of
+  constant ψ̇, so every method's step is exact and the map is flat: every method holds at the top of the grid.
 
 A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
 grid held.
@@ -95,7 +101,50 @@ def pivot_vibration(omega, t, dt, rng):
 
 VALLEY_KAPPA_MAX = 3.0 / 2 * (2 * math.pi / 12.0) ** 2  # κ at the bottom of f = H(1 − cos 2πx/L)/2, H = 3, L = 12
 FIXED = (("euler", {}), ("semi_implicit_euler", {}), ("rk4", {}))
+
+
+def off_circle(env, info, start):
+    """Whether the coin has left the exact circle it rolls at action (1, 1) by more than BOUND · ρ."""
+    rho = env.radius * env.rates[1] / env.rates[0]
+    s = info["state"]
+    half = 0.5 * env.rates[0] * s["t"]
+    chord = env.radius * env.rates[1] * s["t"] * (math.sin(half) / half if half else 1.0)
+    exact = start["state"]["x"] + chord * math.sin(half), start["state"]["y"] + chord * math.cos(half)
+    return math.hypot(s["x"] - exact[0], s["y"] - exact[1]) > BOUND * rho
+
+
+def balance_broken(env, info, start):
+    """Whether the beanie's integrated momentum balance has moved by more than 1e-9 rad."""
+    from connenv.bench.precision import beanie_balance
+
+    return beanie_balance(env, info, start) > 1e-9
+
+
+def random_speed(value, t, dt, rng):
+    return rng.uniform(-1.0, 1.0, 1).astype(np.float32)
 MAPS = {
+    "coin": StabilityMap(
+        "connenv/RollingCoin-v0",
+        "max_steer_rate θ̇ (rad/s)",
+        (1.0, 10.0, 100.0, 1000.0),
+        lambda omega: {"max_steer_rate": omega},
+        lambda omega: {"state": {}},
+        held([1.0, 1.0]),
+        lambda value, dt: math.ceil(10.0 / dt),
+        off_circle,
+        (("euler", {}), ("rk4", {}), ("magnus", {}), ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("exact", {})),
+    ),
+    "beanie": StabilityMap(
+        "connenv/ElroysBeanie-v0",
+        "I₂/I₁",
+        (0.1, 0.25, 1.0, 4.0),
+        lambda ratio: {"beanie_inertia": ratio, "max_beanie_speed": max(4 * math.pi, 1.2 / ratio)},
+        lambda ratio: {"state": {"momentum": 0.7}},
+        random_speed,
+        lambda value, dt: math.ceil(10.0 / dt),
+        balance_broken,
+        (("euler", {}), ("rk4", {}), ("magnus", {}), ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("exact", {})),
+    ),
     "swing": StabilityMap(
         "connenv/Swing-v0",
         "r_min (m)",

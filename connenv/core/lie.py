@@ -226,6 +226,15 @@ class Connection:
         return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
 
 
+@dataclass(frozen=True)
+class ExactConnection(Connection):
+    """A Connection that knows its flow in closed form: ``exact_segment(g, s, ṡ, τ)`` is the coordinates of g after
+    a segment of length τ at constant ṡ from shape s, for one state (arrays (size,), (k,), (k,), a float τ) or a
+    batch of rows (leading axes, τ a float or one per row). The Exact stepper (``integrator="exact"``) takes it."""
+
+    exact_segment: object = field(default=None, compare=False)
+
+
 def group_velocity(system, s, s_dot):
     """ξ = −A(s) ṡ as components: the system's own ``group_velocity`` if it has one (a closed form), else from its
     ``connection``."""

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.lie import FRAMES, GROUPS, Connection
+from connenv.core.lie import FRAMES, GROUPS, Connection, ExactConnection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
 from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import (
@@ -102,7 +102,9 @@ class ConnectionEnv(TaskEnv):
     | task | None | an object with reset, reward, terminated and optionally observation (above) |
     | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
     | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the vector env calls it once |
-    | integrator | "magnus" | "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | exact_segment | None | callable (g, s, ṡ, τ) -> g after a segment at constant ṡ, in closed form (below) |
+    | integrator | "exact" with exact_segment, else "magnus" | "exact" (with exact_segment), "magnus", "euler", "rk4", |
+    | | | "dop853", "rk45", "lsoda", "radau" |
     | atol (magnus: its error bound per segment, 1e-10) / substeps, rtol, atol (others) | | `connenv.core.steppers` |
 
     The default step is `connenv.core.lie.Magnus`: on SO3 the sixth-order Magnus method with closed-form
@@ -111,6 +113,10 @@ class ConnectionEnv(TaskEnv):
     along the shape's path the step is one exponential, the exact flow. g stays on its group to rounding (the other
     integrators step ġ in coordinates and leave SO(3) slowly). A g further than 1e-9 from its group after a step raises
     `connenv.core.StepperError`, as does a non-finite state or a segment that needs more than 4096 substeps.
+
+    A system that knows its flow in closed form gives it as `exact_segment(g, s, ṡ, τ)`: the coordinates of g after
+    a segment of length τ at constant ṡ from the shape s, for one state or a batch of rows (arrays with leading axes,
+    τ a float or one per row). It is then the default step, `integrator="exact"` (`connenv.core.lie.ExactConnection`).
 
     Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`.
     """
@@ -128,7 +134,8 @@ class ConnectionEnv(TaskEnv):
         render_mode: str | None = None,
         draw=None,
         vectorized: bool = False,
-        integrator: str = "magnus",
+        integrator: str | None = None,
+        exact_segment=None,
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
@@ -143,8 +150,14 @@ class ConnectionEnv(TaskEnv):
             raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
         self.task, self.draw = task, draw
         connection = _check_connection(connection, self.group, self.start_shape())
-        self.system = Connection(group, frame, connection, bool(vectorized))
+        if exact_segment is None:
+            self.system = Connection(group, frame, connection, bool(vectorized))
+        elif callable(exact_segment):
+            self.system = ExactConnection(group, frame, connection, bool(vectorized), exact_segment)
+        else:
+            raise ValueError(f"exact_segment={exact_segment!r} must be a callable (g, s, ṡ, τ) -> g, or None")
         check_stepper_options("Connection-v0", stepper_options, type(self))
+        integrator = integrator or ("magnus" if exact_segment is None else "exact")
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.state = ConnectionState(np.array(self.group.identity()), self.start_shape(), 0.0)
         self.action_space = spaces.Box(-1.0, 1.0, self.low.shape, np.float32)
@@ -184,7 +197,7 @@ class ConnectionEnv(TaskEnv):
         segments, s, _ = bounded_segments(state.s, s_dot, self.low, self.high, self.dt)
         g, _ = run_segments(self.stepper, self.system, state.g, segments)
         self.check_group(g)
-        return ConnectionState(g, s, state.t + self.dt)
+        return state.replace(g=g, s=s, t=state.t + self.dt)
 
     def check_group(self, g):
         """StepperError if g (any row of a batch) has left its group by more than GROUP_BOUND (SO3's matrices; the
@@ -266,7 +279,7 @@ class ConnectionVectorEnv(TaskVectorEnv):
         segments, s, _ = bounded_segments_batch(state.s, s_dot, env.low, env.high, env.dt)
         g, _ = run_segments(self.stepper, env.system, state.g, segments)
         env.check_group(g)
-        return ConnectionState(g, s, state.t + env.dt)
+        return state.replace(g=g, s=s, t=state.t + env.dt)
 
 
 def draw_plain(canvas, group: str, state: dict, low, high):

@@ -1,0 +1,240 @@
+"""ElroysBeanie-v0: turn a body by spinning the beanie on it, against the drift of its angular momentum."""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number
+from connenv.envs.base import BATCH, SCALAR
+from connenv.envs.connection import DT_MAX  # noqa: F401  (ConnectionEnv's dt range, this env's)
+from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.systems import elroys_beanie
+
+MOMENTUM_RANGE = (0.25, 1.0)  # |μ| drawn at reset (kg m²/s), with a random sign
+OFF_TARGET_COST = 0.05  # reward paid per step the body is off the target by 10 tolerances or more (graded below)
+SUCCESS_BONUS = 1.0  # reward on the step that completes the hold
+FINE_SCALE = 10.0  # the observed fine error is (θ* − θ)/(FINE_SCALE · tolerance), clipped to [−1, 1]
+HOLD_SLACK = 1e-9  # s: a hold of hold_time − HOLD_SLACK counts (the sum of dt's rounds)
+
+
+@dataclass
+class BeanieState(ConnectionState):
+    """ConnectionState with g = (θ,) the body's angle (unwrapped), s = (ψ,) the beanie's relative to it
+    (unwrapped); the angular momentum μ, the target θ* and the time held within the tolerance."""
+
+    momentum: float
+    target: float
+    held: float
+
+
+class ElroysBeanieEnv(ConnectionEnv):
+    r"""
+    ## Description
+
+    Elroy's beanie (`connenv.systems.elroys_beanie`): a body of inertia I₁ with a beanie of inertia I₂ on it,
+    both turning about one axis; a motor spins the beanie at ψ̇ relative to the body. Their angular momentum
+    μ = (I₁ + I₂) θ̇ + I₂ ψ̇ is conserved, so the body turns by
+
+        θ̇ = −I₂/(I₁ + I₂) ψ̇ + μ/(I₁ + I₂):
+
+    ConnectionEnv on SO(2) with the flat connection A = I₂/(I₁ + I₂) (the geometric phase, −2π A per turn of
+    the beanie, whatever its speed profile) plus the dynamic phase μ t/(I₁ + I₂) of the momentum, which this env
+    adds to the connection's step (exact: the group is abelian). μ is drawn nonzero at reset, so the body drifts
+    unless the beanie spins at μ/I₂.
+
+    ## Action Space
+
+    `Box(-1, 1, (1,), float32)`: ψ̇ = a · max_beanie_speed, constant over the step; outside the box clipped; a wrong
+    shape or a non-finite value raises ValueError. A float64 action is used at float64 precision.
+
+    ## Observation Space
+
+    `Box(5,) float32`, with μ_max = 0.9 I₂ · max_beanie_speed the largest momentum a reset takes:
+
+    | Num | Observation | Min | Max | Unit |
+    |-----|-------------|-----|-----|------|
+    | 0 | sin(θ* − θ) | -1 | 1 | |
+    | 1 | cos(θ* − θ) | -1 | 1 | |
+    | 2 | μ | -μ_max | μ_max | kg m²/s |
+    | 3 | time held within the tolerance / hold_time, at most 1 | 0 | 1 | |
+    | 4 | (θ* − θ)/(10 · tolerance), clipped: the error at the resolution the hold needs | -1 | 1 | |
+
+    ## Rewards
+
+    With e = θ* − θ wrapped into [−π, π], e before the step and e′ after it:
+
+        reward = |e| − |e′| − 0.05 · min(1, |e′|/(10 · tolerance)) · (|e′| > tolerance) + 1 · (hold completed)
+
+    The cost off the target grows with the error up to ten tolerances, so that the reward tells a near miss from a
+    far one; inside the tolerance there is none, so that staying there earns less than completing the hold.
+
+    ## Starting State
+
+    θ = 0, ψ = 0, t = 0; |μ| uniform in [0.25, 1] kg m²/s with a uniform sign (the body drifts at up to
+    0.8 rad/s; holding needs |ψ̇| = |μ|/I₂ ≤ 4 rad/s, within the 4π rad/s bound); θ* uniform in [−π, π).
+    `reset(options={"state": {"theta", "psi", "momentum"}, "target": θ*})` sets any of them: θ, ψ and θ* within
+    [−2π, 2π], |μ| ≤ 0.9 I₂ · max_beanie_speed (else the body could not be held), else ValueError.
+
+    ## Episode End
+
+    Terminated when the body has been within `tolerance` (0.01 rad) of θ* for `hold_time` (1 s) without a break
+    (`info["is_success"]`). Truncated after 200 steps (10 s) by the registration's time limit.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | body_inertia | 1.0 | (0, 1e3] kg m² |
+    | beanie_inertia | 0.25 | (0, 1e3] kg m² |
+    | max_beanie_speed | 4π | (0, 1e3] rad/s, at least 1.2 · 1/I₂ (the largest drawn μ can be held) |
+    | dt | 0.05 | [1e-12, 100] s |
+    | tolerance | 0.01 | (0, π) rad |
+    | hold_time | 1.0 | (0, 100] s |
+    | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    Every `info` has `"state"` (`theta`, `psi` (both unwrapped), `momentum`, `t`), `"target"` (θ*), `"error"`
+    (θ* − θ wrapped, rad), `"held"` (s) and `"is_success"`.
+    """
+
+    metadata = {**ConnectionEnv.metadata, "measures": ("error",)}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        body_inertia: float = 1.0,
+        beanie_inertia: float = 0.25,
+        max_beanie_speed: float = 4 * math.pi,
+        dt: float = 0.05,
+        tolerance: float = 0.01,
+        hold_time: float = 1.0,
+        integrator: str | None = None,
+        **stepper_options,
+    ):
+        self.body_inertia = check_number("body_inertia", body_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.beanie_inertia = check_number("beanie_inertia", beanie_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)
+        least = 1.2 * MOMENTUM_RANGE[1] / self.beanie_inertia
+        self.max_beanie_speed = check_number(
+            "max_beanie_speed", max_beanie_speed, least, MAGNITUDE_BOUND, low_name="1.2 · 1/beanie_inertia"
+        )
+        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
+        self.hold_time = check_number("hold_time", hold_time, 0.0, 100.0, open_low=True)
+        inertias = {"body_inertia": self.body_inertia, "beanie_inertia": self.beanie_inertia}
+        super().__init__(
+            "SO2",
+            functools.partial(elroys_beanie.connection, **inertias),
+            [-math.inf],
+            [math.inf],
+            dt=dt,
+            max_shape_speed=self.max_beanie_speed,
+            render_mode=render_mode,
+            vectorized=True,
+            integrator=integrator,
+            exact_segment=functools.partial(elroys_beanie.exact_segment, **inertias),
+            **stepper_options,
+        )
+        self.state = BeanieState(np.zeros(1), np.zeros(1), 0.0, MOMENTUM_RANGE[0], 0.0, 0.0)
+
+    def parameters(self):
+        return {"body_inertia": self.body_inertia, "beanie_inertia": self.beanie_inertia,
+                "max_beanie_speed": self.max_beanie_speed}  # fmt: skip
+
+    def _observation_space(self):
+        mu = self.momentum_bound()
+        low, high = np.array([-1.0, -1.0, -mu, 0.0, -1.0], np.float32), np.array([1.0, 1.0, mu, 1.0, 1.0], np.float32)
+        return spaces.Box(low, high)
+
+    def momentum_bound(self):
+        """The largest |μ| a reset takes: 0.9 I₂ · max_beanie_speed, so that the beanie can still hold the body."""
+        return 0.9 * self.beanie_inertia * self.max_beanie_speed
+
+    # -- physics ---------------------------------------------------------------
+
+    def start(self, options):
+        check_keys("reset options", options, {"state", "target"})
+        given = options.get("state", {})
+        check_keys("options['state']", given, {"theta", "psi", "momentum"})
+        theta, psi = (check_angle(f"state {k}", given.get(k, 0.0)) for k in ("theta", "psi"))
+        rng = self.np_random
+        momentum = rng.uniform(*MOMENTUM_RANGE) * rng.choice((-1.0, 1.0))
+        target = rng.uniform(-math.pi, math.pi)
+        if "momentum" in given:
+            bound = self.momentum_bound()
+            momentum = check_number("state momentum", given["momentum"], -bound, bound)
+        if "target" in options:
+            target = check_angle("target", options["target"])
+        return BeanieState(np.array([theta]), np.array([psi]), 0.0, float(momentum), float(target), 0.0)
+
+    def advance(self, state, s_dot):
+        return self.drifted(state, super().advance(state, s_dot))
+
+    def drifted(self, before, moved, ops=SCALAR):
+        """The state after the connection's step `moved` from `before`, with the dynamic phase μ dt/(I₁ + I₂)
+        added to θ and the hold counted."""
+        phase = elroys_beanie.dynamic_phase(before.momentum, self.dt, self.body_inertia, self.beanie_inertia)
+        state = moved.replace(g=moved.g + np.asarray(phase)[..., None])
+        inside = abs(self.error(state, ops)) <= self.tolerance
+        return state.replace(held=ops.where(inside, before.held + self.dt, 0.0))
+
+    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
+
+    def error(self, state, ops=SCALAR):
+        """θ* − θ wrapped into [−π, π]."""
+        turn = state.target - (float(state.g[0]) if ops is SCALAR else state.g[..., 0])
+        return ops.atan2(ops.sin(turn), ops.cos(turn))
+
+    def success(self, state, ops=SCALAR):
+        return state.held >= self.hold_time - HOLD_SLACK
+
+    def observe(self, state, ops=SCALAR):
+        e = self.error(state, ops)
+        held = ops.clip(state.held / self.hold_time, 0.0, 1.0)
+        fine = ops.clip(e / (FINE_SCALE * self.tolerance), -1.0, 1.0)
+        return ops.pack([ops.sin(e), ops.cos(e), state.momentum, held, fine])
+
+    def reward(self, before, after, info, ops=SCALAR):
+        e_before, e_after = abs(self.error(before, ops)), abs(info["error"])
+        off = ops.real(e_after > self.tolerance) * ops.clip(e_after / (FINE_SCALE * self.tolerance), 0.0, 1.0)
+        return e_before - e_after - OFF_TARGET_COST * off + SUCCESS_BONUS * ops.real(info["is_success"])
+
+    def describe(self, state, ops=SCALAR):
+        state_dict = {"theta": ops.real(state.g[..., 0]), "psi": ops.real(state.s[..., 0]),
+                      "momentum": ops.real(state.momentum), "t": state.t}  # fmt: skip
+        error = self.error(state, ops)
+        return {
+            "state": state_dict,
+            "target": ops.real(state.target),
+            "error": ops.real(error),
+            "held": ops.real(state.held),
+            "is_success": ops.flag(self.success(state, ops)),
+        }
+
+    def terminated(self, state, info, ops=SCALAR):
+        return info["is_success"]
+
+    # -- rendering ---------------------------------------------------------------
+
+    def _make_renderer(self):
+        from connenv.envs.rendering_lawton import BeanieRenderer
+
+        return BeanieRenderer(self.render_mode, self.metadata["render_fps"])
+
+    def _draw(self, renderer):
+        s = self.state
+        return renderer.draw(float(s.g[0]), float(s.s[0]), s.target, s.momentum, s.t, s.held / self.hold_time)
+
+
+class ElroysBeanieVectorEnv(ConnectionVectorEnv):
+    """ElroysBeanie-v0 over a batch (``gym.make_vec("connenv/ElroysBeanie-v0", num_envs=N)``; see
+    ``connenv.envs.vector``): the connection's step of every row, then the dynamic phase, as the single env."""
+
+    single_env = ElroysBeanieEnv
+
+    def advance(self, state, s_dot):
+        return self.env.drifted(state, super().advance(state, s_dot), BATCH)

@@ -1,0 +1,239 @@
+"""RollingCoin-v0: park a vertical coin, which rolls without slipping, through its connection."""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number, check_vector
+from connenv.envs.base import SCALAR
+from connenv.envs.connection import DT_MAX  # noqa: F401  (ConnectionEnv's dt range, this env's)
+from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.systems import rolling_coin
+
+TIME_COST = 0.01  # reward paid per step until success
+SUCCESS_BONUS = 1.0  # reward on the step that parks
+TARGET_DISTANCE = (1.0, 3.0)  # m: the target's distance from the start is drawn uniformly in this range
+OFFSET_BOUND = 10.0  # m: the observed offsets are clipped here
+
+
+@dataclass
+class CoinState(ConnectionState):
+    """ConnectionState with g = (x, y), s = (θ, φ), and the target (x*, y*, θ*)."""
+
+    target: np.ndarray
+
+
+class RollingCoinEnv(ConnectionEnv):
+    r"""
+    ## Description
+
+    A coin of radius R stands upright on the plane and rolls without slipping (`connenv.systems.rolling_coin`).
+    The controller steers its heading θ (from the y axis) and rolls it by φ; its contact point (x, y) follows
+    through the mechanical connection of rolling,
+
+        ẋ = R sin θ φ̇,    ẏ = R cos θ φ̇,
+
+    ConnectionEnv on the group ℝ² with the shape (θ, φ). Steering alone never moves the coin, rolling moves it along
+    its heading: parking it beside where it stands takes a manoeuvre. The step is exact in closed form (the chord of
+    the arc rolled at constant rates), for any rates and dt.
+
+    ## Action Space
+
+    `Box(-1, 1, (2,), float32)`: (θ̇, φ̇) = (a₀ · max_steer_rate, a₁ · max_roll_rate), constant over the step;
+    outside the box clipped; a wrong shape or a non-finite value raises ValueError. A float64 action is used at
+    float64 precision.
+
+    ## Observation Space
+
+    `Box(4,) float32`: the target seen from the coin, with d = (x* − x, y* − y), the heading f = (sin θ, cos θ)
+    and its right-hand side r = (cos θ, −sin θ):
+
+    | Num | Observation | Min | Max | Unit |
+    |-----|-------------|-----|-----|------|
+    | 0 | d · f, the target's distance ahead, clipped | -10 | 10 | m |
+    | 1 | d · r, the target's distance to the right, clipped | -10 | 10 | m |
+    | 2 | sin(θ* − θ) | -1 | 1 | |
+    | 3 | cos(θ* − θ) | -1 | 1 | |
+
+    ## Rewards
+
+    With the cost c = |d| + R |θ* − θ| (the heading error wrapped into [−π, π], weighed by the radius: m),
+    c before the step and c′ after it:
+
+        reward = c − c′ − 0.01 + 1 · (parked after the step)
+
+    ## Starting State
+
+    The coin at the origin, θ = 0, φ = 0, t = 0. The target: at a distance drawn uniformly in [1, 3] m in a
+    uniform direction, its heading θ* uniform in [−π, π). `reset(options={"state": {"x", "y", "theta", "phi"},
+    "target": (x*, y*, θ*)})` sets any of them: x, y, φ and x*, y* within ±1e3, θ and θ* within [−2π, 2π], else
+    ValueError.
+
+    ## Episode End
+
+    Terminated when parked (`info["is_success"]`): |d| ≤ `position_tolerance` (0.05 m) and |θ* − θ| ≤
+    `heading_tolerance` (0.05 rad, wrapped); φ is free. Truncated after 200 steps (20 s) by the registration's
+    time limit; the reference planner (`agents.lawton.CoinPlanner`) needs at most π/2 + 3/(R · 2) + π s, 78 steps.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | radius | 0.5 | (0, 1e3] m |
+    | max_steer_rate | 1.0 | (0, 1e3] rad/s |
+    | max_roll_rate | 2.0 | (0, 1e3] rad/s |
+    | dt | 0.1 | [1e-12, 100] s |
+    | position_tolerance | 0.05 | (0, ∞) m |
+    | heading_tolerance | 0.05 | (0, π) rad |
+    | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `t`), `"target"` (x*, y*, θ*), `"distance"` (|d|, m),
+    `"heading_error"` (θ* − θ wrapped into [−π, π], rad) and `"is_success"`.
+    """
+
+    metadata = {**ConnectionEnv.metadata, "measures": ("distance", "heading_error")}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        radius: float = 0.5,
+        max_steer_rate: float = 1.0,
+        max_roll_rate: float = 2.0,
+        dt: float = 0.1,
+        position_tolerance: float = 0.05,
+        heading_tolerance: float = 0.05,
+        integrator: str | None = None,
+        **stepper_options,
+    ):
+        self.radius = check_number("radius", radius, 0.0, MAGNITUDE_BOUND, open_low=True)
+        steer = check_number("max_steer_rate", max_steer_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
+        roll = check_number("max_roll_rate", max_roll_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.rates = np.array([steer, roll])
+        self.position_tolerance = check_number("position_tolerance", position_tolerance, 0.0, open_low=True)
+        self.heading_tolerance = check_number(
+            "heading_tolerance", heading_tolerance, 0.0, math.pi, open_low=True, open_high=True
+        )
+        super().__init__(
+            "R2",
+            functools.partial(rolling_coin.connection, radius=self.radius),
+            [-math.inf, -math.inf],
+            [math.inf, math.inf],
+            dt=dt,
+            render_mode=render_mode,
+            vectorized=True,
+            integrator=integrator,
+            exact_segment=functools.partial(rolling_coin.exact_segment, radius=self.radius),
+            **stepper_options,
+        )
+        self.state = CoinState(np.zeros(2), np.zeros(2), 0.0, np.array([0.0, 1.0, 0.0]))
+        self.track = []  # where each step since reset started: drawn behind the coin
+
+    def parameters(self):
+        return {"radius": self.radius, "max_steer_rate": self.rates[0], "max_roll_rate": self.rates[1]}
+
+    def _observation_space(self):
+        high = np.array([OFFSET_BOUND, OFFSET_BOUND, 1.0, 1.0], np.float32)
+        return spaces.Box(-high, high, dtype=np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        self.track = []
+        return super().reset(seed=seed, options=options)
+
+    def step(self, action):
+        self.track.append(self.state.g.copy())
+        return super().step(action)
+
+    # -- physics ---------------------------------------------------------------
+
+    def start(self, options):
+        check_keys("reset options", options, {"state", "target"})
+        given = options.get("state", {})
+        check_keys("options['state']", given, {"x", "y", "theta", "phi"})
+        g = np.array([check_number(f"state {k}", given.get(k, 0.0), -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
+                      for k in ("x", "y")])  # fmt: skip
+        theta = check_angle("state theta", given.get("theta", 0.0))
+        phi = check_number("state phi", given.get("phi", 0.0), -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
+        rng = self.np_random
+        distance, direction = rng.uniform(*TARGET_DISTANCE), rng.uniform(-math.pi, math.pi)
+        target = np.array([distance * math.sin(direction), distance * math.cos(direction), rng.uniform(-math.pi, math.pi)])
+        if "target" in options:
+            bound = [MAGNITUDE_BOUND, MAGNITUDE_BOUND, 2 * math.pi]
+            target = check_vector("target", options["target"], 3, np.negative(bound), bound)
+        return CoinState(g, np.array([theta, phi]), 0.0, target)
+
+    def command(self, a):
+        """(θ̇, φ̇) of action a (one (2,) or a batch (N, 2))."""
+        return a * self.rates
+
+    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
+
+    @staticmethod
+    def coordinates(state, ops=SCALAR):
+        """x, y, θ, φ, x*, y*, θ*: Python floats for one state, arrays over the rows of a batch."""
+        if ops is SCALAR:
+            return (*state.g.tolist(), *state.s.tolist(), *state.target.tolist())
+        return (*state.g.T, *state.s.T, *state.target.T)
+
+    def errors(self, state, ops=SCALAR):
+        """d (the target's offset, x and y), the heading f's components (sin θ, cos θ), and θ* − θ wrapped."""
+        x, y, theta, _, x_target, y_target, theta_target = self.coordinates(state, ops)
+        turn = theta_target - theta
+        return x_target - x, y_target - y, ops.sin(theta), ops.cos(theta), ops.atan2(ops.sin(turn), ops.cos(turn))
+
+    def cost(self, distance, heading_error):
+        """c = |d| + R |θ* − θ|."""
+        return distance + self.radius * abs(heading_error)
+
+    def observe(self, state, ops=SCALAR):
+        dx, dy, sin, cos, heading = self.errors(state, ops)
+        ahead = ops.clip(dx * sin + dy * cos, -OFFSET_BOUND, OFFSET_BOUND)
+        right = ops.clip(dx * cos - dy * sin, -OFFSET_BOUND, OFFSET_BOUND)
+        return ops.pack([ahead, right, ops.sin(heading), ops.cos(heading)])
+
+    def success(self, distance, heading_error):
+        return (distance <= self.position_tolerance) & (abs(heading_error) <= self.heading_tolerance)
+
+    def reward(self, before, after, info, ops=SCALAR):
+        dx, dy, _, _, heading = self.errors(before, ops)
+        progress = self.cost(ops.hypot(dx, dy), heading) - self.cost(info["distance"], info["heading_error"])
+        return progress - TIME_COST + SUCCESS_BONUS * ops.real(info["is_success"])
+
+    def describe(self, state, ops=SCALAR):
+        dx, dy, _, _, heading = self.errors(state, ops)
+        x, y, theta, phi = self.coordinates(state, ops)[:4]
+        distance = ops.hypot(dx, dy)
+        return {
+            "state": {"x": ops.real(x), "y": ops.real(y), "theta": ops.real(theta), "phi": ops.real(phi), "t": state.t},
+            "target": state.target.copy(),
+            "distance": ops.real(distance),
+            "heading_error": ops.real(heading),
+            "is_success": ops.flag(self.success(distance, heading)),
+        }
+
+    def terminated(self, state, info, ops=SCALAR):
+        return info["is_success"]
+
+    # -- rendering ---------------------------------------------------------------
+
+    def _make_renderer(self):
+        from connenv.envs.rendering_lawton import CoinRenderer
+
+        return CoinRenderer(self.radius, self.render_mode, self.metadata["render_fps"])
+
+    def _draw(self, renderer):
+        s = self.state
+        return renderer.draw(np.array([*self.track, s.g]), s.s[0], s.s[1], s.target, s.t)
+
+
+class RollingCoinVectorEnv(ConnectionVectorEnv):
+    """RollingCoin-v0 over a batch (``gym.make_vec("connenv/RollingCoin-v0", num_envs=N)``; see
+    ``connenv.envs.vector``): every row stepped by the same closed form as the single env."""
+
+    single_env = RollingCoinEnv
