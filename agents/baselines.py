@@ -48,6 +48,7 @@ ENVS = (
     "connenv/RollingBallPose-v0",
     "connenv/RollingBallGoal-v0",
     "connenv/KapitzaSwingUp-v0",
+    "connenv/RollingCoinSurface-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each

@@ -65,6 +65,8 @@ class RollingCoinSurface:
     mass: float = 1.0
     g: float = 9.81
 
+    n = 3  # q = (x, y, φ); φ̇, the last entry, is the momentum (3/2) m R² φ̇ up to its constant factor
+
     def vector_field(self, y, u, u_dot):
         """ẏ = (R sin θ φ̇, R cos θ φ̇, φ̇, −(2 g/(3 R)) (z_x sin θ + z_y cos θ)); u_dot drops out."""
         if y.ndim == 1:  # one state: floats, no array calls but the result

@@ -99,11 +99,13 @@ class Symbolic(Surface):
             raise ValueError(f"surface={expression!r}: give surface_params for its symbol(s) {sorted(free - set(self.params))}")
         values = {name: check_number(f"surface_params {name}", v) for name, v in self.params.items()}
         expr = expr.subs({sympy.Symbol(k, real=True): v for k, v in values.items()}).subs(values)
-        self._functions = [sympy.lambdify((x, y), e, "numpy") for e in (expr, expr.diff(x), expr.diff(y))]
+        derivatives = (expr, expr.diff(x), expr.diff(y))
+        self._functions = [sympy.lambdify((x, y), e, "numpy") for e in derivatives]
+        self._scalar = [sympy.lambdify((x, y), e, "math") for e in derivatives]  # one point: no array calls
 
     def height(self, x, y):
         if isinstance(x, float) and isinstance(y, float):
-            return tuple(float(f(x, y)) for f in self._functions)
+            return tuple(float(f(x, y)) for f in self._scalar)
         x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
         return tuple(np.broadcast_to(np.asarray(f(x, y), float), x.shape) for f in self._functions)
 
