@@ -1,7 +1,8 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball kapitza shell connection coin_surface coin_plane] [--quick]
+    python -m connenv.bench precision [--env swing skier ball kapitza shell connection coin_surface coin_plane]
+                                      [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 

@@ -173,7 +173,7 @@ MAPS = {
         held([0.0]),
         lambda value, dt: math.ceil(10.0 / dt),
         lambda env, info, start: abs(info["energy"] - start["energy"]) > BOUND * start["energy"],
-        (*FIXED, ("rk4", {"substeps": 4}), ("dop853", {"rtol": 1e-10, "atol": 1e-12})),
+        (*FIXED, ("rk4", {"substeps": 8}), ("dop853", {"rtol": 1e-10, "atol": 1e-12})),
     ),
 }
 

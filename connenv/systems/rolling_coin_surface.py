@@ -131,11 +131,17 @@ def phi_one(alpha: float):
     versine = 0.5 * half * half
     a2 = alpha * alpha
     if abs(alpha) < SERIES_BELOW:
-        odd = alpha * (1 / 6 - a2 * (1 / 120 - a2 * (1 / 5040 - a2 * (1 / 362880 - a2 * (1 / 39916800 - a2 / 6227020800)))))
+        odd = odd_series(alpha)
     else:
         odd = (alpha - math.sin(alpha)) / a2
     sinc = math.sin(alpha) / alpha if alpha != 0.0 else 1.0
     return complex(sinc, alpha * versine), complex(versine, odd)
+
+
+def odd_series(alpha):
+    """(α − sin α)/α² = α/3! − α³/5! + … to α¹¹/13!, for |α| < SERIES_BELOW (the next term is below 1e-19 there)."""
+    a2 = alpha * alpha
+    return alpha * (1 / 6 - a2 * (1 / 120 - a2 * (1 / 5040 - a2 * (1 / 362880 - a2 * (1 / 39916800 - a2 / 6227020800)))))
 
 
 def phi_functions(angle):
@@ -145,7 +151,7 @@ def phi_functions(angle):
     half = np.sinc(alpha / (2.0 * math.pi))  # sin(α/2)/(α/2)
     versine = 0.5 * half * half  # (1 − cos α)/α²
     a2 = alpha * alpha
-    series = alpha * (1 / 6 - a2 * (1 / 120 - a2 * (1 / 5040 - a2 * (1 / 362880 - a2 * (1 / 39916800 - a2 / 6227020800)))))
+    series = odd_series(alpha)
     with np.errstate(divide="ignore", invalid="ignore"):
         direct = (alpha - np.sin(alpha)) / a2
     odd = np.where(np.abs(alpha) < SERIES_BELOW, series, direct)

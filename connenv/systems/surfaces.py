@@ -96,7 +96,8 @@ class Symbolic(Surface):
         free = {str(s) for s in expr.free_symbols} - {"x", "y"}
         check_keys(f"surface_params of surface={expression!r} (its symbols besides x and y)", self.params, free)
         if free - set(self.params):
-            raise ValueError(f"surface={expression!r}: give surface_params for its symbol(s) {sorted(free - set(self.params))}")
+            missing = sorted(free - set(self.params))
+            raise ValueError(f"surface={expression!r}: give surface_params for its symbol(s) {missing}")
         values = {name: check_number(f"surface_params {name}", v) for name, v in self.params.items()}
         expr = expr.subs({sympy.Symbol(k, real=True): v for k, v in values.items()}).subs(values)
         derivatives = (expr, expr.diff(x), expr.diff(y))
