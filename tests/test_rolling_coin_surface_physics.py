@@ -148,3 +148,15 @@ def test_the_vector_env_steps_each_row_as_the_single_env_on_the_hill_and_the_pla
     batch = plane.exact_segment(y, u, u_dot, 0.05)
     for i in range(5):
         np.testing.assert_allclose(batch[i], plane.exact_segment(y[i], u[i], u_dot[i], 0.05), rtol=1e-14, atol=1e-15)
+
+
+def test_a_diverging_stepper_raises_naming_the_energy_error_dt_and_the_parameters_never_nan():
+    """Explicit Euler gains energy on every step of a turn: past 1e-3 m g Δz the env raises StepperError."""
+    from connenv.core import StepperError
+
+    env = gym.make(ID, integrator="euler", max_episode_steps=10**6).unwrapped
+    obs, _ = env.reset(seed=0)
+    with pytest.raises(StepperError, match=r"energy error.*dt = 0.05.*max_steer_rate = 2.0"):
+        for _ in range(400):
+            obs = env.step(np.array([1.0]))[0]
+            assert np.all(np.isfinite(obs))

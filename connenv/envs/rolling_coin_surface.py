@@ -16,7 +16,7 @@ from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface
 from connenv.systems.surfaces import check_surface, make_surface
 
-DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
+DT_MAX = 0.5  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until the episode ends
 SPEED_BOUND = 3.0  # |observed speed| / v* is clipped here, and bounds the speed given at reset
 ENERGY_ERROR_BOUND = 1e-3  # |E − E(0)| / (m g Δz_arena) past which a stepper has diverged: StepperError
@@ -130,7 +130,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
     | mass | 1.0 | (0, ∞) kg |
     | g | 9.81 | (0, ∞) m/s² |
     | max_steer_rate | 2.0 | (0, ∞) rad/s |
-    | dt | 0.05 | [1e-12, 1] s |
+    | dt | 0.05 | [1e-12, 0.5] s |
     | tolerance | 0.1 | (0, ∞) m |
     | target_distance | 4.0 | (0, ∞) m |
     | target_angle | 0.25 | [0, π/2] rad |
