@@ -50,6 +50,7 @@ ENVS = (
     "connenv/KapitzaSwingUp-v0",
     "connenv/RollingCoin-v0",
     "connenv/ElroysBeanie-v0",
+    "connenv/RollingCoinSurface-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each

@@ -9,6 +9,7 @@ from agents.gaits import GaitPlanner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
 from agents.lawton import BeanieDeadBeat, CoinPlanner
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
+from agents.rolling_coin_surface import SteerToTarget
 
 
 class PiccoliKulkarni:
@@ -70,6 +71,7 @@ CONTROLLERS = {
     "connenv/KapitzaSwingUp-v0": {"swingup": KapitzaSwingUp},
     "connenv/RollingCoin-v0": {"turn_roll_turn": CoinPlanner},
     "connenv/ElroysBeanie-v0": {"dead_beat": BeanieDeadBeat},
+    "connenv/RollingCoinSurface-v0": {"steer": SteerToTarget},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

@@ -69,6 +69,12 @@ register(
     max_episode_steps=6000,
 )
 register(
+    id="connenv/RollingCoinSurface-v0",
+    entry_point="connenv.envs.rolling_coin_surface:RollingCoinSurfaceEnv",
+    vector_entry_point="connenv.envs.rolling_coin_surface:RollingCoinSurfaceVectorEnv",
+    max_episode_steps=200,
+)
+register(
     id="connenv/ActiveConstraint-v0",
     entry_point="connenv.envs.active_constraint:ActiveConstraintEnv",
     vector_entry_point="connenv.envs.active_constraint:ActiveConstraintVectorEnv",

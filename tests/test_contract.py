@@ -34,6 +34,7 @@ CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where an
     "connenv/KapitzaSwingUp-v0": [{}],
     "connenv/RollingCoin-v0": [{}, {"integrator": "magnus"}],
     "connenv/ElroysBeanie-v0": [{}],
+    "connenv/RollingCoinSurface-v0": [{}, {"surface": "plane"}],
     # the generic ids, on connenv.examples' systems: one of each jump class; a flat and a curved connection
     "connenv/ActiveConstraint-v0": [examples.swing(), examples.rotor(), examples.bead()],
     "connenv/Connection-v0": [examples.beanie(), examples.rolling_ball()],

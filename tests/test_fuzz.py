@@ -34,15 +34,20 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/KozlovShell-v0": {"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3},
     "connenv/KapitzaPendulum-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
     "connenv/KapitzaSwingUp-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
+    "connenv/RollingCoinSurface-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0, "phi_dot": 0},
     "connenv/ActiveConstraint-v0": {"q": 1, "p": 1, "u": 1},  # examples.swing(): n = m = 1
     "connenv/Connection-v0": {"s": 1},  # examples.beanie(): k = 1
     "connenv/RollingCoin-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0},
     "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
 }
-OPTION_KEYS = {"connenv/KozlovShell-v0": {"target": 2}, "connenv/RollingCoin-v0": {"target": 3},
-               "connenv/ElroysBeanie-v0": {"target": 0}}  # reset options beside "state"
+OPTION_KEYS = {  # reset options beside "state"
+    "connenv/KozlovShell-v0": {"target": 2},
+    "connenv/RollingCoin-v0": {"target": 3},
+    "connenv/ElroysBeanie-v0": {"target": 0},
+    "connenv/RollingCoinSurface-v0": {"target": 2},
+}
 NOT_NUMBERS = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
-               "control", "integrator", "pivot", "vectorized"}
+               "control", "integrator", "pivot", "vectorized", "surface", "surface_params"}
 INVALID = [math.nan, math.inf, -math.inf, "1", 1j, True, [1.0], 0.0]
 SPECIAL = [*INVALID, None, -1.0, 1e308, -1e308, 1e-308, 1e30, -1e30]
 

@@ -1,7 +1,8 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball kapitza shell coin beanie connection] [--quick]
+    python -m connenv.bench precision [--env swing skier ball kapitza shell connection coin beanie coin_surface
+                                       coin_plane] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -32,6 +33,10 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
+- coin_surface: RollingCoinSurface-v0 on its default hill, from rest at the start with θ₀ = 0.3, 200 steps (10 s) of
+  seeded random steering rates; reference: DOP853 at rtol 1e-13, atol 1e-15. State error: |(x, y) − (x, y)_ref| at
+  the end (m). Invariant: max |E − E(0)| / (m g Δz), Δz the arena's height range (the env's scale).
+- coin_plane: the same on the plane z = −0.25 y (surface="plane"); reference: the exact step.
 
 Time: median µs of env.step over the first episode (the reduced one for the shell), and its ratio to the median
 Pendulum-v1 step timed beside it. A stepper that raises StepperError (non-finite, or the env's invariant bound)
@@ -239,6 +244,25 @@ CASES = {
         "",
         {"group": "SO3", "connection": twisted, "shape_low": [-1.0, -1.0], "shape_high": [1.0, 1.0], "dt": 0.1},
         MAGNUS,
+    ),
+    "coin_surface": Case(
+        "connenv/RollingCoinSurface-v0",
+        TIGHT,
+        (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
+        lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
+        "max |E − E(0)| / (m g Δz)",
+        energy_drift(lambda env: env.system.mass * env.system.g * env.height_range),
+        "m",
+    ),
+    "coin_plane": Case(
+        "connenv/RollingCoinSurface-v0",
+        EXACT,
+        (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
+        lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
+        "max |E − E(0)| / (m g Δz)",
+        energy_drift(lambda env: env.system.mass * env.system.g * env.height_range),
+        "m",
+        {"surface": "plane"},
     ),
 }
 

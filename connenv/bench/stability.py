@@ -1,7 +1,7 @@
 """Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
-    python -m connenv.bench stability [--env swing skier ball kapitza shell coin beanie] [--quick]
+    python -m connenv.bench stability [--env swing skier ball kapitza shell coin beanie coin_surface] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -29,6 +29,10 @@ StepperError and the invariant's error stayed within the bound below at every st
 - beanie: ElroysBeanie-v0 at μ = 0.7 with seeded random beanie speeds, 10 s; parameter I₂/I₁ (beanie_inertia,
   body_inertia 1); bounded: the integrated momentum balance within 1e-9 rad. θ̇ is constant over a step of
   constant ψ̇, so every method's step is exact and the map is flat: every method holds at the top of the grid.
+- coin_surface: RollingCoinSurface-v0 on the bowl z = (x² + y²)/(2ρ), from rest at (0, −1) heading along y
+  (action 0, θ = 0 held), 10 s: the coin oscillates through the bottom, ÿ = −(2 g/(3ρ)) y, harmonic at
+  ω = √(2 g/(3ρ)); parameter the bowl's radius ρ; bounded: |E − E(0)| ≤ 0.1 E(0) (E(0) = m g/(2ρ), the
+  bottom at E = 0).
 
 A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
 grid held.
@@ -208,6 +212,17 @@ MAPS = {
         momentum_unbounded,
         (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10})),
         largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
+    ),
+    "coin_surface": StabilityMap(
+        "connenv/RollingCoinSurface-v0",
+        "bowl radius ρ (m)",
+        (10.0, 1.0, 0.1, 0.01, 0.001),
+        lambda rho: {"surface": "bowl", "surface_params": {"radius": rho}},
+        lambda rho: {"state": {"x": 0.0, "y": -1.0, "theta": 0.0}},
+        held([0.0]),
+        lambda value, dt: math.ceil(10.0 / dt),
+        lambda env, info, start: abs(info["energy"] - start["energy"]) > BOUND * start["energy"],
+        (*FIXED, ("rk4", {"substeps": 8}), ("dop853", {"rtol": 1e-10, "atol": 1e-12})),
     ),
 }
 

@@ -42,6 +42,9 @@ CASES = [
     ("swingup", "connenv/KapitzaSwingUp-v0", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),
     ("coin", "connenv/RollingCoin-v0", {"max_episode_steps": 60, "position_tolerance": 0.5}, None),
     ("beanie", "connenv/ElroysBeanie-v0", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),
+    ("coin_surface", "connenv/RollingCoinSurface-v0", {"max_episode_steps": 40, "tolerance": 1.0}, None),
+    ("coin_plane", "connenv/RollingCoinSurface-v0", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"},
+     None),
 ]
 
 

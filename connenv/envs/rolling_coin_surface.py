@@ -1,0 +1,376 @@
+"""RollingCoinSurface-v0: steer a coin that gravity rolls over a surface, to a target downhill."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.segments import check_drift, run_segments
+from connenv.core.steppers import make_stepper
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
+from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface
+from connenv.systems.surfaces import check_surface, make_surface
+
+DT_MAX = 0.5  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
+TIME_COST = 0.01  # reward paid per step until the episode ends
+SPEED_BOUND = 3.0  # |observed speed| / v* is clipped here, and bounds the speed given at reset
+ENERGY_ERROR_BOUND = 1e-3  # |E − E(0)| / (m g Δz_arena) past which a stepper has diverged: StepperError
+TARGET_ANGLES = 33  # directions sampled in the target's cone when the construction checks that it lies downhill
+GENERAL_INTEGRATOR = ("rk4", {"substeps": 8})  # the default off the plane (bench: precision, stability)
+START = {"bowl": (0.0, -4.0)}  # the start on a built-in surface where the origin is not it
+
+
+@dataclass
+class CoinState(State):
+    """y = (x, y, φ, φ̇); the heading θ; the target (x, y); the time t; E and its value at reset E₀; where the
+    last step started (x, y) and the closest approach of its chord to the target, m."""
+
+    y: np.ndarray
+    theta: float
+    target: np.ndarray
+    t: float
+    energy: float
+    energy0: float
+    previous: np.ndarray
+    miss: float
+
+
+class RollingCoinSurfaceEnv(TaskEnv):
+    r"""
+    ## Description
+
+    A vertical coin of radius R and mass m rolls without slipping over a surface of height z(x, y), under
+    gravity g. The controller assigns its heading θ (measured from the y-axis), an active constraint, by its
+    rate; gravity does the rest. Rolling forbids any motion but along the heading,
+
+        ẋ = R sin θ φ̇,    ẏ = R cos θ φ̇,    (3/2) m R² φ̈ = − m g R (z_x sin θ + z_y cos θ),
+
+    (φ the rolling angle; Hand & Finch pp. 62–64), so the coin goes where it points, at the speed the slope
+    along its heading gives it. Steering does no work: the energy E = ¾ m R² φ̇² + m g z is conserved whatever
+    the steering, and a coin at rest reaches exactly the points below it. On the default surface, a plane
+    sloping down along +y with a hill in the way, the target lies behind the hill: rolling straight at it, the
+    coin climbs the hill, stops short and rolls back; it has to be steered around. At a constant heading the
+    coin rolls on a straight line whatever the surface, so reaching a target around an obstacle takes steering.
+
+    The rolling constraint is nonholonomic, so the coin is not one of `ActiveConstraintEnv`'s holonomic
+    systems (free coordinates with momenta in a Lagrangian of q and u), nor a `ConnectionEnv` (φ is not
+    assigned but driven by gravity): the env is a task of the same layer (`TaskEnv`), stepped through the same
+    control segments and steppers. On a plane the step is exact, in closed form at any constant θ̇
+    (`connenv.systems.rolling_coin_surface`).
+
+    ## Action Space
+
+    `Box(-1, 1, (1,), float32)`; actions outside are clipped, a wrong shape or a non-finite value raises
+    ValueError.
+
+    | Num | Action | Min | Max |
+    |-----|--------|-----|-----|
+    | 0 | steering rate θ̇ = a · max_steer_rate, held over the step | -1 | 1 |
+
+    ## Observation Space
+
+    `Box(9,) float32`, with L the arena's half-width, D = `target_distance`, v* = √(4 g Δz/3) the speed of a
+    drop through the arena's height range Δz (z_max − z_min over |x|, |y| ≤ L) and G the steepest slope there:
+
+    | Num | Observation | Min | Max |
+    |-----|-------------|-----|-----|
+    | 0 | x / L | -1 | 1 |
+    | 1 | y / L | -1 | 1 |
+    | 2 | (x* − x) / D, to the target | -2L/D | 2L/D |
+    | 3 | (y* − y) / D | -2L/D | 2L/D |
+    | 4 | sin θ | -1 | 1 |
+    | 5 | cos θ | -1 | 1 |
+    | 6 | rolling speed R φ̇ / v* (positive along the heading) | -3 | 3 |
+    | 7 | z_x / G, the slope at the coin | -1 | 1 |
+    | 8 | z_y / G | -1 | 1 |
+
+    Each entry is clipped to its bounds (the position once the coin has left the arena, which ends the
+    episode).
+
+    ## Rewards
+
+    With d the distance from the coin to the target before the step and d′ after it (m):
+
+        reward = d − d′ − 0.01
+
+    Summed over an episode: d₀ − d_T − 0.01·steps.
+
+    ## Starting State
+
+    At rest (φ̇ = 0, φ = 0) at the start, the origin (on the bowl (0, −4)), with the heading θ uniform in
+    [−π, π) (np_random). The target is drawn at `target_distance` (4 m) from the start, in a direction within
+    ±`target_angle` (0.25 rad) of the steepest descent there, uniform: on the default hill, 4 m down the slope
+    and up to 1 m to either side, straight behind the hill. The construction checks that every such target
+    lies in the arena and below the start, so that the coin can reach it. `reset(options={"state": {...},
+    "target": (x, y)})` sets any of `x`, `y` (in the arena), `theta`, `phi` (in [−2π, 2π]), `phi_dot` (|R φ̇|
+    ≤ 3 v*) and the target (in the arena) exactly; a value outside is refused (ValueError). A target above the
+    coin's energy cannot be reached.
+
+    ## Episode End
+
+    Terminated on success (`info["is_success"]`): the chord of the step, the segment from where the coin
+    started it to where it ended it, passes within `tolerance` (0.1 m) of the target. The chord stands for the
+    track, which curves away from it by at most v dt² max_steer_rate/8 (2.5 mm at 4 m/s, the default
+    parameters). Terminated too, without success, when the coin leaves the arena, |x| or |y| > L. Truncated
+    after 200 steps (10 s at the default dt) by the registration's time limit.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | surface | "hill" | "plane", "bowl", "hill", or a sympy expression in x and y (or its text) |
+    | slope | None: (0, −0.25) | (sx, sy), each in [−10, 10]; the plane's and the hill's tilt, z = sx x + sy y (+ hill) |
+    | surface_params | None | bowl: radius=5.0 (z = (x² + y²)/(2 radius)); hill: height=1.0, width=0.6, center=(0, 2); a sympy surface: its symbols besides x and y |
+    | radius | 0.5 | (0, ∞) m |
+    | mass | 1.0 | (0, ∞) kg |
+    | g | 9.81 | (0, ∞) m/s² |
+    | max_steer_rate | 2.0 | (0, ∞) rad/s |
+    | dt | 0.05 | [1e-12, 0.5] s |
+    | tolerance | 0.1 | (0, ∞) m |
+    | target_distance | 4.0 | (0, ∞) m |
+    | target_angle | 0.25 | [0, π/2] rad |
+    | arena | 6.0 | (0, 1e3] m, the half-width L of the square arena |
+    | integrator | None: "exact" on a plane, else "rk4" with 8 substeps | "exact" (plane only), "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    Both defaults are on the Pareto front of the work–precision chart (`python -m connenv.bench precision --env
+    coin_surface coin_plane`). RK4 ×8 keeps |E − E₀| within 1e-9 m g Δz over an episode of random steering on
+    the default surfaces (tests), and is stable at the default dt on bowls down to a radius of 1 cm; on
+    steeper surfaces, where fixed steps fail (`python -m connenv.bench stability --env coin_surface`), take
+    `integrator="dop853"`. Semi-implicit Euler splits the state into q = (x, y, φ) and φ̇, which stands for the
+    momentum (3/2) m R² φ̇.
+
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
+    non-finite state, or an energy error |E − E₀| past 1e-3 m g Δz (Δz as in the observation).
+
+    Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `phi_dot`, `t`, in SI), `"energy"` (E, J, z = 0 the
+    reference height), `"distance"` (d′, m), `"miss"` (the closest approach of the step's chord, m),
+    `"left_arena"` and `"is_success"`.
+    """
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        surface="hill",
+        slope=None,
+        surface_params: dict | None = None,
+        radius: float = 0.5,
+        mass: float = 1.0,
+        g: float = 9.81,
+        max_steer_rate: float = 2.0,
+        dt: float = 0.05,
+        tolerance: float = 0.1,
+        target_distance: float = 4.0,
+        target_angle: float = 0.25,
+        arena: float = 6.0,
+        integrator: str | None = None,
+        **stepper_options,
+    ):
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
+        self.max_steer_rate = check_number("max_steer_rate", max_steer_rate, 0.0, open_low=True)
+        self.tolerance = check_number("tolerance", tolerance, 0.0, open_low=True)
+        self.target_distance = check_number("target_distance", target_distance, 0.0, open_low=True)
+        self.target_angle = check_number("target_angle", target_angle, 0.0, math.pi / 2)
+        self.arena = check_number("arena", arena, 0.0, 1e3, open_low=True)
+        self.surface = make_surface(surface, slope, surface_params)
+        on_plane = self.surface.gradient_is_constant()
+        parameters = {
+            "radius": check_number("radius", radius, 0.0, open_low=True),
+            "mass": check_number("mass", mass, 0.0, open_low=True),
+            "g": check_number("g", g, 0.0, open_low=True),
+        }
+        self.system = (RollingCoinPlane if on_plane else RollingCoinSurface)(self.surface, **parameters)
+        check_stepper_options("RollingCoinSurface-v0", stepper_options, type(self))
+        if integrator is None:
+            integrator, defaults = ("exact", {}) if on_plane else GENERAL_INTEGRATOR
+            stepper_options = {**defaults, **stepper_options}
+        if integrator == "exact" and not on_plane:
+            raise ValueError(f"integrator='exact' is the closed-form step on a plane; surface={surface!r} is not one")
+        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+
+        z_min, z_max, self.slope_bound = check_surface(self.surface, self.arena)
+        self.height_range = max(z_max - z_min, 1e-9)
+        self.speed_scale = math.sqrt(4.0 * self.system.g * self.height_range / 3.0)
+        self.start_point = self._start_point(surface)
+        self.downhill = self._downhill()
+        self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
+        reach = 2.0 * self.arena / self.target_distance
+        high = np.array([1.0, 1.0, reach, reach, 1.0, 1.0, SPEED_BOUND, 1.0, 1.0], np.float32)
+        self.observation_space = spaces.Box(-high, high, dtype=np.float32)
+        self.state = self.at(np.array([*self.start_point, 0.0, 0.0]), 0.0, np.zeros(2), 0.0, None, None)
+        self.path = []  # where each step since reset started: the track drawn behind the coin
+
+    def _start_point(self, surface):
+        start = START.get(surface, (0.0, 0.0)) if isinstance(surface, str) else (0.0, 0.0)
+        if max(abs(start[0]), abs(start[1])) > self.arena:
+            raise ValueError(f"arena={self.arena} does not hold the start {start}")
+        return start
+
+    def _downhill(self):
+        """The heading of steepest descent at the start (rad from the y-axis), after checking that every target
+        the reset may draw lies in the arena and below the start."""
+        x0, y0 = self.start_point
+        z0, z_x, z_y = self.surface.height(x0, y0)
+        if math.hypot(z_x, z_y) == 0.0:
+            raise ValueError(f"the surface is flat at the start {self.start_point}: no direction is downhill")
+        heading = math.atan2(-z_x, -z_y)
+        angles = heading + np.linspace(-self.target_angle, self.target_angle, TARGET_ANGLES)
+        xs, ys = x0 + self.target_distance * np.sin(angles), y0 + self.target_distance * np.cos(angles)
+        outside = np.maximum(np.abs(xs), np.abs(ys)) > self.arena
+        below = self.surface.height(xs, ys)[0] < z0
+        if outside.any() or not below.all():
+            i = int(np.flatnonzero(outside | ~below)[0])
+            where = "outside the arena" if outside[i] else "not below the start"
+            raise ValueError(
+                f"target_distance={self.target_distance}, target_angle={self.target_angle}: the target "
+                f"({xs[i]:.6g}, {ys[i]:.6g}) is {where} (start {self.start_point}, arena ±{self.arena} m)"
+            )
+        return heading
+
+    def reset(self, *, seed=None, options=None):
+        self.path = []
+        return super().reset(seed=seed, options=options)
+
+    def step(self, action):
+        self.path.append(self.state.y[:2].copy())
+        return super().step(action)
+
+    def _make_renderer(self):
+        from connenv.envs.rendering_coin_surface import CoinSurfaceRenderer
+
+        return CoinSurfaceRenderer(self.surface, self.arena, self.system.radius, self.render_mode,
+                                   self.metadata["render_fps"])
+
+    def _draw(self, renderer):
+        s = self.state
+        track = np.array([*self.path, s.y[:2]])
+        return renderer.draw(s.y, s.theta, s.target, track, self.tolerance, s.t)
+
+    def parameters(self):
+        return {
+            "radius": self.system.radius,
+            "mass": self.system.mass,
+            "g": self.system.g,
+            "max_steer_rate": self.max_steer_rate,
+        }
+
+    # -- physics ---------------------------------------------------------------
+
+    def at(self, y, theta, target, t, energy0, previous, ops=SCALAR):
+        """The state at y = (x, y, φ, φ̇) and θ, with its energy (E₀ := E where energy0 is None, at reset), and the
+        closest approach of the chord from `previous` (the coin's position where None, at reset)."""
+        energy = ops.real(self.system.energy(y))
+        previous = y[..., :2].copy() if previous is None else previous
+        state = CoinState(y, theta, target, t, energy, energy if energy0 is None else energy0, previous, 0.0)
+        return state.replace(miss=self.closest_approach(state, ops))
+
+    def start(self, options):
+        check_keys("reset options", options, {"state", "target"})
+        theta = self.np_random.uniform(-math.pi, math.pi)
+        angle = self.downhill + self.np_random.uniform(-self.target_angle, self.target_angle)
+        x0, y0 = self.start_point
+        target = np.array([x0 + self.target_distance * math.sin(angle), y0 + self.target_distance * math.cos(angle)])
+        y = np.array([x0, y0, 0.0, 0.0])
+        if "state" in options:
+            y, theta = self._check_state(options["state"], y, theta)
+        if "target" in options:
+            target = check_vector("target", options["target"], 2, -self.arena, self.arena)
+        return self.at(y, theta, target, 0.0, None, None)
+
+    def _check_state(self, state, y, theta):
+        check_keys("options['state']", state, {"x", "y", "theta", "phi", "phi_dot"})
+        x = check_number("state x", state.get("x", y[0]), -self.arena, self.arena)
+        yy = check_number("state y", state.get("y", y[1]), -self.arena, self.arena)
+        theta = check_angle("state theta", state.get("theta", theta))
+        phi = check_angle("state phi", state.get("phi", 0.0))
+        bound = SPEED_BOUND * self.speed_scale / self.system.radius
+        phi_dot = check_number("state phi_dot", state.get("phi_dot", 0.0), -bound, bound)
+        return np.array([x, yy, phi, phi_dot]), theta
+
+    def advance(self, s, rate):
+        return self.rolled(s, rate, self.stepper)
+
+    def rolled(self, s, rate, stepper, ops=SCALAR):
+        """The state after a step at θ̇ = rate (one, or one per row with ops=BATCH and a batched stepper)."""
+        theta, theta_dot = ops.column(s.theta), ops.column(rate)
+        if ops is SCALAR:
+            theta, theta_dot = np.array([theta]), np.array([theta_dot])
+        y = run_segments(stepper, self.system, s.y, [(theta, theta_dot, self.dt)])[0]
+        after = self.at(y, s.theta + rate * self.dt, s.target, s.t + self.dt, s.energy0, s.y[..., :2].copy(),
+                        ops=ops)
+        bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.height_range
+        check_drift(stepper, "energy error", after.energy - after.energy0, bound, " J")
+        return after
+
+    def closest_approach(self, s, ops=SCALAR):
+        """Distance from the target to the chord from s.previous to the coin, m."""
+        px, py = s.previous.T[0], s.previous.T[1]
+        cx, cy = s.y.T[0] - px, s.y.T[1] - py
+        tx, ty = s.target.T[0] - px, s.target.T[1] - py
+        along = ops.clip((tx * cx + ty * cy) / ops.maximum(cx * cx + cy * cy, 1e-300), 0.0, 1.0)
+        return ops.hypot(tx - along * cx, ty - along * cy)
+
+    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
+
+    def command(self, a):
+        """θ̇ = a · max_steer_rate."""
+        return self.max_steer_rate * a.T[0]
+
+    def distance(self, s, ops=SCALAR):
+        return ops.hypot(s.target.T[0] - s.y.T[0], s.target.T[1] - s.y.T[1])
+
+    def left_arena(self, s, ops=SCALAR):
+        return ops.maximum(abs(s.y.T[0]), abs(s.y.T[1])) > self.arena
+
+    def reward(self, before, after, info, ops=SCALAR):
+        """d − d′ − 0.01."""
+        return self.distance(before, ops) - info["distance"] - TIME_COST
+
+    def terminated(self, state, info, ops=SCALAR):
+        return info["is_success"] | info["left_arena"]
+
+    def observe(self, s, ops=SCALAR):
+        x, y, v = s.y.T[0], s.y.T[1], self.system.radius * s.y.T[3]
+        _, z_x, z_y = self.surface.height(x, y)
+        reach, scale = 2.0 * self.arena / self.target_distance, 1.0 / max(self.slope_bound, 1e-300)
+        return ops.pack(
+            [
+                ops.clip(x / self.arena, -1.0, 1.0),
+                ops.clip(y / self.arena, -1.0, 1.0),
+                ops.clip((s.target.T[0] - x) / self.target_distance, -reach, reach),
+                ops.clip((s.target.T[1] - y) / self.target_distance, -reach, reach),
+                ops.sin(s.theta),
+                ops.cos(s.theta),
+                ops.clip(v / self.speed_scale, -SPEED_BOUND, SPEED_BOUND),
+                ops.clip(z_x * scale, -1.0, 1.0),
+                ops.clip(z_y * scale, -1.0, 1.0),
+            ]
+        )
+
+    def describe(self, s, ops=SCALAR):
+        state = {"x": s.y.T[0], "y": s.y.T[1], "theta": s.theta, "phi": s.y.T[2], "phi_dot": s.y.T[3],
+                 "t": s.t}
+        return {
+            "state": {k: ops.real(v) for k, v in state.items()},
+            "energy": s.energy,
+            "distance": self.distance(s, ops),
+            "miss": s.miss,
+            "left_arena": ops.flag(self.left_arena(s, ops)),
+            "is_success": ops.flag(s.miss <= self.tolerance),
+        }
+
+
+class RollingCoinSurfaceVectorEnv(TaskVectorEnv):
+    """RollingCoinSurface-v0 over a batch (``gym.make_vec("connenv/RollingCoinSurface-v0", num_envs=N)``; see
+    ``connenv.envs.vector``); takes the single env's make kwargs."""
+
+    single_env = RollingCoinSurfaceEnv
+
+    def advance(self, s, rate):
+        return self.env.rolled(s, rate, self.stepper, BATCH)
