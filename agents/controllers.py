@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from agents.bead_on_bar import BeadTilt
 from agents.gaits import GaitPlanner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
@@ -67,6 +68,7 @@ CONTROLLERS = {
         "damped": lambda env: KapitzaVibration(env, modulation=DAMPING_MODULATION),
     },
     "connenv/KapitzaSwingUp-v0": {"swingup": KapitzaSwingUp},
+    "connenv/BeadOnBar-v0": {"tilt": BeadTilt},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

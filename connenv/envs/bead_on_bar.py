@@ -21,7 +21,8 @@ OUTWARD_DISTANCE = (0.2, 0.3)  # g = 0: |r*| − |r₀|, in L
 POSITION_TOLERANCE = 0.02  # |r − r*| ≤ 0.02 L
 SPEED_TOLERANCE = 0.05  # |ṙ| ≤ 0.05 L/s
 SPEED_WEIGHT = 0.1  # s: the reward's weight of |ṙ| against |r − r*|
-SPEED_CAP = 10.0  # L/s: |ṙ| beyond it costs no more
+SPEED_CAP = 10.0  # L/s: |ṙ| beyond it costs no more, and is observed as this
+OBSERVATION_HIGH = np.array([2.0, 3.0, SPEED_CAP, 1.0, 1.0, 1.0])  # past the bar's end only at the final step
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
 
 
@@ -65,16 +66,18 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     ## Observation Space
 
-    `Box(-inf, inf, (6,), float32)`:
+    `Box(6,) float32`, each entry clipped to its bounds:
 
-    | Num | Observation |
-    |-----|-------------|
-    | 0 | r / L |
-    | 1 | (r* − r) / L |
-    | 2 | ṙ / L, in 1/s |
-    | 3 | sin θ |
-    | 4 | cos θ |
-    | 5 | hold / hold_time: the part of the hold done (0 with g = 0, which has no hold) |
+    | Num | Observation | Min | Max |
+    |-----|-------------|-----|-----|
+    | 0 | r / L | -2 | 2 |
+    | 1 | (r* − r) / L | -3 | 3 |
+    | 2 | ṙ / L, in 1/s | -10 | 10 |
+    | 3 | sin θ | -1 | 1 |
+    | 4 | cos θ | -1 | 1 |
+    | 5 | hold / hold_time: the part of the hold done (0 with g = 0, which has no hold) | 0 | 1 |
+
+    Within the bar |r/L| ≤ 1 and |(r* − r)/L| ≤ 2; the bounds leave room for the step that leaves it.
 
     ## Rewards
 
@@ -150,7 +153,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         )  # fmt: skip
         self.mass, self.g = mass, g
         self.hold_needed = self.hold_time if g > 0.0 else 0.0
-        self.observation_space = spaces.Box(-np.inf, np.inf, (6,), np.float32)
+        low = -OBSERVATION_HIGH * (np.arange(6) < 5)
+        self.observation_space = spaces.Box(low.astype(np.float32), OBSERVATION_HIGH.astype(np.float32))
         self.state = self.track(self.state, 0.0, None)
 
     def parameters(self):
@@ -212,8 +216,10 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     def observe(self, s, ops=SCALAR):
         r, p = s.y.T
         theta, L = s.u.T[0], self.half_length
-        hold = s.hold / self.hold_needed if self.hold_needed > 0.0 else 0.0 * s.hold
-        return ops.pack([r / L, (s.target - r) / L, p / (self.mass * L), ops.sin(theta), ops.cos(theta), hold])
+        hold = ops.clip(s.hold / self.hold_needed, 0.0, 1.0) if self.hold_needed > 0.0 else 0.0 * s.hold
+        high = OBSERVATION_HIGH
+        return ops.pack([ops.clip(r / L, -high[0], high[0]), ops.clip((s.target - r) / L, -high[1], high[1]),
+                         ops.clip(p / (self.mass * L), -high[2], high[2]), ops.sin(theta), ops.cos(theta), hold])
 
     def describe(self, s, ops=SCALAR):
         r, p = s.y.T
