@@ -42,7 +42,7 @@ def test_success_needs_the_hold_time_at_rest_within_the_tolerances():
     for k in range(1, 26):
         _, reward, terminated, _, info = env.step(STILL)
         assert terminated == (k == 25) == info["is_success"]
-        assert info["hold"] == pytest.approx(0.02 * k) and reward == pytest.approx(-0.02 * 0.01)
+        assert info["hold"] == pytest.approx(0.02 * k) and reward == pytest.approx(-0.02 * 0.01 - 0.01)
     env.reset(seed=0, options={"state": {"r": 0.5, "r_dot": 0.06}, "target": 0.5})
     _, _, terminated, _, info = env.step(STILL)
     assert not terminated and info["hold"] == 0.0  # too fast to count as at rest
