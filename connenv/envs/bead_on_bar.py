@@ -227,8 +227,16 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         theta, L = s.u.T[0], self.half_length
         hold = ops.clip(s.hold / self.hold_needed, 0.0, 1.0) if self.hold_needed > 0.0 else 0.0 * s.hold
         high = OBSERVATION_HIGH
-        return ops.pack([ops.clip(r / L, -high[0], high[0]), ops.clip((s.target - r) / L, -high[1], high[1]),
-                         ops.clip(p / (self.mass * L), -high[2], high[2]), ops.sin(theta), ops.cos(theta), hold])
+        return ops.pack(
+            [
+                ops.clip(r / L, -high[0], high[0]),
+                ops.clip((s.target - r) / L, -high[1], high[1]),
+                ops.clip(p / (self.mass * L), -high[2], high[2]),
+                ops.sin(theta),
+                ops.cos(theta),
+                hold,
+            ]
+        )
 
     def describe(self, s, ops=SCALAR):
         r, p = s.y.T

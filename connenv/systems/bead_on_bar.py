@@ -77,8 +77,9 @@ class BeadOnBar(LagrangianSystem):
     def exact_segment(self, y, u, u_dot, tau):
         """(r, p) after time tau at θ̇ = u_dot from θ = u, in closed form (the module's grouped formula)."""
         if np.ndim(y) == 1 and np.ndim(tau) == 0:
-            return np.array(segment_scalar(float(y[0]), float(y[1]), float(u[0]), float(u_dot[0]), float(tau),
-                                           self.mass, self.g))
+            return np.array(
+                segment_scalar(float(y[0]), float(y[1]), float(u[0]), float(u_dot[0]), float(tau), self.mass, self.g)
+            )
         return segment(y, u, u_dot, tau, self.mass, self.g)
 
 
