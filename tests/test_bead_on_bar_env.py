@@ -42,7 +42,7 @@ def test_success_needs_the_hold_time_at_rest_within_the_tolerances():
     for k in range(1, 26):
         _, reward, terminated, _, info = env.step(STILL)
         assert terminated == (k == 25) == info["is_success"]
-        assert info["hold"] == pytest.approx(0.02 * k) and reward == pytest.approx(-0.02 * 0.01 - 0.01)
+        assert info["hold"] == pytest.approx(0.02 * k) and reward == 0.0  # at rest in the tolerances: Φ constant, no time cost
     env.reset(seed=0, options={"state": {"r": 0.5, "r_dot": 0.06}, "target": 0.5})
     _, _, terminated, _, info = env.step(STILL)
     assert not terminated and info["hold"] == 0.0  # too fast to count as at rest
@@ -54,6 +54,23 @@ def test_horizontal_bar_succeeds_on_arrival_without_a_hold():
     assert not info["is_success"]
     _, _, terminated, _, info = env.step(STILL)  # coasting 0.0009 m: 0.0196 m from the target
     assert terminated and info["is_success"] and info["state"]["r"] == pytest.approx(0.4804)
+
+
+def test_reward_is_the_potentials_change_less_the_time_outside():
+    """10 (Φ′ − Φ) − 0.01 with Φ = −(|r − r*| + 0.1 |ṙ|)/L: the bead sliding toward the target on a tilted bar."""
+    env = gym.make(ID, half_length=2.0)
+    _, before = env.reset(seed=0, options={"state": {"r": 1.0, "theta": 0.2}, "target": -1.0})
+    _, reward, _, _, after = env.step(STILL)
+
+    def potential(info):
+        return -(abs(info["state"]["r"] - info["target"]) + 0.1 * abs(info["state"]["r_dot"])) / 2.0
+
+    assert reward == pytest.approx(10 * (potential(after) - potential(before)) - 0.01, rel=1e-12)
+    total = reward
+    for _ in range(9):
+        _, reward, _, _, info = env.step(STILL)
+        total += reward
+    assert total == pytest.approx(10 * (potential(info) - potential(before)) - 0.1, rel=1e-12)  # it telescopes
 
 
 def test_leaving_the_bar_terminates_with_the_penalty():

@@ -20,8 +20,9 @@ OUTWARD_START = (0.1, 0.6)  # g = 0: |r₀| / L, away from the pivot, where a be
 OUTWARD_DISTANCE = (0.2, 0.3)  # g = 0: |r*| − |r₀|, in L
 POSITION_TOLERANCE = 0.02  # |r − r*| ≤ 0.02 L
 SPEED_TOLERANCE = 0.05  # |ṙ| ≤ 0.05 L/s
-SPEED_WEIGHT = 0.1  # s: the reward's weight of |ṙ| against |r − r*|
-TIME_COST = 0.01  # reward paid per step until the episode ends
+SPEED_WEIGHT = 0.1  # s: the potential's weight of |ṙ| against |r − r*|
+SHAPING = 10.0  # the reward's factor of the potential's change
+TIME_COST = 0.01  # reward paid per step while the bead is outside the success tolerances
 SPEED_CAP = 10.0  # L/s: |ṙ| beyond it costs no more, and is observed as this
 OBSERVATION_HIGH = np.array([2.0, 3.0, SPEED_CAP, 1.0, 1.0, 1.0])  # past the bar's end only at the final step
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
@@ -82,11 +83,15 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     ## Rewards
 
-    Per step, −dt (|r − r*| / L + 0.1 s · min(|ṙ|, 10 L/s) / L) − 0.01: the time integral of the distance to the
-    target and of the speed, which leads the bead there, and a constant that pays for time, which the tight
-    tolerances of success are worth reaching for (the distance term alone is nearly 0 near the target). At most
-    0.07 a step, 35 over the registered 500 steps. Leaving the bar (|r| > L) pays −exit_penalty (default 40, more
-    than any stay in the bar costs) and ends the episode.
+    With the potential Φ = −(|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L, per step
+
+        reward = 10 (Φ′ − Φ) − 0.01 · [outside the tolerances]
+
+    (Φ before the step, Φ′ after): potential-based shaping (Ng, Harada & Russell 1999), which pays for every step
+    toward rest at the target and sums to 10 (Φ_end − Φ₀) whatever the path, so it favours no path between the
+    same ends; and a time cost charged only while the bead is outside the success tolerances (|r − r*| ≤ 0.02 L,
+    |ṙ| ≤ 0.05 L/s), which pays for reaching them fast. From any state, the rest of a 500-step episode inside the bar costs less
+    than 35 (Φ ≥ −3); leaving the bar (|r| > L) pays −exit_penalty instead (default 40) and ends the episode.
 
     ## Starting State
 
@@ -249,11 +254,17 @@ class BeadOnBarEnv(ActiveConstraintEnv):
             "is_success": ops.flag(s.inside & (s.hold >= self.hold_needed - 1e-9 * self.dt)),
         }
 
-    def reward(self, before, after, info, ops=SCALAR):
-        r, p = after.y.T
+    def potential(self, s, ops=SCALAR):
+        """Φ = −(|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L."""
+        r, p = s.y.T
         L = self.half_length
-        cost = abs(r - after.target) / L + SPEED_WEIGHT * ops.clip(abs(p / self.mass) / L, 0.0, SPEED_CAP)
-        return ops.real(ops.where(info["left_bar"], -self.exit_penalty, -self.dt * cost - TIME_COST))
+        return -(abs(r - s.target) / L + SPEED_WEIGHT * ops.clip(abs(p / self.mass) / L, 0.0, SPEED_CAP))
+
+    def reward(self, before, after, info, ops=SCALAR):
+        shaping = SHAPING * (self.potential(after, ops) - self.potential(before, ops))
+        return ops.real(
+            ops.where(info["left_bar"], -self.exit_penalty, shaping - ops.where(after.inside, 0.0, TIME_COST))
+        )
 
     def terminated(self, state, info, ops=SCALAR):
         return info["is_success"] | info["left_bar"]
