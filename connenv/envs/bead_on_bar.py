@@ -10,7 +10,12 @@ from gymnasium import spaces
 
 from connenv.core.segments import check_drift
 from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number, check_stepper_options
-from connenv.envs.active_constraint import ActiveConstraintEnv, ActiveConstraintState, ActiveConstraintVectorEnv
+from connenv.envs.active_constraint import (  # noqa: F401  (DT_MAX: the builder's, this env's too)
+    DT_MAX,
+    ActiveConstraintEnv,
+    ActiveConstraintState,
+    ActiveConstraintVectorEnv,
+)
 from connenv.envs.base import BATCH, SCALAR
 from connenv.systems.bead_on_bar import bead_on_bar
 
