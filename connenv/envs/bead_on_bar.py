@@ -19,6 +19,7 @@ from connenv.envs.active_constraint import (  # noqa: F401  (DT_MAX: the builder
 from connenv.envs.base import BATCH, SCALAR
 from connenv.systems.bead_on_bar import bead_on_bar
 
+OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
 START_REACH = 0.8  # |r₀| ≤ 0.8 L, and so |r*| (g > 0)
 MIN_DISTANCE = 0.2  # |r* − r₀| ≥ 0.2 L
 OUTWARD_START = (0.1, 0.6)  # g = 0: |r₀| / L, away from the pivot, where a bead at rest cannot be moved
@@ -122,7 +123,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     | half_length | 1.0 | (0, ∞) m: L |
     | g | 9.81 | [0, ∞) m/s² |
     | mass | 1.0 | (0, ∞) kg |
-    | omega_max | 2π | (0, ∞) rad/s |
+    | omega_max | 2π | (0, 500] rad/s |
     | dt | 0.02 | [1e-12, 1] s |
     | hold_time | 0.5 | [0, ∞) s |
     | exit_penalty | 40.0 | [0, ∞) |
@@ -157,7 +158,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         self.half_length = check_number("half_length", half_length, 0.0, open_low=True)
         g = check_number("g", g, 0.0)
         mass = check_number("mass", mass, 0.0, open_low=True)
-        self.omega_max = check_number("omega_max", omega_max, 0.0, open_low=True)
+        self.omega_max = check_number("omega_max", omega_max, 0.0, OMEGA_MAX, open_low=True)
         self.hold_time = check_number("hold_time", hold_time, 0.0)
         self.exit_penalty = check_number("exit_penalty", exit_penalty, 0.0)
         super().__init__(

@@ -98,7 +98,15 @@ def _s_series(x4):
 
 
 def segment_scalar(r, p, theta, omega, tau, mass, g):
-    """exact_segment on Python floats (one state): (r, p) after tau."""
+    """exact_segment on Python floats (one state): (r, p) after tau; inf where the growth overflows a float (as
+    numpy's functions answer in `segment`), which the stepper reports."""
+    try:
+        return _segment_scalar(r, p, theta, omega, tau, mass, g)
+    except OverflowError:
+        return math.inf, math.inf
+
+
+def _segment_scalar(r, p, theta, omega, tau, mass, g):
     x, v = omega * tau, p / mass
     if x == 0.0:
         shc = snc = c = 1.0
