@@ -51,6 +51,7 @@ ENVS = (
     "connenv/RollingCoin-v0",
     "connenv/ElroysBeanie-v0",
     "connenv/RollingCoinSurface-v0",
+    "connenv/BeadOnBar-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
@@ -199,6 +200,7 @@ MEASURES = {
     "connenv/Swing-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/Skier-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/KapitzaSwingUp-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
+    "connenv/BeadOnBar-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/RollingBall-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),

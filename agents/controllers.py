@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from agents.bead_on_bar import BeadTilt
 from agents.gaits import GaitPlanner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
 from agents.lawton import BeanieDeadBeat, CoinPlanner
@@ -72,6 +73,7 @@ CONTROLLERS = {
     "connenv/RollingCoin-v0": {"turn_roll_turn": CoinPlanner},
     "connenv/ElroysBeanie-v0": {"dead_beat": BeanieDeadBeat},
     "connenv/RollingCoinSurface-v0": {"steer": SteerToTarget},
+    "connenv/BeadOnBar-v0": {"tilt": BeadTilt},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

@@ -75,6 +75,12 @@ register(
     max_episode_steps=200,
 )
 register(
+    id="connenv/BeadOnBar-v0",
+    entry_point="connenv.envs.bead_on_bar:BeadOnBarEnv",
+    vector_entry_point="connenv.envs.bead_on_bar:BeadOnBarVectorEnv",
+    max_episode_steps=500,
+)
+register(
     id="connenv/ActiveConstraint-v0",
     entry_point="connenv.envs.active_constraint:ActiveConstraintEnv",
     vector_entry_point="connenv.envs.active_constraint:ActiveConstraintVectorEnv",

@@ -39,12 +39,14 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/Connection-v0": {"s": 1},  # examples.beanie(): k = 1
     "connenv/RollingCoin-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0},
     "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
+    "connenv/BeadOnBar-v0": {"r": 0, "r_dot": 0, "theta": 0},
 }
 OPTION_KEYS = {  # reset options beside "state"
     "connenv/KozlovShell-v0": {"target": 2},
     "connenv/RollingCoin-v0": {"target": 3},
     "connenv/ElroysBeanie-v0": {"target": 0},
     "connenv/RollingCoinSurface-v0": {"target": 2},
+    "connenv/BeadOnBar-v0": {"target": 0},
 }
 NOT_NUMBERS = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
                "control", "integrator", "pivot", "vectorized", "surface", "surface_params"}

@@ -1,7 +1,7 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball kapitza shell connection coin beanie coin_surface
+    python -m connenv.bench precision [--env swing skier ball kapitza shell bead connection coin beanie coin_surface
                                        coin_plane] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
@@ -30,6 +30,10 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
 - beanie: ElroysBeanie-v0 at μ = 0.7, 200 steps of seeded random beanie speeds; reference: the exact step.
   State error: |θ − θ_ref| at the end (rad). Invariant: the integrated momentum balance
   |(I₁ + I₂)(θ − θ₀) + I₂ (ψ − ψ₀) − μ t| / (I₁ + I₂) (rad), 0 for the flow.
+- bead: BeadOnBar-v0 from rest at r₀ = −0.5 m, θ₀ = 0, 300 steps (6 s) of the actions that a tilt law
+  (θ̇ = 9 (θ_d − θ), sin θ_d = (3 (r − r*) + 3 ṙ)/g, r* = 0.5 m) takes on the exact step, replayed open loop;
+  reference: DOP853 at rtol 1e-13, atol 1e-15. State error: |r − r_ref| at the end (m). Invariant: none holds
+  while the bar turns, so the second panel is max |r(t) − r_ref(t)| over the episode (m).
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
@@ -51,6 +55,7 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
+import functools
 import math
 import time
 
@@ -157,6 +162,39 @@ def beanie_balance(env, info, start):
     return abs(balance) / total
 
 
+BEAD_START, BEAD_TARGET, BEAD_STEPS = -0.5, 0.5, 300  # m, m, steps
+BEAD_EPISODE = {"state": {"r": BEAD_START}, "target": BEAD_TARGET}
+
+
+def tilt_actions(steps, rng):
+    """The actions of the tilt law on BeadOnBar-v0's exact step (see the module), as a fixed sequence."""
+    env = make_env("connenv/BeadOnBar-v0", None, {})
+    info = env.reset(seed=0, options=BEAD_EPISODE)[1]
+    actions = []
+    for _ in range(steps):
+        state = info["state"]
+        sine = np.clip((3.0 * (state["r"] - BEAD_TARGET) + 3.0 * state["r_dot"]) / env.g, -0.5, 0.5)
+        rate = 9.0 * (math.asin(sine) - state["theta"])
+        actions.append(np.array([np.clip(rate / env.omega_max, -1.0, 1.0)], np.float32))
+        info = env.step(actions[-1])[4]
+    return np.array(actions)
+
+
+@functools.cache
+def bead_reference():
+    """r(t) after every step of the bead's whole episode under the reference stepper (a shortened episode's
+    actions are the first of the whole one's)."""
+    env = make_env("connenv/BeadOnBar-v0", *TIGHT)
+    trajectory = []
+    actions = tilt_actions(BEAD_STEPS, None)
+    run(env, BEAD_EPISODE, actions, measure=lambda env, info: trajectory.append(info["state"]["r"]))
+    return np.array(trajectory)
+
+
+def bead_drift(env, info, start):
+    return abs(info["state"]["r"] - bead_reference()[round(info["state"]["t"] / env.dt) - 1])
+
+
 CASES = {
     "swing": Case(
         "connenv/Swing-v0",
@@ -233,6 +271,15 @@ CASES = {
         beanie_balance,
         "rad",
         steppers=MAGNUS,
+    ),
+    "bead": Case(
+        "connenv/BeadOnBar-v0",
+        TIGHT,
+        (Episode("tilt law", BEAD_EPISODE, tilt_actions, BEAD_STEPS),),
+        lambda env, ref: abs(env.state.y[0] - ref.state.y[0]),
+        "max |r(t) − r_ref(t)| (m)",
+        bead_drift,
+        "m",
     ),
     "connection": Case(
         "connenv/Connection-v0",

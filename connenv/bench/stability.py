@@ -1,7 +1,7 @@
 """Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
-    python -m connenv.bench stability [--env swing skier ball kapitza shell coin beanie coin_surface] [--quick]
+    python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -33,6 +33,12 @@ StepperError and the invariant's error stayed within the bound below at every st
   (action 0, θ = 0 held), 10 s: the coin oscillates through the bottom, ÿ = −(2 g/(3ρ)) y, harmonic at
   ω = √(2 g/(3ρ)); parameter the bowl's radius ρ; bounded: |E − E(0)| ≤ 0.1 E(0) (E(0) = m g/(2ρ), the
   bottom at E = 0).
+
+- bead: BeadOnBar-v0 on the horizontal bar (g = 0), spun at constant θ̇ = omega_max (action +1) from r₀ = 0.5 m
+  at rest, for six e-folds of the bead's growth (6/omega_max s: r grows 200-fold), on a bar long enough to hold
+  it; parameter omega_max, the rate of that growth; bounded: r within 0.1 of the closed form r₀ cosh ωt (ω =
+  omega_max; g = 0, from rest) at every step. The grid starts at half the episode (ω dt = 3): in one step a method
+  may land near the closed form by chance.
 
 A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
 grid held.
@@ -84,6 +90,15 @@ def momentum_unbounded(env, info, start):
 
 def env_bound(env, info, start):
     return False  # the env raises StepperError past its own bound
+
+
+def spin_unbounded(env, info, start):
+    """|r − r₀ cosh ωt| > 0.1 r₀ cosh ωt: off the horizontal bar's closed form from rest at θ̇ = ω = omega_max."""
+    exact = start["state"]["r"] * math.cosh(env.omega_max * info["state"]["t"])
+    return abs(info["state"]["r"] - exact) > BOUND * abs(exact)
+
+
+BEAD_E_FOLDS = 6.0  # the bead's episode: r grows by cosh 6, about 200-fold
 
 
 def loop_gait(value, t, dt, rng):
@@ -223,6 +238,18 @@ MAPS = {
         lambda value, dt: math.ceil(10.0 / dt),
         lambda env, info, start: abs(info["energy"] - start["energy"]) > BOUND * start["energy"],
         (*FIXED, ("rk4", {"substeps": 8}), ("dop853", {"rtol": 1e-10, "atol": 1e-12})),
+    ),
+    "bead": StabilityMap(
+        "connenv/BeadOnBar-v0",
+        "spin rate omega_max (rad/s)",
+        (1.0, 3.0, 10.0, 30.0, 100.0, 300.0),
+        lambda omega: {"omega_max": omega, "g": 0.0, "half_length": 100.0},
+        lambda omega: {"state": {"r": 0.5}, "target": 1.0},
+        held([1.0]),
+        lambda omega, dt: math.ceil(BEAD_E_FOLDS / omega / dt - 1e-9),
+        spin_unbounded,
+        (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("exact", {})),
+        largest=lambda omega: BEAD_E_FOLDS / (2.0 * omega),  # at least 2 steps: one may land near by chance
     ),
 }
 

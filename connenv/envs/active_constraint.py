@@ -10,7 +10,7 @@ from gymnasium import spaces
 from connenv.core.batched import batched
 from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.steppers import Scipy, make_stepper
+from connenv.core.steppers import ExactFlow, ExactSegment, Scipy, make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
@@ -149,15 +149,17 @@ class ActiveConstraintEnv(TaskEnv):
     | dt | 0.05 | [1e-12, 1] s |
     | control | by jump_class (above) | "position", "velocity" |
     | max_control_speed | None | None or (0, ∞), per unit of u per second |
-    | integrator | "dop853" | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | integrator | below | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps / rtol, atol | | see `connenv.core.steppers` |
     | task | None | an object with reset, reward, terminated and optionally observation (below) |
     | draw | None | `draw(state, canvas)`: draws a state dict on a `connenv.envs.rendering.Canvas` |
     | render_mode | None | "human", "rgb_array" |
 
-    The default integrator is scipy's DOP853 at rtol = 1e-10, atol = 1e-12. A generic system has no closed-form
-    flow and time scales the env cannot know, so the step adapts to them rather than to a fixed substep count;
-    `python -m connenv.bench generic` measures the candidates (evaluations of the vector field per step, time,
+    The default integrator is "exact" for a system that gives its closed-form step (`exact_segment(y, u, u̇, τ)` at
+    constant u̇, or `exact_flow(y, u, τ)` where u is held: connenv.core.steppers' ExactSegment and ExactFlow, as
+    BeadOnBar-v0's system does), else scipy's DOP853 at rtol = 1e-10, atol = 1e-12. A generic system has no
+    closed-form flow and time scales the env cannot know, so the step adapts to them rather than to a fixed substep
+    count; `python -m connenv.bench generic` measures the candidates (evaluations of the vector field per step, time,
     error against DOP853 at 1e-13) on a swing and a bead on a bar, where DOP853 reaches round-off for the cost of
     RK4 with 4 to 8 substeps. A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or
     an energy error (the change of E = ½ pᵀ A p + V over the segments where u is held) past 1e-2 (1 + |E|).
@@ -235,7 +237,8 @@ class ActiveConstraintEnv(TaskEnv):
         self.control = self._check_control(control)
         self.field = system if hasattr(system, "vector_field") else MetricField(system)
         check_stepper_options("ActiveConstraint-v0", stepper_options, type(self))
-        self.stepper = make_stepper(integrator or "dop853", self.field, **stepper_options)
+        default = "exact" if isinstance(self.field, (ExactSegment, ExactFlow)) else "dop853"
+        self.stepper = make_stepper(integrator or default, self.field, **stepper_options)
         self.jump = JumpFlow(system)
         self.task, self.draw = task, draw
         self.action_space = spaces.Box(-1.0, 1.0, (self.m,), np.float32)

@@ -45,6 +45,7 @@ CASES = [
     ("coin_surface", "connenv/RollingCoinSurface-v0", {"max_episode_steps": 40, "tolerance": 1.0}, None),
     ("coin_plane", "connenv/RollingCoinSurface-v0", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"},
      None),
+    ("bead", "connenv/BeadOnBar-v0", {"max_episode_steps": 60}, None),
 ]
 
 

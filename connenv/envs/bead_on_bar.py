@@ -1,0 +1,297 @@
+"""BeadOnBar-v0: bring a bead on a turning bar to rest at a target, by tilting and spinning the bar."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.segments import check_drift
+from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number, check_stepper_options
+from connenv.envs.active_constraint import (  # noqa: F401  (DT_MAX: the builder's, this env's too)
+    DT_MAX,
+    ActiveConstraintEnv,
+    ActiveConstraintState,
+    ActiveConstraintVectorEnv,
+)
+from connenv.envs.base import BATCH, SCALAR
+from connenv.systems.bead_on_bar import bead_on_bar
+
+OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
+START_REACH = 0.8  # |r₀| ≤ 0.8 L, and so |r*| (g > 0)
+MIN_DISTANCE = 0.2  # |r* − r₀| ≥ 0.2 L
+OUTWARD_START = (0.1, 0.6)  # g = 0: |r₀| / L, away from the pivot, where a bead at rest cannot be moved
+OUTWARD_DISTANCE = (0.2, 0.3)  # g = 0: |r*| − |r₀|, in L
+POSITION_TOLERANCE = 0.02  # |r − r*| ≤ 0.02 L
+SPEED_TOLERANCE = 0.05  # |ṙ| ≤ 0.05 L/s
+SPEED_WEIGHT = 0.1  # s: the potential's weight of |ṙ| against |r − r*|
+SHAPING = 10.0  # the reward's factor of the potential's change
+TIME_COST = 0.01  # reward paid per step while the bead is outside the success tolerances
+SPEED_CAP = 10.0  # L/s: |ṙ| beyond it costs no more, and is observed as this
+OBSERVATION_HIGH = np.array([2.0, 3.0, SPEED_CAP, 1.0, 1.0, 1.0])  # past the bar's end only at the final step
+ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
+
+
+@dataclass
+class BeadState(ActiveConstraintState):
+    """ActiveConstraint-v0's state (y = (r, p), u = (θ,), t, the energy error) and the task's: the target r*,
+    whether the bead is within the target's tolerances, and for how long it has been (s)."""
+
+    target: float
+    inside: bool
+    hold: float
+
+
+class BeadOnBarEnv(ActiveConstraintEnv):
+    r"""
+    ## Description
+
+    A bead of mass m slides without friction on a straight bar of half-length L that turns about a fixed pivot O
+    in a vertical plane. The controller assigns the bar's angle θ from the horizontal (an *active constraint*,
+    Bressan), and the bead at signed distance r from O moves by
+
+        T = ½ m (ṙ² + r² θ̇²),   V = m g r sin θ,   p = m ṙ,
+        ṙ = p / m,   ṗ = m r θ̇² − m g sin θ.
+
+    Tilting slides the bead down the bar; spinning flings it away from the pivot (the centrifugal term m r θ̇²
+    never pulls it in). The env is `ActiveConstraintEnv` on the system built from this T and V
+    (`connenv.systems.bead_on_bar`, a `LagrangianSystem`), which derives the equations and the class:
+    B = G22 − G12ᵀ G11⁻¹ G12 = m r² depends on r, so the system is *general* (quadratic in θ̇), θ may not jump,
+    and the builder's default control for the class is the rate θ̇. The task: bring the bead to rest at a target.
+
+    With g = 0 (Bressan's horizontal bar) the only force is centrifugal, r r̈ = r² θ̇² ≥ 0: a bead at rest can
+    only move away from the pivot and never slows down. Its slow motion is the differential inclusion ṙ ≥ 0
+    (for r > 0): every nondecreasing path r(t) is traced, to any precision, by the full system with small
+    momentum (spin in short bursts and coast), and no other. The target then lies farther out, and success is
+    to arrive there slowly.
+
+    ## Action Space
+
+    `Box(-1, 1, (1,), float32)`: θ̇ = a · omega_max, constant over the step. Actions outside are clipped; a wrong
+    shape or a non-finite value raises ValueError. θ winds freely.
+
+    ## Observation Space
+
+    `Box(6,) float32`, each entry clipped to its bounds:
+
+    | Num | Observation | Min | Max |
+    |-----|-------------|-----|-----|
+    | 0 | r / L | -2 | 2 |
+    | 1 | (r* − r) / L | -3 | 3 |
+    | 2 | ṙ / L, in 1/s | -10 | 10 |
+    | 3 | sin θ | -1 | 1 |
+    | 4 | cos θ | -1 | 1 |
+    | 5 | hold / hold_time: the part of the hold done (0 with g = 0, which has no hold) | 0 | 1 |
+
+    Within the bar |r/L| ≤ 1 and |(r* − r)/L| ≤ 2; the bounds leave room for the step that leaves it.
+
+    ## Rewards
+
+    With the potential Φ = −(|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L, per step
+
+        reward = 10 (Φ′ − Φ) − 0.01 · [outside the tolerances]
+
+    (Φ before the step, Φ′ after): potential-based shaping (Ng, Harada & Russell 1999), which pays for every step
+    toward rest at the target and sums to 10 (Φ_end − Φ₀) whatever the path, so it favours no path between the
+    same ends; and a time cost charged only while the bead is outside the success tolerances (|r − r*| ≤ 0.02 L,
+    |ṙ| ≤ 0.05 L/s), which pays for reaching them fast. From any state, the rest of a 500-step episode inside the bar costs less
+    than 35 (Φ ≥ −3); leaving the bar (|r| > L) pays −exit_penalty instead (default 40) and ends the episode.
+
+    ## Starting State
+
+    At rest (ṙ = 0), θ = 0, t = 0. With g > 0: r₀ uniform on [−0.8, 0.8] L, and the target r* uniform on the
+    points of [−0.8, 0.8] L at least 0.2 L from r₀. With g = 0: |r₀| uniform on [0.1, 0.6] L on either side of the
+    pivot, and r* on the same side, 0.2 to 0.3 L farther out.
+
+    `reset(options={"state": {...}, "target": r*})` sets any of `r` (in [−L, L]), `r_dot` (within ±1e3) and `theta`
+    (in [−2π, 2π]) and the target r* (in [−L, L]) exactly; the rest is drawn as above.
+
+    ## Episode End
+
+    Terminated on success (`info["is_success"]`) or when the bead leaves the bar (`info["left_bar"]`). Success,
+    with g > 0: |r − r*| ≤ 0.02 L and |ṙ| ≤ 0.05 L/s held for hold_time (0.5 s: every step from entry to
+    hold_time later). With g = 0: |r − r*| ≤ 0.02 L and |ṙ| ≤ 0.05 L/s, no hold: ṙ cannot decrease, so the bead
+    that arrives slowly stops there only in the limit of the inclusion. Truncated after 500 steps (10 s) by the
+    registration's time limit.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | half_length | 1.0 | (0, ∞) m: L |
+    | g | 9.81 | [0, ∞) m/s² |
+    | mass | 1.0 | (0, ∞) kg |
+    | omega_max | 2π | (0, 500] rad/s |
+    | dt | 0.02 | [1e-12, 1] s |
+    | hold_time | 0.5 | [0, ∞) s |
+    | exit_penalty | 40.0 | [0, ∞) |
+    | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps / rtol, atol | | see `connenv.core.steppers` |
+
+    The default stepper is the closed form of the flow at constant θ̇ (`connenv.systems.bead_on_bar`), exact to
+    rounding, including at θ̇ → 0; the builder's steppers stay available through `integrator`
+    (`python -m connenv.bench precision --env bead` charts them). A stepper that diverges raises
+    `connenv.core.StepperError`: a non-finite state, or an energy error (the change of E = p²/(2m) + m g r sin θ
+    over steps where θ is held) past 1e-2 (1 + |E|).
+
+    Every `info` has `"state"` (`r`, `r_dot`, `p`, `theta`, `t` in SI), `"target"` (r*, m), `"hold"` (s within
+    the tolerances so far), `"left_bar"` and `"is_success"`.
+    """
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        half_length: float = 1.0,
+        g: float = 9.81,
+        mass: float = 1.0,
+        omega_max: float = 2.0 * math.pi,
+        dt: float = 0.02,
+        hold_time: float = 0.5,
+        exit_penalty: float = 40.0,
+        integrator: str | None = None,
+        **stepper_options,
+    ):
+        check_stepper_options("BeadOnBar-v0", stepper_options, type(self))
+        self.half_length = check_number("half_length", half_length, 0.0, open_low=True)
+        g = check_number("g", g, 0.0)
+        mass = check_number("mass", mass, 0.0, open_low=True)
+        self.omega_max = check_number("omega_max", omega_max, 0.0, OMEGA_MAX, open_low=True)
+        self.hold_time = check_number("hold_time", hold_time, 0.0)
+        self.exit_penalty = check_number("exit_penalty", exit_penalty, 0.0)
+        super().__init__(
+            bead_on_bar(mass, g), -math.inf, math.inf, dt=dt, max_control_speed=self.omega_max,
+            integrator=integrator, render_mode=render_mode, **stepper_options,
+        )  # fmt: skip
+        self.mass, self.g = mass, g
+        self.hold_needed = self.hold_time if g > 0.0 else 0.0
+        low = -OBSERVATION_HIGH * (np.arange(6) < 5)
+        self.observation_space = spaces.Box(low.astype(np.float32), OBSERVATION_HIGH.astype(np.float32))
+        self.state = self.track(self.state, 0.0, None)
+
+    def parameters(self):
+        return {"half_length": self.half_length, "g": self.g, "mass": self.mass, "omega_max": self.omega_max}
+
+    # -- physics: ActiveConstraintEnv's step, and the task's part of the state --------------------------------
+
+    def start(self, options):
+        check_keys("reset options", options, {"state", "target"})
+        given = options.get("state", {})
+        check_keys("options['state']", given, {"r", "r_dot", "theta"})
+        r, target = self.draw_start()
+        L = self.half_length
+        r = check_number("state r", given.get("r", r), -L, L)
+        r_dot = check_number("state r_dot", given.get("r_dot", 0.0), -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
+        theta = check_angle("state theta", given.get("theta", 0.0))
+        target = check_number("target", options.get("target", target), -L, L)
+        s = self.at(np.array([r, self.mass * r_dot]), np.array([theta]), 0.0, 0.0)
+        return self.track(s, target, None)
+
+    def draw_start(self):
+        """(r₀, r*) drawn from np_random as the docstring's Starting State says."""
+        L, rng = self.half_length, self.np_random
+        if self.g > 0.0:
+            r = rng.uniform(-START_REACH, START_REACH)
+            below = max(r - MIN_DISTANCE + START_REACH, 0.0)  # the length of [−0.8, r₀ − 0.2]
+            above = max(START_REACH - r - MIN_DISTANCE, 0.0)  # of [r₀ + 0.2, 0.8]
+            z = rng.uniform(0.0, below + above)
+            target = -START_REACH + z if z < below else r + MIN_DISTANCE + (z - below)
+            return L * r, L * target
+        side = rng.choice([-1.0, 1.0])
+        r = rng.uniform(*OUTWARD_START)
+        return L * side * r, L * side * (r + rng.uniform(*OUTWARD_DISTANCE))
+
+    def advance(self, s, command):
+        return self.track(super().advance(s, command), s.target, s)
+
+    def track(self, s, target, before, ops=SCALAR):
+        """The BeadState of the physical state s (an ActiveConstraintState) with target r*: inside the
+        tolerances, and the hold grown by dt if it was inside before the step too (before=None: at reset)."""
+        r, p = s.y.T
+        L = self.half_length
+        inside = (abs(r - target) <= POSITION_TOLERANCE * L) & (abs(p / self.mass) <= SPEED_TOLERANCE * L)
+        hold = 0.0 if before is None else ops.where(before.inside & inside, before.hold + self.dt, 0.0)
+        return BeadState(s.y, s.u, s.t, s.energy_error, target, inside, hold)
+
+    def segments(self, u, command, batch=False):
+        """One segment at the commanded rate: θ has no bounds to stop at (the builder's cut, without the search)."""
+        return None, [(u, command, self.dt)], u + command * self.dt
+
+    def held_energy(self, y, u, u_dot):
+        """E = p²/(2m) + m g r sin θ where θ is held, 0 where it turns (the builder's, in closed form)."""
+        if np.ndim(y) == 1:  # one state: Python floats
+            return 0.0 if u_dot[0] != 0.0 else float(self.system.energy(y, u[0]))
+        return np.where(u_dot[..., 0] == 0.0, self.system.energy(y, u[..., 0]), 0.0)
+
+    def check_energy_error(self, energy_error, y, u):
+        if isinstance(energy_error, float) and energy_error == 0.0:  # one state, nothing to bound (the bar turned)
+            return
+        energy = self.system.energy(y, u[..., 0])
+        check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
+
+    # -- task: one state, or a batch with ops=BATCH (the vector env) ---------------------------------------------
+
+    def observe(self, s, ops=SCALAR):
+        r, p = s.y.T
+        theta, L = s.u.T[0], self.half_length
+        hold = ops.clip(s.hold / self.hold_needed, 0.0, 1.0) if self.hold_needed > 0.0 else 0.0 * s.hold
+        high = OBSERVATION_HIGH
+        return ops.pack(
+            [
+                ops.clip(r / L, -high[0], high[0]),
+                ops.clip((s.target - r) / L, -high[1], high[1]),
+                ops.clip(p / (self.mass * L), -high[2], high[2]),
+                ops.sin(theta),
+                ops.cos(theta),
+                hold,
+            ]
+        )
+
+    def describe(self, s, ops=SCALAR):
+        r, p = s.y.T
+        state = {"r": r, "r_dot": p / self.mass, "p": p, "theta": s.u.T[0], "t": s.t}
+        return {
+            "state": state,
+            "target": s.target,
+            "hold": s.hold,
+            "left_bar": ops.flag(abs(r) > self.half_length),
+            "is_success": ops.flag(s.inside & (s.hold >= self.hold_needed - 1e-9 * self.dt)),
+        }
+
+    def potential(self, s, ops=SCALAR):
+        """Φ = −(|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L."""
+        r, p = s.y.T
+        L = self.half_length
+        return -(abs(r - s.target) / L + SPEED_WEIGHT * ops.clip(abs(p / self.mass) / L, 0.0, SPEED_CAP))
+
+    def reward(self, before, after, info, ops=SCALAR):
+        shaping = SHAPING * (self.potential(after, ops) - self.potential(before, ops))
+        return ops.real(
+            ops.where(info["left_bar"], -self.exit_penalty, shaping - ops.where(after.inside, 0.0, TIME_COST))
+        )
+
+    def terminated(self, state, info, ops=SCALAR):
+        return info["is_success"] | info["left_bar"]
+
+    # -- rendering -------------------------------------------------------------------------------------------
+
+    def _make_renderer(self):
+        from connenv.envs.rendering_bead import BeadRenderer
+
+        return BeadRenderer(self.half_length, self.render_mode, self.metadata["render_fps"])
+
+    def _draw(self, renderer):
+        s = self.state
+        return renderer.draw(float(s.y[0]), float(s.u[0]), float(s.target), s.t, bool(s.inside))
+
+
+class BeadOnBarVectorEnv(ActiveConstraintVectorEnv):
+    """BeadOnBar-v0 over a batch (``gym.make_vec("connenv/BeadOnBar-v0", num_envs=N)``; see
+    ``connenv.envs.vector``): ActiveConstraint-v0's batched step, and the task's state row by row."""
+
+    single_env = BeadOnBarEnv
+
+    def advance(self, s, command):
+        return self.env.track(super().advance(s, command), s.target, s, BATCH)

@@ -1,0 +1,34 @@
+"""pygame drawing of BeadOnBar-v0: the bar through its pivot, the bead on it, and the target on the bar."""
+
+from __future__ import annotations
+
+import math
+
+from connenv.envs.rendering import Canvas
+
+
+class BeadRenderer:
+    """The bar at its angle with the pivot, the target as a ring on the bar (green while the bead is within the
+    tolerances), the bead, and the time, r and r* in the corner."""
+
+    def __init__(self, half_length: float, render_mode: str, fps: int):
+        self.half_length = half_length
+        self.canvas = Canvas(1.25 * half_length, 0.0, render_mode, fps)
+
+    def draw(self, r: float, theta: float, target: float, t: float, inside: bool):
+        c, pg = self.canvas, self.canvas.pygame
+        c.screen.fill((255, 255, 255))
+        along = math.cos(theta), math.sin(theta)
+        L = self.half_length
+        pg.draw.line(c.screen, (60, 60, 60), c.px(-L * along[0], -L * along[1]), c.px(L * along[0], L * along[1]), 5)
+        size = max(int(0.05 * L * c.scale), 4)
+        ring = (77, 160, 77) if inside else (77, 110, 204)
+        pg.draw.circle(c.screen, ring, c.px(target * along[0], target * along[1]), size + 5, 3)
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(r * along[0], r * along[1]), size)
+        pg.draw.circle(c.screen, (0, 0, 0), c.px(0.0, 0.0), 5)
+        text = f"t = {t:5.2f} s   r = {r:+5.3f} m   r* = {target:+5.3f} m"
+        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()
