@@ -80,3 +80,9 @@ register(
     vector_entry_point="connenv.envs.connection:ConnectionVectorEnv",
     max_episode_steps=1000,
 )
+register(
+    id="connenv/TubeTwist-v0",
+    entry_point="connenv.envs.tube:TubeTwistEnv",
+    vector_entry_point="connenv.envs.tube:TubeTwistVectorEnv",
+    max_episode_steps=200,
+)

@@ -226,6 +226,29 @@ class Connection:
         return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
 
 
+def constant_connection(s, A):
+    """A at every shape s (…, k): the array A (dim 𝔤, k) broadcast over the leading axes of s."""
+    return np.broadcast_to(A, (*np.shape(s)[:-1], *np.shape(A)))
+
+
+@dataclass(frozen=True)
+class ConstantConnection(Connection):
+    """A connection the same at every shape (``connection`` = functools.partial(constant_connection, A=A)): ξ is
+    constant over a segment of constant ṡ, and the flow over it is one exponential, g exp(τ ξ^) (body frame) or
+    exp(τ ξ^) g (space frame), exact: the ``exact_segment`` of ``connenv.core.steppers.Exact``."""
+
+    def exact_segment(self, y, s, s_dot, tau):
+        group, single = GROUPS[self.group], np.ndim(y) == 1
+        xi = self.group_velocity(s, s_dot)
+        if single:
+            g, tau = tuple(np.asarray(y, float).tolist()), float(tau)
+        else:
+            g, tau = tuple(np.moveaxis(np.asarray(y, float), -1, 0)), np.asarray(tau, float)
+        step = group.exp([tau * c for c in xi])
+        g = group.product(g, step) if self.frame == "body" else group.product(step, g)
+        return np.array(g) if single else np.stack(np.broadcast_arrays(*g), -1)
+
+
 def group_velocity(system, s, s_dot):
     """ξ = −A(s) ṡ as components: the system's own ``group_velocity`` if it has one (a closed form), else from its
     ``connection``."""

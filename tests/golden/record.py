@@ -40,6 +40,7 @@ CASES = [
     ("kapitza", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "planar"}, None),
     ("kapitza_fall", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "horizontal"}, None),
     ("swingup", "connenv/KapitzaSwingUp-v0", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),
+    ("tube", "connenv/TubeTwist-v0", {"max_episode_steps": 40, "tolerance": 0.6}, None),
 ]
 
 
