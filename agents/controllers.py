@@ -7,6 +7,7 @@ import numpy as np
 
 from agents.gaits import GaitPlanner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
+from agents import tube
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
 
 
@@ -67,6 +68,7 @@ CONTROLLERS = {
         "damped": lambda env: KapitzaVibration(env, modulation=DAMPING_MODULATION),
     },
     "connenv/KapitzaSwingUp-v0": {"swingup": KapitzaSwingUp},
+    "connenv/TubeTwist-v0": {"cap": tube.for_env, "square": lambda env: tube.for_env(env, sides=4)},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

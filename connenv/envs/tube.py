@@ -110,11 +110,13 @@ class TubeTwistEnv(ConnectionEnv):
     raises `connenv.core.StepperError` (the generic steppers integrate Ṙ = R ω̂ in coordinates and drift off).
 
     Every `info` has `"state"` (`R` (3×3), `t`), `"twist"` (ψ), `"twist_error"` (ψ − ψ*, wrapped),
-    `"tangent_error"` (θ_T), `"path_length"` (the bend ∫|κ| dt since reset, rad) and `"is_success"`.
+    `"tangent_error"` (θ_T), `"path_length"` (the bend ∫|κ| dt since reset, rad), `"path_ratio"` (path length over
+    √(A (4π − A)), A = |ψ*|: the length of a circle enclosing the area ψ*, the shortest loop that does the task;
+    isoperimetric inequality on the sphere) and `"is_success"`.
     """
 
     name = "TubeTwist-v0"
-    metadata = {**ConnectionEnv.metadata, "measures": ("twist_error", "tangent_error", "path_length")}
+    metadata = {**ConnectionEnv.metadata, "measures": ("path_ratio", "path_length")}
 
     def __init__(
         self,
@@ -208,6 +210,13 @@ class TubeTwistEnv(ConnectionEnv):
     def terminated(self, state, info, ops=SCALAR):
         return info["is_success"]
 
+    def path_ratio(self, s, ops=SCALAR):
+        """The bend so far over the shortest loop that does the task from T₀: a circle of the area |ψ*| (1 for
+        ψ* = 0)."""
+        area = abs(s.target)
+        shortest = ops.sqrt(area * (4 * math.pi - area))
+        return ops.where(shortest > 0, s.path_length / ops.maximum(shortest, 1e-300), 1.0)
+
     def describe(self, s, ops=SCALAR):
         lead = np.shape(s.g)[:-1]
         return {
@@ -216,6 +225,7 @@ class TubeTwistEnv(ConnectionEnv):
             "twist_error": ops.real(self.twist_error(s, ops)),
             "tangent_error": s.tangent_error,
             "path_length": s.path_length,
+            "path_ratio": self.path_ratio(s, ops),
             "is_success": ops.flag(self.success(s, ops)),
         }
 
