@@ -48,6 +48,7 @@ ENVS = (
     "connenv/RollingBallPose-v0",
     "connenv/RollingBallGoal-v0",
     "connenv/KapitzaSwingUp-v0",
+    "connenv/TubeTwist-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
@@ -199,6 +200,7 @@ MEASURES = {
     "connenv/RollingBall-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),
+    "connenv/TubeTwist-v0": ("bend / shortest loop", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
     "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
 }

@@ -1,7 +1,7 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball kapitza shell connection] [--quick]
+    python -m connenv.bench precision [--env swing skier ball kapitza shell tube connection] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -23,6 +23,10 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
   1e-13, atol 1e-15. State error: max-norm of the pose (x, y, θ) error at the end (m, rad), for each model.
   Invariant: max |S(t) − S(0)| / |S(0)| of the spatial momentum S in the full model. Besides the common
   candidates, the Magnus step (`integrator="magnus"`: the reduced model's connection; DOP853 on the full model).
+- tube: TubeTwist-v0 from R = I, 200 steps (one episode) of seeded random bending rates; reference: the exact
+  step (one exponential per step, exact for piecewise-constant rates). State error: the angle between R and R_ref
+  at the end (rad). Invariant: max ‖RᵀR − I‖ over the episode. Besides the common candidates, the builder's Magnus
+  step.
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
@@ -172,6 +176,16 @@ CASES = {
         "max |S − S(0)| / |S(0)| (full model)",
         momentum_drift,
         "m, rad",
+        steppers=MAGNUS,
+    ),
+    "tube": Case(
+        "connenv/TubeTwist-v0",
+        EXACT,
+        (Episode("random κ", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
+        lambda env, ref: float(rotation_angle(env.state.g.reshape(3, 3) @ ref.state.g.reshape(3, 3).T)),
+        "max ‖RᵀR − I‖",
+        lambda env, info, start: float(np.linalg.norm(info["state"]["R"].T @ info["state"]["R"] - np.eye(3))),
+        "rad",
         steppers=MAGNUS,
     ),
     "connection": Case(
