@@ -237,6 +237,11 @@ class ConstantConnection(Connection):
     constant over a segment of constant ṡ, and the flow over it is one exponential, g exp(τ ξ^) (body frame) or
     exp(τ ξ^) g (space frame), exact: the ``exact_segment`` of ``connenv.core.steppers.Exact``."""
 
+    def group_velocity(self, s, s_dot):
+        """ξ = −A ṡ as components: floats for one shape, arrays over the rows of a batch."""
+        xi = np.asarray(s_dot, float) @ -self.connection.keywords["A"].T
+        return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
+
     def exact_segment(self, y, s, s_dot, tau):
         group, single = GROUPS[self.group], np.ndim(y) == 1
         xi = self.group_velocity(s, s_dot)

@@ -21,10 +21,12 @@ TARGET_RANGE = (0.3, 3.0)  # rad: ψ* drawn uniformly at reset
 @dataclass
 class TubeState(ConnectionState):
     """ConnectionState (g: R's 9 entries, s: the accumulated bend, t) with the start frame R₀ (9 entries), the
-    target ψ*, and what the task reads: the twist ψ and the tangent's angle from T₀ (rad), the bend length so far."""
+    target ψ*, and what the task reads: the error E = Rz(ψ*)ᵀR₀ᵀR (9 entries), the twist ψ and the tangent's angle
+    from T₀ (rad), the bend length so far."""
 
     R0: np.ndarray
     target: float
+    error: np.ndarray
     twist: float
     tangent_error: float
     path_length: float
@@ -154,14 +156,17 @@ class TubeTwistEnv(ConnectionEnv):
     # -- physics ---------------------------------------------------------------
 
     def at(self, g, s, t, R0, target, path_length, ops=SCALAR):
-        """The state at R (g) from R₀, with its twist and tangent angle."""
+        """The state at R (g) from R₀, with its error from the target frame, its twist and its tangent angle."""
         lead = np.shape(g)[:-1]
         Q = np.swapaxes(R0.reshape(*lead, 3, 3), -1, -2) @ g.reshape(*lead, 3, 3)
         if ops is SCALAR:
             psi, theta = twist(Q, math.atan2), tangent_angle(Q, math.atan2, math.hypot)
         else:
             psi, theta = twist(Q), tangent_angle(Q)
-        return TubeState(g, s, t, R0, target, ops.real(psi), ops.real(theta), path_length)
+        c, n = ops.column(np.cos(target)), ops.column(np.sin(target))
+        rows = [c * Q[..., 0, :] + n * Q[..., 1, :], c * Q[..., 1, :] - n * Q[..., 0, :], Q[..., 2, :]]
+        error = np.concatenate(rows, -1)
+        return TubeState(g, s, t, R0, target, error, ops.real(psi), ops.real(theta), path_length)
 
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
@@ -190,12 +195,8 @@ class TubeTwistEnv(ConnectionEnv):
         return (s.twist - s.target + math.pi) % (2 * math.pi) - math.pi
 
     def observe(self, s, ops=SCALAR):
-        lead = np.shape(s.g)[:-1]
-        Q = np.swapaxes(s.R0.reshape(*lead, 3, 3), -1, -2) @ s.g.reshape(*lead, 3, 3)
-        c, n = ops.column(np.cos(s.target)), ops.column(np.sin(s.target))
-        rows = [c * Q[..., 0, :] + n * Q[..., 1, :], c * Q[..., 1, :] - n * Q[..., 0, :], Q[..., 2, :]]
         e = self.twist_error(s, ops)
-        return np.concatenate([*rows, np.stack([np.cos(e), np.sin(e)], -1)], -1).astype(np.float32)
+        return np.concatenate([s.error, np.stack([np.cos(e), np.sin(e)], -1)], -1).astype(np.float32)
 
     def cost(self, s, ops=SCALAR):
         """e = θ_T + |ψ − ψ*|, the reward pays its decrease."""
