@@ -57,7 +57,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 BEND_CONNECTION = -np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])
 """A of the tube as a connection over the accumulated bend s: ξ = −A ṡ = (ṡ₁, ṡ₂, 0), in the tip's frame."""
@@ -182,7 +181,3 @@ def circle_rate(colatitude: float, curvature: float = 1.0) -> float:
     """Ω for which the bend k (cos Ωt, sin Ωt) traces the circle of that colatitude: Ω = k cot c."""
     return curvature / math.tan(colatitude)
 
-
-def colatitude_of_area(area: float) -> float:
-    """The colatitude c of the cap of that area, 2π(1 − cos c) = A."""
-    return brentq(lambda c: 2 * math.pi * (1 - math.cos(c)) - area, 0.0, math.pi)
