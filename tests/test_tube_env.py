@@ -102,6 +102,7 @@ def test_bad_reset_options_are_refused(options, words):
         ({"dt": 0.0}, "dt=0.0"),
         ({"integrator": "verlet"}, "integrator='verlet'"),
         ({"bend": 1.0}, "for TubeTwist-v0"),
+        ({"shape_low": [0.0, 0.0]}, "['shape_low'] for TubeTwist-v0"),
     ],
 )
 def test_bad_parameters_are_refused(kwargs, words):

@@ -9,10 +9,12 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.segments import run_segments
-from connenv.core.validation import check_keys, check_number, check_rotation
+from connenv.core.validation import check_keys, check_number, check_rotation, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR
-from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
+
+__all__ = ["DT_MAX", "TubeTwistEnv", "TubeTwistVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
 
 TIME_COST = 0.01  # reward paid per step until success
 TARGET_RANGE = (0.3, 3.0)  # rad: ψ* drawn uniformly at reset
@@ -130,6 +132,7 @@ class TubeTwistEnv(ConnectionEnv):
         integrator: str = "exact",
         **stepper_options,
     ):
+        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
         self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
         max_bend_rate = check_number("max_bend_rate", max_bend_rate, 0.0, open_low=True)
         infinite = [math.inf, math.inf]
