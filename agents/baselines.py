@@ -52,6 +52,7 @@ ENVS = (
     "connenv/ElroysBeanie-v0",
     "connenv/RollingCoinSurface-v0",
     "connenv/BeadOnBar-v0",
+    "connenv/TubeTwist-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
@@ -204,6 +205,7 @@ MEASURES = {
     "connenv/RollingBall-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),
+    "connenv/TubeTwist-v0": ("bend / shortest loop", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
     "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
     "connenv/RollingCoin-v0": ("time to park", "s", lambda row: row["time_to_success_mean"]),

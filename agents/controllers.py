@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from agents import tube
 from agents.bead_on_bar import BeadTilt
 from agents.gaits import GaitPlanner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
@@ -74,6 +75,7 @@ CONTROLLERS = {
     "connenv/ElroysBeanie-v0": {"dead_beat": BeanieDeadBeat},
     "connenv/RollingCoinSurface-v0": {"steer": SteerToTarget},
     "connenv/BeadOnBar-v0": {"tilt": BeadTilt},
+    "connenv/TubeTwist-v0": {"cap": tube.for_env, "square": lambda env: tube.for_env(env, sides=4)},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

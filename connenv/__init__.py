@@ -104,3 +104,9 @@ register(
     vector_entry_point="connenv.envs.elroys_beanie:ElroysBeanieVectorEnv",
     max_episode_steps=200,
 )
+register(
+    id="connenv/TubeTwist-v0",
+    entry_point="connenv.envs.tube:TubeTwistEnv",
+    vector_entry_point="connenv.envs.tube:TubeTwistVectorEnv",
+    max_episode_steps=200,
+)

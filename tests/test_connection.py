@@ -178,6 +178,28 @@ def test_constant_connection_is_one_exponential():
     assert np.max(np.abs(info["state"]["g"] - expm(X))) <= 1e-15
 
 
+def test_a_constant_connection_given_as_an_array_steps_exactly_alone_and_in_a_batch():
+    """A given as an array: the exact step (one exponential) by default. The rolling ball's A in the space frame
+    gives RollingBall-v0's attitude (Rodrigues by scipy) to rounding, and the vector env's rows the single env's."""
+    radius, dt = 0.7, 0.1
+    kwargs = {"group": "SO3", "frame": "space", "connection": rolling_ball_connection(radius)(None),
+              "shape_low": [-np.inf] * 2, "shape_high": [np.inf] * 2, "dt": dt}  # fmt: skip
+    env, ball = gym.make(ID, **kwargs), gym.make("connenv/RollingBall-v0", radius=radius, dt=dt)
+    assert type(env.unwrapped.stepper).__name__ == "Exact"
+    native = gym.make_vec(ID, 2, vectorization_mode="vector_entry_point", **kwargs)
+    env.reset(seed=0)
+    ball.reset(seed=0)
+    native.reset(seed=0)
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        a = (0.7 * rng.uniform(-1.0, 1.0, (2, 2))).astype(np.float32)
+        info = env.step(a[0])[4]
+        ball_info = ball.step(a[0])[4]
+        rows = native.step(a)[4]
+    assert np.max(np.abs(info["state"]["g"] - ball_info["state"]["R"])) <= 1e-13
+    assert np.array_equal(rows["state"]["g"][0], info["state"]["g"])
+
+
 # -- the env's contract ---------------------------------------------------------------------------
 
 
@@ -258,7 +280,8 @@ def test_reset_sets_the_state_and_renders():
         ({"frame": "world"}, "frame='world'"),
         ({"connection": lambda s: np.ones((2, 2))}, "shape (3, 2)"),
         ({"connection": lambda s: np.full((3, 2), np.nan)}, "finite"),
-        ({"connection": np.ones((3, 2))}, "callable"),
+        ({"connection": np.ones((2, 2))}, "or a constant A"),
+        ({"connection": "curved"}, "callable"),
         ({"shape_low": [1.0, 0.0]}, "below"),
         ({"shape_low": [-1.0]}, "one shape"),
         ({"shape_high": [1.0, np.nan]}, "NaN"),

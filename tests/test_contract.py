@@ -36,6 +36,7 @@ CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where an
     "connenv/ElroysBeanie-v0": [{}],
     "connenv/RollingCoinSurface-v0": [{}, {"surface": "plane"}],
     "connenv/BeadOnBar-v0": [{}, {"g": 0.0}],
+    "connenv/TubeTwist-v0": [{}, {"integrator": "magnus"}],
     # the generic ids, on connenv.examples' systems: one of each jump class; a flat and a curved connection
     "connenv/ActiveConstraint-v0": [examples.swing(), examples.rotor(), examples.bead()],
     "connenv/Connection-v0": [examples.beanie(), examples.rolling_ball()],

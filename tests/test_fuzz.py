@@ -40,6 +40,7 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/RollingCoin-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0},
     "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
     "connenv/BeadOnBar-v0": {"r": 0, "r_dot": 0, "theta": 0},
+    "connenv/TubeTwist-v0": {},  # R: a rotation matrix (tests/test_tube_env.py)
 }
 OPTION_KEYS = {  # reset options beside "state"
     "connenv/KozlovShell-v0": {"target": 2},
@@ -47,6 +48,7 @@ OPTION_KEYS = {  # reset options beside "state"
     "connenv/ElroysBeanie-v0": {"target": 0},
     "connenv/RollingCoinSurface-v0": {"target": 2},
     "connenv/BeadOnBar-v0": {"target": 0},
+    "connenv/TubeTwist-v0": {"target": 0},
 }
 NOT_NUMBERS = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
                "control", "integrator", "pivot", "vectorized", "surface", "surface_params"}

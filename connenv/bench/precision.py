@@ -2,7 +2,7 @@
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
     python -m connenv.bench precision [--env swing skier ball kapitza shell bead connection coin beanie coin_surface
-                                       coin_plane] [--quick]
+                                       coin_plane tube] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -34,6 +34,10 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
   (θ̇ = 9 (θ_d − θ), sin θ_d = (3 (r − r*) + 3 ṙ)/g, r* = 0.5 m) takes on the exact step, replayed open loop;
   reference: DOP853 at rtol 1e-13, atol 1e-15. State error: |r − r_ref| at the end (m). Invariant: none holds
   while the bar turns, so the second panel is max |r(t) − r_ref(t)| over the episode (m).
+- tube: TubeTwist-v0 from R = I, 200 steps (one episode) of seeded random bending rates; reference: the exact
+  step (one exponential per step, exact for piecewise-constant rates). State error: the angle between R and R_ref
+  at the end (rad). Invariant: max ‖RᵀR − I‖ over the episode. Besides the common candidates, the builder's Magnus
+  step.
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
@@ -280,6 +284,16 @@ CASES = {
         "max |r(t) − r_ref(t)| (m)",
         bead_drift,
         "m",
+    ),
+    "tube": Case(
+        "connenv/TubeTwist-v0",
+        EXACT,
+        (Episode("random κ", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
+        lambda env, ref: float(rotation_angle(env.state.g.reshape(3, 3) @ ref.state.g.reshape(3, 3).T)),
+        "max ‖RᵀR − I‖",
+        lambda env, info, start: float(np.linalg.norm(info["state"]["R"].T @ info["state"]["R"] - np.eye(3))),
+        "rad",
+        steppers=MAGNUS,
     ),
     "connection": Case(
         "connenv/Connection-v0",

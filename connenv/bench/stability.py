@@ -1,7 +1,8 @@
 """Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
-    python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface] [--quick]
+    python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface tube]
+                                      [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -14,6 +15,8 @@ StepperError and the invariant's error stayed within the bound below at every st
   min(1 − κ h_max) over the trail, set by h_max = (1 − λ)/κ_max; bounded: |E − E(0)| ≤ 0.1 m g H.
 - ball: seeded random velocities for N steps whatever dt; parameter N, the horizon; bounded: ‖RᵀR − I‖ ≤ 1e-6
   (the env's own bound: past it the env raises).
+- tube: TubeTwist-v0 bent at seeded random rates for 1 s whatever dt; parameter max_bend_rate (the bend per step
+  is max_bend_rate · dt); bounded: ‖RᵀR − I‖ ≤ 1e-9 (the env's own bound: past it the env raises).
 - kapitza: KapitzaPendulum-v0 from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt, a = 0.05 m,
   each step's velocity the chord between samples (v_max = a ω), 2 s; parameter ω; bounded: the env's energy
   error (in the pivot's frame, on segments of constant u̇) within 0.1 m g l (the env's own bound). The grid
@@ -201,6 +204,24 @@ MAPS = {
             ("rk4", {"substeps": 4}),
             ("lsoda", {"rtol": 1e-8, "atol": 1e-10}),
             ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
+            ("exact", {}),
+        ),
+    ),
+    "tube": StabilityMap(
+        "connenv/TubeTwist-v0",
+        "max_bend_rate (rad/s)",
+        (0.1, 1.0, 10.0, 100.0),
+        lambda rate: {"max_bend_rate": rate},
+        lambda rate: {"state": {}},
+        random_velocity,
+        lambda rate, dt: math.ceil(1.0 / dt),
+        env_bound,
+        (
+            ("euler", {}),
+            ("rk4", {}),
+            ("rk4", {"substeps": 4}),
+            ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
+            ("magnus", {}),
             ("exact", {}),
         ),
     ),

@@ -235,6 +235,34 @@ class ExactConnection(Connection):
     exact_segment: object = field(default=None, compare=False)
 
 
+def constant_connection(s, A):
+    """A at every shape s (…, k): the array A (dim 𝔤, k) broadcast over the leading axes of s."""
+    return np.broadcast_to(A, (*np.shape(s)[:-1], *np.shape(A)))
+
+
+@dataclass(frozen=True)
+class ConstantConnection(Connection):
+    """A connection the same at every shape (``connection`` = functools.partial(constant_connection, A=A)): ξ is
+    constant over a segment of constant ṡ, and the flow over it is one exponential, g exp(τ ξ^) (body frame) or
+    exp(τ ξ^) g (space frame), exact: the ``exact_segment`` of ``connenv.core.steppers.Exact``."""
+
+    def group_velocity(self, s, s_dot):
+        """ξ = −A ṡ as components: floats for one shape, arrays over the rows of a batch."""
+        xi = np.asarray(s_dot, float) @ -self.connection.keywords["A"].T
+        return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
+
+    def exact_segment(self, y, s, s_dot, tau):
+        group, single = GROUPS[self.group], np.ndim(y) == 1
+        xi = self.group_velocity(s, s_dot)
+        if single:
+            g, tau = tuple(np.asarray(y, float).tolist()), float(tau)
+        else:
+            g, tau = tuple(np.moveaxis(np.asarray(y, float), -1, 0)), np.asarray(tau, float)
+        step = group.exp([tau * c for c in xi])
+        g = group.product(g, step) if self.frame == "body" else group.product(step, g)
+        return np.array(g) if single else np.stack(np.broadcast_arrays(*g), -1)
+
+
 def group_velocity(system, s, s_dot):
     """ξ = −A(s) ṡ as components: the system's own ``group_velocity`` if it has one (a closed form), else from its
     ``connection``."""

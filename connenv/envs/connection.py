@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.lie import FRAMES, GROUPS, Connection, ExactConnection
+from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, Connection, ExactConnection, constant_connection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
 from connenv.core.steppers import StepperError, make_stepper
 from connenv.core.validation import (
@@ -57,7 +58,9 @@ class ConnectionEnv(TaskEnv):
     | "SO3" | 3×3 rotation | (ω₁, ω₂, ω₃), ω̂ v = ω × v |
     | "R2" | the vector (x, y) | (v₁, v₂) |
 
-    and `connection(s)` returns A(s) as an array of shape (dim 𝔤, k) for a shape s of shape (k,).
+    and `connection(s)` returns A(s) as an array of shape (dim 𝔤, k) for a shape s of shape (k,). A connection
+    that is the same at every shape (the rolling ball's, the beanie's, a tube's) may be given as that array A: its
+    flow over a step is then one exponential, the exact step (`integrator="exact"`, its default).
 
     ## Action Space
 
@@ -94,7 +97,7 @@ class ConnectionEnv(TaskEnv):
     | kwarg | default | range |
     |---|---|---|
     | group | (required) | "SO2", "SE2", "SO3", "R2" |
-    | connection | (required) | callable s -> A(s) of shape (dim 𝔤, k), finite |
+    | connection | (required) | callable s -> A(s) of shape (dim 𝔤, k), finite; or a constant A, an array of that shape |
     | shape_low, shape_high | (required) | arrays of shape (k,), low < high, ±inf allowed |
     | dt | 0.1 | [1e-12, 100] s |
     | frame | "body" | "body", "space" |
@@ -103,8 +106,8 @@ class ConnectionEnv(TaskEnv):
     | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
     | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the vector env calls it once |
     | exact_segment | None | callable (g, s, ṡ, τ) -> g after a segment at constant ṡ, in closed form (below) |
-    | integrator | "exact" with exact_segment, else "magnus" | "exact" (with exact_segment), "magnus", "euler", "rk4", |
-    | | | "dop853", "rk45", "lsoda", "radau" |
+    | integrator | "exact" with exact_segment or a constant A, else "magnus" | "exact" (with exact_segment or a |
+    | | | constant A), "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | atol (magnus: its error bound per segment, 1e-10) / substeps, rtol, atol (others) | | `connenv.core.steppers` |
 
     The default step is `connenv.core.lie.Magnus`: on SO3 the sixth-order Magnus method with closed-form
@@ -120,6 +123,8 @@ class ConnectionEnv(TaskEnv):
 
     Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`.
     """
+
+    name = "Connection-v0"  # the id bad make kwargs are reported against
 
     def __init__(
         self,
@@ -149,15 +154,23 @@ class ConnectionEnv(TaskEnv):
         if draw is not None and not callable(draw):
             raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
         self.task, self.draw = task, draw
-        connection = _check_connection(connection, self.group, self.start_shape())
-        if exact_segment is None:
+        if not callable(connection):
+            if exact_segment is not None:
+                raise ValueError(f"exact_segment={exact_segment!r} is for a callable connection; a constant A "
+                                 "has its own exact step (one exponential)")
+            A = _check_constant(connection, self.group, self.low.size)
+            self.system = ConstantConnection(group, frame, functools.partial(constant_connection, A=A), True)
+        elif exact_segment is None:
+            connection = _check_connection(connection, self.group, self.start_shape())
             self.system = Connection(group, frame, connection, bool(vectorized))
         elif callable(exact_segment):
+            connection = _check_connection(connection, self.group, self.start_shape())
             self.system = ExactConnection(group, frame, connection, bool(vectorized), exact_segment)
         else:
             raise ValueError(f"exact_segment={exact_segment!r} must be a callable (g, s, ṡ, τ) -> g, or None")
-        check_stepper_options("Connection-v0", stepper_options, type(self))
-        integrator = integrator or ("magnus" if exact_segment is None else "exact")
+        check_stepper_options(self.name, stepper_options, type(self))
+        if integrator is None:
+            integrator = "exact" if isinstance(self.system, (ConstantConnection, ExactConnection)) else "magnus"
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.state = ConnectionState(np.array(self.group.identity()), self.start_shape(), 0.0)
         self.action_space = spaces.Box(-1.0, 1.0, self.low.shape, np.float32)
@@ -310,6 +323,20 @@ def draw_plain(canvas, group: str, state: dict, low, high):
         pg.draw.rect(screen, (70, 110, 160), (x, size - 10 - int(100 * fraction), width, int(100 * fraction)))
     screen.blit(canvas.font.render(f"t = {state['t']:5.2f}   s = {np.round(state['s'], 2)}", True, (0, 0, 0)), (10, 10))
     return canvas.show()
+
+
+def _check_constant(connection, group, k):
+    """A constant connection as a float array, if it is finite of shape (dim 𝔤, k)."""
+    try:
+        A = np.array(connection, dtype=float)
+    except (TypeError, ValueError):
+        A = None
+    if A is None or A.shape != (group.dim, k) or not np.all(np.isfinite(A)):
+        raise ValueError(
+            f"connection={connection!r} must be a callable s -> A(s) or a constant A: finite, of shape {(group.dim, k)} "
+            f"(dim 𝔤, k) for group {group.name} and a shape of {k} coordinates"
+        )
+    return A
 
 
 def _check_connection(connection, group, s):

@@ -46,6 +46,7 @@ CASES = [
     ("coin_plane", "connenv/RollingCoinSurface-v0", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"},
      None),
     ("bead", "connenv/BeadOnBar-v0", {"max_episode_steps": 60}, None),
+    ("tube", "connenv/TubeTwist-v0", {"max_episode_steps": 40, "tolerance": 0.6}, None),
 ]
 
 

@@ -1,0 +1,257 @@
+"""TubeTwist-v0: turn a tube about its own axis by bending it, since it cannot twist."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.segments import run_segments
+from connenv.core.validation import check_keys, check_number, check_rotation, check_stepper_options
+from connenv.envs.base import BATCH, SCALAR
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
+
+__all__ = ["DT_MAX", "TubeTwistEnv", "TubeTwistVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
+
+TIME_COST = 0.01  # reward paid per step until success
+TARGET_RANGE = (0.3, 3.0)  # rad: ψ* drawn uniformly at reset
+
+
+@dataclass
+class TubeState(ConnectionState):
+    """ConnectionState (g: R's 9 entries, s: the accumulated bend, t) with the start frame R₀ (9 entries), the
+    target ψ*, and what the task reads: the error E = Rz(ψ*)ᵀR₀ᵀR (9 entries), the twist ψ and the tangent's angle
+    from T₀ (rad), the bend length so far."""
+
+    R0: np.ndarray
+    target: float
+    error: np.ndarray
+    twist: float
+    tangent_error: float
+    path_length: float
+
+
+class TubeTwistEnv(ConnectionEnv):
+    r"""
+    ## Description
+
+    The tip of a tube that bends but cannot twist, as surgical and imaging probes are (Lawton): its frame R ∈ SO(3)
+    (tip → space) has columns N, B, T (normal, binormal, tangent), and the controller sets its bending rates
+    κ = (κ₁, κ₂) in the tip's frame, with no rate about T:
+
+        Ṙ = R ω̂,    ω = (κ₁, κ₂, 0).
+
+    N is then parallel transported along the curve that T traces on the unit sphere. The only way to turn the tip
+    about its own axis is a loop of T: back where it started, the tip has turned by the area the loop encloses
+    (counterclockwise seen from outside, mod 2π). The task is to turn it by a target angle ψ* and bring the tangent
+    back. Built on `ConnectionEnv`: SO(3) in the body frame, the shape being the accumulated bend s = ∫κ dt (the
+    tangent's trace rolled out on the plane) and the constant connection A = −[[1, 0], [0, 1], [0, 0]]; each step
+    is one exponential, R ← R exp(dt ω̂), exact.
+
+    The *twist* ψ (`info["twist"]`) is the angle by which N has turned about T relative to the start frame R₀,
+    measured once T is carried back to T₀ along the great circle between them: with Q = R₀ᵀR and G that rotation,
+    G Q = Rz(ψ). On a closed loop of T it is the enclosed area; while T is away it is the area of the path closed
+    by that geodesic. At T = −T₀, where no geodesic is singled out, ψ = 0.
+
+    ## Action Space
+
+    `Box(-1, 1, (2,), float32)`: κ = a · max_bend_rate, constant over the step. Actions outside are clipped; a
+    float64 action is used at its precision (not rounded to float32); a wrong shape or a non-finite value raises
+    ValueError.
+
+    | Num | Action | Min | Max |
+    |-----|--------|-----|-----|
+    | 0 | κ₁ / max_bend_rate (bend about N) | -1 | 1 |
+    | 1 | κ₂ / max_bend_rate (bend about B) | -1 | 1 |
+
+    ## Observation Space
+
+    `Box(-1, 1, (11,), float32)`: the error E = Rz(ψ*)ᵀ R₀ᵀ R, the frame relative to the target frame R₀ Rz(ψ*)
+    (E = I at the goal), which turns as the tip does, Ė = E ω̂, so it is a Markov state; then the twist error.
+
+    | Num | Observation | Min | Max |
+    |-----|-------------|-----|-----|
+    | 0–8 | E, row by row (row 2: T₀ in the tip's frame) | -1 | 1 |
+    | 9 | cos(ψ − ψ*) | -1 | 1 |
+    | 10 | sin(ψ − ψ*) | -1 | 1 |
+
+    ## Rewards
+
+    With the cost e = θ_T + |ψ − ψ*| (θ_T the angle between T and T₀, the twist error wrapped into [−π, π)),
+    e before the step and e′ after it:
+
+        reward = e − e′ − 0.01
+
+    Bending T radially away from T₀ costs θ_T; going round pays back the twist it adds, at the rate tan(θ_T/2) per
+    radian of bend, so the reward leads round a loop. Summed to success: e₀ − e_T − 0.01 · steps.
+
+    ## Starting State
+
+    R = R₀ = I, s = 0, t = 0, and ψ* uniform in [0.3, 3] rad. `reset(options={"state": {"R": R₀}, "target": ψ*})`
+    sets either: R₀ a rotation matrix to 1e-9 (‖RᵀR − I‖, |det R − 1|; never re-orthonormalized), ψ* in [−π, π],
+    else ValueError.
+
+    ## Episode End
+
+    Terminated when θ_T ≤ `tolerance` and |ψ − ψ*| ≤ `tolerance` (`info["is_success"]`). Truncated after 200 steps
+    by the registration's time limit: the cap controller, a loop of the shortest length, needs at most
+    √(3 (4π − 3))/(max_bend_rate · dt) ≈ 108 steps.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | max_bend_rate | 1.0 | (0, ∞) rad/s |
+    | dt | 0.05 | [1e-12, 100] s |
+    | tolerance | 0.02 | (0, π) rad |
+    | integrator | "exact" | "exact" (Rodrigues), "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (euler, rk4) / rtol, atol (scipy, magnus) | | `connenv.core.steppers` |
+
+    R stays on SO(3) to rounding under the exact step; a stepper that leaves it by more than 1e-9 (‖RᵀR − I‖)
+    raises `connenv.core.StepperError` (the generic steppers integrate Ṙ = R ω̂ in coordinates and drift off).
+
+    Every `info` has `"state"` (`R` (3×3), `t`), `"twist"` (ψ), `"twist_error"` (ψ − ψ*, wrapped),
+    `"tangent_error"` (θ_T), `"path_length"` (the bend ∫|κ| dt since reset, rad), `"path_ratio"` (path length over
+    √(A (4π − A)), A = |ψ*|: the length of a circle enclosing the area ψ*, the shortest loop that does the task;
+    isoperimetric inequality on the sphere) and `"is_success"`.
+    """
+
+    name = "TubeTwist-v0"
+    metadata = {**ConnectionEnv.metadata, "measures": ("path_ratio", "path_length")}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        max_bend_rate: float = 1.0,
+        dt: float = 0.05,
+        tolerance: float = 0.02,
+        integrator: str = "exact",
+        **stepper_options,
+    ):
+        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
+        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
+        max_bend_rate = check_number("max_bend_rate", max_bend_rate, 0.0, open_low=True)
+        infinite = [math.inf, math.inf]
+        super().__init__("SO3", BEND_CONNECTION, np.negative(infinite), infinite, dt=dt, frame="body",
+                         max_shape_speed=max_bend_rate, render_mode=render_mode, integrator=integrator,
+                         **stepper_options)  # fmt: skip
+        self.state = self.at(np.eye(3).ravel(), np.zeros(2), 0.0, np.eye(3).ravel(), 1.0, 0.0)
+        self.trace = []  # T at the start of each step since reset: the tangent's trace drawn on the sphere
+
+    def parameters(self):
+        return {"max_bend_rate": self.max_shape_speed, "tolerance": self.tolerance}
+
+    def _observation_space(self):
+        return spaces.Box(-1.0, 1.0, (11,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        self.trace = []
+        return super().reset(seed=seed, options=options)
+
+    def step(self, action):
+        self.trace.append(self.state.g[2::3].copy())
+        return super().step(action)
+
+    # -- physics ---------------------------------------------------------------
+
+    def at(self, g, s, t, R0, target, path_length, ops=SCALAR):
+        """The state at R (g) from R₀, with its error from the target frame, its twist and its tangent angle."""
+        lead = np.shape(g)[:-1]
+        Q = np.swapaxes(R0.reshape(*lead, 3, 3), -1, -2) @ g.reshape(*lead, 3, 3)
+        if ops is SCALAR:
+            psi, theta = twist(Q, math.atan2), tangent_angle(Q, math.atan2, math.hypot)
+        else:
+            psi, theta = twist(Q), tangent_angle(Q)
+        c, n = ops.column(np.cos(target)), ops.column(np.sin(target))
+        rows = [c * Q[..., 0, :] + n * Q[..., 1, :], c * Q[..., 1, :] - n * Q[..., 0, :], Q[..., 2, :]]
+        error = np.concatenate(rows, -1)
+        return TubeState(g, s, t, R0, target, error, ops.real(psi), ops.real(theta), path_length)
+
+    def start(self, options):
+        check_keys("reset options", options, {"state", "target"})
+        check_keys("options['state']", options.get("state", {}), {"R"})
+        target = float(self.np_random.uniform(*TARGET_RANGE))
+        if "target" in options:
+            target = check_number("target", options["target"], -math.pi, math.pi)
+        R0 = check_rotation("state R", options["state"]["R"]) if "R" in options.get("state", {}) else np.eye(3)
+        g = R0.ravel().copy()
+        return self.at(g, np.zeros(2), 0.0, g.copy(), target, 0.0)
+
+    def advance(self, state, kappa):
+        return self.bent(state, kappa, self.stepper)
+
+    def bent(self, state, kappa, stepper, ops=SCALAR):
+        """The state after bending at the rates κ for dt (one state, or rows with ops=BATCH)."""
+        g = run_segments(stepper, self.system, state.g, [(state.s, kappa, self.dt)])[0]
+        self.check_group(g)
+        length = state.path_length + ops.hypot(kappa[..., 0], kappa[..., 1]) * self.dt
+        return self.at(g, state.s + kappa * self.dt, state.t + self.dt, state.R0, state.target, length, ops)
+
+    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
+
+    def twist_error(self, s, ops=SCALAR):
+        """ψ − ψ*, wrapped into [−π, π)."""
+        return (s.twist - s.target + math.pi) % (2 * math.pi) - math.pi
+
+    def observe(self, s, ops=SCALAR):
+        e = self.twist_error(s, ops)
+        return np.concatenate([s.error, np.stack([np.cos(e), np.sin(e)], -1)], -1).astype(np.float32)
+
+    def cost(self, s, ops=SCALAR):
+        """e = θ_T + |ψ − ψ*|, the reward pays its decrease."""
+        return s.tangent_error + abs(self.twist_error(s, ops))
+
+    def reward(self, before, after, info, ops=SCALAR):
+        return self.cost(before, ops) - self.cost(after, ops) - TIME_COST
+
+    def success(self, s, ops=SCALAR):
+        return (s.tangent_error <= self.tolerance) & (abs(self.twist_error(s, ops)) <= self.tolerance)
+
+    def terminated(self, state, info, ops=SCALAR):
+        return info["is_success"]
+
+    def path_ratio(self, s, ops=SCALAR):
+        """The bend so far over the shortest loop that does the task from T₀: a circle of the area |ψ*| (1 for
+        ψ* = 0)."""
+        area = abs(s.target)
+        shortest = ops.sqrt(area * (4 * math.pi - area))
+        return ops.where(shortest > 0, s.path_length / ops.maximum(shortest, 1e-300), 1.0)
+
+    def describe(self, s, ops=SCALAR):
+        lead = np.shape(s.g)[:-1]
+        return {
+            "state": {"R": s.g.reshape(*lead, 3, 3).copy(), "t": s.t},
+            "twist": s.twist,
+            "twist_error": ops.real(self.twist_error(s, ops)),
+            "tangent_error": s.tangent_error,
+            "path_length": s.path_length,
+            "path_ratio": self.path_ratio(s, ops),
+            "is_success": ops.flag(self.success(s, ops)),
+        }
+
+    # -- rendering ---------------------------------------------------------------
+
+    def _make_renderer(self):
+        from connenv.envs.rendering import TubeRenderer
+
+        return TubeRenderer(self.render_mode, self.metadata["render_fps"])
+
+    def _draw(self, renderer):
+        s = self.state
+        trace = np.array([*self.trace, s.g[2::3]])
+        info = self.describe(s)
+        return renderer.draw(s.g.reshape(3, 3), s.R0.reshape(3, 3), trace, s.t, info["twist"], s.target)
+
+
+class TubeTwistVectorEnv(ConnectionVectorEnv):
+    """TubeTwist-v0 over a batch (``gym.make_vec("connenv/TubeTwist-v0", num_envs=N)``; see
+    ``connenv.envs.vector``): every row bent by the single env's exponential."""
+
+    single_env = TubeTwistEnv
+
+    def advance(self, state, kappa):
+        return self.env.bent(state, kappa, self.stepper, BATCH)
