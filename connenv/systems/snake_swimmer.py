@@ -51,12 +51,13 @@ so that the Lie-group step evaluates the connection on floats at each quadrature
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.systems.kozlov_shell import _frame, _reconstruct, _split
+from connenv.systems.kozlov_shell import _frame, _split
 
 JOINT_LIMIT = 2.0 * math.pi / 3.0  # |α|, |β| ≤ 2π/3: the links' tips stay apart
 
@@ -71,6 +72,13 @@ class _Arrays:
 
 def _ops(x):
     return _Floats if isinstance(x, float) else _Arrays
+
+
+def _reconstruct(theta, v1, v2, omega):
+    """ġ = g ξ on SE(2): (cos θ v₁ − sin θ v₂, sin θ v₁ + cos θ v₂, ω)."""
+    ops = _ops(theta)
+    c, s = ops.cos(theta), ops.sin(theta)
+    return c * v1 - s * v2, s * v1 + c * v2, omega
 
 
 @dataclass(frozen=True)
@@ -99,7 +107,7 @@ class SnakeSwimmer:
         a2, b2 = self.a**2, self.b**2
         return self.rho * math.pi * b2, self.rho * math.pi * a2, self.rho * math.pi * (a2 - b2) ** 2 / 8
 
-    @property
+    @functools.cached_property
     def link_inertias(self) -> tuple[float, float, float]:
         """(m₁, m₂, j) = (m_l + λ₁, m_l + λ₂, J_l + λ₃): the diagonal of each link's 𝕀ᵢ in its own frame."""
         lam1, lam2, lam3 = self.added_masses
@@ -184,11 +192,12 @@ class SnakeSwimmer:
 
     def vector_field(self, y, s, s_dot):
         """Full model: ẏ for y = (x, y, θ, P₁, P₂, Π), Kirchhoff's equations and the reconstruction."""
-        _, _, theta, p1, p2, pi = _split(y)
-        v1, v2, omega = self._body_velocity((p1, p2, pi), _split(s), _split(s_dot))
-        return np.stack(
-            np.broadcast_arrays(*_reconstruct(theta, v1, v2, omega), omega * p2, -omega * p1, v2 * p1 - v1 * p2), -1
-        )
+        single = np.ndim(y) == 1 and np.ndim(s) == 1
+        y, s, s_dot = (np.asarray(a, float).tolist() if single else _split(a) for a in (y, s, s_dot))
+        _, _, theta, p1, p2, pi = y
+        v1, v2, omega = self._body_velocity((p1, p2, pi), s, s_dot)
+        y_dot = (*_reconstruct(theta, v1, v2, omega), omega * p2, -omega * p1, v2 * p1 - v1 * p2)
+        return np.array(y_dot) if single else np.stack(np.broadcast_arrays(*y_dot), -1)
 
     def spatial_momentum(self, y):
         """(R(θ) P, Π + x P_y − y P_x): the total momentum of chain and fluid in the space frame, conserved."""
@@ -251,5 +260,7 @@ class ReducedSnakeSwimmer(SnakeSwimmer):
 
     def vector_field(self, y, s, s_dot):
         """Reduced model: ẏ for y = (x, y, θ), the connection reconstructed on SE(2)."""
-        xi = self._body_velocity((0.0, 0.0, 0.0), _split(s), _split(s_dot))
-        return np.stack(np.broadcast_arrays(*_reconstruct(_split(y)[2], *xi)), axis=-1)
+        single = np.ndim(y) == 1 and np.ndim(s) == 1
+        y, s, s_dot = (np.asarray(a, float).tolist() if single else _split(a) for a in (y, s, s_dot))
+        y_dot = _reconstruct(y[2], *self._body_velocity((0.0, 0.0, 0.0), s, s_dot))
+        return np.array(y_dot) if single else np.stack(np.broadcast_arrays(*y_dot), axis=-1)
