@@ -32,12 +32,13 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/RollingBallPose-v0": {"x": 0, "y": 0},
     "connenv/RollingBallGoal-v0": {"x": 0, "y": 0},
     "connenv/KozlovShell-v0": {"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3},
+    "connenv/SnakeSwimmer-v0": {"x": 0, "y": 0, "theta": 0, "alpha": 0, "beta": 0, "momentum": 3},
     "connenv/KapitzaPendulum-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
     "connenv/KapitzaSwingUp-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
     "connenv/ActiveConstraint-v0": {"q": 1, "p": 1, "u": 1},  # examples.swing(): n = m = 1
     "connenv/Connection-v0": {"s": 1},  # examples.beanie(): k = 1
 }
-OPTION_KEYS = {"connenv/KozlovShell-v0": {"target": 2}}  # reset options beside "state"
+OPTION_KEYS = {"connenv/KozlovShell-v0": {"target": 2}, "connenv/SnakeSwimmer-v0": {"target": 2}}  # reset options beside "state"
 NOT_NUMBERS = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
                "control", "integrator", "pivot", "vectorized"}
 INVALID = [math.nan, math.inf, -math.inf, "1", 1j, True, [1.0], 0.0]
