@@ -170,9 +170,11 @@ class SnakeSwimmer:
         C11, C12, C13 = I22 * I33 - I23 * I23, I13 * I23 - I12 * I33, I12 * I23 - I13 * I22
         C22, C23, C33 = I11 * I33 - I13 * I13, I12 * I13 - I11 * I23, I11 * I22 - I12 * I12
         det = I11 * C11 + I12 * C12 + I13 * C13
-        return (C11 * w1 + C12 * w2 + C13 * w3) / det, (C12 * w1 + C22 * w2 + C23 * w3) / det, (
-            C13 * w1 + C23 * w2 + C33 * w3
-        ) / det
+        return (
+            (C11 * w1 + C12 * w2 + C13 * w3) / det,
+            (C12 * w1 + C22 * w2 + C23 * w3) / det,
+            (C13 * w1 + C23 * w2 + C33 * w3) / det,
+        )
 
     def _body_velocity(self, mu, s, s_dot):
         """ξ = 𝕀_loc⁻¹ (μ − 𝕀_c ṡ) as components."""
@@ -180,8 +182,10 @@ class SnakeSwimmer:
 
         def rhs(columns):
             (ca1, ca2, ca3), (cb1, cb2, cb3) = columns
-            return mu[0] - ca1 * d_alpha - cb1 * d_beta, mu[1] - ca2 * d_alpha - cb2 * d_beta, (
-                mu[2] - ca3 * d_alpha - cb3 * d_beta
+            return (
+                mu[0] - ca1 * d_alpha - cb1 * d_beta,
+                mu[1] - ca2 * d_alpha - cb2 * d_beta,
+                (mu[2] - ca3 * d_alpha - cb3 * d_beta),
             )
 
         return self._velocity(s, rhs)
