@@ -44,6 +44,7 @@ ENVS = (
     "connenv/KapitzaPendulum-v0",
     "connenv/Skier-v0",
     "connenv/KozlovShell-v0",
+    "connenv/SnakeSwimmer-v0",
     "connenv/RollingBall-v0",
     "connenv/RollingBallPose-v0",
     "connenv/RollingBallGoal-v0",
@@ -200,6 +201,7 @@ MEASURES = {
     "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),
     "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
+    "connenv/SnakeSwimmer-v0": ("steps to target", "", steps_to_target),
     "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
 }
 
