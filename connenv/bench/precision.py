@@ -1,7 +1,7 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball kapitza shell connection] [--quick]
+    python -m connenv.bench precision [--env swing skier ball kapitza shell snake connection] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -23,6 +23,9 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
   1e-13, atol 1e-15. State error: max-norm of the pose (x, y, θ) error at the end (m, rad), for each model.
   Invariant: max |S(t) − S(0)| / |S(0)| of the spatial momentum S in the full model. Besides the common
   candidates, the Magnus step (`integrator="magnus"`: the reduced model's connection; DOP853 on the full model).
+- snake: SnakeSwimmer-v0, 300 steps of seeded random joint commands, from rest (the reduced model) and from the
+  body momentum (0.3, 0.1, 0.05) (the full model), as the shell's; the same reference, errors, invariant and Magnus
+  steps.
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
@@ -163,6 +166,19 @@ CASES = {
     ),
     "shell": Case(
         "connenv/KozlovShell-v0",
+        TIGHT,
+        (
+            Episode("reduced", {"state": {}}, uniform(2), 300),
+            Episode("full", {"state": {"momentum": (0.3, 0.1, 0.05)}}, uniform(2), 300),
+        ),
+        lambda env, ref: float(np.max(np.abs(env.state.pose - ref.state.pose))),
+        "max |S − S(0)| / |S(0)| (full model)",
+        momentum_drift,
+        "m, rad",
+        steppers=MAGNUS,
+    ),
+    "snake": Case(
+        "connenv/SnakeSwimmer-v0",
         TIGHT,
         (
             Episode("reduced", {"state": {}}, uniform(2), 300),

@@ -1,7 +1,7 @@
 """Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
-    python -m connenv.bench stability [--env swing skier ball kapitza shell] [--quick]
+    python -m connenv.bench stability [--env swing skier ball kapitza shell snake] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -23,6 +23,10 @@ StepperError and the invariant's error stayed within the bound below at every st
   u2_max sin 2πt/T), T = 2 s, for 10 s; parameter the mass ratio m/(M + λ₁), set by m; bounded: the spatial
   momentum within 0.1 of its norm (the env's own bound). The reduced model is not mapped: its motion is
   geometric, so a step's error depends on the path of u over the step and not on dt.
+- snake: full model from the body momentum (0.3, 0.1, 0.05), the joints circling, (α*, β*) = π/3 (cos 2πt/T,
+  sin 2πt/T), T = 2 s, for 10 s; parameter the links' aspect ratio a/b (a = 0.5 m), which sets the ratio of the
+  added masses across and along a link, λ₂/λ₁ = (a/b)²; bounded: the spatial momentum within 0.1 of its norm (the
+  env's own bound). The reduced model is not mapped, as the shell's.
 
 A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
 grid held.
@@ -79,6 +83,11 @@ def env_bound(env, info, start):
 def loop_gait(value, t, dt, rng):
     phase = 2 * math.pi * (t + dt) / 2.0
     return np.array([math.cos(phase), math.sin(phase)], np.float32)
+
+
+def joint_circle(value, t, dt, rng):
+    phase = 2 * math.pi * (t + dt) / 2.0
+    return np.array([0.5 * math.cos(phase), 0.5 * math.sin(phase)], np.float32)
 
 
 def random_velocity(value, t, dt, rng):
@@ -155,6 +164,18 @@ MAPS = {
         lambda ratio: {"mass": ratio * (1.0 + math.pi * 0.25)},  # M = 1, λ₁ = ρπb² = π/4
         lambda ratio: {"state": {"u": (0.5, 0.0), "momentum": (0.3, 0.1, 0.05)}},
         loop_gait,
+        lambda value, dt: math.ceil(10.0 / dt),
+        momentum_unbounded,
+        (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10})),
+        largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
+    ),
+    "snake": StabilityMap(
+        "connenv/SnakeSwimmer-v0",
+        "aspect ratio a/b of the links",
+        (2.0, 5.0, 10.0, 30.0, 100.0),
+        lambda ratio: {"b": 0.5 / ratio},
+        lambda ratio: {"state": {"alpha": math.pi / 3, "momentum": (0.3, 0.1, 0.05)}},
+        joint_circle,
         lambda value, dt: math.ceil(10.0 / dt),
         momentum_unbounded,
         (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10})),

@@ -27,7 +27,7 @@ MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped he
 TIME_COST = 0.01  # reward paid per step until success
 MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
 DEFAULT_INTEGRATOR = "magnus"
-DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # DOP853's in the full model; atol is the Lie-group step's too
+DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full model; atol is the Lie-group step's too
 STATE_KEYS = ("x", "y", "theta", "alpha", "beta", "momentum")
 
 
@@ -155,8 +155,8 @@ class SnakeSwimmerEnv(TaskEnv):
     | max_joint_speed | 3.0 | (0, ∞) rad/s |
     | dt | 0.05 | [1e-12, 1] s |
     | success_radius | None: 0.1 body length, 0.6a | (0, 6a) m |
-    | integrator | "magnus" (atol 1e-10) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-8, atol 1e-10 | see `connenv.core.steppers` |
+    | integrator | "magnus" (atol 1e-12) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-10, atol 1e-12 | see `connenv.core.steppers` |
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or, in the full model, a spatial momentum that has moved by more than 0.1 of its norm since
@@ -166,8 +166,8 @@ class SnakeSwimmerEnv(TaskEnv):
     (`connenv.core.lie`): θ = ∫ω and the translation ∫R(θ) v by Gauss–Legendre quadrature, with a rule
     (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
     on the motions at top speed in the eight directions from a 3 × 3 grid of joint angles (the corners, edge
-    midpoints and centre of the joints' square). The full model has no
-    connection and goes to DOP853 (rtol 1e-8, atol 1e-10). Its place on the work–precision chart:
+    midpoints and centre of the joints' square). The full model has no connection and goes to DOP853 (rtol 1e-10,
+    atol 1e-12), which keeps the spatial momentum to 1e-10 of its norm. Its place on the work–precision chart:
     `python -m connenv.bench precision --env snake`.
 
     Every `info` has `"state"` (`x`, `y`, `theta` (the middle link), `alpha`, `beta`, `momentum` (P₁, P₂, Π, body
