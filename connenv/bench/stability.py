@@ -23,7 +23,8 @@ StepperError and the invariant's error stayed within the bound below at every st
   u2_max sin 2πt/T), T = 2 s, for 10 s; parameter the mass ratio m/(M + λ₁), set by m; bounded: the spatial
   momentum within 0.1 of its norm (the env's own bound). The reduced model is not mapped: its motion is
   geometric, so a step's error depends on the path of u over the step and not on dt.
-- snake: full model from the body momentum (0.3, 0.1, 0.05), the joints circling, (α*, β*) = π/3 (cos 2πt/T,
+- snake: full model from the body momentum 𝕀_loc ξ of ξ = (0.3 m/s, 0.1 m/s, 0.05 rad/s), bent at α = π/3, the
+  joints circling, (α*, β*) = π/3 (cos 2πt/T,
   sin 2πt/T), T = 2 s, for 10 s; parameter the links' aspect ratio a/b (a = 0.5 m), which sets the ratio of the
   added masses across and along a link, λ₂/λ₁ = (a/b)²; bounded: the spatial momentum within 0.1 of its norm (the
   env's own bound). The reduced model is not mapped, as the shell's.
@@ -88,6 +89,15 @@ def loop_gait(value, t, dt, rng):
 def joint_circle(value, t, dt, rng):
     phase = 2 * math.pi * (t + dt) / 2.0
     return np.array([0.5 * math.cos(phase), 0.5 * math.sin(phase)], np.float32)
+
+
+def snake_start(ratio):
+    """Bent at α = π/3, with the body momentum 𝕀_loc ξ of the body velocity ξ = (0.3 m/s, 0.1 m/s, 0.05 rad/s)."""
+    from connenv.systems.snake_swimmer import SnakeSwimmer
+
+    shape = np.array([math.pi / 3, 0.0])
+    momentum = SnakeSwimmer(b=0.5 / ratio).locked_inertia(shape) @ np.array([0.3, 0.1, 0.05])
+    return {"state": {"alpha": shape[0], "momentum": tuple(momentum.tolist())}}
 
 
 def random_velocity(value, t, dt, rng):
@@ -174,7 +184,7 @@ MAPS = {
         "aspect ratio a/b of the links",
         (2.0, 5.0, 10.0, 30.0, 100.0),
         lambda ratio: {"b": 0.5 / ratio},
-        lambda ratio: {"state": {"alpha": math.pi / 3, "momentum": (0.3, 0.1, 0.05)}},
+        snake_start,
         joint_circle,
         lambda value, dt: math.ceil(10.0 / dt),
         momentum_unbounded,
