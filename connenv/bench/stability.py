@@ -188,7 +188,7 @@ MAPS = {
         joint_circle,
         lambda value, dt: math.ceil(10.0 / dt),
         momentum_unbounded,
-        (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10})),
+        (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("magnus", {})),  # magnus: the default, DOP853 rtol 1e-10
         largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
     ),
 }

@@ -52,6 +52,8 @@ def joint_path(s, s_cmd, dt: float, max_speed: float):
     joint at max_speed, then held at s_cmd for the rest of the step if it got there. Returns (ṡ, the duration of
     the motion, the joints at the end of the step); over a batch (rows on the first axis) the duration is one per
     row, and a row that does not move has ṡ = 0 and duration 0."""
+    if np.ndim(s) == 1:  # one state on floats, the same arithmetic: several times faster than numpy on two numbers
+        return _joint_path_floats(s.tolist(), s_cmd.tolist(), dt, max_speed)
     delta = s_cmd - s
     largest = np.max(np.abs(delta), axis=-1)
     reach = largest / max_speed
@@ -60,6 +62,16 @@ def joint_path(s, s_cmd, dt: float, max_speed: float):
     ramp = np.minimum(reach, dt)
     end = np.where((reach <= dt)[..., None], s_cmd, s + s_dot * dt)
     return s_dot, ramp, end
+
+
+def _joint_path_floats(s, s_cmd, dt, max_speed):
+    """joint_path of one state, its joints as lists of floats."""
+    delta = [b - a for a, b in zip(s, s_cmd)]
+    largest = max(abs(d) for d in delta)
+    reach = largest / max_speed
+    s_dot = [d * (max_speed / largest) for d in delta] if largest > 0.0 else [0.0, 0.0]
+    end = s_cmd if reach <= dt else [a + d * dt for a, d in zip(s, s_dot)]
+    return np.array(s_dot), min(reach, dt), np.array(end)
 
 
 class SnakeSwimmerEnv(TaskEnv):

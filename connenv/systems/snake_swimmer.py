@@ -117,8 +117,8 @@ class SnakeSwimmer:
 
     def _side_link(self, angle, sign):
         """Entries of one side link's part of 𝕀_loc (I11, I12, I13, I22, I23, I33), of its column of 𝕀_c (c1, c2, c3)
-        and of 𝕀_s (its diagonal entry), the link at φ = sign · angle, its centre at r = (sign (a + a cos angle), a sin angle).
-        sign −1: the rear link (φ₁ = −α), +1: the front link (φ₃ = β)."""
+        and of 𝕀_s (its diagonal entry), the link at φ = sign · angle, its centre at
+        r = (sign (a + a cos angle), a sin angle). sign −1: the rear link (φ₁ = −α), +1: the front link (φ₃ = β)."""
         ops, a = _ops(angle), self.a
         m1, m2, j = self.link_inertias
         c, s = ops.cos(angle), ops.sin(angle)
@@ -141,8 +141,8 @@ class SnakeSwimmer:
         m1, m2, j = self.link_inertias
         rear, rear_c, rear_s = self._side_link(alpha, -1.0)
         front, front_c, front_s = self._side_link(beta, 1.0)
-        middle = (m1, 0.0, 0.0, m2, 0.0, j)
-        locked = tuple(p + q + r for p, q, r in zip(middle, rear, front))
+        locked = (m1 + rear[0] + front[0], rear[1] + front[1], rear[2] + front[2], m2 + rear[3] + front[3],
+                  rear[4] + front[4], j + rear[5] + front[5])  # the middle link's diag(m₁, m₂, j) and the others'
         return locked, (rear_c, front_c), (rear_s, front_s)
 
     def locked_inertia(self, s):
