@@ -7,7 +7,7 @@ import numpy as np
 
 from agents import tube
 from agents.bead_on_bar import BeadTilt
-from agents.gaits import GaitPlanner
+from agents.gaits import GaitPlanner, snake_planner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
 from agents.lawton import BeanieDeadBeat, CoinPlanner
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
@@ -66,6 +66,7 @@ CONTROLLERS = {
     "connenv/RollingBallPose-v0": {"holonomy": for_env(Holonomy, pose=True)},
     "connenv/RollingBallGoal-v0": {"arc": for_env(OptimalArc), "holonomy": for_env(Holonomy)},
     "connenv/KozlovShell-v0": {"gaits": lambda env: GaitPlanner(env)},
+    "connenv/SnakeSwimmer-v0": {"gaits": snake_planner},
     "connenv/KapitzaPendulum-v0": {
         "kapitza": KapitzaVibration,
         "damped": lambda env: KapitzaVibration(env, modulation=DAMPING_MODULATION),

@@ -1,18 +1,27 @@
-"""A geometric gait planner for KozlovShell-v0, built on the holonomy of the mechanical connection.
+"""A geometric gait planner for swimmers moved by a mechanical connection: KozlovShell-v0 and SnakeSwimmer-v0.
 
-At zero momentum the shell moves by ξ = −I(u)⁻¹ C(u) u̇: the net motion g ∈ SE(2) after a closed loop of u is the
+At zero momentum the body moves by ξ = −A(s) ṡ: the net motion g ∈ SE(2) after a closed loop of shapes s is the
 connection's holonomy, and it does not depend on how fast the loop is run. So a gait is a closed polygon of
-commanded mass positions, one vertex per step, and its net motion per cycle is measured once, from the env's own
-model and stepper. A loop turns the shell; a figure-eight, a loop followed by its mirror image run the other way,
-translates it without net turn (the two turns cancel exactly, by the mirror symmetry of the ellipse).
+commanded shapes, and its net motion per cycle is measured once, from the env's own model and stepper (`trace`:
+the env's step, toward each vertex until the shape gets there). Gaits that turn by nothing (by a symmetry of the
+body) translate; the others turn.
 
-Every gait starts and ends with the mass at the box corner BASE. There the planner chooses the next gait greedily,
-looking one gait further: the gait g minimizing its steps + min over the next gait h of (h's steps + the steps still
-needed after both), estimated from the target's predicted position in the body frame as (turn toward the best
-translating direction) + (distance / its speed). Only g is run; at BASE again it chooses anew.
+Every gait starts and ends at the shape `base`. There the planner chooses the next gait greedily, looking one gait
+further: the gait g minimizing its steps + min over the next gait h of (h's steps + the steps still needed after
+both), estimated from the target's predicted position in the body frame as (turn toward the best translating
+direction) + (distance / its speed). Only g is run; at `base` again it chooses anew.
 
-At the defaults the figure-eight X through the box's corners moves the shell 0.040 m per cycle of 4 steps, 0.13 rad
-off body −y (0.010 m per step); the loop O turns it by 1.04 rad in 4 steps, the triangles by 0.52 rad in 3.
+KozlovShell-v0 (`GaitPlanner(env)`): the mass reaches each vertex in one step; every gait starts at the box corner
+BASE, which a reset (mass at the centre) never gives. A loop turns the shell; a figure-eight, a loop followed by its
+mirror image run the other way, translates it without net turn (the two turns cancel exactly, by the mirror symmetry
+of the ellipse). At the defaults the figure-eight X through the box's corners moves the shell 0.040 m per cycle of 4
+steps, 0.13 rad off body −y (0.010 m per step); the loop O turns it by 1.04 rad in 4 steps, the triangles by 0.52 rad
+in 3.
+
+SnakeSwimmer-v0 (`snake_planner(env)`): the joints take several steps to each vertex at their top speed; every gait
+starts and ends straight, (α, β) = 0, where a reset puts the chain. A loop that is its own image under
+(α, β) ↦ (−α, −β) (the chain mirrored across its middle link's axis, which mirrors the motion and turns it by −θ)
+turns by nothing and translates: the squares and diamonds about the straight shape. A loop in one quadrant turns.
 """
 
 from __future__ import annotations
@@ -21,20 +30,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BASE = (1.0, -1.0)  # action units: the corner u = (u1_max, −u2_max) where every gait starts and ends
+BASE = (1.0, -1.0)  # action units: the corner u = (u1_max, −u2_max) where every shell gait starts and ends
 SCALES = (1.0, 0.5, 0.25, 0.125)  # sizes of the gaits, as fractions of the box
-U_TOLERANCE = 1e-4  # action units: the mass is where the planner sent it
+U_TOLERANCE = 1e-4  # action units: the shape is where the planner sent it
 NO_TURN = 1e-6  # rad: a gait turning less per cycle translates only (the figure-eights turn by the stepper error)
 
 
 @dataclass(frozen=True)
 class Gait:
-    """A closed polygon of commanded actions ending at BASE, and its measured net motion (x, y, θ) per cycle,
+    """A closed polygon of commanded actions ending at the base shape, one per step (a vertex repeated until the
+    shape gets there), the shape after each step (action units), and its measured net motion (x, y, θ) per cycle,
     in the body frame of its start."""
 
     name: str
     waypoints: tuple
     holonomy: tuple
+    shapes: tuple
 
     @property
     def steps(self) -> int:
@@ -63,20 +74,61 @@ def loops(scale: float) -> dict:
     }
 
 
-def measure(env, waypoints) -> tuple:
-    """The net motion (x, y, θ) of one cycle from BASE, at zero momentum, with the env's reduced model and
-    stepper: the connection's holonomy."""
-    y, u = np.zeros(3), np.array(BASE) * env.u_max
-    for action in waypoints:
-        u_cmd = np.array(action) * env.u_max
-        y = env.stepper(env.reduced_system, y, u, (u_cmd - u) / env.dt, env.dt)
-        u = u_cmd
-    return tuple(float(v) for v in y)
+def trace(env, name, vertices, start, shape, tolerance=1e-12) -> Gait:
+    """The gait of the polygon `vertices` (action units) from the state `start` (at rest at the origin), by the
+    env's own step (its reduced model and stepper): each vertex commanded until shape(state), the shape in action
+    units, is within tolerance of it; the net motion is the connection's holonomy."""
+    state, actions, shapes = start, [], []
+    for vertex in vertices:
+        while not shapes or np.max(np.abs(np.subtract(shapes[-1], vertex))) > tolerance:
+            state = env.advance(state, env.command(np.array(vertex, float)))
+            actions.append(tuple(vertex))
+            shapes.append(tuple(float(v) for v in shape(state)))
+        shapes[-1] = tuple(vertex)
+    return Gait(name, tuple(actions), tuple(float(v) for v in state.pose), tuple(shapes))
 
 
 def gait_library(env, scales=SCALES) -> list[Gait]:
-    """Every loop at every scale, with its measured holonomy."""
-    return [Gait(name, path, measure(env, path)) for s in scales for name, path in loops(s).items()]
+    """KozlovShell-v0's loops at every scale, each measured from BASE."""
+    start = env.state.replace(pose=np.zeros(3), momentum=np.zeros(3), u=np.array(BASE) * env.u_max, full=False)
+
+    def shape(state):
+        return state.u / env.u_max
+
+    return [trace(env, name, path, start, shape) for s in scales for name, path in loops(s).items()]
+
+
+SNAKE_BASE = (0.0, 0.0)  # action units: straight, where a reset puts the chain
+SNAKE_SCALES = (1.0, 0.5, 0.25, 0.125)  # the loops' sizes, as fractions of the joints' range 2π/3
+
+
+def snake_loops(scale: float) -> dict:
+    """Polygons of joint angles (action units) from the straight shape and back: the square S through (±s, ±s) and
+    the diamond D through (±s, 0), (0, ±s), each its own mirror image (they translate), and the four quadrant
+    squares Q1–Q4 (they turn); each also run backwards (suffix r)."""
+    s = scale
+    shapes = {
+        "S": [(s, s), (-s, s), (-s, -s), (s, -s), (s, s)],
+        "D": [(s, 0.0), (0.0, s), (-s, 0.0), (0.0, -s), (s, 0.0)],
+        **{f"Q{k}": [(i * s, 0.0), (i * s, j * s), (0.0, j * s)] for k, (i, j) in
+           enumerate([(1, 1), (-1, 1), (-1, -1), (1, -1)], 1)},
+    }  # fmt: skip
+    return {
+        f"{name}{suffix}@{s:g}": (*points, SNAKE_BASE)
+        for name, shape in shapes.items()
+        for suffix, points in (("", shape), ("r", shape[::-1]))
+    }
+
+
+def snake_planner(env, scales=SNAKE_SCALES):
+    """The gait planner of SnakeSwimmer-v0 (see the module), its loops measured from the straight shape at rest."""
+    start = env.state.replace(pose=np.zeros(3), momentum=np.zeros(3), s=np.zeros(2), full=False)
+
+    def shape(state):
+        return state.s / env.joint_limit
+
+    gaits = [trace(env, name, path, start, shape) for s in scales for name, path in snake_loops(s).items()]
+    return GaitPlanner(env, gaits, SNAKE_BASE, env.body_length)
 
 
 def targets_after(holonomies, target):
@@ -88,16 +140,19 @@ def targets_after(holonomies, target):
 
 
 class GaitPlanner:
-    """Swim to the target with gaits from the library, chosen greedily at BASE (see the module docstring).
+    """Swim to the target with gaits from the library, chosen greedily at the base shape (see the module docstring).
 
-    It reads the KozlovShell-v0 observation: the target in the body frame (obs[0:2]) and the mass position
-    (obs[4:6]). A new episode, or any other interruption, shows as the mass not being where the planner sent it
-    (the reset puts it at the centre, which no gait visits): the planner then drops its plan and returns the mass
-    to BASE first. Observations may be batched; each row keeps its own plan.
+    It reads the observation of KozlovShell-v0 or SnakeSwimmer-v0: the target in the body frame (obs[0:2], in
+    units of target_scale metres) and the shape in action units (obs[4:6]). A new episode, or any other
+    interruption, shows as the shape not being where the gait left it: the planner then drops its plan and returns
+    to the base first. Observations may be batched; each row keeps its own plan.
+
+    gaits: the library (default: KozlovShell-v0's, `gait_library`); base: the shape every gait starts and ends at.
     """
 
-    def __init__(self, env):
-        self.gaits = gait_library(env)
+    def __init__(self, env, gaits=None, base=BASE, target_scale: float = 1.0):
+        self.gaits = gait_library(env) if gaits is None else gaits
+        self.base, self.target_scale = np.array(base), target_scale
         self.holonomies = np.array([g.holonomy for g in self.gaits])
         self.steps = np.array([g.steps for g in self.gaits])
         self.goal = 0.8 * env.success_radius  # a margin for the float32 observation
@@ -106,7 +161,7 @@ class GaitPlanner:
         moves = self.holonomies[translating, :2]
         self.directions = moves / np.linalg.norm(moves, axis=-1, keepdims=True)
         self.speeds = np.linalg.norm(moves, axis=-1) / self.steps[translating]  # m per step
-        self.plans = []  # per observation row: [pending waypoints, last command]
+        self.plans = []  # per observation row: [pending (action, shape after it), the shape expected now or None]
 
     def predict(self, obs, state=None, episode_start=None, deterministic=True):
         obs = np.asarray(obs, dtype=np.float64)
@@ -117,15 +172,16 @@ class GaitPlanner:
         return (actions if obs.ndim == 2 else actions[0]), state
 
     def _act(self, obs, plan):
-        pending, last = plan
-        u = obs[4:6]
-        if last is None or np.max(np.abs(u - last)) > U_TOLERANCE:
-            pending.clear()  # a new episode, or the mass was moved: start over from BASE
+        pending, expected = plan
+        shape = obs[4:6]
+        if expected is not None and np.max(np.abs(shape - expected)) > U_TOLERANCE:
+            pending.clear()  # a new episode, or the shape was moved: start over from the base
         if not pending:
-            at_base = np.max(np.abs(u - BASE)) <= U_TOLERANCE
-            pending.extend(self.choose(obs[:2]).waypoints if at_base else [BASE])
-        plan[1] = np.array(pending.pop(0))
-        return plan[1]
+            at_base = np.max(np.abs(shape - self.base)) <= U_TOLERANCE
+            gait = self.choose(obs[:2] * self.target_scale) if at_base else None
+            pending.extend(zip(gait.waypoints, gait.shapes) if at_base else [(tuple(self.base), None)])
+        action, plan[1] = pending.pop(0)
+        return np.array(action)
 
     def choose(self, target) -> Gait:
         """The gait g minimizing steps(g) + min_h [steps(h) + steps_to_go(after g, then h)], or the shortest

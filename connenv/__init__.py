@@ -57,6 +57,12 @@ register(
     max_episode_steps=300,
 )
 register(
+    id="connenv/SnakeSwimmer-v0",
+    entry_point="connenv.envs.snake_swimmer:SnakeSwimmerEnv",
+    vector_entry_point="connenv.envs.snake_swimmer:SnakeSwimmerVectorEnv",
+    max_episode_steps=1000,
+)
+register(
     id="connenv/KapitzaPendulum-v0",
     entry_point="connenv.envs.kapitza:KapitzaPendulumEnv",
     vector_entry_point="connenv.envs.kapitza:KapitzaPendulumVectorEnv",

@@ -120,6 +120,13 @@ DIVERGING = [  # (env_id, make kwargs, reset state, action, the StepperError's m
         [1.0, 1.0],
         r"SemiImplicitEuler\(substeps=1\) diverged: the spatial momentum .* dt = 0.1, .*m/\(M \+ λ₁\) = 10.0,",
     ),
+    (
+        "connenv/SnakeSwimmer-v0",
+        {"integrator": "euler", "b": 0.005},  # links of aspect ratio 100
+        {"momentum": (0.2, 1.0, 0.5)},
+        [1.0, 1.0],
+        r"Euler\(substeps=1\) diverged: the spatial momentum .* dt = 0.05, a = 0.5, b = 0.005,",
+    ),
 ]
 
 

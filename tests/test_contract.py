@@ -30,6 +30,7 @@ CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where an
     "connenv/RollingBallPose-v0": [{}],
     "connenv/RollingBallGoal-v0": [{}],
     "connenv/KozlovShell-v0": [{}],
+    "connenv/SnakeSwimmer-v0": [{}],
     "connenv/KapitzaPendulum-v0": [{}, {"pivot": "planar"}],
     "connenv/KapitzaSwingUp-v0": [{}],
     "connenv/RollingCoin-v0": [{}, {"integrator": "magnus"}],
@@ -43,6 +44,7 @@ CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where an
 }
 RESET_OPTIONS = {  # starts that take another code path: the shell with a momentum is in the full (Kirchhoff) model
     "connenv/KozlovShell-v0": [None, {"state": {"momentum": (0.2, 0.0, -0.1)}}],
+    "connenv/SnakeSwimmer-v0": [None, {"state": {"momentum": (0.2, 0.0, -0.1)}}],
 }
 
 

@@ -32,6 +32,7 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/RollingBallPose-v0": {"x": 0, "y": 0},
     "connenv/RollingBallGoal-v0": {"x": 0, "y": 0},
     "connenv/KozlovShell-v0": {"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3},
+    "connenv/SnakeSwimmer-v0": {"x": 0, "y": 0, "theta": 0, "alpha": 0, "beta": 0, "momentum": 3},
     "connenv/KapitzaPendulum-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
     "connenv/KapitzaSwingUp-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
     "connenv/RollingCoinSurface-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0, "phi_dot": 0},
@@ -49,6 +50,7 @@ OPTION_KEYS = {  # reset options beside "state"
     "connenv/RollingCoinSurface-v0": {"target": 2},
     "connenv/BeadOnBar-v0": {"target": 0},
     "connenv/TubeTwist-v0": {"target": 0},
+    "connenv/SnakeSwimmer-v0": {"target": 2},
 }
 NOT_NUMBERS = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
                "control", "integrator", "pivot", "vectorized", "surface", "surface_params"}

@@ -2,7 +2,7 @@
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
     python -m connenv.bench precision [--env swing skier ball kapitza shell bead connection coin beanie coin_surface
-                                       coin_plane tube] [--quick]
+                                       coin_plane tube snake] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -38,6 +38,11 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
   step (one exponential per step, exact for piecewise-constant rates). State error: the angle between R and R_ref
   at the end (rad). Invariant: max ‖RᵀR − I‖ over the episode. Besides the common candidates, the builder's Magnus
   step.
+- snake: SnakeSwimmer-v0, 300 steps of seeded random joint commands, from rest (the reduced model) and from the
+  body momentum (0.3, 0.1, 0.05) (the full model), as the shell's; the same reference, errors and invariant. Of the
+  Magnus step only the default (atol 1e-12; DOP853 at rtol 1e-10 on the full model): every atol from 1e-6 to 1e-12
+  fixes the same rule for the reduced model, 1 piece of 8 Gauss points, so rows of other atol differ only in
+  DOP853's atol on the full model.
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
@@ -294,6 +299,19 @@ CASES = {
         lambda env, info, start: float(np.linalg.norm(info["state"]["R"].T @ info["state"]["R"] - np.eye(3))),
         "rad",
         steppers=MAGNUS,
+    ),
+    "snake": Case(
+        "connenv/SnakeSwimmer-v0",
+        TIGHT,
+        (
+            Episode("reduced", {"state": {}}, uniform(2), 300),
+            Episode("full", {"state": {"momentum": (0.3, 0.1, 0.05)}}, uniform(2), 300),
+        ),
+        lambda env, ref: float(np.max(np.abs(env.state.pose - ref.state.pose))),
+        "max |S − S(0)| / |S(0)| (full model)",
+        momentum_drift,
+        "m, rad",
+        steppers=(("magnus", {}),),  # every atol from 1e-6 to 1e-12 takes the same rule on the reduced model
     ),
     "connection": Case(
         "connenv/Connection-v0",

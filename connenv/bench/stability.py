@@ -1,7 +1,7 @@
 """Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
-    python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface tube]
+    python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface tube snake]
                                       [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
@@ -36,12 +36,16 @@ StepperError and the invariant's error stayed within the bound below at every st
   (action 0, θ = 0 held), 10 s: the coin oscillates through the bottom, ÿ = −(2 g/(3ρ)) y, harmonic at
   ω = √(2 g/(3ρ)); parameter the bowl's radius ρ; bounded: |E − E(0)| ≤ 0.1 E(0) (E(0) = m g/(2ρ), the
   bottom at E = 0).
-
 - bead: BeadOnBar-v0 on the horizontal bar (g = 0), spun at constant θ̇ = omega_max (action +1) from r₀ = 0.5 m
   at rest, for six e-folds of the bead's growth (6/omega_max s: r grows 200-fold), on a bar long enough to hold
   it; parameter omega_max, the rate of that growth; bounded: r within 0.1 of the closed form r₀ cosh ωt (ω =
   omega_max; g = 0, from rest) at every step. The grid starts at half the episode (ω dt = 3): in one step a method
   may land near the closed form by chance.
+- snake: full model from the body momentum 𝕀_loc ξ of ξ = (0.3 m/s, 0.1 m/s, 0.05 rad/s), bent at α = π/3, the
+  joints circling, (α*, β*) = π/3 (cos 2πt/T,
+  sin 2πt/T), T = 2 s, for 10 s; parameter the links' aspect ratio a/b (a = 0.5 m), which sets the ratio of the
+  added masses across and along a link, λ₂/λ₁ = (a/b)²; bounded: the spatial momentum within 0.1 of its norm (the
+  env's own bound). The reduced model is not mapped, as the shell's.
 
 A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
 grid held.
@@ -107,6 +111,20 @@ BEAD_E_FOLDS = 6.0  # the bead's episode: r grows by cosh 6, about 200-fold
 def loop_gait(value, t, dt, rng):
     phase = 2 * math.pi * (t + dt) / 2.0
     return np.array([math.cos(phase), math.sin(phase)], np.float32)
+
+
+def joint_circle(value, t, dt, rng):
+    phase = 2 * math.pi * (t + dt) / 2.0
+    return np.array([0.5 * math.cos(phase), 0.5 * math.sin(phase)], np.float32)
+
+
+def snake_start(ratio):
+    """Bent at α = π/3, with the body momentum 𝕀_loc ξ of the body velocity ξ = (0.3 m/s, 0.1 m/s, 0.05 rad/s)."""
+    from connenv.systems.snake_swimmer import SnakeSwimmer
+
+    shape = np.array([math.pi / 3, 0.0])
+    momentum = SnakeSwimmer(b=0.5 / ratio).locked_inertia(shape) @ np.array([0.3, 0.1, 0.05])
+    return {"state": {"alpha": shape[0], "momentum": tuple(momentum.tolist())}}
 
 
 def random_velocity(value, t, dt, rng):
@@ -271,6 +289,18 @@ MAPS = {
         spin_unbounded,
         (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("exact", {})),
         largest=lambda omega: BEAD_E_FOLDS / (2.0 * omega),  # at least 2 steps: one may land near by chance
+    ),
+    "snake": StabilityMap(
+        "connenv/SnakeSwimmer-v0",
+        "aspect ratio a/b of the links",
+        (2.0, 5.0, 10.0, 30.0, 100.0),
+        lambda ratio: {"b": 0.5 / ratio},
+        snake_start,
+        joint_circle,
+        lambda value, dt: math.ceil(10.0 / dt),
+        momentum_unbounded,
+        (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("magnus", {})),  # magnus: the default, DOP853 rtol 1e-10
+        largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
     ),
 }
 

@@ -1,0 +1,414 @@
+"""SnakeSwimmer-v0: swim a chain of three elliptic links through a perfect fluid to a target by bending its joints."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.lie import Magnus, fixed_rule
+from connenv.core.segments import check_drift, run_segments
+from connenv.core.steppers import make_stepper
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
+from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
+from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
+
+DT_MAX = 0.25  # s: the longest dt; longer steps (joint moves up to the whole range) make the Lie-group rule's choice
+# at construction take seconds
+TARGET_DISTANCES = (1.0, 2.0)  # body lengths from the start, uniform, in a uniform direction
+TARGET_BOUND = 3.0  # body lengths: the observed target is clipped here
+POSITION_BOUND = 100.0  # m: |x|, |y| of the middle link and of the target given at reset
+MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
+TIME_COST = 0.01  # reward paid per step until success
+MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
+DEFAULT_INTEGRATOR = "magnus"
+DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full model; atol is the Lie-group step's too
+STATE_KEYS = ("x", "y", "theta", "alpha", "beta", "momentum")
+
+
+@dataclass
+class SnakeState(State):
+    """The middle link's pose (x, y, θ); the body momentum (P₁, P₂, Π), 0 in the reduced model; the joint angles
+    s = (α, β); the target (x, y); the time t; full: whether the state steps the full model (else the reduced
+    one); and the spatial momentum at reset, which the full model conserves."""
+
+    pose: np.ndarray
+    momentum: np.ndarray
+    s: np.ndarray
+    target: np.ndarray
+    t: float
+    full: bool
+    momentum0: np.ndarray
+
+
+def joint_path(s, s_cmd, dt: float, max_speed: float):
+    """The joints' motion over one step toward the command: along the straight segment from s to s_cmd, the faster
+    joint at max_speed, then held at s_cmd for the rest of the step if it got there. Returns (ṡ, the duration of
+    the motion, the joints at the end of the step); over a batch (rows on the first axis) the duration is one per
+    row, and a row that does not move has ṡ = 0 and duration 0."""
+    if np.ndim(s) == 1:  # one state on floats, the same arithmetic: several times faster than numpy on two numbers
+        return _joint_path_floats(s.tolist(), s_cmd.tolist(), dt, max_speed)
+    delta = s_cmd - s
+    largest = np.max(np.abs(delta), axis=-1)
+    reach = largest / max_speed
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s_dot = np.where(largest[..., None] > 0.0, delta * (max_speed / largest[..., None]), 0.0)
+    ramp = np.minimum(reach, dt)
+    end = np.where((reach <= dt)[..., None], s_cmd, s + s_dot * dt)
+    return s_dot, ramp, end
+
+
+def _joint_path_floats(s, s_cmd, dt, max_speed):
+    """joint_path of one state, its joints as lists of floats."""
+    delta = [b - a for a, b in zip(s, s_cmd)]
+    largest = max(abs(d) for d in delta)
+    reach = largest / max_speed
+    s_dot = [d * (max_speed / largest) for d in delta] if largest > 0.0 else [0.0, 0.0]
+    end = s_cmd if reach <= dt else [a + d * dt for a, d in zip(s, s_dot)]
+    return np.array(s_dot), min(reach, dt), np.array(end)
+
+
+class SnakeSwimmerEnv(TaskEnv):
+    r"""
+    ## Description
+
+    Three identical rigid elliptic links, semi-axes a along the link and b across it, hinged tip to tip, float in
+    an unbounded planar ideal fluid at rest at infinity (Kanso, Marsden, Rowley & Melli-Huber 2005). The
+    controller assigns the two joint angles s = (α, β): an *active constraint* (Bressan). Bending the chain moves
+    it, and closed loops of (α, β) make it swim. With g = (x, y, θ) the middle link's pose, ξ = (v₁, v₂, ω) its
+    body velocity and μ = (P₁, P₂, Π) the body momentum of chain and fluid together,
+
+        μ = 𝕀_loc(α, β) ξ + 𝕀_c(α, β) ṡ,    Ṗ₁ = ω P₂,  Ṗ₂ = −ω P₁,  Π̇ = v₂ P₁ − v₁ P₂    (Kirchhoff)
+
+    with 𝕀_loc the locked inertia (the chain frozen in its shape, with the fluid's added masses of each link,
+    λ₁ = ρπb² along it, λ₂ = ρπa² across it, λ₃ = ρπ(a² − b²)²/8 in rotation) and 𝕀_c the coupling, both derived
+    from the links' body velocities in `connenv.systems.snake_swimmer`. Each link's fluid is that of the link
+    alone: the links' interaction through the fluid is neglected (Kanso et al.'s model). The spatial momentum is
+    conserved. The system is fit for jumps, not strongly (the joint angles fix the shape up to a rigid motion;
+    `connenv.core.mechanics.classify` derives it from the metric): a change of (α, β) needs its path, here the
+    straight segment at the joints' top speed.
+
+    From rest, the default, μ stays 0 and the motion is geometric, ξ = −𝕀_loc⁻¹ 𝕀_c ṡ (the mechanical connection),
+    so the env integrates the reduced state (x, y, θ). A nonzero initial momentum (a reset option) switches that
+    episode to the full model, (x, y, θ, P₁, P₂, Π). At zero momentum the net motion of a closed loop of (α, β)
+    does not depend on how fast it is run. There is no drag: the fluid stores momentum and dissipates nothing.
+    The goal is to bring the middle link's centre within `success_radius` of a target 1 to 2 body lengths away
+    (a body length is 6a, the straight chain's length).
+
+    ## Action Space
+
+    `Box([-1, -1], [1, 1], float32)`; actions outside are clipped, a wrong shape or a non-finite value raises
+    ValueError.
+
+    | Num | Action | Min | Max |
+    |-----|--------|-----|-----|
+    | 0 | commanded rear joint angle: α* = action[0] · 2π/3 | -1 | 1 |
+    | 1 | commanded front joint angle: β* = action[1] · 2π/3 | -1 | 1 |
+
+    Within the step the joints move from (α, β) toward (α*, β*) along the straight segment, the one with further
+    to go at `max_joint_speed` and the other in proportion, and hold there once they arrive; if they cannot
+    arrive within dt they stop where they got to.
+
+    ## Observation Space
+
+    `Box(9,) float32`, with L = 6a the body length:
+
+    | Num | Observation | Min | Max |
+    |-----|-------------|-----|-----|
+    | 0 | target in the middle link's frame, along its axis, in body lengths | -3 | 3 |
+    | 1 | target in the middle link's frame, across it, in body lengths | -3 | 3 |
+    | 2 | cos θ | -1 | 1 |
+    | 3 | sin θ | -1 | 1 |
+    | 4 | α / (2π/3) | -1 | 1 |
+    | 5 | β / (2π/3) | -1 | 1 |
+    | 6 | P₁ / 𝕀_loc(0)₁₁, m/s | -10 | 10 |
+    | 7 | P₂ / 𝕀_loc(0)₂₂, m/s | -10 | 10 |
+    | 8 | Π / 𝕀_loc(0)₃₃, rad/s | -10 | 10 |
+
+    The target and the momentum are clipped to their bounds; 𝕀_loc(0) is the straight chain's locked inertia. The
+    momentum is 0 in the reduced model.
+
+    ## Rewards
+
+    With d the distance from the middle link's centre to the target before the step and d′ after it:
+
+        reward = (d − d′) / success_radius − 0.01
+
+    Progress is paid in units of the success radius; the constant pays for time. Summed to success:
+    (d₀ − d_T)/success_radius − 0.01·steps.
+
+    ## Starting State
+
+    At rest, μ = 0, straight (α = β = 0), at the origin with θ = 0, t = 0. The target is drawn by np_random at a
+    distance uniform in [1, 2] body lengths, in a uniform direction. `reset(options={"state": {...},
+    "target": (x, y)})` sets any of `x`, `y` (within ±100 m), `theta` (in [−2π, 2π]), `alpha`, `beta` (in
+    [−2π/3, 2π/3]), `momentum` (P₁, P₂, Π in the body frame, within the observed bounds |P_k| ≤ 10 𝕀_loc(0)_kk)
+    and the target (within ±100 m) exactly; a value outside is refused (ValueError).
+
+    ## Episode End
+
+    Terminated when the middle link's centre is within `success_radius` of the target, checked at the end of each
+    step (`info["is_success"]`). Truncated after 1000 steps (50 s at the default dt) by the registration's time
+    limit.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | a | 0.5 | (0, ∞), the links' semi-axis along the link |
+    | b | 0.05 | (0, a), across the link |
+    | link_density | 1.0 | (0, ∞), mass per area: a link's mass is link_density · πab |
+    | rho | 1.0 | [0, ∞), fluid density |
+    | max_joint_speed | 3.0 | (0, ∞) rad/s |
+    | dt | 0.05 | [1e-12, 0.25] s |
+    | success_radius | None: 0.1 body length, 0.6a | (0, 6a) m |
+    | integrator | "magnus" (atol 1e-12) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-10, atol 1e-12 | see `connenv.core.steppers` |
+
+    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
+    non-finite state, or, in the full model, a spatial momentum that has moved by more than 0.1 of its norm since
+    reset.
+
+    The default stepper, `integrator="magnus"`, steps the reduced model by the Lie-group step on SE(2)
+    (`connenv.core.lie`): θ = ∫ω and the translation ∫R(θ) v by Gauss–Legendre quadrature, with a rule
+    (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
+    on the motions at top speed in the eight directions from a 3 × 3 grid of joint angles (the corners, edge
+    midpoints and centre of the joints' square). The full model has no connection and goes to DOP853 (rtol 1e-10,
+    atol 1e-12), which keeps the spatial momentum to 1e-10 of its norm. Its place on the work–precision chart:
+    `python -m connenv.bench precision --env snake`.
+
+    Every `info` has `"state"` (`x`, `y`, `theta` (the middle link), `alpha`, `beta`, `momentum` (P₁, P₂, Π, body
+    frame), `t`, in SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y),
+    `"distance"` (m), `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final
+    `"distance"`.
+    """
+
+    metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        a: float = 0.5,
+        b: float = 0.05,
+        link_density: float = 1.0,
+        rho: float = 1.0,
+        max_joint_speed: float = 3.0,
+        dt: float = 0.05,
+        success_radius: float | None = None,
+        integrator: str = DEFAULT_INTEGRATOR,
+        **stepper_options,
+    ):
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
+        a = check_number("a", a, 0.0, open_low=True)
+        params = {
+            "a": a,
+            "b": check_number("b", b, 0.0, a, open_low=True, open_high=True, high_name="a"),
+            "link_density": check_number("link_density", link_density, 0.0, open_low=True),
+            "rho": check_number("rho", rho, 0.0),
+        }
+        self.full_system, self.reduced_system = SnakeSwimmer(**params), ReducedSnakeSwimmer(**params)
+        self.body_length = 6.0 * a
+        self.max_joint_speed = check_number("max_joint_speed", max_joint_speed, 0.0, open_low=True)
+        if success_radius is None:
+            success_radius = 0.1 * self.body_length
+        self.success_radius = check_number(
+            "success_radius", success_radius, 0.0, self.body_length, open_low=True, open_high=True
+        )
+        check_stepper_options("SnakeSwimmer-v0", stepper_options, type(self))
+        if integrator in ("magnus", "dop853"):
+            stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
+        self.stepper = make_stepper(integrator, self.full_system, **stepper_options)
+        if isinstance(self.stepper, Magnus):
+            pieces, points = snake_rule(self.reduced_system, self.max_joint_speed, self.dt, self.stepper.atol)
+            self.stepper = dataclasses.replace(self.stepper, pieces=pieces, points=points)
+
+        self.joint_limit = JOINT_LIMIT
+        self.momentum_scale = np.diag(self.full_system.locked_inertia(np.zeros(2)))
+        self.momentum_bounds = self.momentum_scale.tolist()
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
+        self.observation_space = spaces.Box(-high, high, dtype=np.float32)
+        self.state = SnakeState(np.zeros(3), np.zeros(3), np.zeros(2), np.zeros(2), 0.0, False, np.zeros(3))
+        self.wake = []  # rendering history: the links' centres at the start of every step (only when rendering)
+
+    # -- rendering: the wake is history, kept beside the state ----------------
+
+    def reset(self, *, seed=None, options=None):
+        self.wake = []
+        return super().reset(seed=seed, options=options)
+
+    def step(self, action):
+        if self.render_mode is not None:
+            self.wake.append(self.full_system.link_poses(self.state.pose, self.state.s)[:, :2])
+        return super().step(action)
+
+    def _make_renderer(self):
+        from connenv.envs.rendering_snake import SnakeSwimmerRenderer
+
+        system = self.full_system
+        return SnakeSwimmerRenderer(
+            system.a, system.b, TARGET_DISTANCES[1] * self.body_length, self.render_mode, self.metadata["render_fps"]
+        )
+
+    def _draw(self, renderer):
+        s = self.state
+        links = self.full_system.link_poses(s.pose, s.s)
+        return renderer.draw(links, s.target, [*self.wake, links[:, :2]], self.success_radius, s.t)
+
+    def parameters(self):
+        system = self.full_system
+        return {
+            "a": system.a,
+            "b": system.b,
+            "link_density": system.link_density,
+            "rho": system.rho,
+            "max_joint_speed": self.max_joint_speed,
+            "model": "full" if self.state.full else "reduced",
+        }
+
+    # -- physics ---------------------------------------------------------------
+
+    def start(self, options):
+        """At rest, straight, at the origin, or options['state']; the target drawn by np_random, or
+        options['target']. The model follows the momentum: reduced at zero, full otherwise."""
+        check_keys("reset options", options, {"state", "target"})
+        distance = self.np_random.uniform(*TARGET_DISTANCES) * self.body_length
+        angle = self.np_random.uniform(-math.pi, math.pi)
+        target = distance * np.array([math.cos(angle), math.sin(angle)])
+        if "target" in options:
+            target = check_vector("target", options["target"], 2, -POSITION_BOUND, POSITION_BOUND)
+        pose, s, momentum = self._check_state(options.get("state", {}))
+        full = bool(momentum.any())
+        state = SnakeState(pose, momentum if full else np.zeros(3), s, target, 0.0, full, np.zeros(3))
+        return state.replace(momentum0=np.array(self.spatial_momentum(state)))
+
+    def advance(self, s, s_cmd):
+        """The joints move toward s_cmd (`joint_path`); the full model also drifts with its momentum while they
+        hold, and checks its spatial momentum."""
+        s_dot, ramp, s_end = joint_path(s.s, s_cmd, self.dt, self.max_joint_speed)
+        ramp = float(ramp)
+        if s.full:
+            segments = [(s.s, s_dot, ramp), (s_end, np.zeros(2), self.dt - ramp)]
+            segments = [segment for segment in segments if segment[2] > 0.0]
+            y, _ = run_segments(self.stepper, self.full_system, np.concatenate([s.pose, s.momentum]), segments)
+            self.check_momentum(y, s.momentum0)
+            return SnakeState(y[:3], y[3:], s_end, s.target, s.t + self.dt, s.full, s.momentum0)
+        pose = s.pose
+        if ramp > 0.0:  # held joints do not move the chain at zero momentum
+            pose, _ = run_segments(self.stepper, self.reduced_system, s.pose, [(s.s, s_dot, ramp)])
+        return SnakeState(pose, s.momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
+
+    def spatial_momentum(self, s, ops=SCALAR):
+        """(R(θ) P, Π + x P_y − y P_x): a tuple of floats for one state, an array (N, 3) for a batch."""
+        (x, y, theta), (p1, p2, pi) = _components(s.pose), _components(s.momentum)
+        c, sin = ops.cos(theta), ops.sin(theta)
+        px, py = c * p1 - sin * p2, sin * p1 + c * p2
+        momentum = px, py, pi + x * py - y * px
+        return momentum if ops is SCALAR else np.stack(momentum, axis=-1)
+
+    def check_momentum(self, y, momentum0):
+        """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
+        reset by more than MOMENTUM_ERROR_BOUND of its norm."""
+        drift = np.linalg.norm(self.full_system.spatial_momentum(y) - momentum0, axis=-1)
+        norm = np.linalg.norm(momentum0, axis=-1)
+        check_drift(self.stepper, "the spatial momentum", drift, MOMENTUM_ERROR_BOUND, norm=norm)
+
+    def _check_state(self, state):
+        """(pose, s, momentum) from options['state'], default at rest, straight, at the origin."""
+        check_keys("options['state']", state, STATE_KEYS)
+        x, y = (check_number(f"state {key}", state.get(key, 0.0), -POSITION_BOUND, POSITION_BOUND) for key in "xy")
+        pose = np.array([x, y, check_angle("state theta", state.get("theta", 0.0))])
+        s = np.array([check_number(f"state {key}", state.get(key, 0.0), -JOINT_LIMIT, JOINT_LIMIT)
+                      for key in ("alpha", "beta")])  # fmt: skip
+        bound = MOMENTUM_BOUND * self.momentum_scale  # the momentum the observation holds
+        return pose, s, check_vector("state momentum", state.get("momentum", (0.0, 0.0, 0.0)), 3, -bound, bound)
+
+    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
+
+    def command(self, a):
+        """The commanded joint angles (α*, β*) of action a."""
+        return a * JOINT_LIMIT
+
+    def distance(self, s, ops=SCALAR):
+        """From the middle link's centre to the target, m."""
+        (x, y, _), (x_target, y_target) = _components(s.pose), _components(s.target)
+        return ops.hypot(x_target - x, y_target - y)
+
+    def reward(self, before, after, info, ops=SCALAR):
+        return (self.distance(before, ops) - info["distance"]) / self.success_radius - TIME_COST
+
+    def observe(self, s, ops=SCALAR):
+        (x, y, theta), (x_target, y_target) = _components(s.pose), _components(s.target)
+        c, sin = ops.cos(theta), ops.sin(theta)
+        dx, dy = (x_target - x) / self.body_length, (y_target - y) / self.body_length
+        body_target = [ops.clip(c * dx + sin * dy, -TARGET_BOUND, TARGET_BOUND)]
+        body_target.append(ops.clip(-sin * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
+        scaled_s = [angle / JOINT_LIMIT for angle in _components(s.s)]
+        momentum = zip(_components(s.momentum), self.momentum_bounds)
+        scaled_momentum = [ops.clip(p / scale, -MOMENTUM_BOUND, MOMENTUM_BOUND) for p, scale in momentum]
+        return ops.pack([*body_target, c, sin, *scaled_s, *scaled_momentum])
+
+    def describe(self, s, ops=SCALAR):
+        x, y, theta = (ops.real(s.pose[..., i]) for i in range(3))
+        alpha, beta = ops.real(s.s[..., 0]), ops.real(s.s[..., 1])
+        distance = self.distance(s, ops)
+        state = {"x": x, "y": y, "theta": theta, "alpha": alpha, "beta": beta, "momentum": ops.vector(s.momentum),
+                 "t": s.t}  # fmt: skip
+        return {
+            "state": state,
+            "spatial_momentum": self.spatial_momentum(s, ops),
+            "target": ops.vector(s.target),
+            "distance": distance,
+            "model": ops.where(s.full, "full", "reduced"),
+            "is_success": ops.flag(distance <= self.success_radius),
+        }
+
+
+class SnakeSwimmerVectorEnv(TaskVectorEnv):
+    """SnakeSwimmer-v0 over a batch (``gym.make_vec("connenv/SnakeSwimmer-v0", num_envs=N)``; see
+    ``connenv.envs.vector``). Rows reset at rest step the reduced model, rows reset with a momentum the full one,
+    as the single env does."""
+
+    single_env = SnakeSwimmerEnv
+
+    def advance(self, s, s_cmd):
+        env = self.env
+        s_dot, ramp, s_end = joint_path(s.s, s_cmd, env.dt, env.max_joint_speed)
+        y, full, rest = np.concatenate([s.pose, s.momentum], axis=-1), s.full, ~s.full
+        if full.any():
+            segments = [(s.s[full], s_dot[full], ramp[full]), (s_end[full], np.zeros_like(s_dot[full]),
+                                                               env.dt - ramp[full])]  # fmt: skip
+            y[full] = run_segments(self.stepper, env.full_system, y[full], segments)[0]
+            env.check_momentum(y[full], s.momentum0[full])
+        if rest.any():
+            segments = [(s.s[rest], s_dot[rest], ramp[rest])]
+            y[rest, :3] = run_segments(self.stepper, env.reduced_system, s.pose[rest], segments)[0]
+        return SnakeState(y[:, :3], y[:, 3:], s_end, s.target, s.t + env.dt, s.full, s.momentum0)
+
+
+def _components(a):
+    """The components along the last axis: floats of one state's array, columns of a batch's."""
+    return a.tolist() if a.ndim == 1 else [a[..., i] for i in range(a.shape[-1])]
+
+
+@functools.cache
+def snake_rule(system, max_speed, dt, atol):
+    """The Lie-group step's rule (pieces, points) for the reduced model: the cheapest that meets atol on every
+    step the env admits, judged on the motions at top speed in the eight directions (the faster joint at
+    max_speed) from a 3 × 3 grid of joint angles, each for dt or until a joint reaches its limit; see
+    `connenv.core.lie.fixed_rule`."""
+    grid = np.linspace(-JOINT_LIMIT, JOINT_LIMIT, 3)
+    segments = []
+    for start in (np.array([p, q]) for p in grid for q in grid):
+        for direction in (np.array([i, j], float) for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j):
+            room = min((JOINT_LIMIT - d * x) / max_speed for x, d in zip(start, direction) if d)
+            if room > 0.0:
+                segments.append((start, direction * max_speed, min(dt, room)))
+    return fixed_rule(system, segments, atol)
