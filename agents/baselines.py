@@ -48,6 +48,7 @@ ENVS = (
     "connenv/RollingBallPose-v0",
     "connenv/RollingBallGoal-v0",
     "connenv/KapitzaSwingUp-v0",
+    "connenv/ChaplyginSleigh-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
@@ -200,6 +201,7 @@ MEASURES = {
     "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),
     "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
+    "connenv/ChaplyginSleigh-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
 }
 

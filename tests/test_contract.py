@@ -32,7 +32,7 @@ CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where an
     "connenv/KozlovShell-v0": [{}],
     "connenv/KapitzaPendulum-v0": [{}, {"pivot": "planar"}],
     "connenv/KapitzaSwingUp-v0": [{}],
-    "connenv/ChaplyginSleigh-v0": [{}, {"offset": 0.0}],  # general: u̇ commanded; fit: u commanded
+    "connenv/ChaplyginSleigh-v0": [{}, {"offset": 0.0, "box": 0.0}],  # general: u̇ commanded; fit: u commanded
     # the generic ids, on connenv.examples' systems: one of each jump class; a flat and a curved connection
     "connenv/ActiveConstraint-v0": [examples.swing(), examples.rotor(), examples.bead()],
     "connenv/Connection-v0": [examples.beanie(), examples.rolling_ball()],

@@ -33,16 +33,16 @@ ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + E) past which i
 TARGET_DISTANCE = (1.0, 2.0)  # m from the start, any direction
 SPEED_BOUND = 10.0  # |v| (m/s) given at reset
 RATE_BOUND = 20.0  # |ω| (rad/s) given at reset
-OBSERVED = (10.0, 10.0, 5.0, 10.0, 1.0, 1.0)  # the observation's bounds (clipped): Δx_b, Δy_b, v, ω, u/rail, u̇/ṁax
+OBSERVED = (10.0, 10.0, 5.0, 10.0, 1.0, 1.0, 1.0, 1.0)  # bounds of the observation (clipped), in its order
 PROGRESS_GAIN = 10.0  # reward per metre of approach
 TIME_COST = 0.01  # reward paid per step until success
-STATE_KEYS = ("x", "y", "phi", "v", "omega", "u", "u_dot")
+STATE_KEYS = ("x", "y", "phi", "v", "omega", "u", "u_dot", "u_along", "u_along_dot")
 
 
 @dataclass
 class SleighState(State):
-    """y = (x, y, φ, p₁, p₂) (P, heading, Bressan's momenta, `connenv.systems.chaplygin_sleigh`); the mass offset u
-    and velocity u̇ at the end of the step (arrays (1,)); the target (x, y); the time t; the stepper's energy error
+    """y = (x, y, φ, p₁, p₂) (P, heading, Bressan's momenta, `connenv.systems.chaplygin_sleigh`); the mass offset
+    u = (u₁ along, u₂ across) and its velocity u̇ at the end of the step (arrays (2,)); the target (x, y); the time t; the stepper's energy error
     (the change of T over the segments where u is held, summed since reset)."""
 
     y: np.ndarray
@@ -149,6 +149,7 @@ class ChaplyginSleighEnv(TaskEnv):
         offset: float = 0.5,
         mass: float = 0.5,
         rail: float = 0.3,
+        box: float = 0.3,
         max_mass_speed: float | None = 2.0,
         tolerance: float = 0.1,
         dt: float = 0.05,
@@ -163,13 +164,18 @@ class ChaplyginSleighEnv(TaskEnv):
             check_number("mass", mass, 0.0, open_low=True),
         )
         self.rail = check_number("rail", rail, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.box = check_number("box", box, 0.0, MAGNITUDE_BOUND)
+        self.u_high = np.array([self.box, self.rail])
         self.tolerance = check_number("tolerance", tolerance, 0.0, 1.0, open_low=True, open_high=True)
-        self.jump_class = self.system.jump_class(np.linspace(-self.rail, self.rail, 7))
+        grid = np.meshgrid(np.linspace(-self.box, self.box, 5), np.linspace(-self.rail, self.rail, 7))
+        directions = ((1.0, 0.0), (0.0, 1.0), (1.0, 1.0)) if self.box > 0.0 else ((0.0, 1.0),)  # admissible u̇
+        self.jump_class = self.system.jump_class(np.stack(grid, -1).reshape(-1, 2), directions)
         self.control = "velocity" if self.jump_class is JumpClass.GENERAL else "position"
         if max_mass_speed is None and self.control == "velocity":
             raise ValueError(
-                f"max_mass_speed=None would jump the mass, which this sleigh (offset={self.system.offset}, class "
-                f"{self.jump_class.value!r}: u̇ enters its equations quadratically) does not admit; give a speed > 0"
+                f"max_mass_speed=None would jump the mass, which this sleigh (offset={self.system.offset}, box={self.box}"
+                f", class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not admit; give a "
+                "speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
             )
         self.max_mass_speed = (
             None if max_mass_speed is None else check_number("max_mass_speed", max_mass_speed, 0.0, open_low=True)
@@ -179,15 +185,15 @@ class ChaplyginSleighEnv(TaskEnv):
             stepper_options = {"substeps": DEFAULT_SUBSTEPS, **stepper_options}
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.jump = JumpFlow(self.system)
-        self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         high = np.array(OBSERVED, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
-        self.state = SleighState(np.zeros(5), np.zeros(1), np.zeros(1), np.array([1.0, 0.0]), 0.0, 0.0)
+        self.state = SleighState(np.zeros(5), np.zeros(2), np.zeros(2), np.array([1.0, 0.0]), 0.0, 0.0)
 
     def parameters(self):
         s = self.system
         return {"sled_mass": s.sled_mass, "sled_inertia": s.sled_inertia, "offset": s.offset, "mass": s.mass,
-                "rail": self.rail, "max_mass_speed": self.max_mass_speed}
+                "rail": self.rail, "box": self.box, "max_mass_speed": self.max_mass_speed}
 
     # -- physics ---------------------------------------------------------------
 
@@ -198,7 +204,7 @@ class ChaplyginSleighEnv(TaskEnv):
         values = {key: 0.0 for key in STATE_KEYS}
         speed = 0.0 if self.max_mass_speed is None else self.max_mass_speed
         bounds = {"x": MAGNITUDE_BOUND, "y": MAGNITUDE_BOUND, "v": SPEED_BOUND, "omega": RATE_BOUND, "u": self.rail,
-                  "u_dot": speed}
+                  "u_dot": speed, "u_along": self.box, "u_along_dot": speed if self.box > 0.0 else 0.0}
         for key, value in state.items():
             values[key] = check_angle("state phi", value) if key == "phi" else check_number(
                 f"state {key}", value, -bounds[key], bounds[key])
@@ -207,14 +213,14 @@ class ChaplyginSleighEnv(TaskEnv):
         target = np.array([distance * math.cos(bearing), distance * math.sin(bearing)])
         if "target" in options:
             target = check_vector("target", options["target"], 2, -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
-        u, u_dot = values["u"], values["u_dot"]
+        u, u_dot = np.array([values["u_along"], values["u"]]), np.array([values["u_along_dot"], values["u_dot"]])
         p = self.system.momenta(values["v"], values["omega"], u, u_dot)
         y = np.array([values["x"], values["y"], values["phi"], *p])
-        return SleighState(y, np.array([u]), np.array([u_dot]), target, 0.0, 0.0)
+        return SleighState(y, u, u_dot, target, 0.0, 0.0)
 
     def command(self, a):
         """u̇ (velocity control) or the commanded u (position control) of action a (one or a batch)."""
-        return a * (self.max_mass_speed if self.control == "velocity" else self.rail)
+        return a * (self.max_mass_speed if self.control == "velocity" else self.u_high)
 
     def segments(self, u, command, batch=False):
         """(Δu of a jump or None, control segments, u and u̇ at the end) of a step from u under the command."""
@@ -225,7 +231,7 @@ class ChaplyginSleighEnv(TaskEnv):
             u_dot = np.copysign(self.max_mass_speed, command - u)
             low, high = np.minimum(u, command), np.maximum(u, command)
         else:
-            u_dot, low, high = command, -self.rail, self.rail
+            u_dot, low, high = command, -self.u_high, self.u_high
         segments, u_end, u_dot_end = (bounded_segments_batch if batch else bounded_segments)(
             u, u_dot, low, high, self.dt)
         return None, segments, u_end, u_dot_end
@@ -241,12 +247,12 @@ class ChaplyginSleighEnv(TaskEnv):
 
     def held_energy(self, y, u, u_dot):
         """T where the mass is held (u̇ = 0), 0 where it moves."""
-        held = u_dot[..., 0] == 0.0
-        energy = self.system.energy(y, u[..., 0], 0.0 * u[..., 0])
+        held = np.all(u_dot == 0.0, axis=-1)
+        energy = self.system.energy(y, u, 0.0 * u)
         return np.where(held, energy, 0.0) if np.ndim(held) else (float(energy) if held else 0.0)
 
     def check_energy_error(self, energy_error, y, u):
-        energy = self.system.energy(y, u[..., 0], 0.0 * u[..., 0])
+        energy = self.system.energy(y, u, 0.0 * u)
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + energy), ENERGY_ERROR_BOUND)
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
@@ -263,21 +269,23 @@ class ChaplyginSleighEnv(TaskEnv):
 
     def observe(self, s, ops=SCALAR):
         along, across, _ = self.relative_target(s, ops)
-        v, omega = self.system.velocities(s.y, s.u[..., 0], s.u_dot[..., 0])
+        v, omega = self.system.velocities(s.y, s.u, s.u_dot)
         speed = 1.0 if self.max_mass_speed is None else self.max_mass_speed
-        parts = (along, across, v, omega, s.u[..., 0] / self.rail, s.u_dot[..., 0] / speed)
+        parts = (along, across, v, omega, s.u[..., 1] / self.rail, s.u_dot[..., 1] / speed,
+                 s.u[..., 0] / max(self.box, self.rail), s.u_dot[..., 0] / speed)
         return ops.pack([ops.clip(ops.real(x), -bound, bound) for x, bound in zip(parts, OBSERVED)])
 
     def describe(self, s, ops=SCALAR):
-        v, omega = self.system.velocities(s.y, s.u[..., 0], s.u_dot[..., 0])
+        v, omega = self.system.velocities(s.y, s.u, s.u_dot)
         distance = self.relative_target(s, ops)[2]
         state = {"x": s.y[..., 0], "y": s.y[..., 1], "phi": s.y[..., 2], "v": v, "omega": omega,
-                 "u": s.u[..., 0], "u_dot": s.u_dot[..., 0], "t": s.t}
+                 "u": s.u[..., 1], "u_dot": s.u_dot[..., 1], "u_along": s.u[..., 0], "u_along_dot": s.u_dot[..., 0],
+                 "t": s.t}
         return {
             "state": {key: ops.real(value) for key, value in state.items()},
             "target": s.target.copy(),
             "distance": ops.real(distance),
-            "energy": ops.real(self.system.energy(s.y, s.u[..., 0], s.u_dot[..., 0])),
+            "energy": ops.real(self.system.energy(s.y, s.u, s.u_dot)),
             "is_success": ops.flag(distance <= self.tolerance),
         }
 
@@ -286,12 +294,12 @@ class ChaplyginSleighEnv(TaskEnv):
     def _make_renderer(self):
         from connenv.envs.rendering import SleighRenderer
 
-        return SleighRenderer(self.system.offset, self.rail, self.tolerance, self.render_mode,
+        return SleighRenderer(self.system.offset, self.rail, self.box, self.tolerance, self.render_mode,
                               self.metadata["render_fps"])
 
     def _draw(self, renderer):
         s = self.state
-        return renderer.draw(s.y[:3].copy(), float(s.u[0]), s.target.copy(), s.t)
+        return renderer.draw(s.y[:3].copy(), s.u.copy(), s.target.copy(), s.t)
 
 
 class ChaplyginSleighVectorEnv(TaskVectorEnv):

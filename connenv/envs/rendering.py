@@ -215,15 +215,15 @@ class CoordinatePlot:
 
 
 class SleighRenderer:
-    """Top view: the track of the knife edge, the sled (its outline, the knife edge at P, the rail across it
-    through C), the mass on the rail and the target disc."""
+    """Top view: the track of the knife edge, the sled (its outline, the knife edge at P, the mass's box or rail
+    around C), the mass and the target disc."""
 
-    def __init__(self, offset: float, rail: float, tolerance: float, render_mode: str, fps: int):
-        self.offset, self.rail, self.tolerance = offset, rail, tolerance
+    def __init__(self, offset: float, rail: float, box: float, tolerance: float, render_mode: str, fps: int):
+        self.offset, self.rail, self.box, self.tolerance = offset, rail, box, tolerance
         self.canvas = Canvas(3.0, 0.0, render_mode, fps)
         self.track = []
 
-    def draw(self, pose, u: float, target, t: float):
+    def draw(self, pose, u, target, t: float):
         c, pg = self.canvas, self.canvas.pygame
         x, y, phi = pose
         if t == 0.0:
@@ -240,15 +240,17 @@ class SleighRenderer:
         if len(self.track) > 1:
             pg.draw.lines(c.screen, (150, 150, 150), False, [c.px(*p) for p in self.track], 2)
         half = 1.2 * self.rail
-        length = max(self.offset, 0.2)
-        corners = [P - 0.2 * length * e1 + half * e2, P + 1.6 * length * e1 + half * e2,
-                   P + 1.6 * length * e1 - half * e2, P - 0.2 * length * e1 - half * e2]
+        front = self.offset + 1.2 * max(self.box, 0.1)
+        corners = [P - 0.1 * e1 + half * e2, P + front * e1 + half * e2, P + front * e1 - half * e2,
+                   P - 0.1 * e1 - half * e2]
         pg.draw.polygon(c.screen, (225, 225, 240), [c.px(*p) for p in corners])
         pg.draw.polygon(c.screen, (60, 60, 90), [c.px(*p) for p in corners], 2)
         pg.draw.line(c.screen, (40, 40, 40), c.px(*(P - 0.15 * e1)), c.px(*(P + 0.15 * e1)), 5)  # the knife edge
-        pg.draw.line(c.screen, (120, 120, 160), c.px(*(C - self.rail * e2)), c.px(*(C + self.rail * e2)), 2)
+        b, r = self.box, self.rail
+        box = [C + b * e1 + r * e2, C + b * e1 - r * e2, C - b * e1 - r * e2, C - b * e1 + r * e2]
+        pg.draw.lines(c.screen, (120, 120, 160), True, [c.px(*p) for p in box], 2)  # the mass's box (a rail if b = 0)
         pg.draw.circle(c.screen, (0, 0, 0), c.px(*C), 3)
-        pg.draw.circle(c.screen, (204, 77, 77), c.px(*(C + u * e2)), 8)
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*(C + u[0] * e1 + u[1] * e2)), 8)
         c.screen.blit(c.font.render(f"t = {t:5.2f} s", True, (0, 0, 0)), (10, 10))
         return c.show()
 
