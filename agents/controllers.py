@@ -8,7 +8,7 @@ import numpy as np
 from agents.gaits import GaitPlanner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
-from agents.sleigh import TailFirst
+from agents.sleigh import ShakePlanner, TailFirst
 
 
 class PiccoliKulkarni:
@@ -68,7 +68,7 @@ CONTROLLERS = {
         "damped": lambda env: KapitzaVibration(env, modulation=DAMPING_MODULATION),
     },
     "connenv/KapitzaSwingUp-v0": {"swingup": KapitzaSwingUp},
-    "connenv/ChaplyginSleigh-v0": {"tail_first": TailFirst},
+    "connenv/ChaplyginSleigh-v0": {"planner": ShakePlanner, "tail_first": TailFirst},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 
