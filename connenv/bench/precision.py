@@ -1,7 +1,7 @@
 """Work–precision charts: for every stepper, the time per env step against the state error after a fixed episode
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
-    python -m connenv.bench precision [--env swing skier ball kapitza shell connection] [--quick]
+    python -m connenv.bench precision [--env swing skier ball kapitza shell connection sleigh] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -26,6 +26,11 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
+- sleigh: ChaplyginSleigh-v0 from v = 1 m/s, ω = 1 rad/s, 300 steps of seeded random mass velocities in the box
+  (the mass stops at its walls, where it is held), then 300 steps from v = 1 m/s, ω = 2 rad/s with the mass held
+  at u = (0.1, 0.2) m; reference: DOP853 at rtol 1e-13, atol 1e-15. State error: max-norm of the (x, y, φ) error
+  at the end (m, rad), for each episode. Invariant: the env's energy error, the change of the kinetic energy T over
+  the segments where the mass is held, max over the episodes in units of T at reset.
 
 Time: median µs of env.step over the first episode (the reduced one for the shell), and its ratio to the median
 Pendulum-v1 step timed beside it. A stepper that raises StepperError (non-finite, or the env's invariant bound)
@@ -184,6 +189,23 @@ CASES = {
         "",
         {"group": "SO3", "connection": twisted, "shape_low": [-1.0, -1.0], "shape_high": [1.0, 1.0], "dt": 0.1},
         MAGNUS,
+    ),
+    "sleigh": Case(
+        "connenv/ChaplyginSleigh-v0",
+        TIGHT,
+        (
+            Episode("random u̇", {"state": {"v": 1.0, "omega": 1.0}, "target": (100.0, 0.0)}, uniform(2), 300),
+            Episode(
+                "held",
+                {"state": {"v": 1.0, "omega": 2.0, "u_along": 0.1, "u": 0.2}, "target": (100.0, 0.0)},
+                held([0.0, 0.0]),
+                300,
+            ),
+        ),
+        lambda env, ref: float(np.max(np.abs(env.state.y[:3] - ref.state.y[:3]))),
+        "max |energy error| / T(0)",
+        lambda env, info, start: abs(env.state.energy_error) / start["energy"],
+        "m, rad",
     ),
 }
 
