@@ -47,8 +47,10 @@ class Gaits:
     def reach(self, d):
         """How far along each line d (n, 2) the mass goes: the amplitude, or the box's wall."""
         box, rail = self.u_high
-        return np.minimum(self.amplitude, np.minimum(rail / np.maximum(np.abs(d[:, 1]), 1e-9),
-                                                     box / np.maximum(np.abs(d[:, 0]), 1e-9)))
+        return np.minimum(
+            self.amplitude,
+            np.minimum(rail / np.maximum(np.abs(d[:, 1]), 1e-9), box / np.maximum(np.abs(d[:, 0]), 1e-9)),
+        )
 
     def read(self, obs):
         """(target along, across, v, ω, u, u̇) of an observation."""
@@ -97,7 +99,7 @@ class ShakePlanner(Gaits):
             ends = self.ends(y, u, u_dot)
             self.choice = int(np.argmin(np.hypot(along - ends[:, 0], across - ends[:, 1])))
         self.count += 1
-        d = self.d[self.choice:self.choice + 1]
+        d = self.d[self.choice : self.choice + 1]
         return shake(u[None], u_dot[None], d, self.reach(d), self.speed, self.dt)[0].astype(np.float32)
 
 

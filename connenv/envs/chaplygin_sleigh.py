@@ -134,7 +134,7 @@ class ChaplyginSleighEnv(TaskEnv):
     | max_mass_speed | 2.0 | (0, ∞) m/s; None (fit class only): u jumps to the command |
     | tolerance | 0.1 | (0, 1) m |
     | dt | 0.05 | [1e-12, 1] s |
-    | integrator | "rk4" (2 substeps) | "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | integrator | "rk4" (2 substeps) | "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps / rtol, atol | | see `connenv.core.steppers` |
     | render_mode | None | "human", "rgb_array" |
 
