@@ -54,6 +54,7 @@ ENVS = (
     "connenv/RollingCoinSurface-v0",
     "connenv/BeadOnBar-v0",
     "connenv/TubeTwist-v0",
+    "connenv/ChaplyginSleigh-v0",
 )
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
@@ -209,6 +210,7 @@ MEASURES = {
     "connenv/TubeTwist-v0": ("bend / shortest loop", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
     "connenv/SnakeSwimmer-v0": ("steps to target", "", steps_to_target),
+    "connenv/ChaplyginSleigh-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
     "connenv/RollingCoin-v0": ("time to park", "s", lambda row: row["time_to_success_mean"]),
     "connenv/ElroysBeanie-v0": ("time to hold", "s", lambda row: row["time_to_success_mean"]),

@@ -12,6 +12,7 @@ from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
 from agents.lawton import BeanieDeadBeat, CoinPlanner
 from agents.rolling_ball import Holonomy, OptimalArc, for_env
 from agents.rolling_coin_surface import SteerToTarget
+from agents.sleigh import ShakePlanner, TailFirst
 
 
 class PiccoliKulkarni:
@@ -77,6 +78,7 @@ CONTROLLERS = {
     "connenv/RollingCoinSurface-v0": {"steer": SteerToTarget},
     "connenv/BeadOnBar-v0": {"tilt": BeadTilt},
     "connenv/TubeTwist-v0": {"cap": tube.for_env, "square": lambda env: tube.for_env(env, sides=4)},
+    "connenv/ChaplyginSleigh-v0": {"planner": ShakePlanner, "tail_first": TailFirst},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

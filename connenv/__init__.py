@@ -87,6 +87,12 @@ register(
     max_episode_steps=500,
 )
 register(
+    id="connenv/ChaplyginSleigh-v0",
+    entry_point="connenv.envs.chaplygin_sleigh:ChaplyginSleighEnv",
+    vector_entry_point="connenv.envs.chaplygin_sleigh:ChaplyginSleighVectorEnv",
+    max_episode_steps=1000,
+)
+register(
     id="connenv/ActiveConstraint-v0",
     entry_point="connenv.envs.active_constraint:ActiveConstraintEnv",
     vector_entry_point="connenv.envs.active_constraint:ActiveConstraintVectorEnv",

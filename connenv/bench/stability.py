@@ -1,8 +1,8 @@
 """Stability maps: the largest dt at which a stepper keeps the env's invariant bounded, against the parameter that
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
-    python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface tube snake]
-                                      [--quick]
+    python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface tube snake
+                                      sleigh] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -46,6 +46,11 @@ StepperError and the invariant's error stayed within the bound below at every st
   sin 2πt/T), T = 2 s, for 10 s; parameter the links' aspect ratio a/b (a = 0.5 m), which sets the ratio of the
   added masses across and along a link, λ₂/λ₁ = (a/b)²; bounded: the spatial momentum within 0.1 of its norm (the
   env's own bound). The reduced model is not mapped, as the shell's.
+- sleigh: ChaplyginSleigh-v0 from v = 1 m/s, the mass at C driven to the box's corner at max_mass_speed (action
+  (1, 1) held: it stops at the walls, whatever dt), then held there, 10 s; parameter max_mass_speed (the sleigh
+  is not fit for jumps: the move is a kick that grows with the speed, and so do the rates of the motion after it);
+  bounded: the env's energy error, the change of T while the mass is held, within 1e-2 (1 + T) (the env's own
+  bound).
 
 A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
 grid held.
@@ -301,6 +306,17 @@ MAPS = {
         momentum_unbounded,
         (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("magnus", {})),  # magnus: the default, DOP853 rtol 1e-10
         largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
+    ),
+    "sleigh": StabilityMap(
+        "connenv/ChaplyginSleigh-v0",
+        "max_mass_speed (m/s)",
+        (0.5, 4.0, 32.0, 256.0, 2048.0),
+        lambda speed: {"max_mass_speed": speed},
+        lambda speed: {"state": {"v": 1.0}, "target": (100.0, 0.0)},
+        held([1.0, 1.0]),
+        lambda value, dt: math.ceil(10.0 / dt),
+        env_bound,
+        (*FIXED, ("rk4", {"substeps": 2}), ("dop853", {"rtol": 1e-8, "atol": 1e-10})),
     ),
 }
 

@@ -42,6 +42,8 @@ CASES = [
      {"state": {"momentum": (0.3, -0.2, 0.1)}}),
     ("kapitza", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "planar"}, None),
     ("kapitza_fall", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "horizontal"}, None),
+    ("sleigh", "connenv/ChaplyginSleigh-v0", {"max_episode_steps": 60, "tolerance": 0.5}, None),
+    ("sleigh_fit", "connenv/ChaplyginSleigh-v0", {"max_episode_steps": 60, "offset": 0.0, "box": 0.0}, None),
     ("swingup", "connenv/KapitzaSwingUp-v0", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),
     ("coin", "connenv/RollingCoin-v0", {"max_episode_steps": 60, "position_tolerance": 0.5}, None),
     ("beanie", "connenv/ElroysBeanie-v0", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),

@@ -1,0 +1,327 @@
+"""ChaplyginSleigh-v0: a sled on a knife edge, propelled and steered only by a mass moving across it."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.batched import batched
+from connenv.core.mechanics import JumpClass
+from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
+from connenv.core.steppers import make_stepper
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_angle,
+    check_dt,
+    check_keys,
+    check_number,
+    check_stepper_options,
+    check_vector,
+)
+from connenv.envs.active_constraint import JUMP_STEPPER, JumpFlow
+from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.vector import TaskVectorEnv
+from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
+
+DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
+DEFAULT_INTEGRATOR = "rk4"
+DEFAULT_SUBSTEPS = 2  # RK4 × 2: cheaper than DOP853 for the accuracy the task needs (docs/envs/ChaplyginSleigh.md)
+ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + E) past which it has diverged: StepperError
+TARGET_DISTANCE = (1.0, 2.0)  # m from the start, any direction
+SPEED_BOUND = 10.0  # |v| (m/s) given at reset
+RATE_BOUND = 20.0  # |ω| (rad/s) given at reset
+OBSERVED = (10.0, 10.0, 5.0, 10.0, 1.0, 1.0, 1.0, 1.0)  # bounds of the observation (clipped), in its order
+PROGRESS_GAIN = 10.0  # reward per metre of approach
+TIME_COST = 0.01  # reward paid per step until success
+STATE_KEYS = ("x", "y", "phi", "v", "omega", "u", "u_dot", "u_along", "u_along_dot")
+
+
+@dataclass
+class SleighState(State):
+    """y = (x, y, φ, p₁, p₂) (P, heading, Bressan's momenta, `connenv.systems.chaplygin_sleigh`); the mass offset
+    u = (u₁ along, u₂ across) and its velocity u̇ at the end of the step (arrays (2,)); the target (x, y); the time t; the stepper's energy error
+    (the change of T over the segments where u is held, summed since reset)."""
+
+    y: np.ndarray
+    u: np.ndarray
+    u_dot: np.ndarray
+    target: np.ndarray
+    t: float
+    energy_error: float
+
+
+class ChaplyginSleighEnv(TaskEnv):
+    r"""
+    ## Description
+
+    A sled of mass M and inertia J (about its centre of mass C) glides on a plane on a knife edge at the point P of
+    its axis, C a distance a ahead of P: P cannot slip sideways (the nonholonomic constraint of the Chaplygin
+    sleigh). A mass m moves in a box on the sled; its offset from C, u = (u₁ along the axis, |u₁| ≤ box; u₂ across
+    it, left positive, |u₂| ≤ rail), is assigned by the controller, an *active constraint*. Nothing else pushes the
+    sled: shaking the mass across propels it (tail first), shaking it along and across together turns it (box=0 is
+    a transverse rail, which cannot steer from rest: docs/envs/ChaplyginSleigh.md). With p = (p₁, p₂) = (∂T/∂v,
+    ∂T/∂ω), v the forward velocity of P and ω = φ̇,
+
+        ṗ₁ = ω P_w,   ṗ₂ = −v P_w,   P_w = M a ω + m ((a + u₁) ω + u̇₂),   (ẋ, ẏ, φ̇) = (v cos φ, v sin φ, ω)
+
+    (Lagrange–d'Alembert; derivation in `connenv.systems.chaplygin_sleigh`). With the mass held at C it is the
+    classical sleigh, which ends every motion going straight.
+
+    **Jump class.** By Bressan and Rampazzo's criterion (a system with a nonholonomic constraint is fit for jumps
+    iff the bundle orthogonal to the leaves u = const within the constraint is invariant under the constrained free
+    motion), derived at construction (`env.unwrapped.jump_class`): with a > 0, or with the box (u₁ shifts the lever
+    a + u₁), the sleigh is *not* fit for jumps, u̇ enters the equations quadratically, and the control is the
+    mass's velocity; the rail over the knife edge (box=0, offset=0) is fit and the control is the mass's position.
+    Shaking the mass is what propels the sleigh: the quadratic term is the thrust.
+
+    ## Action Space
+
+    `Box(-1, 1, (2,), float32)` for (u₁, u₂); actions outside are clipped, a wrong shape or a non-finite value
+    raises ValueError.
+
+    | class | action a means | |
+    |---|---|---|
+    | general (the default) | u̇ = a · max_mass_speed through the step | the mass stops at the box's walls |
+    | fit (box=0, offset=0) | u = a · (box, rail) commanded | reached at max_mass_speed, or a jump with max_mass_speed=None |
+
+    Action 0 with u = 0 keeps the mass at C.
+
+    ## Observation Space
+
+    `Box(8,) float32`, each entry clipped to its bound:
+
+    | Num | Observation | Bound |
+    |-----|-------------|-------|
+    | 0 | target − P along the sled's axis, m | ±10 |
+    | 1 | target − P across it (left), m | ±10 |
+    | 2 | v, forward velocity of P, m/s | ±5 |
+    | 3 | ω, rad/s | ±10 |
+    | 4 | u₂ / rail | ±1 |
+    | 5 | u̇₂ / max_mass_speed (u̇₂ without max_mass_speed, always 0) | ±1 |
+    | 6 | u₁ / max(box, rail) | ±1 |
+    | 7 | u̇₁ / max_mass_speed | ±1 |
+
+    ## Rewards
+
+    With d the distance from P to the target before the step and d′ after it:
+    `10 (d − d′) − 0.01`: dense progress (summed, 10 (d₀ − d_T), so no loop pays) and a cost of time.
+
+    ## Starting State
+
+    At rest at the origin heading along x, the mass at C (u = u̇ = 0), t = 0; the target uniform at 1 to 2 m in
+    any direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of `x`, `y` (within
+    ±1e3 m), `phi` (±2π), `v` (±10 m/s), `omega` (±20 rad/s), `u` (u₂, ±rail), `u_dot` (±max_mass_speed, 0 without
+    it), `u_along` (u₁, ±box), `u_along_dot` (±max_mass_speed, 0 with box=0) and the target (within ±1e3 m), exactly; else ValueError.
+
+    ## Episode End
+
+    Terminated on success (`info["is_success"]`): P within `tolerance` of the target at the end of a step.
+    Truncated after 1000 steps (50 s at the default dt) by the registration's time limit.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | sled_mass | 1.0 | (0, ∞) kg |
+    | sled_inertia | 0.1 | (0, ∞) kg m², about C |
+    | offset | 0.5 | [0, ∞) m, C ahead of P |
+    | mass | 0.5 | (0, ∞) kg |
+    | rail | 0.3 | (0, ∞) m, \|u₂\| ≤ rail |
+    | box | 0.3 | [0, ∞) m, \|u₁\| ≤ box; 0: the rail alone |
+    | max_mass_speed | 2.0 | (0, ∞) m/s; None (fit class only): u jumps to the command |
+    | tolerance | 0.1 | (0, 1) m |
+    | dt | 0.05 | [1e-12, 1] s |
+    | integrator | "rk4" (2 substeps) | "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | substeps / rtol, atol | | see `connenv.core.steppers` |
+    | render_mode | None | "human", "rgb_array" |
+
+    The default stepper, RK4 with 2 substeps, was measured against DOP853 (docs/envs/ChaplyginSleigh.md). A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or an energy
+    error past 1e-2 (1 + T) (T is conserved where the mass is held). Every `info` has `"state"` (`x`, `y`, `phi`,
+    `v`, `omega`, `u`, `u_dot`, `u_along`, `u_along_dot`, `t`), `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
+    """
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        sled_mass: float = 1.0,
+        sled_inertia: float = 0.1,
+        offset: float = 0.5,
+        mass: float = 0.5,
+        rail: float = 0.3,
+        box: float = 0.3,
+        max_mass_speed: float | None = 2.0,
+        tolerance: float = 0.1,
+        dt: float = 0.05,
+        integrator: str = DEFAULT_INTEGRATOR,
+        **stepper_options,
+    ):
+        super().__init__(render_mode, check_dt(dt, DT_MAX))
+        self.system = ChaplyginSleigh(
+            check_number("sled_mass", sled_mass, 0.0, open_low=True),
+            check_number("sled_inertia", sled_inertia, 0.0, open_low=True),
+            check_number("offset", offset, 0.0),
+            check_number("mass", mass, 0.0, open_low=True),
+        )
+        self.rail = check_number("rail", rail, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.box = check_number("box", box, 0.0, MAGNITUDE_BOUND)
+        self.u_high = np.array([self.box, self.rail])
+        self.tolerance = check_number("tolerance", tolerance, 0.0, 1.0, open_low=True, open_high=True)
+        grid = np.meshgrid(np.linspace(-self.box, self.box, 5), np.linspace(-self.rail, self.rail, 7))
+        directions = ((1.0, 0.0), (0.0, 1.0), (1.0, 1.0)) if self.box > 0.0 else ((0.0, 1.0),)  # admissible u̇
+        self.jump_class = self.system.jump_class(np.stack(grid, -1).reshape(-1, 2), directions)
+        self.control = "velocity" if self.jump_class is JumpClass.GENERAL else "position"
+        if max_mass_speed is None and self.control == "velocity":
+            raise ValueError(
+                f"max_mass_speed=None would jump the mass, which this sleigh (offset={self.system.offset}, box={self.box}"
+                f", class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not admit; give a "
+                "speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
+            )
+        self.max_mass_speed = (
+            None if max_mass_speed is None else check_number("max_mass_speed", max_mass_speed, 0.0, open_low=True)
+        )
+        check_stepper_options("ChaplyginSleigh-v0", stepper_options, type(self))
+        if integrator == DEFAULT_INTEGRATOR:
+            stepper_options = {"substeps": DEFAULT_SUBSTEPS, **stepper_options}
+        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+        self.jump = JumpFlow(self.system)
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        high = np.array(OBSERVED, np.float32)
+        self.observation_space = spaces.Box(-high, high, dtype=np.float32)
+        self.state = SleighState(np.zeros(5), np.zeros(2), np.zeros(2), np.array([1.0, 0.0]), 0.0, 0.0)
+
+    def parameters(self):
+        s = self.system
+        return {"sled_mass": s.sled_mass, "sled_inertia": s.sled_inertia, "offset": s.offset, "mass": s.mass,
+                "rail": self.rail, "box": self.box, "max_mass_speed": self.max_mass_speed}
+
+    # -- physics ---------------------------------------------------------------
+
+    def start(self, options):
+        check_keys("reset options", options, {"state", "target"})
+        state = options.get("state", {})
+        check_keys("options['state']", state, STATE_KEYS)
+        values = {key: 0.0 for key in STATE_KEYS}
+        speed = 0.0 if self.max_mass_speed is None else self.max_mass_speed
+        bounds = {"x": MAGNITUDE_BOUND, "y": MAGNITUDE_BOUND, "v": SPEED_BOUND, "omega": RATE_BOUND, "u": self.rail,
+                  "u_dot": speed, "u_along": self.box, "u_along_dot": speed if self.box > 0.0 else 0.0}
+        for key, value in state.items():
+            values[key] = check_angle("state phi", value) if key == "phi" else check_number(
+                f"state {key}", value, -bounds[key], bounds[key])
+        distance = self.np_random.uniform(*TARGET_DISTANCE)
+        bearing = self.np_random.uniform(-math.pi, math.pi)
+        target = np.array([distance * math.cos(bearing), distance * math.sin(bearing)])
+        if "target" in options:
+            target = check_vector("target", options["target"], 2, -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
+        u, u_dot = np.array([values["u_along"], values["u"]]), np.array([values["u_along_dot"], values["u_dot"]])
+        p = self.system.momenta(values["v"], values["omega"], u, u_dot)
+        y = np.array([values["x"], values["y"], values["phi"], *p])
+        return SleighState(y, u, u_dot, target, 0.0, 0.0)
+
+    def command(self, a):
+        """u̇ (velocity control) or the commanded u (position control) of action a (one or a batch)."""
+        return a * (self.max_mass_speed if self.control == "velocity" else self.u_high)
+
+    def segments(self, u, command, batch=False):
+        """(Δu of a jump or None, control segments, u and u̇ at the end) of a step from u under the command."""
+        if self.control == "position" and self.max_mass_speed is None:
+            zero = np.zeros_like(command)
+            return command - u, [(command, zero, self.dt if not batch else np.full(len(u), self.dt))], command, zero
+        if self.control == "position":
+            u_dot = np.copysign(self.max_mass_speed, command - u)
+            low, high = np.minimum(u, command), np.maximum(u, command)
+        else:
+            u_dot, low, high = command, -self.u_high, self.u_high
+        segments, u_end, u_dot_end = (bounded_segments_batch if batch else bounded_segments)(
+            u, u_dot, low, high, self.dt)
+        return None, segments, u_end, u_dot_end
+
+    def advance(self, s, command):
+        delta, segments, u_end, u_dot_end = self.segments(s.u, command)
+        y = s.y
+        if delta is not None and np.any(delta != 0.0):
+            y = JUMP_STEPPER(self.jump, y, s.u, delta, 1.0)
+        y, change = run_segments(self.stepper, self.system, y, segments, self.held_energy)
+        self.check_energy_error(s.energy_error + change, y, u_end)
+        return SleighState(y, u_end, u_dot_end, s.target, s.t + self.dt, s.energy_error + change)
+
+    def held_energy(self, y, u, u_dot):
+        """T where the mass is held (u̇ = 0), 0 where it moves."""
+        held = np.all(u_dot == 0.0, axis=-1)
+        energy = self.system.energy(y, u, 0.0 * u)
+        return np.where(held, energy, 0.0) if np.ndim(held) else (float(energy) if held else 0.0)
+
+    def check_energy_error(self, energy_error, y, u):
+        energy = self.system.energy(y, u, 0.0 * u)
+        check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + energy), ENERGY_ERROR_BOUND)
+
+    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
+
+    def relative_target(self, s, ops=SCALAR):
+        """target − P in the sled's frame (along its axis, across it) and the distance."""
+        dx, dy = s.target[..., 0] - s.y[..., 0], s.target[..., 1] - s.y[..., 1]
+        c, n = ops.cos(s.y[..., 2]), ops.sin(s.y[..., 2])
+        return c * dx + n * dy, -n * dx + c * dy, ops.hypot(dx, dy)
+
+    def reward(self, before, after, info, ops=SCALAR):
+        """10 (d − d′) − 0.01."""
+        return PROGRESS_GAIN * (self.relative_target(before, ops)[2] - info["distance"]) - TIME_COST
+
+    def observe(self, s, ops=SCALAR):
+        along, across, _ = self.relative_target(s, ops)
+        v, omega = self.system.velocities(s.y, s.u, s.u_dot)
+        speed = 1.0 if self.max_mass_speed is None else self.max_mass_speed
+        parts = (along, across, v, omega, s.u[..., 1] / self.rail, s.u_dot[..., 1] / speed,
+                 s.u[..., 0] / max(self.box, self.rail), s.u_dot[..., 0] / speed)
+        return ops.pack([ops.clip(ops.real(x), -bound, bound) for x, bound in zip(parts, OBSERVED)])
+
+    def describe(self, s, ops=SCALAR):
+        v, omega = self.system.velocities(s.y, s.u, s.u_dot)
+        distance = self.relative_target(s, ops)[2]
+        state = {"x": s.y[..., 0], "y": s.y[..., 1], "phi": s.y[..., 2], "v": v, "omega": omega,
+                 "u": s.u[..., 1], "u_dot": s.u_dot[..., 1], "u_along": s.u[..., 0], "u_along_dot": s.u_dot[..., 0],
+                 "t": s.t}
+        return {
+            "state": {key: ops.real(value) for key, value in state.items()},
+            "target": s.target.copy(),
+            "distance": ops.real(distance),
+            "energy": ops.real(self.system.energy(s.y, s.u, s.u_dot)),
+            "is_success": ops.flag(distance <= self.tolerance),
+        }
+
+    # -- rendering -------------------------------------------------------------
+
+    def _make_renderer(self):
+        from connenv.envs.rendering import SleighRenderer
+
+        return SleighRenderer(self.system.offset, self.rail, self.box, self.tolerance, self.render_mode,
+                              self.metadata["render_fps"])
+
+    def _draw(self, renderer):
+        s = self.state
+        return renderer.draw(s.y[:3].copy(), s.u.copy(), s.target.copy(), s.t)
+
+
+class ChaplyginSleighVectorEnv(TaskVectorEnv):
+    """ChaplyginSleigh-v0 over a batch (``gym.make_vec("connenv/ChaplyginSleigh-v0", num_envs=N)``; see
+    ``connenv.envs.vector``): each row's mass stops at the rail's ends at its own time."""
+
+    single_env = ChaplyginSleighEnv
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
+        super().__init__(num_envs, max_episode_steps, **kwargs)
+        self.jump_stepper = batched(JUMP_STEPPER)
+
+    def advance(self, s, command):
+        env = self.env
+        delta, segments, u_end, u_dot_end = env.segments(s.u, command, batch=True)
+        y = s.y
+        if delta is not None and np.any(delta != 0.0):
+            y = self.jump_stepper(env.jump, y, s.u, delta, np.ones(len(y)))
+        y, change = run_segments(self.stepper, env.system, y, segments, env.held_energy)
+        env.check_energy_error(s.energy_error + change, y, u_end)
+        return SleighState(y, u_end, u_dot_end, s.target, s.t + env.dt, s.energy_error + change)
+
