@@ -214,6 +214,7 @@ MEASURES = {
     "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
     "connenv/RollingCoin-v0": ("time to park", "s", lambda row: row["time_to_success_mean"]),
     "connenv/ElroysBeanie-v0": ("time to hold", "s", lambda row: row["time_to_success_mean"]),
+    "connenv/RollingCoinSurface-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
 }
 
 

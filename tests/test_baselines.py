@@ -53,3 +53,10 @@ def test_pretrained_zips_keep_their_own_algorithm_when_algo_is_given():
         ("Swing-v0_ppo", None),
         ("Swing-v0_sac", None),
     ]
+
+
+@pytest.mark.parametrize("env_id", baselines.ENVS + baselines.UNTRAINED)
+def test_every_trainable_env_has_hyperparameters_an_analytic_controller_and_a_physical_measure(env_id):
+    for algo in baselines.ALGOS:
+        assert int(float(baselines.hyperparams(algo, env_id)["n_timesteps"])) > 0
+    assert env_id in baselines.CONTROLLERS and env_id in baselines.MEASURES
