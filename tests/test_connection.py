@@ -295,6 +295,19 @@ def test_bad_construction_is_refused(kwargs, words):
         make(**kwargs)
 
 
+@pytest.mark.parametrize("env_id", ["RollingCoin-v0", "ElroysBeanie-v0", "TubeTwist-v0"])
+@pytest.mark.parametrize(
+    "kwarg",
+    ["group", "connection", "shape_low", "shape_high", "frame", "max_shape_speed", "task", "draw", "vectorized",
+     "exact_segment", "bogus"],
+)
+def test_a_subclass_refuses_connection_env_kwargs_by_its_own_name(env_id, kwarg):
+    """An env built on ConnectionEnv sets the builder's kwargs itself: passing one to it (or an unknown one) is a
+    ValueError naming the kwarg and the env, not a silent override nor a TypeError."""
+    with pytest.raises(ValueError, match=re.escape(f"['{kwarg}'] for {env_id}")):
+        gym.make(f"connenv/{env_id}", **{kwarg: 1})
+
+
 @pytest.mark.parametrize(
     ("state", "words"),
     [
