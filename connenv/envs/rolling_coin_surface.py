@@ -149,8 +149,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
     Both defaults are on the Pareto front of the work–precision chart (`python -m connenv.bench precision --env
     coin_surface coin_plane`). RK4 ×8 keeps |E − E₀| within 1e-9 m g Δz over an episode of random steering on
-    the default surfaces (tests), and is stable at the default dt on bowls down to a radius of 1 cm; on
-    steeper surfaces, where fixed steps fail (`python -m connenv.bench stability --env coin_surface`), take
+    the default surfaces (tests). Fixed steps fail on surfaces curved enough for the dt (where: `python -m
+    connenv.bench stability --env coin_surface`, charted on the env's docs page); there take
     `integrator="dop853"`. Semi-implicit Euler splits the state into q = (x, y, φ) and φ̇, which stands for the
     momentum (3/2) m R² φ̇.
 

@@ -189,8 +189,8 @@ class SnakeSwimmerEnv(TaskEnv):
     (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
     on the motions at top speed in the eight directions from a 3 × 3 grid of joint angles (the corners, edge
     midpoints and centre of the joints' square). The full model has no connection and goes to DOP853 (rtol 1e-10,
-    atol 1e-12), which keeps the spatial momentum to 1e-10 of its norm. Its place on the work–precision chart:
-    `python -m connenv.bench precision --env snake`.
+    atol 1e-12). Its pose and spatial momentum errors, and its place on the work–precision chart:
+    `python -m connenv.bench precision --env snake` (on the env's docs page).
 
     Every `info` has `"state"` (`x`, `y`, `theta` (the middle link), `alpha`, `beta`, `momentum` (P₁, P₂, Π, body
     frame), `t`, in SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y),
