@@ -21,7 +21,9 @@ in 3.
 SnakeSwimmer-v0 (`snake_planner(env)`): the joints take several steps to each vertex at their top speed; every gait
 starts and ends straight, (α, β) = 0, where a reset puts the chain. A loop that is its own image under
 (α, β) ↦ (−α, −β) (the chain mirrored across its middle link's axis, which mirrors the motion and turns it by −θ)
-turns by nothing and translates: the squares and diamonds about the straight shape. A loop in one quadrant turns.
+turns by nothing and translates: the squares and diamonds about the straight shape. Of the loops in one quadrant,
+the S-shaped ones (Q2, Q4: α and β of opposite signs), their own images under (α, β) ↦ (−β, −α) (the chain
+reversed end to end), do not turn either; the C-shaped ones (Q1, Q3: α and β of the same sign) turn.
 """
 
 from __future__ import annotations
@@ -105,7 +107,8 @@ SNAKE_SCALES = (1.0, 0.5, 0.25, 0.125)  # the loops' sizes, as fractions of the 
 def snake_loops(scale: float) -> dict:
     """Polygons of joint angles (action units) from the straight shape and back: the square S through (±s, ±s) and
     the diamond D through (±s, 0), (0, ±s), each its own mirror image (they translate), and the four quadrant
-    squares Q1–Q4 (they turn); each also run backwards (suffix r)."""
+    squares Q1–Q4 (Q1 and Q3 turn; Q2 and Q4, their own images under (α, β) ↦ (−β, −α), translate); each also run
+    backwards (suffix r)."""
     s = scale
     shapes = {
         "S": [(s, s), (-s, s), (-s, -s), (s, -s), (s, s)],

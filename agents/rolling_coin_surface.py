@@ -3,9 +3,9 @@
 The coin moves only along its heading, at the speed gravity gives it, and turning it costs no energy: steering is
 choosing where the velocity points. The law (pure pursuit, read off the observation):
 
-- aim point: the target; on the hill surface, first a waypoint beside the hill, W = c ± (3 w, 0) (c the hill's
-  centre, w its width, on the target's side), until the coin is level with the hill (y ≥ c_y, down the slope):
-  the straight line to the target climbs the hill higher than the start, where the coin would stop and roll back;
+- aim point: the target; on the hill surface, a waypoint beside the hill, W = c ± (3 w, 0) (c the hill's
+  centre, w its width, on the target's side), while the straight line to the target is blocked (`blocked`): it
+  rises within MARGIN of the coin's level E/(m g), the height where the coin would stop and roll back;
 - direction of motion: the heading θ when the coin rolls forward (R φ̇ > 0), θ + π when it rolls backward; at
   rest, the end of its line that points downhill, where gravity will start it;
 - steering: θ̇ = clip(e / dt, ±max_steer_rate), e the angle from the direction of motion to the aim point

@@ -295,6 +295,19 @@ def test_bad_construction_is_refused(kwargs, words):
         make(**kwargs)
 
 
+@pytest.mark.parametrize("env_id", ["RollingCoin-v0", "ElroysBeanie-v0", "TubeTwist-v0"])
+@pytest.mark.parametrize(
+    "kwarg",
+    ["group", "connection", "shape_low", "shape_high", "frame", "max_shape_speed", "task", "draw", "vectorized",
+     "exact_segment", "bogus"],
+)
+def test_a_subclass_refuses_connection_env_kwargs_by_its_own_name(env_id, kwarg):
+    """An env built on ConnectionEnv sets the builder's kwargs itself: passing one to it (or an unknown one) is a
+    ValueError naming the kwarg and the env, not a silent override nor a TypeError."""
+    with pytest.raises(ValueError, match=re.escape(f"['{kwarg}'] for {env_id}")):
+        gym.make(f"connenv/{env_id}", **{kwarg: 1})
+
+
 @pytest.mark.parametrize(
     ("state", "words"),
     [
@@ -393,3 +406,20 @@ def test_a_closed_form_exact_segment_is_the_default_step_and_the_flow_magnus_int
     assert np.max(np.abs(exact.state.g - magnus.state.g)) <= 1e-11
     with pytest.raises(ValueError, match="exact_segment"):
         gym.make(ID, exact_segment=3.0, **kwargs)
+
+
+@pytest.mark.parametrize(
+    ("exact_segment", "words"),
+    [
+        (lambda g, s, s_dot, tau: np.zeros(3), "of shape (2,)"),  # SE2's size, not R2's
+        (lambda g, s, s_dot, tau: g + s_dot[0] / s_dot[1], "finite"),  # NaN at ṡ = 0
+        (lambda g, s, s_dot, tau: g + np.tanh(s_dot) * np.inf, "finite"),  # ±inf once ṡ ≠ 0
+        (lambda g, s, s_dot, tau: "moved", "of shape (2,)"),
+    ],
+)
+def test_an_exact_segment_that_does_not_return_a_finite_g_of_its_group_is_refused_at_make(exact_segment, words):
+    """The user's exact_segment is tried at construction (g = identity, the start shape, τ = dt, ṡ = 0 and ṡ at top
+    speed): a wrong shape or a non-finite g is a ValueError naming exact_segment, before any step uses it."""
+    kwargs = {"group": "R2", "connection": lambda s: np.eye(2), "shape_low": [-1.0, -1.0], "shape_high": [1.0, 1.0]}
+    with np.errstate(all="ignore"), pytest.raises(ValueError, match=r"exact_segment=.*" + re.escape(words)):
+        gym.make(ID, exact_segment=exact_segment, **kwargs)

@@ -54,6 +54,19 @@ def test_holding_for_the_hold_time_within_the_tolerance_succeeds():
     _, reward, terminated, _, info = env.step(hold)
     assert terminated and info["is_success"] and info["held"] == pytest.approx(1.0)
     assert reward == pytest.approx(1.0)
+    # a break: ψ̇ = μ/I₂ ± δ turns the body by ∓ I₂/(I₁+I₂) δ dt = 0.03 rad (past the tolerance) and back
+    env.reset(options={"state": {"momentum": mu}, "target": 0.0})
+    for _ in range(10):
+        info = env.step(hold)[4]
+    assert info["held"] == pytest.approx(0.5)
+    delta = np.array([3.0 / (4 * math.pi)])
+    _, _, terminated, _, info = env.step(hold + delta)
+    assert abs(info["error"]) == pytest.approx(0.03) and info["held"] == 0.0 and not terminated
+    info = env.step(hold - delta)[4]
+    assert abs(info["error"]) <= 1e-12 and info["held"] == pytest.approx(0.05)  # the count restarts
+    for k in range(18):
+        assert not env.step(hold)[2]
+    assert env.step(hold)[2]  # 20 steps on target after the break, not the 10 before it
 
 
 @pytest.mark.parametrize(

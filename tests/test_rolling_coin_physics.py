@@ -39,12 +39,13 @@ def test_a_rectangle_in_theta_phi_moves_the_coin_by_the_closed_form(theta0, delt
 
 
 def test_a_small_loop_moves_the_coin_by_curvature_times_area():
-    """Stokes: a small loop's displacement ≈ the curvature (R cos θ, −R sin θ) times the enclosed area."""
+    """Stokes: a small counterclockwise loop's displacement Δg = −∮A ≈ −dA = (R cos θ, −R sin θ) times the enclosed
+    area (the curvature dA = (−R cos θ, R sin θ) dθ ∧ dφ)."""
     theta0, h = 0.8, 1e-3
     env = make(max_steer_rate=h / 0.1, max_roll_rate=h / 0.1)
     state = drive(env, [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)], {"theta": theta0})  # counter-clockwise
-    curvature = R * np.array([math.cos(theta0 + h / 2), -math.sin(theta0 + h / 2)])
-    assert np.allclose(state.g / h**2, curvature, rtol=0, atol=1e-6)
+    minus_curvature = R * np.array([math.cos(theta0 + h / 2), -math.sin(theta0 + h / 2)])
+    assert np.allclose(state.g / h**2, minus_curvature, rtol=0, atol=1e-6)
 
 
 @pytest.mark.parametrize("omega, nu", [(0.7, -1.9), (1e-9, 2.0), (-1.0, 0.0), (0.0, 1.3)])

@@ -121,12 +121,38 @@ def test_a_float64_action_is_used_at_its_precision():
         ({"surface": "-0.25*y + 0.3*y**2"}, "not below the start"),
         ({"surface": "x**2 + y**2"}, "flat at the start"),
         ({"substep": 4}, "substep"),
+        ({"radius": 1e300}, "radius=1e+300 is out of range: must be finite and in [0.001, 1000.0]"),
+        ({"radius": 1e-300}, "radius=1e-300 is out of range"),
+        ({"mass": 0.0}, "mass=0.0 is out of range: must be finite and in [1e-06, 1000.0]"),
+        ({"g": 1e300}, "g=1e+300 is out of range: must be finite and in [1e-06, 1000.0]"),
+        ({"max_steer_rate": 1e300}, "max_steer_rate=1e+300 is out of range"),
+        ({"tolerance": 1e300}, "tolerance=1e+300 is out of range"),
+        ({"surface": "bowl", "surface_params": {"radius": 1e-300}},
+         "surface_params radius=1e-300 is out of range: must be finite and in [0.001, 1000.0]"),
+        ({"surface_params": {"width": 1e-300}}, "surface_params width=1e-300"),
+        ({"surface_params": {"height": 1e300}}, "surface_params height=1e+300"),
+        ({"surface": "-a*y", "surface_params": {"a": 1e300}}, "surface_params a=1e+300"),
+        ({"surface": "moon"}, "give surface_params for its symbol(s) ['moon']"),
+        ({"surface": "x + I*y"}, "complex"),
     ],
 )
 def test_bad_parameters_are_refused_naming_them(kwargs, words):
     with pytest.raises(ValueError) as error:
         gym.make(ID, **kwargs)
     assert words in str(error.value)
+
+
+@pytest.mark.parametrize(("surface", "downhill"), [("x", -math.pi / 2), ("y", -math.pi), ("-y", 0.0)])
+def test_a_single_symbol_surface_is_a_sympy_plane(surface, downhill):
+    """A surface that is one symbol ("x", "y") is the sympy plane z = x or z = y, not a misspelt built-in: the start
+    heads down its gradient, z_x = 1 or z_y = 1, and the coin rolls downhill on it."""
+    env = gym.make(ID, surface=surface).unwrapped
+    assert math.remainder(env.downhill - downhill, 2 * math.pi) == pytest.approx(0.0, abs=1e-12)
+    env.reset(seed=0)
+    z0 = env.surface.height(0.0, 0.0)[0]
+    for _ in range(5):
+        info = env.step(np.zeros(1))[4]
+    assert env.surface.height(info["state"]["x"], info["state"]["y"])[0] < z0
 
 
 @pytest.mark.parametrize(

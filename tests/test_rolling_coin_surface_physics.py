@@ -9,7 +9,7 @@ import pytest
 
 import connenv  # noqa: F401
 from connenv.core.steppers import make_stepper
-from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface, phi_functions
+from connenv.systems.rolling_coin_surface import SERIES_BELOW, RollingCoinPlane, RollingCoinSurface, phi_functions
 from connenv.systems.surfaces import Hill, Plane, Symbolic
 
 ID = "connenv/RollingCoinSurface-v0"
@@ -62,14 +62,31 @@ def test_the_exact_step_agrees_with_dop853_on_the_ode_for_every_steering_rate(om
     assert np.max(np.abs(a - b)) < 1e-11
 
 
-def test_phi_functions_are_continuous_across_the_series_threshold_and_at_zero():
-    alpha = np.array([0.0, 1e-300, 1e-8, 0.3 - 1e-12, 0.3, 0.3 + 1e-12])
+def reference_phi(alpha: float):
+    """(φ₁(iα), φ₂(iα)) as (sin α/α, (1 − cos α)/α, (1 − cos α)/α², (α − sin α)/α²) in 700-digit arithmetic: enough
+    for the cancellations down to α = 1e-300 (mpmath, which sympy requires)."""
+    import mpmath
+
+    if alpha == 0.0:
+        return 1.0, 0.0, 0.5, 0.0
+    with mpmath.workdps(700):
+        a = mpmath.mpf(alpha)
+        return tuple(float(v) for v in (mpmath.sin(a) / a, (1 - mpmath.cos(a)) / a, (1 - mpmath.cos(a)) / a**2,
+                                        (a - mpmath.sin(a)) / a**2))  # fmt: skip
+
+
+def test_phi_functions_match_high_precision_at_zero_tiny_angles_and_across_the_series_threshold():
+    """Each real and imaginary part to 1e-15 (a few ulp) where the series is summed (|α| < SERIES_BELOW), including
+    α = 1e-300 and 1e-8 where the direct forms cancel to nothing; to 2e-14 past it, where α − sin α cancels by at
+    most 6/α² ≈ 67 ulp at α = 0.3; φ(0) = (1, ½) exactly."""
+    alpha = np.array([0.0, 1e-300, -1e-8, 1e-5, 0.3 - 1e-12, 0.3, 0.3 + 1e-12, 2.0])
     phi1, phi2 = phi_functions(alpha)
-    with np.errstate(all="ignore"):
-        z = 1j * alpha
-        direct2 = (np.exp(z) - 1 - z) / z**2
     assert phi1[0] == 1.0 and phi2[0] == 0.5
-    assert abs(phi2[3] - phi2[5]) < 1e-12 and abs(phi2[4] - direct2[4]) < 1e-15
+    for i, a in enumerate(alpha):
+        got = (phi1[i].real, phi1[i].imag, phi2[i].real, phi2[i].imag)
+        rtol = 1e-15 if abs(a) < SERIES_BELOW else 2e-14
+        for value, reference in zip(got, reference_phi(float(a))):
+            assert abs(value - reference) <= rtol * abs(reference), (a, value, reference)
 
 
 SURFACES = [
@@ -137,8 +154,9 @@ def test_a_symbolic_surface_is_the_built_in_one_it_spells():
     np.testing.assert_allclose(a, b, atol=1e-13)
 
 
-def test_the_vector_env_steps_each_row_as_the_single_env_on_the_hill_and_the_plane():
-    """The batched system (arrays over rows) against one state: the vector field and the exact step."""
+def test_the_batched_vector_field_and_exact_step_are_the_single_state_ones_row_by_row():
+    """The system over a batch (arrays over rows, as the vector env calls it) against one state at a time: the hill's
+    vector field and the plane's exact step."""
     rng = np.random.default_rng(2)
     y, u, u_dot = rng.uniform(-1, 1, (5, 4)), rng.uniform(-3, 3, (5, 1)), rng.uniform(-2, 2, (5, 1))
     hill, plane = RollingCoinSurface(Hill()), RollingCoinPlane(Plane((0.1, -0.25)))

@@ -114,6 +114,13 @@ def test_gait_planner_measures_its_gaits_on_the_model():
         ({"b": 0.5}, r"b=0.5 .*a=0.5"),
         ({"b": -0.5}, "b=-0.5"),
         ({"link_density": 0.0}, "link_density=0.0"),
+        ({"a": 1e200}, r"a=1e\+200 .*\[1e-06, 1000.0\]"),
+        ({"a": 1e-200, "b": 1e-201}, r"a=1e-200 .*\[1e-06, 1000.0\]"),
+        ({"b": 1e-201}, r"b=1e-201 .*\[1e-06, a=0.5\)"),
+        ({"rho": 0.0, "link_density": 1e-300}, r"link_density=1e-300 .*\[1e-06, 1000.0\]"),
+        ({"link_density": 1e300}, r"link_density=1e\+300 .*\[1e-06, 1000.0\]"),
+        ({"rho": 1e300}, r"rho=1e\+300 .*\[0.0, 1000.0\]"),
+        ({"max_joint_speed": 1e300}, r"max_joint_speed=1e\+300 .*\(0.0, 1000.0\]"),
         ({"rho": -1.0}, "rho=-1.0"),
         ({"max_joint_speed": float("inf")}, "max_joint_speed=inf"),
         ({"dt": 0.0}, "dt=0.0"),
@@ -129,6 +136,17 @@ def test_gait_planner_measures_its_gaits_on_the_model():
 def test_bad_parameters_are_named_with_their_range(kwargs, message):
     with pytest.raises(ValueError, match=message):
         make(**kwargs)
+
+
+def test_the_smallest_links_in_vacuum_still_have_mass_and_step_finitely():
+    """At the least a, b and link_density the link mass link_density · πab is positive, so rho = 0 (a snake in
+    vacuum, no added mass) is a valid model: it steps to finite observations."""
+    env = make(a=2e-6, b=1e-6, link_density=1e-6, rho=0.0).unwrapped
+    assert env.full_system.link_mass > 0.0
+    env.reset(seed=0)
+    for _ in range(3):
+        obs, *_ = env.step(np.array([1.0, -0.5]))
+    assert np.all(np.isfinite(obs))
 
 
 @pytest.mark.parametrize(

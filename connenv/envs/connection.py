@@ -120,6 +120,8 @@ class ConnectionEnv(TaskEnv):
     A system that knows its flow in closed form gives it as `exact_segment(g, s, ṡ, τ)`: the coordinates of g after
     a segment of length τ at constant ṡ from the shape s, for one state or a batch of rows (arrays with leading axes,
     τ a float or one per row). It is then the default step, `integrator="exact"` (`connenv.core.lie.ExactConnection`).
+    It is tried once at construction, from g = identity at the start shape over τ = dt with ṡ = 0 and with every
+    shape coordinate at max_shape_speed: a result that is not finite of g's coordinates' shape is a ValueError.
 
     Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`.
     """
@@ -163,11 +165,11 @@ class ConnectionEnv(TaskEnv):
         elif exact_segment is None:
             connection = _check_connection(connection, self.group, self.start_shape())
             self.system = Connection(group, frame, connection, bool(vectorized))
-        elif callable(exact_segment):
-            connection = _check_connection(connection, self.group, self.start_shape())
-            self.system = ExactConnection(group, frame, connection, bool(vectorized), exact_segment)
         else:
-            raise ValueError(f"exact_segment={exact_segment!r} must be a callable (g, s, ṡ, τ) -> g, or None")
+            connection = _check_connection(connection, self.group, self.start_shape())
+            exact_segment = _check_exact_segment(exact_segment, self.group, self.start_shape(), self.dt,
+                                                 self.max_shape_speed)  # fmt: skip
+            self.system = ExactConnection(group, frame, connection, bool(vectorized), exact_segment)
         check_stepper_options(self.name, stepper_options, type(self))
         if integrator is None:
             integrator = "exact" if isinstance(self.system, (ConstantConnection, ExactConnection)) else "magnus"
@@ -351,3 +353,22 @@ def _check_connection(connection, group, s):
             f"of {s.size} coordinates it must be finite of shape {shape} (dim 𝔤, k)"
         )
     return connection
+
+
+def _check_exact_segment(exact_segment, group, s, dt, speed):
+    """exact_segment, if it is callable and from g = identity at the shape s gives a finite g of its group's size
+    after τ = dt, both at ṡ = 0 and with every shape coordinate at the top speed."""
+    if not callable(exact_segment):
+        raise ValueError(f"exact_segment={exact_segment!r} must be a callable (g, s, ṡ, τ) -> g, or None")
+    identity = np.array(group.identity(), dtype=float)
+    for s_dot in (np.zeros_like(s), np.full_like(s, speed)):
+        try:
+            value = np.asarray(exact_segment(identity.copy(), s.copy(), s_dot, dt), dtype=float)
+        except (TypeError, ValueError):
+            value = None
+        if value is None or value.shape != identity.shape or not np.all(np.isfinite(value)):
+            raise ValueError(
+                f"exact_segment={exact_segment!r} at g = identity, s={s}, ṡ={s_dot}, τ={dt} returned "
+                f"{value!r}; it must return the coordinates of g on {group.name}: finite, of shape {identity.shape}"
+            )
+    return exact_segment

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number
+from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR
 from connenv.envs.connection import DT_MAX  # noqa: F401  (ConnectionEnv's dt range, this env's)
 from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
@@ -102,6 +102,7 @@ class ElroysBeanieEnv(ConnectionEnv):
     (θ* − θ wrapped, rad), `"held"` (s) and `"is_success"`.
     """
 
+    name = "ElroysBeanie-v0"
     metadata = {**ConnectionEnv.metadata, "measures": ("error",)}
 
     def __init__(
@@ -117,6 +118,7 @@ class ElroysBeanieEnv(ConnectionEnv):
         integrator: str | None = None,
         **stepper_options,
     ):
+        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
         self.body_inertia = check_number("body_inertia", body_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)
         self.beanie_inertia = check_number("beanie_inertia", beanie_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)
         least = 1.2 * MOMENTUM_RANGE[1] / self.beanie_inertia

@@ -9,7 +9,14 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number, check_vector
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_angle,
+    check_keys,
+    check_number,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import SCALAR
 from connenv.envs.connection import DT_MAX  # noqa: F401  (ConnectionEnv's dt range, this env's)
 from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
@@ -97,6 +104,7 @@ class RollingCoinEnv(ConnectionEnv):
     `"heading_error"` (θ* − θ wrapped into [−π, π], rad) and `"is_success"`.
     """
 
+    name = "RollingCoin-v0"
     metadata = {**ConnectionEnv.metadata, "measures": ("distance", "heading_error")}
 
     def __init__(
@@ -112,6 +120,7 @@ class RollingCoinEnv(ConnectionEnv):
         integrator: str | None = None,
         **stepper_options,
     ):
+        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
         self.radius = check_number("radius", radius, 0.0, MAGNITUDE_BOUND, open_low=True)
         steer = check_number("max_steer_rate", max_steer_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
         roll = check_number("max_roll_rate", max_roll_rate, 0.0, MAGNITUDE_BOUND, open_low=True)

@@ -10,11 +10,19 @@ from gymnasium import spaces
 
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_angle,
+    check_dt,
+    check_keys,
+    check_number,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface
-from connenv.systems.surfaces import check_surface, make_surface
+from connenv.systems.surfaces import LENGTH_MIN, check_surface, make_surface
 
 DT_MAX = 0.5  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until the episode ends
@@ -22,6 +30,7 @@ SPEED_BOUND = 3.0  # |observed speed| / v* is clipped here, and bounds the speed
 ENERGY_ERROR_BOUND = 1e-3  # |E − E(0)| / (m g Δz_arena) past which a stepper has diverged: StepperError
 TARGET_ANGLES = 33  # directions sampled in the target's cone when the construction checks that it lies downhill
 GENERAL_INTEGRATOR = ("rk4", {"substeps": 8})  # the default off the plane (bench: precision, stability)
+SCALE_MIN = 1e-6  # the least mass (kg) and g (m/s²)
 START = {"bowl": (0.0, -4.0)}  # the start on a built-in surface where the origin is not it
 
 
@@ -125,14 +134,14 @@ class RollingCoinSurfaceEnv(TaskEnv):
     |---|---|---|
     | surface | "hill" | "plane", "bowl", "hill", or a sympy expression in x and y (or its text) |
     | slope | None: (0, −0.25) | (sx, sy), each in [−10, 10]; the plane's and the hill's tilt, z = sx x + sy y (+ hill) |
-    | surface_params | None | bowl: radius=5.0 (z = (x² + y²)/(2 radius)); hill: height=1.0, width=0.6, center=(0, 2); a sympy surface: its symbols besides x and y |
-    | radius | 0.5 | (0, ∞) m |
-    | mass | 1.0 | (0, ∞) kg |
-    | g | 9.81 | (0, ∞) m/s² |
-    | max_steer_rate | 2.0 | (0, ∞) rad/s |
+    | surface_params | None | bowl: radius=5.0 in [1e-3, 1e3] (z = (x² + y²)/(2 radius)); hill: height=1.0 in [0, 1e3], width=0.6 in [1e-3, 1e3], center=(0, 2); a sympy surface: its symbols besides x and y, each in [−1e3, 1e3] |
+    | radius | 0.5 | [1e-3, 1e3] m |
+    | mass | 1.0 | [1e-6, 1e3] kg |
+    | g | 9.81 | [1e-6, 1e3] m/s² |
+    | max_steer_rate | 2.0 | (0, 1e3] rad/s |
     | dt | 0.05 | [1e-12, 0.5] s |
-    | tolerance | 0.1 | (0, ∞) m |
-    | target_distance | 4.0 | (0, ∞) m |
+    | tolerance | 0.1 | (0, 1e3] m |
+    | target_distance | 4.0 | (0, 1e3] m |
     | target_angle | 0.25 | [0, π/2] rad |
     | arena | 6.0 | (0, 1e3] m, the half-width L of the square arena |
     | integrator | None: "exact" on a plane, else "rk4" with 8 substeps | "exact" (plane only), "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -140,8 +149,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
     Both defaults are on the Pareto front of the work–precision chart (`python -m connenv.bench precision --env
     coin_surface coin_plane`). RK4 ×8 keeps |E − E₀| within 1e-9 m g Δz over an episode of random steering on
-    the default surfaces (tests), and is stable at the default dt on bowls down to a radius of 1 cm; on
-    steeper surfaces, where fixed steps fail (`python -m connenv.bench stability --env coin_surface`), take
+    the default surfaces (tests). Fixed steps fail on surfaces curved enough for the dt (where: `python -m
+    connenv.bench stability --env coin_surface`, charted on the env's docs page); there take
     `integrator="dop853"`. Semi-implicit Euler splits the state into q = (x, y, φ) and φ̇, which stands for the
     momentum (3/2) m R² φ̇.
 
@@ -173,17 +182,17 @@ class RollingCoinSurfaceEnv(TaskEnv):
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.max_steer_rate = check_number("max_steer_rate", max_steer_rate, 0.0, open_low=True)
-        self.tolerance = check_number("tolerance", tolerance, 0.0, open_low=True)
-        self.target_distance = check_number("target_distance", target_distance, 0.0, open_low=True)
+        self.max_steer_rate = check_number("max_steer_rate", max_steer_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.tolerance = check_number("tolerance", tolerance, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.target_distance = check_number("target_distance", target_distance, 0.0, MAGNITUDE_BOUND, open_low=True)
         self.target_angle = check_number("target_angle", target_angle, 0.0, math.pi / 2)
         self.arena = check_number("arena", arena, 0.0, 1e3, open_low=True)
         self.surface = make_surface(surface, slope, surface_params)
         on_plane = self.surface.gradient_is_constant()
         parameters = {
-            "radius": check_number("radius", radius, 0.0, open_low=True),
-            "mass": check_number("mass", mass, 0.0, open_low=True),
-            "g": check_number("g", g, 0.0, open_low=True),
+            "radius": check_number("radius", radius, LENGTH_MIN, MAGNITUDE_BOUND),
+            "mass": check_number("mass", mass, SCALE_MIN, MAGNITUDE_BOUND),
+            "g": check_number("g", g, SCALE_MIN, MAGNITUDE_BOUND),
         }
         self.system = (RollingCoinPlane if on_plane else RollingCoinSurface)(self.surface, **parameters)
         check_stepper_options("RollingCoinSurface-v0", stepper_options, type(self))

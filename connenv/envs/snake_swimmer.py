@@ -14,7 +14,15 @@ from gymnasium import spaces
 from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_angle,
+    check_dt,
+    check_keys,
+    check_number,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
@@ -29,6 +37,7 @@ TIME_COST = 0.01  # reward paid per step until success
 MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full model; atol is the Lie-group step's too
+SIZE_MIN = 1e-6  # the least a, b (m) and link_density: the link mass link_density · πab stays positive, so rho may be 0
 STATE_KEYS = ("x", "y", "theta", "alpha", "beta", "momentum")
 
 
@@ -161,11 +170,11 @@ class SnakeSwimmerEnv(TaskEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | a | 0.5 | (0, ∞), the links' semi-axis along the link |
-    | b | 0.05 | (0, a), across the link |
-    | link_density | 1.0 | (0, ∞), mass per area: a link's mass is link_density · πab |
-    | rho | 1.0 | [0, ∞), fluid density |
-    | max_joint_speed | 3.0 | (0, ∞) rad/s |
+    | a | 0.5 | [1e-6, 1e3] m, the links' semi-axis along the link |
+    | b | 0.05 | [1e-6, a) m, across the link |
+    | link_density | 1.0 | [1e-6, 1e3], mass per area: a link's mass is link_density · πab |
+    | rho | 1.0 | [0, 1e3], fluid density |
+    | max_joint_speed | 3.0 | (0, 1e3] rad/s |
     | dt | 0.05 | [1e-12, 0.25] s |
     | success_radius | None: 0.1 body length, 0.6a | (0, 6a) m |
     | integrator | "magnus" (atol 1e-12) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
@@ -180,8 +189,8 @@ class SnakeSwimmerEnv(TaskEnv):
     (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
     on the motions at top speed in the eight directions from a 3 × 3 grid of joint angles (the corners, edge
     midpoints and centre of the joints' square). The full model has no connection and goes to DOP853 (rtol 1e-10,
-    atol 1e-12), which keeps the spatial momentum to 1e-10 of its norm. Its place on the work–precision chart:
-    `python -m connenv.bench precision --env snake`.
+    atol 1e-12). Its pose and spatial momentum errors, and its place on the work–precision chart:
+    `python -m connenv.bench precision --env snake` (on the env's docs page).
 
     Every `info` has `"state"` (`x`, `y`, `theta` (the middle link), `alpha`, `beta`, `momentum` (P₁, P₂, Π, body
     frame), `t`, in SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y),
@@ -206,16 +215,16 @@ class SnakeSwimmerEnv(TaskEnv):
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
-        a = check_number("a", a, 0.0, open_low=True)
+        a = check_number("a", a, SIZE_MIN, MAGNITUDE_BOUND)
         params = {
             "a": a,
-            "b": check_number("b", b, 0.0, a, open_low=True, open_high=True, high_name="a"),
-            "link_density": check_number("link_density", link_density, 0.0, open_low=True),
-            "rho": check_number("rho", rho, 0.0),
+            "b": check_number("b", b, SIZE_MIN, a, open_high=True, high_name="a"),
+            "link_density": check_number("link_density", link_density, SIZE_MIN, MAGNITUDE_BOUND),
+            "rho": check_number("rho", rho, 0.0, MAGNITUDE_BOUND),
         }
         self.full_system, self.reduced_system = SnakeSwimmer(**params), ReducedSnakeSwimmer(**params)
         self.body_length = 6.0 * a
-        self.max_joint_speed = check_number("max_joint_speed", max_joint_speed, 0.0, open_low=True)
+        self.max_joint_speed = check_number("max_joint_speed", max_joint_speed, 0.0, MAGNITUDE_BOUND, open_low=True)
         if success_radius is None:
             success_radius = 0.1 * self.body_length
         self.success_radius = check_number(

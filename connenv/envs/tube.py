@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.segments import run_segments
-from connenv.core.validation import check_keys, check_number, check_rotation, check_stepper_options
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number, check_rotation, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
@@ -104,7 +104,7 @@ class TubeTwistEnv(ConnectionEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | max_bend_rate | 1.0 | (0, ∞) rad/s |
+    | max_bend_rate | 1.0 | (0, 1e3] rad/s |
     | dt | 0.05 | [1e-12, 100] s |
     | tolerance | 0.02 | (0, π) rad |
     | integrator | "exact" | "exact" (Rodrigues), "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -134,7 +134,7 @@ class TubeTwistEnv(ConnectionEnv):
     ):
         check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
         self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
-        max_bend_rate = check_number("max_bend_rate", max_bend_rate, 0.0, open_low=True)
+        max_bend_rate = check_number("max_bend_rate", max_bend_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
         infinite = [math.inf, math.inf]
         super().__init__("SO3", BEND_CONNECTION, np.negative(infinite), infinite, dt=dt, frame="body",
                          max_shape_speed=max_bend_rate, render_mode=render_mode, integrator=integrator,

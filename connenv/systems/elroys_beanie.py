@@ -45,8 +45,3 @@ def exact_segment(g, s, s_dot, tau, body_inertia: float, beanie_inertia: float):
 def dynamic_phase(momentum, tau, body_inertia: float, beanie_inertia: float):
     """μ τ/(I₁ + I₂): the body's turn over a time tau from the momentum alone."""
     return momentum * tau / (body_inertia + beanie_inertia)
-
-
-def holding_speed(momentum, beanie_inertia: float):
-    """ψ̇ = μ/I₂, at which the body holds still."""
-    return momentum / beanie_inertia

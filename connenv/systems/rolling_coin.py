@@ -11,9 +11,10 @@ so the position g = (x, y) ∈ ℝ² follows the shape s = (θ, φ) through the 
     A(θ, φ) = [[0, −R sin θ],
                [0, −R cos θ]],    ẋ = R sin θ φ̇,   ẏ = R cos θ φ̇.
 
-The group is abelian, so the body and space frames agree. The curvature dA has components
-(R cos θ, −R sin θ) dθ ∧ dφ: steering alone (dφ = 0) never moves the coin, rolling alone moves it along its
-heading, and a loop in the shape plane moves it by the integral of the curvature over the loop's inside.
+The group is abelian, so the body and space frames agree. The curvature is dA = (−R cos θ, R sin θ) dθ ∧ dφ:
+steering alone (dφ = 0) never moves the coin, rolling alone moves it along its heading, and a loop in the shape
+plane moves it by Δg = −∮A = −∬dA over the loop's inside (Stokes): (R cos θ, −R sin θ) times the area for a
+counterclockwise loop in the (θ, φ) plane.
 
 **Exact step.** With θ̇ = Ω and φ̇ = ν constant over a segment of length τ, θ(t) = θ + Ω t and
 

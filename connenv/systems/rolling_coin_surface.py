@@ -146,7 +146,8 @@ def odd_series(alpha):
 
 def phi_functions(angle):
     """(φ₁(i α), φ₂(i α)) for real α = Ωτ, without cancellation: φ₁ = sin α/α + i (1 − cos α)/α,
-    φ₂ = (1 − cos α)/α² + i (α − sin α)/α², the half-angle forms and, for |α| < 1, the series of (α − sin α)/α²."""
+    φ₂ = (1 − cos α)/α² + i (α − sin α)/α², the half-angle forms and, for |α| < SERIES_BELOW, the series of
+    (α − sin α)/α²."""
     alpha = np.asarray(angle, float)
     half = np.sinc(alpha / (2.0 * math.pi))  # sin(α/2)/(α/2)
     versine = 0.5 * half * half  # (1 − cos α)/α²

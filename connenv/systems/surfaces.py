@@ -19,9 +19,10 @@ import math
 
 import numpy as np
 
-from connenv.core.validation import check_keys, check_number, check_vector
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number, check_vector
 
 GRID = 201  # samples per side of the arena for the checks and the bounds
+LENGTH_MIN = 1e-3  # m: the least length of a surface (bowl radius, hill width) and of the coin's radius
 
 
 class Surface:
@@ -53,7 +54,7 @@ class Bowl(Surface):
     """z = (x² + y²)/(2 ρ): curvature 1/ρ at the bottom (the origin)."""
 
     def __init__(self, radius: float = 5.0):
-        self.radius = check_number("surface_params radius", radius, 0.0, open_low=True)
+        self.radius = check_number("surface_params radius", radius, LENGTH_MIN, MAGNITUDE_BOUND)
 
     def height(self, x, y):
         k = 1.0 / self.radius
@@ -65,8 +66,8 @@ class Hill(Surface):
 
     def __init__(self, slope=(0.0, -0.25), height: float = 1.0, width: float = 0.6, center=(0.0, 2.0)):
         self.slope = tuple(check_vector("slope", slope, 2, -10.0, 10.0))
-        self.H = check_number("surface_params height", height, 0.0)
-        self.width = check_number("surface_params width", width, 0.0, open_low=True)
+        self.H = check_number("surface_params height", height, 0.0, MAGNITUDE_BOUND)
+        self.width = check_number("surface_params width", width, LENGTH_MIN, MAGNITUDE_BOUND)
         self.center = tuple(check_vector("surface_params center", center, 2, -1e3, 1e3))
 
     def height(self, x, y):
@@ -97,9 +98,13 @@ class Symbolic(Surface):
         check_keys(f"surface_params of surface={expression!r} (its symbols besides x and y)", self.params, free)
         if free - set(self.params):
             missing = sorted(free - set(self.params))
-            raise ValueError(f"surface={expression!r}: give surface_params for its symbol(s) {missing}")
-        values = {name: check_number(f"surface_params {name}", v) for name, v in self.params.items()}
+            raise ValueError(f"surface={expression!r} is not one of {sorted(BUILT_IN)}; as a sympy expression in x and "
+                             f"y, give surface_params for its symbol(s) {missing}")
+        values = {name: check_number(f"surface_params {name}", v, -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
+                  for name, v in self.params.items()}  # fmt: skip
         expr = expr.subs({sympy.Symbol(k, real=True): v for k, v in values.items()}).subs(values)
+        if expr.has(sympy.I):
+            raise ValueError(f"surface={expression!r} is complex (it has I): the height must be real")
         derivatives = (expr, expr.diff(x), expr.diff(y))
         self._functions = [sympy.lambdify((x, y), e, "numpy") for e in derivatives]
         self._scalar = [sympy.lambdify((x, y), e, "math") for e in derivatives]  # one point: no array calls
@@ -134,7 +139,7 @@ def make_surface(surface="hill", slope=None, surface_params: dict | None = None)
         allowed = inspect.signature(cls.__init__).parameters.keys() - {"self", "slope"}
         check_keys(f"surface_params of surface={surface!r}", params, allowed)
         return cls(**({} if slope is None else {"slope": slope}), **params)
-    if (isinstance(surface, str) and not surface.isidentifier()) or type(surface).__module__.startswith("sympy"):
+    if isinstance(surface, str) or type(surface).__module__.startswith("sympy"):
         return Symbolic(surface, params)
     raise ValueError(f"surface={surface!r} is not one of {sorted(BUILT_IN)} or a sympy expression in x and y")
 
