@@ -32,6 +32,8 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/RollingBallPose-v0": {"x": 0, "y": 0},
     "connenv/RollingBallGoal-v0": {"x": 0, "y": 0},
     "connenv/KozlovShell-v0": {"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3},
+    "connenv/ChaplyginSleigh-v0": {key: 0 for key in ("x", "y", "phi", "v", "omega", "u", "u_dot", "u_along",
+                                                         "u_along_dot")},
     "connenv/SnakeSwimmer-v0": {"x": 0, "y": 0, "theta": 0, "alpha": 0, "beta": 0, "momentum": 3},
     "connenv/KapitzaPendulum-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
     "connenv/KapitzaSwingUp-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
@@ -51,6 +53,7 @@ OPTION_KEYS = {  # reset options beside "state"
     "connenv/BeadOnBar-v0": {"target": 0},
     "connenv/TubeTwist-v0": {"target": 0},
     "connenv/SnakeSwimmer-v0": {"target": 2},
+    "connenv/ChaplyginSleigh-v0": {"target": 2},
 }
 NOT_NUMBERS = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
                "control", "integrator", "pivot", "vectorized", "surface", "surface_params"}
