@@ -12,10 +12,11 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.lie import Magnus, fixed_rule
-from connenv.core.segments import check_drift, run_segments
+from connenv.core.segments import run_segments
 from connenv.core.steppers import make_stepper
 from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.swimmer import PlanarSwimmer, components
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
@@ -24,8 +25,6 @@ TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform directi
 TARGET_BOUND = 3.0  # m: the observed target is clipped here
 POSITION_BOUND = 100.0  # m: |x|, |y| of the shell and of the target given at reset
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
-TIME_COST = 0.01  # reward paid per step until success
-MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # DOP853's in the full model; atol is the Lie-group step's too
 STATE_KEYS = ("x", "y", "theta", "u", "momentum")
@@ -46,7 +45,7 @@ class ShellState(State):
     momentum0: np.ndarray
 
 
-class KozlovShellEnv(TaskEnv):
+class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     r"""
     ## Description
 
@@ -278,22 +277,6 @@ class KozlovShellEnv(TaskEnv):
         pose, _ = run_segments(self.stepper, self.reduced_system, s.pose, segments)
         return ShellState(pose, s.momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
 
-    def spatial_momentum(self, s, ops=SCALAR):
-        """(R(θ) P, Π + x P_y − y P_x), the arithmetic of the system's spatial_momentum: a tuple of floats for one
-        state, an array (N, 3) for a batch."""
-        (x, y, theta), (p1, p2, pi) = _components(s.pose), _components(s.momentum)
-        c, sin = ops.cos(theta), ops.sin(theta)
-        px, py = c * p1 - sin * p2, sin * p1 + c * p2
-        momentum = px, py, pi + x * py - y * px
-        return momentum if ops is SCALAR else np.stack(momentum, axis=-1)
-
-    def check_momentum(self, y, momentum0):
-        """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
-        reset by more than MOMENTUM_ERROR_BOUND of its norm."""
-        drift = np.linalg.norm(self.full_system.spatial_momentum(y) - momentum0, axis=-1)
-        norm = np.linalg.norm(momentum0, axis=-1)
-        check_drift(self.stepper, "the spatial momentum", drift, MOMENTUM_ERROR_BOUND, norm=norm)
-
     def _check_state(self, state):
         """(pose, u, momentum) from options['state'], default at rest at the origin with the mass at the centre."""
         check_keys("options['state']", state, STATE_KEYS)
@@ -309,22 +292,14 @@ class KozlovShellEnv(TaskEnv):
         """The commanded mass position u* of action a."""
         return a * self.u_max
 
-    def distance(self, s, ops=SCALAR):
-        """From the shell's centre to the target, m."""
-        (x, y, _), (x_target, y_target) = _components(s.pose), _components(s.target)
-        return ops.hypot(x_target - x, y_target - y)
-
-    def reward(self, before, after, info, ops=SCALAR):
-        return (self.distance(before, ops) - info["distance"]) / self.success_radius - TIME_COST
-
     def observe(self, s, ops=SCALAR):
-        (x, y, theta), (x_target, y_target) = _components(s.pose), _components(s.target)
+        (x, y, theta), (x_target, y_target) = components(s.pose), components(s.target)
         c, sin = ops.cos(theta), ops.sin(theta)
         dx, dy = x_target - x, y_target - y
         body_target = [ops.clip(c * dx + sin * dy, -TARGET_BOUND, TARGET_BOUND)]
         body_target.append(ops.clip(-sin * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
-        scaled_u = [u / bound for u, bound in zip(_components(s.u), self.u_bounds)]
-        momentum = zip(_components(s.momentum), self.momentum_bounds)
+        scaled_u = [u / bound for u, bound in zip(components(s.u), self.u_bounds)]
+        momentum = zip(components(s.momentum), self.momentum_bounds)
         scaled_momentum = [ops.clip(p / scale, -MOMENTUM_BOUND, MOMENTUM_BOUND) for p, scale in momentum]
         return ops.pack([*body_target, c, sin, *scaled_u, *scaled_momentum])
 
@@ -363,11 +338,6 @@ class KozlovShellVectorEnv(TaskVectorEnv):
             segments = [(s.u[rest], u_dot[rest], env.dt)]
             y[rest, :3] = run_segments(self.stepper, env.reduced_system, s.pose[rest], segments)[0]
         return ShellState(y[:, :3], y[:, 3:], u_cmd, s.target, s.t + env.dt, s.full, s.momentum0)
-
-
-def _components(a):
-    """The components along the last axis: floats of one state's array, columns of a batch's."""
-    return a.tolist() if a.ndim == 1 else [a[..., i] for i in range(a.shape[-1])]
 
 
 @functools.cache

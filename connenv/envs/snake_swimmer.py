@@ -12,7 +12,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.lie import Magnus, fixed_rule
-from connenv.core.segments import check_drift, run_segments
+from connenv.core.segments import run_segments
 from connenv.core.steppers import make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
@@ -24,6 +24,7 @@ from connenv.core.validation import (
     check_vector,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.swimmer import PlanarSwimmer, components
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
@@ -33,8 +34,6 @@ TARGET_DISTANCES = (1.0, 2.0)  # body lengths from the start, uniform, in a unif
 TARGET_BOUND = 3.0  # body lengths: the observed target is clipped here
 POSITION_BOUND = 100.0  # m: |x|, |y| of the middle link and of the target given at reset
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
-TIME_COST = 0.01  # reward paid per step until success
-MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full model; atol is the Lie-group step's too
 SIZE_MIN = 1e-6  # the least a, b (m) and link_density: the link mass link_density · πab stays positive, so rho may be 0
@@ -83,7 +82,7 @@ def _joint_path_floats(s, s_cmd, dt, max_speed):
     return np.array(s_dot), min(reach, dt), np.array(end)
 
 
-class SnakeSwimmerEnv(TaskEnv):
+class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     r"""
     ## Description
 
@@ -314,21 +313,6 @@ class SnakeSwimmerEnv(TaskEnv):
             pose, _ = run_segments(self.stepper, self.reduced_system, s.pose, [(s.s, s_dot, ramp)])
         return SnakeState(pose, s.momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
 
-    def spatial_momentum(self, s, ops=SCALAR):
-        """(R(θ) P, Π + x P_y − y P_x): a tuple of floats for one state, an array (N, 3) for a batch."""
-        (x, y, theta), (p1, p2, pi) = _components(s.pose), _components(s.momentum)
-        c, sin = ops.cos(theta), ops.sin(theta)
-        px, py = c * p1 - sin * p2, sin * p1 + c * p2
-        momentum = px, py, pi + x * py - y * px
-        return momentum if ops is SCALAR else np.stack(momentum, axis=-1)
-
-    def check_momentum(self, y, momentum0):
-        """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
-        reset by more than MOMENTUM_ERROR_BOUND of its norm."""
-        drift = np.linalg.norm(self.full_system.spatial_momentum(y) - momentum0, axis=-1)
-        norm = np.linalg.norm(momentum0, axis=-1)
-        check_drift(self.stepper, "the spatial momentum", drift, MOMENTUM_ERROR_BOUND, norm=norm)
-
     def _check_state(self, state):
         """(pose, s, momentum) from options['state'], default at rest, straight, at the origin."""
         check_keys("options['state']", state, STATE_KEYS)
@@ -345,22 +329,14 @@ class SnakeSwimmerEnv(TaskEnv):
         """The commanded joint angles (α*, β*) of action a."""
         return a * JOINT_LIMIT
 
-    def distance(self, s, ops=SCALAR):
-        """From the middle link's centre to the target, m."""
-        (x, y, _), (x_target, y_target) = _components(s.pose), _components(s.target)
-        return ops.hypot(x_target - x, y_target - y)
-
-    def reward(self, before, after, info, ops=SCALAR):
-        return (self.distance(before, ops) - info["distance"]) / self.success_radius - TIME_COST
-
     def observe(self, s, ops=SCALAR):
-        (x, y, theta), (x_target, y_target) = _components(s.pose), _components(s.target)
+        (x, y, theta), (x_target, y_target) = components(s.pose), components(s.target)
         c, sin = ops.cos(theta), ops.sin(theta)
         dx, dy = (x_target - x) / self.body_length, (y_target - y) / self.body_length
         body_target = [ops.clip(c * dx + sin * dy, -TARGET_BOUND, TARGET_BOUND)]
         body_target.append(ops.clip(-sin * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
-        scaled_s = [angle / JOINT_LIMIT for angle in _components(s.s)]
-        momentum = zip(_components(s.momentum), self.momentum_bounds)
+        scaled_s = [angle / JOINT_LIMIT for angle in components(s.s)]
+        momentum = zip(components(s.momentum), self.momentum_bounds)
         scaled_momentum = [ops.clip(p / scale, -MOMENTUM_BOUND, MOMENTUM_BOUND) for p, scale in momentum]
         return ops.pack([*body_target, c, sin, *scaled_s, *scaled_momentum])
 
@@ -400,11 +376,6 @@ class SnakeSwimmerVectorEnv(TaskVectorEnv):
             segments = [(s.s[rest], s_dot[rest], ramp[rest])]
             y[rest, :3] = run_segments(self.stepper, env.reduced_system, s.pose[rest], segments)[0]
         return SnakeState(y[:, :3], y[:, 3:], s_end, s.target, s.t + env.dt, s.full, s.momentum0)
-
-
-def _components(a):
-    """The components along the last axis: floats of one state's array, columns of a batch's."""
-    return a.tolist() if a.ndim == 1 else [a[..., i] for i in range(a.shape[-1])]
 
 
 @functools.cache
