@@ -114,16 +114,17 @@ def euler(M, inertia):
 
 @dataclass(frozen=True)
 class Orbit:
-    """The elliptic solution through an initial M (see the module), over the rows of a batch: ``r3`` whether M
-    circulates about axis 3 (else about axis 1), amplitudes A_p, A_q, A_r, the sign s, ω_p, m = k², k'² and u₀."""
+    """The elliptic solution through an initial M (see the module): ``r3`` whether M circulates about axis 3 (else
+    about axis 1), amplitudes A_p, A_q, A_r, the sign s, ω_p, m = k², k'² and u₀; floats for one state, arrays over
+    the rows of a batch."""
 
-    r3: np.ndarray
+    r3: object
     amplitude: tuple
-    sign: np.ndarray
-    rate: np.ndarray
-    m: np.ndarray
-    m1: np.ndarray
-    u0: np.ndarray
+    sign: object
+    rate: object
+    m: object
+    m1: object
+    u0: object
 
     @property
     def period(self):
@@ -135,29 +136,62 @@ class Orbit:
         sn, cn, dn, _ = ellipj(self.u0 + self.rate * np.asarray(t, float), self.m)
         A_p, A_q, A_r = self.amplitude
         outer, middle, axis = A_p * cn, self.sign * A_q * sn, self.sign * A_r * dn
+        if isinstance(self.r3, bool):
+            return np.stack([outer, middle, axis] if self.r3 else [axis, middle, outer], -1)
         return np.stack([np.where(self.r3, outer, axis), middle, np.where(self.r3, axis, outer)], -1)
 
 
+class _Floats:
+    sqrt, atan2 = staticmethod(math.sqrt), staticmethod(math.atan2)
+
+    @staticmethod
+    def where(condition, a, b):
+        return a if condition else b
+
+    @staticmethod
+    def positive(x):
+        return max(x, 0.0)
+
+    @staticmethod
+    def unit(x):
+        return min(max(x, 0.0), 1.0)
+
+
+class _Arrays:
+    sqrt, atan2, where = np.sqrt, np.arctan2, np.where
+
+    @staticmethod
+    def positive(x):
+        return np.maximum(x, 0.0)
+
+    @staticmethod
+    def unit(x):
+        return np.clip(x, 0.0, 1.0)
+
+
 def orbit(M, inertia) -> Orbit:
-    """The elliptic solution with M(0) = M (…, 3) for principal inertias I₁ < I₂ < I₃."""
+    """The elliptic solution with M(0) = M (…, 3) for principal inertias I₁ < I₂ < I₃: Python floats for one
+    state (M of shape (3,)), arrays over the rows of a batch."""
     M = np.asarray(M, float)
+    ops = _Floats if M.ndim == 1 else _Arrays
+    M1, M2, M3 = M.tolist() if M.ndim == 1 else np.moveaxis(M, -1, 0)
     I1, I2, I3 = inertia
-    squares = M * M
-    D1, D2, D3 = (np.sum(squares * (np.asarray(inertia) - Ii) / np.asarray(inertia), axis=-1) for Ii in inertia)
+    D1 = M2 * M2 * (1.0 - I1 / I2) + M3 * M3 * (1.0 - I1 / I3)  # D_i = M² − 2 E I_i, term by term
+    D2 = M1 * M1 * (1.0 - I2 / I1) + M3 * M3 * (1.0 - I2 / I3)
+    D3 = M1 * M1 * (1.0 - I3 / I1) + M2 * M2 * (1.0 - I3 / I2)
     r3 = D2 > 0.0
-    Ip, Ir = np.where(r3, I1, I3), np.where(r3, I3, I1)
-    Dp, Dr = np.where(r3, D1, D3), np.where(r3, D3, D1)
+    Ip, Ir, Dp, Dr = ops.where(r3, I1, I3), ops.where(r3, I3, I1), ops.where(r3, D1, D3), ops.where(r3, D3, D1)
+    M_p, M_r = ops.where(r3, M1, M3), ops.where(r3, M3, M1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        A_p = np.sqrt(np.maximum(-Ip * Dr / (Ir - Ip), 0.0))
-        A_q = np.sqrt(np.maximum(-I2 * Dr / (Ir - I2), 0.0))
-        A_r = np.sqrt(np.maximum(Ir * Dp / (Ir - Ip), 0.0))
-        rate = np.sqrt(np.maximum((Ir - I2) * Dp / (I1 * I2 * I3), 0.0))
-        m = np.clip((I2 - Ip) * -Dr / ((Ir - I2) * Dp), 0.0, 1.0)
-        m1 = np.clip((Ir - Ip) * D2 / ((Ir - I2) * Dp), 0.0, 1.0)
-    M_p, M_r = np.where(r3, M[..., 0], M[..., 2]), np.where(r3, M[..., 2], M[..., 0])
-    sign = np.where(M_r < 0.0, -1.0, 1.0)
-    amplitude = np.arctan2(sign * M[..., 1] * A_p, M_p * A_q)  # tan φ₀ = sn/cn = (s M_q/A_q)/(M_p/A_p)
-    return Orbit(r3, (A_p, A_q, A_r), sign, rate, m, m1, ellipkinc(amplitude, m))
+        A_p = ops.sqrt(ops.positive(-Ip * Dr / (Ir - Ip)))
+        A_q = ops.sqrt(ops.positive(-I2 * Dr / (Ir - I2)))
+        A_r = ops.sqrt(ops.positive(Ir * Dp / (Ir - Ip)))
+        rate = ops.sqrt(ops.positive((Ir - I2) * Dp / (I1 * I2 * I3)))
+        m = ops.unit((I2 - Ip) * -Dr / ((Ir - I2) * Dp))
+        m1 = ops.unit((Ir - Ip) * D2 / ((Ir - I2) * Dp))
+    sign = ops.where(M_r < 0.0, -1.0, 1.0)
+    amplitude = ops.atan2(sign * M2 * A_p, M_p * A_q)  # tan φ₀ = sn/cn = (s M_q/A_q)/(M_p/A_p)
+    return Orbit(r3 if ops is _Arrays else bool(r3), (A_p, A_q, A_r), sign, rate, m, m1, ellipkinc(amplitude, m))
 
 
 def attitude(R, velocity, tau, pieces: int):
@@ -205,12 +239,19 @@ class RigidBody:
         formula is, at the middle axis on the separatrix)."""
         M, R = self.split(y)
         path = orbit(M, self.inertia)
-        turn = np.max(np.linalg.norm(M, axis=-1) / self.inertia[0] * np.abs(tau))
+        turn = float(np.max(np.sqrt(2.0 * energy(M, self.inertia) / self.inertia[0]) * np.abs(tau)))  # |ω|² ≤ 2E/I₁
         pieces = max(1, math.ceil(turn / self.max_turn)) if math.isfinite(turn) else 1
         if pieces > MAX_PIECES:
             raise StepperError(f"a step turning the body by {turn:.3g} rad needs > {MAX_PIECES} Magnus pieces")
-        R = attitude(R, lambda t: path.momentum(t) / np.asarray(self.inertia), tau, pieces)
-        return np.concatenate([path.momentum(tau), R.reshape(*R.shape[:-2], 9)], -1)
+        end = []
+
+        def velocity(t):  # ω at the Gauss nodes; M at the end of the step from the same call of ellipj
+            M_t = path.momentum(np.concatenate([t, np.broadcast_to(tau, (1, *np.shape(t)[1:]))]))
+            end.append(M_t[-1])
+            return M_t[:-1] / np.asarray(self.inertia)
+
+        R = attitude(R, velocity, tau, pieces)
+        return np.concatenate([end[0], R.reshape(*R.shape[:-2], 9)], -1)
 
     def invariants(self, y):
         """(E, |M|, m = R M): the energy, the norm of M and the spatial momentum."""
