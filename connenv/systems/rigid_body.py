@@ -208,7 +208,7 @@ def attitude(R, velocity, tau, pieces: int):
         nodes = np.moveaxis(omega.reshape(pieces, 3, *omega.shape[1:]), -1, 2)  # (pieces, node, component, …)
     for xi in nodes:
         g = SO3.product(g, SO3.exp(_omega(SO3, "body", h, list(map(tuple, xi)))))
-    return np.stack(np.broadcast_arrays(*g), -1).reshape(R.shape)
+    return np.array(g).reshape(3, 3) if R.ndim == 2 else np.stack(g, -1).reshape(R.shape)
 
 
 @dataclass(frozen=True)
@@ -243,12 +243,13 @@ class RigidBody:
         pieces = max(1, math.ceil(turn / self.max_turn)) if math.isfinite(turn) else 1
         if pieces > MAX_PIECES:
             raise StepperError(f"a step turning the body by {turn:.3g} rad needs > {MAX_PIECES} Magnus pieces")
-        end = []
+        end, inverse = [], 1.0 / np.array(self.inertia)
 
         def velocity(t):  # ω at the Gauss nodes; M at the end of the step from the same call of ellipj
-            M_t = path.momentum(np.concatenate([t, np.broadcast_to(tau, (1, *np.shape(t)[1:]))]))
+            last = np.reshape(tau, (1, *np.shape(t)[1:])) if np.ndim(tau) else np.full((1, *np.shape(t)[1:]), tau)
+            M_t = path.momentum(np.concatenate([t, last]))
             end.append(M_t[-1])
-            return M_t[:-1] / np.asarray(self.inertia)
+            return M_t[:-1] * inverse
 
         R = attitude(R, velocity, tau, pieces)
         return np.concatenate([end[0], R.reshape(*R.shape[:-2], 9)], -1)
