@@ -32,7 +32,7 @@ itself (D₂ = 0) M is asymptotic to the middle axis and the flow returns NaN wh
 axis): the `Exact` stepper then hands those states to DOP853.
 
 **Attitude.** Ṙ = R ω̂ with ω(t) = I⁻¹M(t) known in closed form is linear in R: a Lie-group step keeps R on SO(3).
-`exact_flow` cuts a step into pieces of at most ``max_turn`` radians of turn (|ω| ≤ |M|/I₁) and takes each by the
+`exact_flow` cuts a step into pieces of at most ``max_turn`` radians of turn (|ω|² ≤ 2E/I₁) and takes each by the
 sixth-order Magnus method with ω at three Gauss nodes (connenv.core.lie), one Rodrigues exponential per piece: M is
 exact and R accurate to the Magnus error, for any step length.
 
