@@ -3,6 +3,7 @@ Gymnasium's SyncVectorEnv of the same env.
 
     python -m connenv.throughput [--envs ID ...] [--sizes 1 64 1024 4096] [--sync-max 1024] [--seconds 0.5]
                                  [--breakdown]
+    python -m connenv.throughput --rigid-body [--single-steps 3000]
 
 Single envs: each env from ``gym.make(id)`` (its registered wrappers included) and Pendulum-v1 from
 ``gym.make("Pendulum-v1")`` are stepped alternately with random actions, each step timed alone, resets left out
@@ -22,6 +23,10 @@ observation, reward, info), the vector-field evaluations per step of the adaptiv
 reset (the single env's reset, run with the row's generator) with its share per step when every episode runs to the
 time limit. Targets (issue 7): single-env step ≤ 1.0× Pendulum-v1; native vector ≥ 5 M
 env-steps/s at N = 4096 for Swing and Skier, ≥ 1 M for RollingBall, KozlovShell and the Kapitza pendulum.
+
+``--rigid-body``: the free rigid body (connenv.systems.rigid_body, a system without an env): its default step,
+``advance`` by the exact flow over dt = 0.1 s from a seeded random momentum, timed alternately with Pendulum-v1's
+env step as above.
 """
 
 from __future__ import annotations
@@ -77,6 +82,27 @@ def single_step_times(env_id: str, steps: int, seed: int = 0, **kwargs):
             times[k].append(time.perf_counter() - start)
             if terminated or truncated:
                 env.reset()
+    return statistics.median(times[0]), statistics.median(times[1])
+
+
+def rigid_body_step_times(steps: int, dt: float = 0.1, seed: int = 0):
+    """Median step times (s) of the free rigid body's default step (the exact flow over dt) and of Pendulum-v1,
+    stepped alternately, each step timed alone."""
+    from connenv.systems.rigid_body import RigidBody, advance, state
+
+    body, pendulum = RigidBody(), gym.make("Pendulum-v1")
+    pendulum.reset(seed=seed)
+    pendulum.action_space.seed(seed)
+    y = state(np.random.default_rng(seed).normal(size=3))
+    times = [[], []]
+    for _ in range(steps):
+        start = time.perf_counter()
+        y = advance(body, y, dt)
+        times[0].append(time.perf_counter() - start)
+        action = pendulum.action_space.sample()
+        start = time.perf_counter()
+        pendulum.step(action)
+        times[1].append(time.perf_counter() - start)
     return statistics.median(times[0]), statistics.median(times[1])
 
 
@@ -244,7 +270,13 @@ def main(argv=None):
         "integrators (default: dop853 magnus default; magnus:ATOL for another atol; default: the env's own stepper) "
         "against Pendulum-v1 and CartPole-v1's native vector env, at the largest N"
     )
+    parser.add_argument("--rigid-body", action="store_true", help="only the free rigid body's step against Pendulum-v1")
     args = parser.parse_args(argv)
+    if args.rigid_body:
+        body, pendulum = rigid_body_step_times(args.single_steps)
+        print(f"free rigid body, exact flow, dt = 0.1 s: {body * 1e6:.1f} µs/step, Pendulum-v1 {pendulum * 1e6:.1f} "
+              f"µs/step: {body / pendulum:.2f}× Pendulum-v1")  # fmt: skip
+        return
     if args.shell_steppers is not None:
         integrators = args.shell_steppers or ["dop853", "magnus", "default"]
         shell_steppers(integrators, max(args.sizes), args.single_steps, args.seconds)

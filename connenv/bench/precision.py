@@ -2,7 +2,7 @@
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
     python -m connenv.bench precision [--env swing skier ball kapitza shell bead connection coin beanie coin_surface
-                                       coin_plane tube snake sleigh] [--quick]
+                                       coin_plane tube snake sleigh rigid_body] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -468,6 +468,7 @@ STYLE = {
     "lsoda": ("tab:purple", "D"),
     "radau": ("tab:brown", "P"),
     "magnus": ("tab:cyan", "X"),
+    "splitting": ("tab:olive", "h"),
 }
 
 
@@ -557,13 +558,19 @@ def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="python -m connenv.bench precision", description=__doc__.split("\n")[0])
-    parser.add_argument("--env", nargs="+", choices=sorted(CASES), default=list(CASES))
+    parser.add_argument("--env", nargs="+", choices=sorted([*CASES, "rigid_body"]), default=[*CASES, "rigid_body"])
     parser.add_argument("--quick", action="store_true", help="a fifth of every episode")
     args = parser.parse_args(argv)
     header("precision")
     OUTPUT.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     for name in args.env:
-        _, csv_path, png_path = chart(name, fraction=0.2 if args.quick else 1.0)
+        fraction = 0.2 if args.quick else 1.0
+        if name == "rigid_body":  # a system without an env: connenv.bench.rigid_body
+            from connenv.bench.rigid_body import precision_chart
+
+            _, csv_path, png_path = precision_chart(OUTPUT, fraction)
+        else:
+            _, csv_path, png_path = chart(name, fraction=fraction)
         print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")
     print(f"\nwall time: {time.perf_counter() - start:.0f} s")

@@ -2,7 +2,7 @@
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
     python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface tube snake
-                                      sleigh] [--quick]
+                                      sleigh rigid_body] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -51,6 +51,9 @@ StepperError and the invariant's error stayed within the bound below at every st
   is not fit for jumps: the move is a kick that grows with the speed, and so do the rates of the motion after it);
   bounded: the env's energy error, the change of T while the mass is held, within 1e-2 (1 + T) (the env's own
   bound).
+
+- rigid_body: the free rigid body, a system without an env: a slender body against its slenderness I₃/I₁
+  (connenv.bench.rigid_body).
 
 A method on the grey band (printed "≥") found no limit on the grid; "< 10^-4" (at the bottom) means none on the
 grid held.
@@ -430,13 +433,19 @@ def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="python -m connenv.bench stability", description=__doc__.split("\n")[0])
-    parser.add_argument("--env", nargs="+", choices=sorted(MAPS), default=list(MAPS))
+    parser.add_argument("--env", nargs="+", choices=sorted([*MAPS, "rigid_body"]), default=[*MAPS, "rigid_body"])
     parser.add_argument("--quick", action="store_true", help="dt down to 1e-3 only")
     args = parser.parse_args(argv)
     header("stability")
     OUTPUT.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     for name in args.env:
-        _, csv_path, png_path = chart(name, smallest=1e-3 if args.quick else 1e-4)
+        smallest = 1e-3 if args.quick else 1e-4
+        if name == "rigid_body":  # a system without an env: connenv.bench.rigid_body
+            from connenv.bench.rigid_body import stability_chart
+
+            _, csv_path, png_path = stability_chart(OUTPUT, smallest)
+        else:
+            _, csv_path, png_path = chart(name, smallest=smallest)
         print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")
     print(f"\nwall time: {time.perf_counter() - start:.0f} s")
