@@ -2,7 +2,7 @@
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
     python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface tube snake
-                                      sleigh] [--quick]
+                                      sleigh cat] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -17,6 +17,10 @@ StepperError and the invariant's error stayed within the bound below at every st
   (the env's own bound: past it the env raises).
 - tube: TubeTwist-v0 bent at seeded random rates for 1 s whatever dt; parameter max_bend_rate (the bend per step
   is max_bend_rate · dt); bounded: ‖RᵀR − I‖ ≤ 1e-9 (the env's own bound: past it the env raises).
+- cat: FallingCat-v0 bent at seeded random velocities for 1 s whatever dt (fall_time 100 s), from R = I, straight;
+  parameter J/I (axial_inertia, transverse_inertia 0.01): the roll rate f(β)/β² · β |ṡ| near the straight cat grows
+  as (2I − J)/(8J); bounded: ‖gᵀg − I‖ ≤ 1e-9 (the env's own bound: past it the env raises). Every method turns
+  the cat about its spine only; what breaks is g's orthogonality.
 - kapitza: KapitzaPendulum-v0 from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt, a = 0.05 m,
   each step's velocity the chord between samples (v_max = a ω), 2 s; parameter ω; bounded: the env's energy
   error (in the pivot's frame, on segments of constant u̇) within 0.1 m g l (the env's own bound). The grid
@@ -238,6 +242,24 @@ MAPS = {
         lambda rate: {"state": {}},
         random_velocity,
         lambda rate, dt: math.ceil(1.0 / dt),
+        env_bound,
+        (
+            ("euler", {}),
+            ("rk4", {}),
+            ("rk4", {"substeps": 4}),
+            ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
+            ("magnus", {}),
+            ("exact", {}),
+        ),
+    ),
+    "cat": StabilityMap(
+        "connenv/FallingCat-v0",
+        "J/I",
+        (0.3, 0.1, 0.03, 0.01, 0.003),
+        lambda ratio: {"axial_inertia": 0.01 * ratio, "fall_time": 100.0},
+        lambda ratio: {"state": {"R": np.eye(3)}},
+        random_velocity,
+        lambda ratio, dt: math.ceil(1.0 / dt),
         env_bound,
         (
             ("euler", {}),

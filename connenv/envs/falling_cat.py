@@ -230,11 +230,13 @@ class FallingCatEnv(ConnectionEnv):
     def errors(self, state, ops=SCALAR):
         """The roll (rad, 0 feet down), the spine error (rad) and β."""
         g, H = self.frames(state)
+        if ops is SCALAR:
+            (a1, _, _, a2, _, _, a3, _, _), (b1, _, _, b2, _, _, b3, _, _) = state.g.tolist(), state.heading.tolist()
+            across = math.hypot(a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1)
+            spine_error = math.atan2(across, a1 * b1 + a2 * b2 + a3 * b3)
+            return math.atan2(state.g[7], state.g[8]), spine_error, math.hypot(*state.s.tolist())
         spine, start = g[..., :, 0], H[..., :, 0]
         across = np.cross(spine, start)
-        if ops is SCALAR:
-            spine_error = math.atan2(math.hypot(*across), float(spine @ start))
-            return math.atan2(g[2, 1], g[2, 2]), spine_error, math.hypot(*state.s)
         spine_error = np.arctan2(np.linalg.norm(across, axis=-1), np.sum(spine * start, -1))
         return np.arctan2(g[..., 2, 1], g[..., 2, 2]), spine_error, np.hypot(state.s[..., 0], state.s[..., 1])
 
@@ -254,11 +256,12 @@ class FallingCatEnv(ConnectionEnv):
         g, _ = self.frames(state)
         roll, spine_error, beta = self.errors(state, ops)
         omega = -np.einsum("...ij,...j->...i", falling_cat.connection(state.s, **self.inertias), state.s_dot)
+        front = falling_cat.front_half(state.s)
         momentum = falling_cat.angular_momentum(g, state.s, state.s_dot, omega, **self.inertias, mass=self.mass,
-                                                cm_distance=self.cm_distance)  # fmt: skip
+                                                cm_distance=self.cm_distance, front=front)  # fmt: skip
         success = (abs(roll) <= self.tolerance) & (spine_error <= self.tolerance) & (beta <= self.tolerance)
         return {
-            "state": {"R": g @ falling_cat.halves(state.s)[0], "bend": np.array(state.s), "t": state.t},
+            "state": {"R": g @ front[0], "bend": np.array(state.s), "t": state.t},
             "angular_momentum": momentum,
             "roll": roll,
             "roll_error": abs(roll),

@@ -62,6 +62,7 @@ of that distance converges to rounding (``nodes_for``; the tests compare it with
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -128,12 +129,18 @@ def pieces_for(max_length: float, transverse_inertia: float, axial_inertia: floa
     return max(1, math.ceil(max_length / reach))
 
 
+@functools.lru_cache(maxsize=None)
+def _rule(pieces: int):
+    """The nodes (fractions of the segment) and weights of Gauss–Legendre on `pieces` equal pieces of [0, 1]."""
+    fractions = (np.arange(pieces)[:, None] + 0.5 * (_NODES + 1.0)[None, :]).ravel() / pieces
+    return fractions, np.tile(_WEIGHTS, pieces) / (2 * pieces)
+
+
 def segment_roll(s, s_dot, tau, transverse_inertia: float, axial_inertia: float, pieces: int = 1):
     """Δφ = −(s₀ × v) ∫₀^τ f/β² dτ′ over segments s₀ + τ′ v (s, s_dot (…, 2), tau a float or (…)): Gauss–Legendre
     with GAUSS_NODES nodes on each of `pieces` equal pieces."""
     s, v, tau = np.asarray(s, float), np.asarray(s_dot, float), np.asarray(tau, float)
-    fractions = (np.arange(pieces)[:, None] + 0.5 * (_NODES + 1.0)[None, :]).ravel() / pieces  # (pieces·nodes,)
-    weights = np.tile(_WEIGHTS, pieces) / (2 * pieces)
+    fractions, weights = _rule(pieces)
     points = s[..., None, :] + (tau[..., None] * fractions)[..., None] * v[..., None, :]
     density = roll_density(np.sum(points * points, axis=-1), transverse_inertia, axial_inertia)
     cross = s[..., 0] * v[..., 1] - s[..., 1] * v[..., 0]
@@ -157,54 +164,75 @@ def roll(g):
 # -- the two bodies ------------------------------------------------------------
 
 
-def _hat(w):
-    zero = np.zeros_like(w[..., 0])
-    rows = [[zero, -w[..., 2], w[..., 1]], [w[..., 2], zero, -w[..., 0]], [-w[..., 1], w[..., 0], zero]]
-    return np.stack([np.stack(r, -1) for r in rows], -2)
+def _cross(a, b):
+    """a × b over the last axis (…, 3): numpy's np.cross costs more than the arithmetic on 3-vectors."""
+    return a[..., [1, 2, 0]] * b[..., [2, 0, 1]] - a[..., [2, 0, 1]] * b[..., [1, 2, 0]]
 
 
-def _exp_and_jacobian(v):
-    """exp(v̂) and the left Jacobian J(v) with (d/dt exp(v̂)) exp(v̂)ᵀ = (J(v) v̇)^ (…, 3): I + a v̂ + b v̂²,
-    a = (1 − cos θ)/θ², b = (θ − sin θ)/θ³, by series below θ = 1e-3."""
-    theta = np.linalg.norm(v, axis=-1)[..., None, None]
-    safe = np.where(theta < 1e-3, 1.0, theta)
-    sin_part = np.where(theta < 1e-3, 1 - theta**2 / 6, np.sin(safe) / safe)
-    a = np.where(theta < 1e-3, 0.5 - theta**2 / 24, (1 - np.cos(safe)) / safe**2)
-    b = np.where(theta < 1e-3, 1 / 6 - theta**2 / 120, (safe - np.sin(safe)) / safe**3)
-    V = _hat(v)
+def front_half(s):
+    """Q_A = exp(v̂) and the left Jacobian J(v), (Q̇_A Q_Aᵀ) = (J(v) v̇)^, at v = (0, −y, x)/2 (…, 3, 3); the rear
+    half's are their transposes (v ↦ −v): Q_B = Q_Aᵀ, J(−v) = J(v)ᵀ. With θ = β/2 and V = v̂:
+    Q = I + sin θ/θ V + (1 − cos θ)/θ² V², J = I + (1 − cos θ)/θ² V + (θ − sin θ)/θ³ V², by series below 1e-3."""
+    s = np.asarray(s, float)
+    if s.ndim == 1:
+        return _front_half_one(*(0.5 * s).tolist())
+    x, y = 0.5 * s[..., 0], 0.5 * s[..., 1]
+    theta = np.hypot(x, y)[..., None, None]
+    small = theta < 1e-3
+    safe = np.where(small, 1.0, theta)
+    sin_part = np.where(small, 1 - theta**2 / 6, np.sin(safe) / safe)
+    cos_part = np.where(small, 0.5 - theta**2 / 24, (1 - np.cos(safe)) / safe**2)
+    tail = np.where(small, 1 / 6 - theta**2 / 120, (safe - np.sin(safe)) / safe**3)
+    zero = np.zeros_like(x)
+    V = np.stack([np.stack([zero, -x, -y], -1), np.stack([x, zero, zero], -1), np.stack([y, zero, zero], -1)], -2)
     V2 = V @ V
-    return np.eye(3) + sin_part * V + a * V2, np.eye(3) + a * V + b * V2
+    eye = np.eye(3)
+    return eye + sin_part * V + cos_part * V2, eye + cos_part * V + tail * V2
+
+
+def _front_half_one(x, y):
+    """front_half of one shape, in floats (v = (0, −y, x), the halved bend)."""
+    theta = math.hypot(x, y)
+    if theta < 1e-3:
+        sin_part, cos_part, tail = 1 - theta**2 / 6, 0.5 - theta**2 / 24, 1 / 6 - theta**2 / 120
+    else:
+        sin_part, cos_part = math.sin(theta) / theta, (1 - math.cos(theta)) / theta**2
+        tail = (theta - math.sin(theta)) / theta**3
+    V = np.array([[0.0, -x, -y], [x, 0.0, 0.0], [y, 0.0, 0.0]])
+    V2 = np.array([[-theta * theta, 0.0, 0.0], [0.0, -x * x, -x * y], [0.0, -x * y, -y * y]])
+    return _EYE + sin_part * V + cos_part * V2, _EYE + cos_part * V + tail * V2
+
+
+_EYE = np.eye(3)
 
 
 def halves(s):
     """Q_A, Q_B (…, 3, 3): the front and rear halves' attitudes in the cat frame, exp(±(0, −y, x)^/2)."""
-    s = np.asarray(s, float)
-    v = 0.5 * np.stack([np.zeros_like(s[..., 0]), -s[..., 1], s[..., 0]], -1)
-    return _exp_and_jacobian(v)[0], _exp_and_jacobian(-v)[0]
+    Q = front_half(s)[0]
+    return Q, np.swapaxes(Q, -1, -2)
 
 
 def angular_momentum(g, s, s_dot, omega, transverse_inertia: float, axial_inertia: float, mass: float,
-                     cm_distance: float):  # fmt: skip
+                     cm_distance: float, front=None):  # fmt: skip
     """The angular momentum in space about the centre of mass (…, 3), summed over the two bodies: their spins
     𝕀_i ω_i and their centres' m r_i × ṙ_i, from the cat frame g (…, 3, 3), its angular velocity Ω (…, 3, in the
-    cat frame), the shape s and ṡ."""
-    s, s_dot, omega = (np.asarray(a, float) for a in (s, s_dot, omega))
-    inertia = np.diag([axial_inertia, transverse_inertia, transverse_inertia])
-    e1 = np.array([1.0, 0.0, 0.0])
+    cat frame), the shape s and ṡ (front: `front_half(s)` if at hand)."""
+    s_dot, omega = np.asarray(s_dot, float), np.asarray(omega, float)
+    Q, jacobian = front_half(s) if front is None else front
+    v_dot = 0.5 * np.stack([np.zeros_like(s_dot[..., 0]), -s_dot[..., 1], s_dot[..., 0]], -1)
+    inertia = np.array([axial_inertia, transverse_inertia, transverse_inertia])
     total, centres = 0.0, []
-    for sign in (1.0, -1.0):
-        v = sign * 0.5 * np.stack([np.zeros_like(s[..., 0]), -s[..., 1], s[..., 0]], -1)
-        v_dot = sign * 0.5 * np.stack([np.zeros_like(s_dot[..., 0]), -s_dot[..., 1], s_dot[..., 0]], -1)
-        Q, jacobian = _exp_and_jacobian(v)
-        w = np.einsum("...ij,...j->...i", jacobian, v_dot)  # Q̇ Qᵀ = ŵ
-        spin = Q @ inertia @ np.swapaxes(Q, -1, -2)
-        total = total + np.einsum("...ij,...j->...i", spin, omega + w)
-        axis = Q @ e1
-        centres.append((sign * cm_distance * axis, sign * cm_distance * np.cross(w, axis)))  # joint → centre
+    for Q_i, w_i, sign in ((Q, jacobian @ v_dot[..., None], 1.0), (np.swapaxes(Q, -1, -2),
+                           -np.swapaxes(jacobian, -1, -2) @ v_dot[..., None], -1.0)):  # fmt: skip
+        w_i = w_i[..., 0]  # Q̇_i Q_iᵀ = ŵ_i
+        body = np.einsum("...ji,...j->...i", Q_i, omega + w_i)  # ω_i in the half's own axes
+        total = total + np.einsum("...ij,...j->...i", Q_i, inertia * body)
+        axis = Q_i[..., 0]
+        centres.append((sign * cm_distance * axis, sign * cm_distance * _cross(w_i, axis)))  # joint → centre
     (a, a_dot), (b, b_dot) = centres
     shift, shift_dot = 0.5 * (a + b), 0.5 * (a_dot + b_dot)  # the joint → the system's centre of mass
     for r, r_dot in ((a - shift, a_dot - shift_dot), (b - shift, b_dot - shift_dot)):
-        total = total + mass * np.cross(r, np.cross(omega, r) + r_dot)
+        total = total + mass * _cross(r, _cross(omega, r) + r_dot)
     return np.einsum("...ij,...j->...i", g, total)
 
 
@@ -213,6 +241,8 @@ def disc_segment(s, s_dot, max_bend: float, dt: float):
     edge; it rests there for the rest of the step): its duration τ (a float, or one per row), and s and ṡ at the
     end of the step. τ is the positive root of |s + τ ṡ|² = max_bend², without cancellation."""
     s, v = np.asarray(s, float), np.asarray(s_dot, float)
+    if s.ndim == 1:
+        return _disc_segment_one(s, v, max_bend, dt)
     a, b = np.sum(v * v, -1), 2 * np.sum(s * v, -1)
     c = np.minimum(np.sum(s * s, -1) - max_bend**2, 0.0)  # ≤ 0: s is in the disc
     end = s + v * dt
@@ -226,3 +256,17 @@ def disc_segment(s, s_dot, max_bend: float, dt: float):
     s_end = np.where(inside[..., None], end, edge)
     v_end = np.where(inside[..., None], v, 0.0)
     return (float(tau) if np.ndim(tau) == 0 else tau), s_end, v_end
+
+
+def _disc_segment_one(s, v, max_bend: float, dt: float):
+    """disc_segment of one state, in floats."""
+    (x, y), (vx, vy) = s.tolist(), v.tolist()
+    end = s + v * dt
+    if math.hypot(end[0], end[1]) <= max_bend:
+        return dt, end, v
+    a, b, c = vx * vx + vy * vy, 2 * (x * vx + y * vy), min(x * x + y * y - max_bend**2, 0.0)
+    root = math.sqrt(b * b - 4 * a * c)
+    reach = -2 * c / (b + root) if b >= 0 else (root - b) / (2 * a)
+    tau = min(max(reach if math.isfinite(reach) else 0.0, 0.0), dt)
+    edge = s + v * tau
+    return tau, edge * min(1.0, max_bend / max(math.hypot(edge[0], edge[1]), 1e-300)), np.zeros(2)
