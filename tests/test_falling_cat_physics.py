@@ -16,7 +16,7 @@ import connenv  # noqa: F401  (registers the envs)
 from connenv.systems import falling_cat as cat
 
 ID = "connenv/FallingCat-v0"
-I, J, MASS, ELL = 0.01, 0.0003, 1.5, 0.12
+I, J, MASS, ELL = 0.01, 0.0003, 1.5, 0.12  # noqa: E741  (the transverse inertia I)
 INERTIAS = {"transverse_inertia": I, "axial_inertia": J}
 SHAPES = [(0.3, 0.1), (-0.2, 0.5), (1.0, -0.3), (1e-4, 2e-4), (0.0, -1.2)]
 

@@ -146,7 +146,7 @@ class FallingCatEnv(ConnectionEnv):
         **stepper_options,
     ):
         check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        I = check_number("transverse_inertia", transverse_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)
+        I = check_number("transverse_inertia", transverse_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)  # noqa: E741
         J = check_number("axial_inertia", axial_inertia, 0.0, I, open_low=True, open_high=True,
                          high_name="transverse_inertia")  # fmt: skip
         self.mass = check_number("mass", mass, 0.0, MAGNITUDE_BOUND, open_low=True)
@@ -199,7 +199,8 @@ class FallingCatEnv(ConnectionEnv):
             g = check_rotation("state R", given["R"]) @ falling_cat.halves(s)[0].T
         else:
             c, n, cr, sr = math.cos(heading), math.sin(heading), math.cos(roll), math.sin(roll)
-            g = np.array([[c, -n, 0.0], [n, c, 0.0], [0.0, 0.0, 1.0]]) @ np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+            turn = np.array([[c, -n, 0.0], [n, c, 0.0], [0.0, 0.0, 1.0]])  # Rz(ψ)
+            g = turn @ np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])  # Rz(ψ) Rx(π + δ)
         spine = g[:, 0]
         if not 1.0 - abs(spine[2]) > VERTICAL:
             raise ValueError(f"state R={given['R']!r} puts the spine vertical, {spine.tolist()}: no roll about it")

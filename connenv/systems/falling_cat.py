@@ -103,7 +103,7 @@ def curvature(beta, transverse_inertia: float, axial_inertia: float):
     """F(β) = f′(β)/β, the curvature dA = F dx ∧ dy: a small loop of area a (counterclockwise) at s rolls the cat
     by −F a."""
     beta = np.asarray(beta, float)
-    I, J = transverse_inertia, axial_inertia
+    I, J = transverse_inertia, axial_inertia  # noqa: E741  (the literature's I)
     c, s = np.cos(0.5 * beta), np.sin(0.5 * beta)
     numerator, denominator = I * s * s - J * c * (1 - c), I * s * s + J * c * c
     sinc = 0.5 * np.sinc(beta / (2 * math.pi))  # s/β, finite at β = 0
@@ -113,7 +113,7 @@ def curvature(beta, transverse_inertia: float, axial_inertia: float):
 def bend_for_roll(roll: float, transverse_inertia: float, axial_inertia: float) -> float:
     """β₀ at which one full sweep of γ rolls the cat by |roll| ∈ [0, 2π) (f(β₀) = |roll|/2π): the root c ∈ (0, 1] of
     (1 − q)(I − J) c² + J c − (1 − q) I = 0, q = |roll|/2π (I > J)."""
-    q, I, J = abs(roll) / (2 * math.pi), transverse_inertia, axial_inertia
+    q, I, J = abs(roll) / (2 * math.pi), transverse_inertia, axial_inertia  # noqa: E741
     c = (math.sqrt(J * J + 4 * (1 - q) ** 2 * (I - J) * I) - J) / (2 * (1 - q) * (I - J))
     return 2 * math.acos(min(c, 1.0))
 
