@@ -57,7 +57,7 @@ quadratic in c: (1 − q)(I − J) c² + J c − (1 − q) I = 0, and for q = 1/
 
 an integral of an analytic function of β² = |s₀ + τ′ v|², a quadratic in τ′. Its nearest complex singularity is
 where I σ² + J c² = 0, at β² = −(2 artanh √(J/I))²; Gauss–Legendre quadrature on pieces no longer than a quarter
-of that distance converges to rounding (``nodes_for``; the tests compare it with adaptive quadrature).
+of that distance converges to rounding (``pieces_for``; the tests compare it with adaptive quadrature).
 """
 
 from __future__ import annotations
