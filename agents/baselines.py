@@ -54,7 +54,7 @@ ENVS = (
     "connenv/TubeTwist-v0",
     "connenv/BeadOnBar-v0",
 )
-UNTRAINED = ("connenv/ChaplyginSleigh-v0", "connenv/SnakeSwimmer-v0")
+UNTRAINED = ("connenv/ChaplyginSleigh-v0", "connenv/SnakeSwimmer-v0", "connenv/FallingCat-v0")
 """Envs with hyperparameters and analytic controllers whose reference runs are still to be trained: ``train`` and
 ``collect`` take them; the table holds ENVS."""
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
@@ -209,6 +209,7 @@ MEASURES = {
     "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),
     "connenv/TubeTwist-v0": ("bend / shortest loop", "", lambda row: row["measures_mean"]["path_ratio"]),
+    "connenv/FallingCat-v0": ("roll error at landing", "rad", lambda row: row["measures_mean"]["roll_error"]),
     "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
     "connenv/SnakeSwimmer-v0": ("steps to target", "", steps_to_target),
     "connenv/ChaplyginSleigh-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),

@@ -7,6 +7,7 @@ import numpy as np
 
 from agents import tube
 from agents.bead_on_bar import BeadTilt
+from agents.falling_cat import KaneScher
 from agents.gaits import GaitPlanner, snake_planner
 from agents.kapitza import DAMPING_MODULATION, KapitzaSwingUp, KapitzaVibration
 from agents.lawton import BeanieDeadBeat, CoinPlanner
@@ -79,6 +80,7 @@ CONTROLLERS = {
     "connenv/BeadOnBar-v0": {"tilt": BeadTilt},
     "connenv/TubeTwist-v0": {"cap": tube.for_env, "square": lambda env: tube.for_env(env, sides=4)},
     "connenv/ChaplyginSleigh-v0": {"planner": ShakePlanner, "tail_first": TailFirst},
+    "connenv/FallingCat-v0": {"kane_scher": KaneScher},
 }
 """Reference controllers by env id and name: a factory of the unwrapped env (for the parameters a law needs)."""
 

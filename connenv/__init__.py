@@ -122,3 +122,9 @@ register(
     vector_entry_point="connenv.envs.tube:TubeTwistVectorEnv",
     max_episode_steps=200,
 )
+register(
+    id="connenv/FallingCat-v0",
+    entry_point="connenv.envs.falling_cat:FallingCatEnv",
+    vector_entry_point="connenv.envs.falling_cat:FallingCatVectorEnv",
+    max_episode_steps=60,
+)

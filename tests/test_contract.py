@@ -38,6 +38,7 @@ CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where an
     "connenv/RollingCoinSurface-v0": [{}, {"surface": "plane"}],
     "connenv/BeadOnBar-v0": [{}, {"g": 0.0}],
     "connenv/TubeTwist-v0": [{}, {"integrator": "magnus"}],
+    "connenv/FallingCat-v0": [{}],
     "connenv/ChaplyginSleigh-v0": [{}, {"offset": 0.0, "box": 0.0}],  # general: u̇ commanded; fit: u commanded
     # the generic ids, on connenv.examples' systems: one of each jump class; a flat and a curved connection
     "connenv/ActiveConstraint-v0": [examples.swing(), examples.rotor(), examples.bead()],

@@ -44,6 +44,7 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
     "connenv/BeadOnBar-v0": {"r": 0, "r_dot": 0, "theta": 0},
     "connenv/TubeTwist-v0": {},  # R: a rotation matrix (tests/test_tube_env.py)
+    "connenv/FallingCat-v0": {"bend": 2},  # R: a rotation matrix (tests/test_falling_cat_env.py)
 }
 OPTION_KEYS = {  # reset options beside "state"
     "connenv/KozlovShell-v0": {"target": 2},

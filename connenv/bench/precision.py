@@ -2,7 +2,7 @@
 and the drift of the invariant, one chart per env (docs/precision/<env>_precision.png and .csv).
 
     python -m connenv.bench precision [--env swing skier ball kapitza shell bead connection coin beanie coin_surface
-                                       coin_plane tube snake sleigh rigid_body] [--quick]
+                                       coin_plane tube snake sleigh cat rigid_body] [--quick]
 
 Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
 
@@ -38,6 +38,10 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
   step (one exponential per step, exact for piecewise-constant rates). State error: the angle between R and R_ref
   at the end (rad). Invariant: max ‖RᵀR − I‖ over the episode. Besides the common candidates, the builder's Magnus
   step.
+- cat: FallingCat-v0 from R = I, straight, 200 steps of seeded random bend velocities (fall_time 2 s, so that the
+  cat does not land), the bend stopping at max_bend; reference: the exact step (Gauss–Legendre on the roll's
+  integral, exact to rounding). State error: the angle between g and g_ref at the end (rad). Invariant: max
+  ‖gᵀg − I‖ over the episode. Besides the common candidates, the builder's Magnus step.
 - snake: SnakeSwimmer-v0, 300 steps of seeded random joint commands, from rest (the reduced model) and from the
   body momentum (0.3, 0.1, 0.05) (the full model), as the shell's; the same reference, errors and invariant. Of the
   Magnus step only the default (atol 1e-12; DOP853 at rtol 1e-10 on the full model): the rule it fixes for the
@@ -304,6 +308,17 @@ CASES = {
         lambda env, info, start: float(np.linalg.norm(info["state"]["R"].T @ info["state"]["R"] - np.eye(3))),
         "rad",
         steppers=MAGNUS,
+    ),
+    "cat": Case(
+        "connenv/FallingCat-v0",
+        EXACT,
+        (Episode("random ṡ", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
+        lambda env, ref: float(rotation_angle(env.state.g.reshape(3, 3) @ ref.state.g.reshape(3, 3).T)),
+        "max ‖gᵀg − I‖",
+        lambda env, info, start: float(env.group.off_group(env.state.g.reshape(3, 3))),
+        "rad",
+        {"fall_time": 2.0},
+        MAGNUS,
     ),
     "snake": Case(
         "connenv/SnakeSwimmer-v0",

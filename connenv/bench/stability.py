@@ -2,7 +2,7 @@
 breaks steppers, one curve per method (docs/precision/<env>_stability.png and .csv).
 
     python -m connenv.bench stability [--env swing skier ball kapitza shell bead coin beanie coin_surface tube snake
-                                      sleigh rigid_body] [--quick]
+                                      sleigh cat rigid_body] [--quick]
 
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
@@ -17,6 +17,12 @@ StepperError and the invariant's error stayed within the bound below at every st
   (the env's own bound: past it the env raises).
 - tube: TubeTwist-v0 bent at seeded random rates for 1 s whatever dt; parameter max_bend_rate (the bend per step
   is max_bend_rate · dt); bounded: ‖RᵀR − I‖ ≤ 1e-9 (the env's own bound: past it the env raises).
+- cat: FallingCat-v0 from R = I bent at s = (0.5, 0), its bend swept round the circle β = 0.5 at the full speed
+  (ṡ = 6 rad/s, γ̇ = 12 rad/s), each step's velocity the chord between samples of the circle, 1 s whatever dt
+  (fall_time 100 s); parameter J/I (axial_inertia, transverse_inertia 0.01): the roll per radian of sweep near the
+  straight cat grows as (2I − J)/(8J), and a long step's chord cuts close to it; bounded: ‖gᵀg − I‖ ≤ 1e-9 (the
+  env's own bound: past it the env raises). Every method turns the cat about its spine only; what breaks is g's
+  orthogonality.
 - kapitza: KapitzaPendulum-v0 from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt, a = 0.05 m,
   each step's velocity the chord between samples (v_max = a ω), 2 s; parameter ω; bounded: the env's energy
   error (in the pivot's frame, on segments of constant u̇) within 0.1 m g l (the env's own bound). The grid
@@ -139,6 +145,18 @@ def random_velocity(value, t, dt, rng):
     return rng.uniform(-1.0, 1.0, 2).astype(np.float32)
 
 
+CAT_BEND = 0.5  # rad: β of the cat's swept circle
+
+
+def bend_sweep(ratio, t, dt, rng):
+    """The chord velocity between samples of the circle CAT_BEND (cos ωt, sin ωt) at ω = 6/CAT_BEND, as an action of
+    max_bend_speed 6 rad/s."""
+    omega = 6.0 / CAT_BEND
+    chord = CAT_BEND * np.array([math.cos(omega * (t + dt)) - math.cos(omega * t),
+                                 math.sin(omega * (t + dt)) - math.sin(omega * t)])  # fmt: skip
+    return (chord / (6.0 * dt)).astype(np.float32)
+
+
 KAPITZA_AMPLITUDE = 0.05  # a, m: the pivot's vibration u₂ = a cos ωt
 
 
@@ -241,6 +259,24 @@ MAPS = {
         lambda rate: {"state": {}},
         random_velocity,
         lambda rate, dt: math.ceil(1.0 / dt),
+        env_bound,
+        (
+            ("euler", {}),
+            ("rk4", {}),
+            ("rk4", {"substeps": 4}),
+            ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
+            ("magnus", {}),
+            ("exact", {}),
+        ),
+    ),
+    "cat": StabilityMap(
+        "connenv/FallingCat-v0",
+        "J/I",
+        (0.3, 0.1, 0.03, 0.01, 0.003),
+        lambda ratio: {"axial_inertia": 0.01 * ratio, "fall_time": 100.0},
+        lambda ratio: {"state": {"R": np.eye(3), "bend": [CAT_BEND, 0.0]}},
+        bend_sweep,
+        lambda ratio, dt: math.ceil(1.0 / dt),
         env_bound,
         (
             ("euler", {}),

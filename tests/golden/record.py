@@ -52,6 +52,7 @@ CASES = [
      None),
     ("bead", "connenv/BeadOnBar-v0", {"max_episode_steps": 60}, None),
     ("tube", "connenv/TubeTwist-v0", {"max_episode_steps": 40, "tolerance": 0.6}, None),
+    ("cat", "connenv/FallingCat-v0", {"max_episode_steps": 60, "fall_time": 0.4, "max_bend": 0.5}, None),
 ]
 
 

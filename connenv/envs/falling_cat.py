@@ -1,0 +1,303 @@
+"""FallingCat-v0: a cat dropped upside down at rest lands on its feet by bending alone (Kane & Scher 1969)."""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.segments import run_segments
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_dt,
+    check_keys,
+    check_number,
+    check_rotation,
+    check_stepper_options,
+    check_vector,
+)
+from connenv.envs.base import BATCH, SCALAR
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.systems import falling_cat
+
+__all__ = ["DT_MAX", "FallingCatEnv", "FallingCatVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
+
+ROLL_OFFSET = 0.2  # rad: the start's roll is π + δ, δ uniform in [−ROLL_OFFSET, ROLL_OFFSET]
+SUCCESS_BONUS = 1.0  # reward on the step the cat is in its landing pose
+LANDING_SLACK = 1e-9  # s: t ≥ fall_time − LANDING_SLACK is the landing (the sum of dt's rounds)
+VERTICAL = 1e-6  # a given spine within this of vertical (1 − |spine · Z|) has no roll about it: ValueError
+
+
+@dataclass
+class CatState(ConnectionState):
+    """ConnectionState (g: the cat frame's 9 entries, s: the bend vector, t) with the bend velocity ṡ at the end of
+    the step (0 where the bend stopped at max_bend) and the heading frame H (9 entries: the start spine, the
+    horizontal across it, the vertical orthogonalized to the spine), fixed at reset."""
+
+    s_dot: np.ndarray
+    heading: np.ndarray
+
+
+class FallingCatEnv(ConnectionEnv):
+    r"""
+    ## Description
+
+    Kane and Scher's falling cat (`connenv.systems.falling_cat`): two identical axisymmetric halves (mass m, axial
+    inertia J, transverse inertia I, centre of mass ℓ from the joint) that bend at the joint but never twist about
+    their own axes. Dropped at rest, the cat's angular momentum stays zero, so its attitude g (the cat frame: e₁
+    the mean spine, e₃ the back) follows the bend vector s = β (cos γ, sin γ) through a mechanical connection:
+
+        Ω = −A(s) ṡ = −f(β) γ̇ e₁,    f(β) = [I sin²(β/2) − J c (1 − c)] / (I sin²(β/2) + J c²),  c = cos(β/2).
+
+    Bending straight out turns nothing; sweeping the bend around the spine rolls the cat about it. Kane and
+    Scher's motion (bend to β₀, sweep once around, unbend) rolls it by 2π f(β₀): a half turn at f(β₀) = 1/2. Built
+    on `ConnectionEnv` (SO(3), body frame), with the roll over each step in closed form up to a Gauss–Legendre
+    quadrature exact to rounding (the default `integrator="exact"`). Gravity moves only the centre of mass in free
+    fall and does not enter.
+
+    ## Action Space
+
+    `Box(-1, 1, (2,), float32)`: the bend velocity ṡ = a · max_bend_speed, constant over the step. Actions outside
+    are clipped; a wrong shape or a non-finite value raises ValueError. A bend that reaches β = max_bend stops
+    there for the rest of the step.
+
+    ## Observation Space
+
+    `Box(-1, 1, (12,), float32)`:
+
+    | Num | Observation | Min | Max |
+    |-----|-------------|-----|-----|
+    | 0–8 | E = Hᵀ g, row by row: the cat frame in the heading frame H (E = I feet down, spine at its start) | -1 | 1 |
+    | 9–10 | s / max_bend | -1 | 1 |
+    | 11 | time left to landing / fall_time | 0 | 1 |
+
+    H has columns the start spine, the horizontal across it and the vertical (orthogonalized to the spine).
+
+    ## Rewards
+
+    With the landing error e = |roll| + spine error + β (rad), e before the step and e′ after it:
+
+        reward = e − e′ + 1 · (is_success)
+
+    The roll is atan2(Z · g e₂, Z · g e₃) (0 feet down), the spine error the angle between g e₁ and its start.
+    Bending out costs β, paid back when the cat straightens; the sweep pays the roll it takes away. Summed over an
+    episode: e₀ − e_T, plus 1 on success.
+
+    ## Starting State
+
+    Straight (s = 0), at rest, t = 0, upside down: g = Rz(ψ) Rx(π + δ), the spine horizontal at the heading ψ
+    uniform in [0, 2π) (physically irrelevant: the cat's roll does not depend on it), δ uniform in [−0.2, 0.2].
+    `reset(options={"state": {"R": R, "bend": s}})` sets either exactly: R the front half's attitude g Q_A(s), a
+    rotation to 1e-9 whose cat frame's spine is not vertical; s with |s| ≤ max_bend; else ValueError.
+
+    ## Episode End
+
+    Terminated on success, |roll| ≤ `tolerance`, spine error ≤ `tolerance` and β ≤ `tolerance`
+    (`info["is_success"]`), or at the landing, t = fall_time: the cat meets the ground, a real end (not a
+    truncation). The registration's time limit, fall_time/dt = 60 steps, is the landing at the defaults; with
+    another fall_time or dt pass `max_episode_steps` to `gym.make`.
+
+    ## Arguments
+
+    | kwarg | default | range |
+    |---|---|---|
+    | transverse_inertia | 0.01 | (0, 1e3] kg m², I: a half's inertia across its axis about its centre of mass |
+    | axial_inertia | 0.0003 | (0, transverse_inertia) kg m², J: about its own axis |
+    | mass | 1.5 | (0, 1e3] kg, m: each half |
+    | cm_distance | 0.12 | (0, 1e3] m, ℓ: joint to a half's centre of mass |
+    | max_bend | 1.2 | (0, 3] rad |
+    | max_bend_speed | 6.0 | (0, 1e3] rad/s |
+    | fall_time | 0.6 | (0, 100] s |
+    | dt | 0.01 | [1e-12, 100] s |
+    | tolerance | 0.05 | (0, π) rad |
+    | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | `connenv.core.steppers` |
+
+    m and ℓ enter only the locked inertia across the spine, never the roll: they show in the angular momentum and
+    the rendering. The defaults are a slender cat (J/I = 0.03) whose half turn needs β₀ ≈ 0.35 rad, so that
+    Kane and Scher's motion fits in the fall at the bend speed; stouter halves need larger bends and faster ones.
+    A stepper that leaves SO(3) by more than 1e-9 raises `connenv.core.StepperError`.
+
+    Every `info` has `"state"` (`R` (3×3) the front half's attitude, `bend` (2), `t`), `"angular_momentum"` (in
+    space, about the centre of mass, summed over the two bodies' spins and motions at the end of the step: 0 to
+    rounding), `"roll"`, `"spine_error"`, `"bend_angle"` (β) and `"is_success"`.
+    """
+
+    name = "FallingCat-v0"
+    metadata = {**ConnectionEnv.metadata, "measures": ("roll_error",)}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        transverse_inertia: float = 0.01,
+        axial_inertia: float = 0.0003,
+        mass: float = 1.5,
+        cm_distance: float = 0.12,
+        max_bend: float = 1.2,
+        max_bend_speed: float = 6.0,
+        fall_time: float = 0.6,
+        dt: float = 0.01,
+        tolerance: float = 0.05,
+        integrator: str | None = None,
+        **stepper_options,
+    ):
+        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
+        I = check_number("transverse_inertia", transverse_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)  # noqa: E741
+        J = check_number("axial_inertia", axial_inertia, 0.0, I, open_low=True, open_high=True,
+                         high_name="transverse_inertia")  # fmt: skip
+        self.mass = check_number("mass", mass, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.cm_distance = check_number("cm_distance", cm_distance, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.max_bend = check_number("max_bend", max_bend, 0.0, 3.0, open_low=True)
+        speed = check_number("max_bend_speed", max_bend_speed, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.fall_time = check_number("fall_time", fall_time, 0.0, 100.0, open_low=True)
+        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
+        self.inertias = {"transverse_inertia": I, "axial_inertia": J}
+        longest = min(math.sqrt(2) * speed * check_dt(dt, DT_MAX), 2 * self.max_bend)  # a segment's longest bend
+        pieces = falling_cat.pieces_for(longest, I, J)
+        super().__init__(
+            "SO3",
+            functools.partial(falling_cat.connection, **self.inertias),
+            [-self.max_bend] * 2,
+            [self.max_bend] * 2,
+            dt=dt,
+            frame="body",
+            max_shape_speed=speed,
+            render_mode=render_mode,
+            vectorized=True,
+            integrator=integrator,
+            exact_segment=functools.partial(falling_cat.exact_segment, **self.inertias, pieces=pieces),
+            **stepper_options,
+        )
+        eye = np.eye(3).ravel()
+        self.state = CatState(eye.copy(), np.zeros(2), 0.0, np.zeros(2), eye.copy())
+
+    def parameters(self):
+        return {**self.inertias, "mass": self.mass, "cm_distance": self.cm_distance, "max_bend": self.max_bend,
+                "max_bend_speed": self.max_shape_speed}  # fmt: skip
+
+    def _observation_space(self):
+        return spaces.Box(-1.0, 1.0, (12,), np.float32)
+
+    # -- physics ---------------------------------------------------------------
+
+    def start(self, options):
+        check_keys("reset options", options, {"state"})
+        given = options.get("state", {})
+        check_keys("options['state']", given, {"R", "bend"})
+        s = np.zeros(2)
+        if "bend" in given:
+            s = check_vector("state bend", given["bend"], 2, -self.max_bend, self.max_bend)
+            if math.hypot(*s) > self.max_bend:
+                raise ValueError(f"state bend={s.tolist()} has β = {math.hypot(*s):.6g} > max_bend={self.max_bend}")
+        heading = self.np_random.uniform(0.0, 2 * math.pi)
+        roll = math.pi + self.np_random.uniform(-ROLL_OFFSET, ROLL_OFFSET)
+        if "R" in given:
+            g = check_rotation("state R", given["R"]) @ falling_cat.halves(s)[0].T
+        else:
+            c, n, cr, sr = math.cos(heading), math.sin(heading), math.cos(roll), math.sin(roll)
+            turn = np.array([[c, -n, 0.0], [n, c, 0.0], [0.0, 0.0, 1.0]])  # Rz(ψ)
+            g = turn @ np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])  # Rz(ψ) Rx(π + δ)
+        spine = g[:, 0]
+        if not 1.0 - abs(spine[2]) > VERTICAL:
+            raise ValueError(f"state R={given['R']!r} puts the spine vertical, {spine.tolist()}: no roll about it")
+        up = np.array([0.0, 0.0, 1.0]) - spine[2] * spine
+        up /= np.linalg.norm(up)
+        H = np.stack([spine, np.cross(up, spine), up], -1)
+        return CatState(g.ravel(), s, 0.0, np.zeros(2), H.ravel())
+
+    def advance(self, state, s_dot):
+        return self.bent(state, s_dot, self.stepper)
+
+    def bent(self, state, s_dot, stepper, ops=SCALAR):
+        """The state after bending at ṡ for dt, stopped at max_bend (one state, or rows with ops=BATCH)."""
+        tau, s, v = falling_cat.disc_segment(state.s, s_dot, self.max_bend, self.dt)
+        g = state.g
+        if ops is BATCH or tau > 0.0:
+            g = run_segments(stepper, self.system, g, [(state.s, s_dot, tau)])[0]
+            self.check_group(g)
+        return state.replace(g=g, s=s, s_dot=v, t=state.t + self.dt)
+
+    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
+
+    def frames(self, state):
+        """g and H as (…, 3, 3)."""
+        lead = np.shape(state.g)[:-1]
+        return state.g.reshape(*lead, 3, 3), state.heading.reshape(*lead, 3, 3)
+
+    def errors(self, state, ops=SCALAR):
+        """The roll (rad, 0 feet down), the spine error (rad) and β."""
+        g, H = self.frames(state)
+        if ops is SCALAR:
+            (a1, _, _, a2, _, _, a3, _, _), (b1, _, _, b2, _, _, b3, _, _) = state.g.tolist(), state.heading.tolist()
+            across = math.hypot(a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1)
+            spine_error = math.atan2(across, a1 * b1 + a2 * b2 + a3 * b3)
+            return math.atan2(state.g[7], state.g[8]), spine_error, math.hypot(*state.s.tolist())
+        spine, start = g[..., :, 0], H[..., :, 0]
+        across = np.cross(spine, start)
+        spine_error = np.arctan2(np.linalg.norm(across, axis=-1), np.sum(spine * start, -1))
+        return np.arctan2(g[..., 2, 1], g[..., 2, 2]), spine_error, np.hypot(state.s[..., 0], state.s[..., 1])
+
+    def landing_error(self, state, ops=SCALAR):
+        """e = |roll| + spine error + β: the reward pays its decrease."""
+        roll, spine_error, beta = self.errors(state, ops)
+        return abs(roll) + spine_error + beta
+
+    def observe(self, state, ops=SCALAR):
+        g, H = self.frames(state)
+        E = (np.swapaxes(H, -1, -2) @ g).reshape(*np.shape(state.s)[:-1], 9)
+        left = ops.clip((self.fall_time - np.asarray(state.t)) / self.fall_time, 0.0, 1.0)
+        parts = [E, state.s / self.max_bend, np.asarray(left)[..., None]]
+        return np.concatenate(parts, -1).astype(np.float32)
+
+    def describe(self, state, ops=SCALAR):
+        g, _ = self.frames(state)
+        roll, spine_error, beta = self.errors(state, ops)
+        omega = -np.einsum("...ij,...j->...i", falling_cat.connection(state.s, **self.inertias), state.s_dot)
+        front = falling_cat.front_half(state.s)
+        momentum = falling_cat.angular_momentum(g, state.s, state.s_dot, omega, **self.inertias, mass=self.mass,
+                                                cm_distance=self.cm_distance, front=front)  # fmt: skip
+        success = (abs(roll) <= self.tolerance) & (spine_error <= self.tolerance) & (beta <= self.tolerance)
+        return {
+            "state": {"R": g @ front[0], "bend": np.array(state.s), "t": state.t},
+            "angular_momentum": momentum,
+            "roll": roll,
+            "roll_error": abs(roll),
+            "spine_error": spine_error,
+            "bend_angle": beta,
+            "is_success": ops.flag(success),
+        }
+
+    def reward(self, before, after, info, ops=SCALAR):
+        error = info["roll_error"] + info["spine_error"] + info["bend_angle"]
+        return self.landing_error(before, ops) - error + SUCCESS_BONUS * ops.real(info["is_success"])
+
+    def terminated(self, state, info, ops=SCALAR):
+        landed = np.asarray(state.t) >= self.fall_time - LANDING_SLACK
+        return ops.flag(info["is_success"] | landed)
+
+    # -- rendering ---------------------------------------------------------------
+
+    def _make_renderer(self):
+        from connenv.envs.rendering_lawton import CatRenderer
+
+        return CatRenderer(self.cm_distance, self.render_mode, self.metadata["render_fps"])
+
+    def _draw(self, renderer):
+        g, H = self.frames(self.state)
+        Q_A, Q_B = falling_cat.halves(self.state.s)
+        roll, _, _ = self.errors(self.state)
+        return renderer.draw(H.T @ g, Q_A, Q_B, self.state.s, self.state.t, roll)
+
+
+class FallingCatVectorEnv(ConnectionVectorEnv):
+    """FallingCat-v0 over a batch (``gym.make_vec("connenv/FallingCat-v0", num_envs=N)``; see
+    ``connenv.envs.vector``): every row bent by the single env's closed-form roll."""
+
+    single_env = FallingCatEnv
+
+    def advance(self, state, s_dot):
+        return self.env.bent(state, s_dot, self.stepper, BATCH)
