@@ -23,12 +23,13 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from agents.planning import RowPlanner
 from connenv.systems import falling_cat
 
 DONE = 1e-9  # rad: a roll below it needs no loop
 
 
-class KaneScher:
+class KaneScher(RowPlanner):
     """FallingCat-v0's controller: predict(obs) → (ṡ/max_bend_speed, state)."""
 
     def __init__(self, env):
@@ -37,13 +38,6 @@ class KaneScher:
         self.inertias = env.inertias
         self.pieces = env.system.exact_segment.keywords["pieces"]
         self.plans = {}  # row of the (batched) observation -> the remaining bend velocities (k, 2)
-
-    def predict(self, obs, state=None, episode_start=None, deterministic=True):
-        obs = np.asarray(obs, np.float64)
-        single = obs.ndim == 1
-        rows = np.reshape(obs, (-1, obs.shape[-1]))
-        actions = np.array([self.act(i, row) for i, row in enumerate(rows)], np.float32)
-        return (actions[0] if single else actions), state
 
     def act(self, i, obs):
         if obs[11] == 1.0 or i not in self.plans:  # the start of an episode

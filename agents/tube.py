@@ -23,25 +23,19 @@ import math
 
 import numpy as np
 
+from agents.planning import RowPlanner
 from connenv.systems.tube import bent, cap_loop, heading_bend, regular_loop
 
 MATCH = 1e-5  # largest difference between the observed and the predicted error E of a plan
 DONE = 1e-9  # rad: a twist or tangent error below it needs no loop
 
 
-class LoopPlanner:
+class LoopPlanner(RowPlanner):
     """TubeTwist-v0's controller: predict(obs) → (κ/max_bend_rate, state); sides=None for the cap loop."""
 
     def __init__(self, max_bend_rate: float, dt: float, sides: int | None = None):
         self.step_length, self.sides = max_bend_rate * dt, sides
         self.plans = {}  # row of the (batched) observation -> [remaining bends, predicted E]
-
-    def predict(self, obs, state=None, episode_start=None, deterministic=True):
-        obs = np.asarray(obs, np.float64)
-        single = obs.ndim == 1
-        rows = np.reshape(obs, (-1, obs.shape[-1]))
-        actions = np.array([self.act(i, row) for i, row in enumerate(rows)], np.float32)
-        return (actions[0] if single else actions), state
 
     def act(self, i, obs):
         E, twist_error = obs[:9].reshape(3, 3), math.atan2(obs[10], obs[9])
