@@ -145,6 +145,14 @@ def random_velocity(value, t, dt, rng):
     return rng.uniform(-1.0, 1.0, 2).astype(np.float32)
 
 
+SO3_METHODS = (  # the candidates on the tube and the cat, connections on SO(3)
+    ("euler", {}),
+    ("rk4", {}),
+    ("rk4", {"substeps": 4}),
+    ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
+    ("magnus", {}),
+    ("exact", {}),
+)
 CAT_BEND = 0.5  # rad: β of the cat's swept circle
 
 
@@ -260,14 +268,7 @@ MAPS = {
         random_velocity,
         lambda rate, dt: math.ceil(1.0 / dt),
         env_bound,
-        (
-            ("euler", {}),
-            ("rk4", {}),
-            ("rk4", {"substeps": 4}),
-            ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
-            ("magnus", {}),
-            ("exact", {}),
-        ),
+        SO3_METHODS,
     ),
     "cat": StabilityMap(
         "connenv/FallingCat-v0",
@@ -278,14 +279,7 @@ MAPS = {
         bend_sweep,
         lambda ratio, dt: math.ceil(1.0 / dt),
         env_bound,
-        (
-            ("euler", {}),
-            ("rk4", {}),
-            ("rk4", {"substeps": 4}),
-            ("dop853", {"rtol": 1e-8, "atol": 1e-10}),
-            ("magnus", {}),
-            ("exact", {}),
-        ),
+        SO3_METHODS,
     ),
     "kapitza": StabilityMap(
         "connenv/KapitzaPendulum-v0",
