@@ -10,11 +10,12 @@ leading batch axes of y.
 
 Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
 flow), ``"magnus"`` (the fourth-order Lie-group step of a system with a
-connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"`` or ``"rk4"`` with ``substeps``, or
+connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"``, ``"rk4"``, ``"rk8"`` (DOP853's formula at a fixed step) or
+``"rk8_energy"`` (the same, projected onto the energy level where u is held) with ``substeps``, or
 one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol``
 and ``atol``. The two Euler methods are Gymnasium classic control's
 integrators (its ``kinematics_integrator``), there to compare against: they are
-first order, and written here because scipy has no fixed-step methods.
+first order, and written here because scipy has no fixed-step methods; so is RK8, which takes scipy's tableau.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import DOP853, solve_ivp
 
 
 @runtime_checkable
@@ -134,6 +135,120 @@ class SemiImplicitEuler:
         return _finite(y, self)
 
 
+@dataclass(frozen=True)
+class RK8:
+    """DOP853's eighth-order formula (Dormand & Prince; scipy's 12-stage tableau) at ``substeps`` equal steps per
+    segment, without its step-size control: the adaptive method's work with none of its decisions, and with no
+    solve_ivp around one state. A single state runs on Python floats, where a stage sum of a few numbers costs
+    less than numpy's per-call overhead; a batch runs on arrays. Both sum each stage's terms in the tableau's
+    order, so a row of a batch gets the single state's arithmetic (scipy's own fixed-step methods are none)."""
+
+    substeps: int = 1
+
+    def __call__(self, system, y, u, u_dot, tau):
+        held = not (u_dot.any() if type(u_dot) is np.ndarray else np.any(u_dot))
+        if type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
+            return _finite(np.array(self._one(system, y.tolist(), u, u_dot, tau, held)), self)
+        h = tau / self.substeps
+        for i in range(self.substeps):
+            K = []
+            for c, row in _DOP853_ROWS:
+                u_s = u if held else u + (i * h + c * h) * u_dot
+                K.append(system.vector_field(y if not row else y + h * _weighted(row, K), u_s, u_dot))
+            y = y + h * _weighted(_DOP853_B, K)
+        return _finite(y, self)
+
+    def _one(self, system, y, u, u_dot, tau, held):
+        """The step of one state y (a list of floats), in the batch's order of operations."""
+        h = tau / self.substeps
+        for i in range(self.substeps):
+            K = [[] for _ in y]  # K[k][j]: component k of stage j
+            for c, row in _DOP853_ROWS:
+                u_s = u if held else u + (i * h + c * h) * u_dot
+                stage = [y_k + h * _weighted(row, K_k) for y_k, K_k in zip(y, K)] if row else y
+                for K_k, f_k in zip(K, system.vector_field(np.array(stage), u_s, u_dot).tolist()):
+                    K_k.append(f_k)
+            y = [y_k + h * _weighted(_DOP853_B, K_k) for y_k, K_k in zip(y, K)]
+        return y
+
+
+@dataclass(frozen=True)
+class EnergyProjected:
+    """RK8 at ``substeps``, then one Newton step back onto the energy level the segment started on, where u is
+    held: y ← y − (H(y) − H₀) ∇H / |∇H|², with ∇H = (−ṗ, q̇) read off Hamilton's equations (y = (q, p)). The flow
+    conserves H there, so the projection removes the step's energy error, and what is left is the error of the
+    phase along the level, which the method's order keeps small. The energy error the projection removes is
+    also the step's error estimate: past ``atol`` (in the units of H), the segment is stepped again at twice
+    the substeps, up to MAX_DOUBLINGS times. Past them the projected step is taken as it is: where the vector
+    field jumps (a trail's f‴ at the end of its domain) the error is first order in the substep and doubling
+    stops paying, while the projection still lands on the level; a diverged step, which the projection cannot
+    bring back, leaves its energy error for the env's check (and a non-finite state raises StepperError).
+    Where u moves H is not conserved, and the step is RK8's alone. The system gives ``hamiltonian(y, u)`` and ``n`` (HamiltonianSystem). A batch decides per
+    row, as each row's single state would."""
+
+    substeps: int = 1
+    atol: float = 1e-8
+
+    def __call__(self, system, y, u, u_dot, tau):
+        if u_dot.any() if type(u_dot) is np.ndarray else np.any(u_dot):
+            return RK8(self.substeps)(system, y, u, u_dot, tau)
+        return self._held(system, y, u, u_dot, tau, self.substeps)
+
+    def _held(self, system, y, u, u_dot, tau, substeps):
+        y_new = RK8(substeps)(system, y, u, u_dot, tau)
+        excess = system.hamiltonian(y_new, u) - system.hamiltonian(y, u)
+        if y_new.ndim == 1:  # one state, on Python floats (numpy's per-call overhead would double the step)
+            if not abs(excess) <= self.atol and substeps < self.substeps << MAX_DOUBLINGS:
+                return self._held(system, y, u, u_dot, tau, 2 * substeps)
+            f = system.vector_field(y_new, u, u_dot).tolist()
+            gradient = [-v for v in f[system.n :]] + f[: system.n]
+            norm = sum(v * v for v in gradient)
+            shift = float(excess) / norm if norm > 0.0 else 0.0
+            return _finite(np.array([y_k - shift * g_k for y_k, g_k in zip(y_new.tolist(), gradient)]), self)
+        redo = ~(np.abs(excess) <= self.atol) & (substeps < self.substeps << MAX_DOUBLINGS)
+        if redo.any():
+            rows = lambda a: a[redo] if np.ndim(a) else a  # noqa: E731
+            y_new, excess = y_new.copy(), excess.copy()
+            y_new[redo] = self._held(system, y[redo], rows(u), rows(u_dot), rows(tau), 2 * substeps)
+            excess[redo] = 0.0  # those rows are projected already
+        f = system.vector_field(y_new, u, u_dot)
+        gradient = np.concatenate([-f[..., system.n :], f[..., : system.n]], axis=-1)
+        norm = np.sum(gradient * gradient, axis=-1)
+        shift = np.divide(excess, norm, out=np.zeros_like(norm), where=norm > 0.0)
+        return _finite(y_new - shift[..., None] * gradient, self)
+
+
+MAX_DOUBLINGS = 6  # of EnergyProjected's substeps on one segment
+
+
+@runtime_checkable
+class HamiltonianSystem(Protocol):
+    """A system with a state y = (q, p), n = dim q, and its Hamiltonian H(y, u) (EnergyProjected's level)."""
+
+    n: int
+
+    def hamiltonian(self, y, u): ...
+
+
+def _weighted(row, K):
+    """Σ a K[j] over the (j, a) of row, left to right (for floats and arrays alike)."""
+    (j, a), *rest = row
+    total = a * K[j]
+    for j, a in rest:
+        total = total + a * K[j]
+    return total
+
+
+def _tableau_rows():
+    """DOP853's stages as (c, [(j, a) for the nonzero a of A's row]), and the nonzero weights of B."""
+    A, C = DOP853.A[: DOP853.n_stages, : DOP853.n_stages], DOP853.C[: DOP853.n_stages]
+    rows = tuple((float(C[s]), tuple((j, float(a)) for j, a in enumerate(A[s, :s]) if a != 0.0)) for s in range(len(C)))
+    return rows, tuple((j, float(b)) for j, b in enumerate(DOP853.B) if b != 0.0)
+
+
+_DOP853_ROWS, _DOP853_B = _tableau_rows()
+
+
 MAX_EVALUATIONS = 100_000  # of the vector field per segment: past it an adaptive stepper has failed (about 1 s)
 
 
@@ -177,7 +292,7 @@ class Exact:
     def __call__(self, system, y, u, u_dot, tau):
         if conforms(system, ExactSegment):
             flow = system.exact_segment(y, u, u_dot, tau)
-        elif np.any(u_dot != 0.0):
+        elif (u_dot.any() if type(u_dot) is np.ndarray else u_dot != 0.0):  # the method: np.any costs 2x more
             return self.fallback(system, y, u, u_dot, tau)
         else:
             flow = system.exact_flow(y, u, tau)
@@ -194,7 +309,13 @@ class Exact:
 
 
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
-FIXED_STEP = {"euler": Euler, "semi_implicit_euler": SemiImplicitEuler, "rk4": RK4}
+FIXED_STEP = {
+    "euler": Euler,
+    "semi_implicit_euler": SemiImplicitEuler,
+    "rk4": RK4,
+    "rk8": RK8,
+    "rk8_energy": EnergyProjected,
+}
 INTEGRATORS = ("exact", "magnus", *FIXED_STEP, *SCIPY_METHODS)
 STEPPER_OPTIONS = ("substeps", "rtol", "atol")
 
@@ -202,7 +323,8 @@ STEPPER_OPTIONS = ("substeps", "rtol", "atol")
 def make_stepper(integrator: str, system: SteppedSystem | None = None, **options):
     """Build a stepper by name, validating its options (and, for "exact", that the system has a flow).
 
-    euler, semi_implicit_euler and rk4 take ``substeps`` (int ≥ 1); the scipy
+    euler, semi_implicit_euler, rk4, rk8 and rk8_energy take ``substeps`` (int ≥ 1), rk8_energy also ``atol``,
+    its energy error per segment past which it doubles the substeps (default 1e-8, in H's units); the scipy
     methods take ``rtol`` and ``atol`` (> 0); exact takes the scipy options for
     the segments where u moves; magnus takes ``atol``, its error bound per
     segment on the coordinates of g (default 1e-10), and hands ``rtol`` and
@@ -211,6 +333,7 @@ def make_stepper(integrator: str, system: SteppedSystem | None = None, **options
     if integrator not in INTEGRATORS:
         raise ValueError(f"integrator={integrator!r} is not one of {INTEGRATORS}")
     allowed = {"substeps"} if integrator in FIXED_STEP else {"rtol", "atol"}
+    allowed |= {"atol"} if integrator == "rk8_energy" else set()
     unknown = set(options) - allowed
     if unknown:
         raise ValueError(
@@ -225,11 +348,16 @@ def make_stepper(integrator: str, system: SteppedSystem | None = None, **options
                 f"integrator='semi_implicit_euler' needs a state (q, p) split by the system's n, which "
                 f"{type(system).__name__} has not (a kinematic model); 'euler' is what the method reduces to there"
             )
+        if integrator == "rk8_energy" and system is not None and not isinstance(system, HamiltonianSystem):
+            raise ValueError(
+                f"integrator='rk8_energy' projects onto the level of the system's hamiltonian(y, u), which "
+                f"{type(system).__name__} has not; 'rk8' is the step without the projection"
+            )
+        if integrator == "rk8_energy":
+            return EnergyProjected(int(substeps), _positive("atol", options.get("atol", EnergyProjected.atol)))
         return FIXED_STEP[integrator](int(substeps))
     for name in ("rtol", "atol"):
-        value = options.get(name, 1.0)
-        if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
-            raise ValueError(f"{name}={value!r} must be a finite number > 0")
+        _positive(name, options.get(name, 1.0))
     if integrator == "magnus":
         from connenv.core.lie import Magnus  # lie builds on this module
 
@@ -239,6 +367,13 @@ def make_stepper(integrator: str, system: SteppedSystem | None = None, **options
             raise ValueError(f"integrator='exact' needs a closed-form flow, which {type(system).__name__} has not")
         return Exact(Scipy(**options))
     return Scipy(SCIPY_METHODS[integrator], **options)
+
+
+def _positive(name: str, value):
+    """value if a finite number > 0, else ValueError naming it."""
+    if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+        raise ValueError(f"{name}={value!r} must be a finite number > 0")
+    return value
 
 
 _CONFORMS: dict = {}

@@ -91,6 +91,11 @@ def check_stepper_options(env_name: str, options, env_cls):
         raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {valid}")
 
 
+def ndim(x) -> int:
+    """np.ndim(x), at an attribute's cost for an array (np.ndim's dispatch costs a step's microsecond)."""
+    return x.ndim if type(x) is np.ndarray else np.ndim(x)
+
+
 def check_action(action, space):
     """The action as a float array of the space's shape, finite, clipped into the space."""
     return np.minimum(np.maximum(finite_action(action, space), space.low), space.high)
@@ -98,6 +103,10 @@ def check_action(action, space):
 
 def finite_action(action, space):
     """The action as a float array of the space's shape, finite, else ValueError; not clipped."""
+    if type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == space.shape:  # a policy's action
+        a = action.astype(np.float64)
+        if all(map(math.isfinite, a.flat)):  # on Python floats: numpy's isfinite().all() costs more on a few numbers
+            return a
     try:
         kind = np.asarray(action).dtype.kind
     except (TypeError, ValueError):  # a ragged sequence

@@ -39,11 +39,13 @@ class Skier:
     def geometry(self, x, h):
         """(f, f′, σ, κ, 1 − κh, w, w′) at x for barycentre height h."""
         f, f1, f2, f3 = self.trail.derivatives(x)
-        sigma = (1.0 + f1 * f1) ** 0.5
-        kappa = f2 / sigma**3
+        sigma_2 = 1.0 + f1 * f1
+        sigma = sigma_2**0.5
+        sigma_3 = sigma_2 * sigma  # products, not powers: a power of an array costs several products
+        kappa = f2 / sigma_3
         lever = 1.0 - kappa * h
         sigma_1 = f1 * f2 / sigma
-        kappa_1 = f3 / sigma**3 - 3.0 * f1 * f2 * f2 / sigma**5
+        kappa_1 = (f3 - 3.0 * f1 * f2 * f2 / sigma_2) / sigma_3
         return f, f1, sigma, kappa, lever, lever * sigma, lever * sigma_1 - h * kappa_1 * sigma
 
     def metric(self, q, u):
@@ -57,8 +59,8 @@ class Skier:
 
     def vector_field(self, y, u, u_dot):
         """Hand-derived (ẋ, ṗ); u_dot is accepted for the common interface and drops out."""
-        single = y.ndim == 1  # one state: numpy scalars, which the trail evaluates without array calls
-        x, p, h = (y[0], y[1], u[0]) if single else (y[..., 0], y[..., 1], u[..., 0])
+        single = y.ndim == 1  # one state: Python floats, which the trail evaluates without array calls
+        (x, p), h = (y.tolist(), float(u[0])) if single else ((y[..., 0], y[..., 1]), u[..., 0])
         _, f1, _, _, lever, w, w_1 = self.geometry(x, h)
         x_dot = p / (self.mass * w * w)
         p_dot = x_dot * x_dot * self.mass * w * w_1 - self.mass * self.g * f1 * lever
@@ -66,13 +68,25 @@ class Skier:
 
     def velocity(self, y, h):
         """ẋ = p / (m w²)."""
-        w = self.geometry(y[..., 0], h)[5]
-        return y[..., 1] / (self.mass * w * w)
+        return self.kinematics(y, h)[1]
 
     def energy(self, y, h):
         """E = p²/(2 m w²) + m g (f + h cos φ), zero with the barycentre at the trail's level y = 0."""
-        f, _, sigma, _, _, w, _ = self.geometry(y[..., 0], h)
-        return y[..., 1] ** 2 / (2 * self.mass * w * w) + self.mass * self.g * (f + h / sigma)
+        return self.kinematics(y, h)[0]
+
+    def hamiltonian(self, y, u):
+        """H(y, u) = E(y, h), the energy as the steppers' projection takes it (u = (h,))."""
+        return self.energy(y, u[..., 0])
+
+    def kinematics(self, y, h):
+        """(E, ẋ, f′, σ, κ) at (y, h), from one evaluation of the trail's geometry."""
+        if np.ndim(y) == 1:  # one state: Python floats (a 0-d array would take the trail's array path)
+            (x, p), h = y.tolist(), float(h)
+        else:
+            x, p = y[..., 0], y[..., 1]
+        f, f1, sigma, kappa, _, w, _ = self.geometry(x, h)
+        x_dot = p / (self.mass * w * w)
+        return 0.5 * p * x_dot + self.mass * self.g * (f + h / sigma), x_dot, f1, sigma, kappa
 
 
 def check_curvature(trail: Trail, h_max: float):

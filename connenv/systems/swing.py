@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipj, ellipk, ellipkinc
 
+from connenv.core.validation import ndim
+
 SEPARATRIX_BAND = 1e-6
 """|k² − 1| below which exact_flow declines (measured: 1e-9 error at 1 − k² = 2.5e-7, 25 rad at 2.5e-11)."""
 
@@ -51,6 +53,10 @@ class Swing:
         theta, p = y[..., 0], y[..., 1]
         return p**2 / (2 * self.mass * r**2) - self.mass * self.g * r * np.cos(theta)
 
+    def hamiltonian(self, y, u):
+        """H(y, u) = E(y, r) (u = (r,)), the level the steppers' energy projection keeps."""
+        return self.energy(y, u[..., 0])
+
     def lift(self, y, r):
         """h = (E + m g r)/(m g r), energy above the bottom in units of m g r; 1 − cos A while librating."""
         return (self.energy(y, r) + self.mass * self.g * r) / (self.mass * self.g * r)
@@ -72,9 +78,9 @@ class Swing:
         """
         # The formulas are written once. A single state (the env's case) runs them on
         # Python floats, about 5x faster than numpy with its per-call overhead on 0-d arrays.
-        one = np.ndim(y) == 1 and np.ndim(r) == 1
+        one = ndim(y) == 1 and ndim(r) == 1
         if one:
-            (theta, p), r = map(float, y), float(r[0])
+            (theta, p), r = (y.tolist() if type(y) is np.ndarray else map(float, y)), float(r[0])
             sin, cos, sqrt, atan2, copysign, maximum = math.sin, math.cos, math.sqrt, math.atan2, math.copysign, max
             where = lambda condition, a, b: a if condition else b  # noqa: E731
         else:

@@ -59,6 +59,8 @@ class Trail:
 
     def arc_length(self, x):
         """s(x) = ∫ σ dx from the origin; continued in closed form along the parabola beyond the domain."""
+        if isinstance(x, float) and self.lo <= x <= self.hi:  # a single state on the domain: no array calls
+            return float(self.arc_length_on_domain(x) - self.arc_length_on_domain(self.origin))
         b = np.clip(x, self.lo, self.hi)
         _, f1, f2, _ = self.profile(b)
         return self.arc_length_on_domain(b) - self.arc_length_on_domain(self.origin) + _parabola_arc(f1, f2, x - b)
