@@ -1,8 +1,8 @@
-"""Throughput: single-env steps/s against Gymnasium's Pendulum-v1, and native vector env-steps/s against
-Gymnasium's SyncVectorEnv of the same env.
+"""Throughput: single-env steps/s against Gymnasium's Pendulum-v1, native vector env-steps/s against Gymnasium's
+native CartPole-v1 vector env and SyncVectorEnv, and SB3 PPO training steps/s against Pendulum-v1's.
 
     python -m connenv.throughput [--envs ID ...] [--sizes 1 64 1024 4096] [--sync-max 1024] [--seconds 0.5]
-                                 [--breakdown]
+                                 [--breakdown] [--training] [--write docs/throughput.md]
     python -m connenv.throughput --rigid-body [--single-steps 3000]
 
 Single envs: each env from ``gym.make(id)`` (its registered wrappers included) and Pendulum-v1 from
@@ -12,17 +12,24 @@ measured in the same loop, so that it holds on a machine busy with other work, w
 
 Vector envs: ``gym.make_vec(id, N, vectorization_mode="vector_entry_point")`` (native) and the same with
 ``"sync"`` (Gymnasium's SyncVectorEnv of N single envs), and Gymnasium's native CartPole-v1 vector env at the same N
-(``gym.make_vec("CartPole-v1", N, vectorization_mode="vector_entry_point")``, the reference of issue 15's ratios),
-reset once (untimed), then stepped with random actions in alternating blocks of about ``seconds / ROUNDS`` each;
-autoresets are part of the steps, as in training. The figure is N × steps / time, the median over the blocks.
-SyncVectorEnv's cost per env hardly depends on N, and at N = 4096 its first reset alone takes tens of seconds on
-the envs whose reset solves for an optimal arc, so it runs only up to ``--sync-max`` (default 1024). The timed blocks
-are short beside an episode, so few rows end in them: the autoresets' share in a long run is printed by
-``--breakdown``, which adds, at the largest N, where a native step's time goes: the stepper and the rest (task code:
-observation, reward, info), the vector-field evaluations per step of the adaptive steppers, and the cost of a row's
-reset (the single env's reset, run with the row's generator) with its share per step when every episode runs to the
-time limit. Targets (issue 7): single-env step ≤ 1.0× Pendulum-v1; native vector ≥ 5 M
-env-steps/s at N = 4096 for Swing and Skier, ≥ 1 M for RollingBall, KozlovShell and the Kapitza pendulum.
+(``gym.make_vec("CartPole-v1", N, vectorization_mode="vector_entry_point")``), reset once (untimed), then stepped
+with random actions in alternating blocks of about ``seconds / ROUNDS`` each; autoresets are part of the steps, as
+in training. The figure is N × steps / time, the median over the blocks, and the target is a fraction of
+CartPole's rate in the same run. SyncVectorEnv's cost per env hardly depends on N, and at N = 4096 its first reset
+alone takes tens of seconds on the envs whose reset solves for an optimal arc, so it runs only up to ``--sync-max``
+(default 1024). The timed blocks are short beside an episode, so few rows end in them: the autoresets' share in a
+long run is printed by ``--breakdown``, which adds, at the largest N, where a native step's time goes: the stepper
+and the rest (task code: observation, reward, info), the vector-field evaluations per step of the adaptive
+steppers, and the cost of a row's reset (the single env's reset, run with the row's generator) with its share per
+step when every episode runs to the time limit.
+
+``--training``: SB3's PPO (MlpPolicy, or MultiInputPolicy for a Dict observation) on 8 copies of the env in SB3's
+DummyVecEnv, n_steps 256, torch on one thread, beside Pendulum-v1 with the same settings: training steps/s after a
+warm-up rollout, and the env's share of the training time (the time the same DummyVecEnv takes to step as often
+with random actions, over the training time). It needs the ``train`` extra.
+
+``--write PATH`` writes what was printed as a Markdown page (docs/throughput.md): regenerate it with the command, do
+not edit it.
 
 ``--rigid-body``: the free rigid body (connenv.systems.rigid_body, a system without an env): its default step,
 ``advance`` by the exact flow over dt = 0.1 s from a seeded random momentum, timed alternately with Pendulum-v1's
@@ -34,8 +41,11 @@ from __future__ import annotations
 import argparse
 import datetime
 import os
+import pathlib
 import platform
 import statistics
+import subprocess
+import sys
 import time
 
 import gymnasium as gym
@@ -49,14 +59,23 @@ SINGLE_STEPS = 3000
 REFERENCE = "CartPole-v1"  # Gymnasium's native vector env, the vector table's reference (issue 15)
 ROUNDS = 5
 SIZES = (1, 64, 1024, 4096)
-VECTOR_TARGETS = {
-    "connenv/Swing-v0": 5e6,
-    "connenv/Skier-v0": 5e6,
-    "connenv/RollingBall-v0": 1e6,
-    "connenv/KozlovShell-v0": 1e6,
-    "connenv/KapitzaPendulum-v0": 1e6,
-    "connenv/KapitzaSwingUp-v0": 1e6,
+SINGLE_TARGETS = {  # issue 20: the largest ratio to Pendulum-v1's step
+    "connenv/Swing-v0": 1.5,
+    "connenv/KapitzaPendulum-v0": 1.5,
+    "connenv/KapitzaSwingUp-v0": 1.5,
+    "connenv/RollingBall-v0": 1.5,
+    "connenv/RollingBallPose-v0": 1.5,
+    "connenv/RollingBallGoal-v0": 3.0,
+    "connenv/Skier-v0": 5.0,
 }
+VECTOR_TARGETS = {  # issue 20: the smallest fraction of CartPole-v1's native vector env at N = 4096
+    "connenv/Swing-v0": 0.35,
+    "connenv/Skier-v0": 0.15,
+    "connenv/KapitzaPendulum-v0": 0.1,
+    "connenv/KapitzaSwingUp-v0": 0.1,
+    "connenv/RollingBall-v0": 0.1,
+}
+TRAINING = {"n_envs": 8, "n_steps": 256, "rollouts": 2}  # PPO's settings for --training, env and Pendulum-v1 alike
 
 
 def make_kwargs(env_id: str) -> dict:
@@ -139,7 +158,9 @@ def vector_rates(env_id: str, n: int, seconds: float, sync: bool, seed: int = 0,
 
 
 class Counted:
-    """A system whose vector_field calls are counted (the adaptive steppers' right-hand-side evaluations)."""
+    """A system whose vector_field calls are counted (the adaptive steppers' right-hand-side evaluations). Made by
+    ``counted(system)``: a subclass per wrapped type, because the steppers decide a system's protocols once per type
+    (``connenv.core.steppers.conforms``), and one class for every wrapped system would answer for the first."""
 
     def __init__(self, system):
         self.system, self.calls = system, 0
@@ -152,6 +173,17 @@ class Counted:
         return getattr(self.system, name)
 
 
+def counted(system) -> Counted:
+    """system wrapped in Counted, with the methods of the system's protocols (exact flows, hamiltonian) exposed."""
+    names = [name for name in dir(type(system)) if not name.startswith("_") and callable(getattr(system, name))]
+    methods = {name: _forward(name) for name in names if name != "vector_field"}
+    return type(f"Counted{type(system).__name__}", (Counted,), methods)(system)
+
+
+def _forward(name):
+    return lambda self, *args, **kwargs: getattr(self.system, name)(*args, **kwargs)
+
+
 def step_breakdown(env_id: str, n: int, steps: int, seed: int = 0):
     """Where a native vector step goes at N = n: (ms per step, ms in the stepper, vector-field evaluations per
     step, µs per row reset, ms per step of autoresets in the steady state of episodes at the time limit)."""
@@ -159,9 +191,9 @@ def step_breakdown(env_id: str, n: int, steps: int, seed: int = 0):
     prototype = venv.unwrapped.env
     for name in ("system", "reduced_system", "full_system"):
         if hasattr(prototype, name):
-            setattr(prototype, name, Counted(getattr(prototype, name)))
-    counted = {name: getattr(prototype, name, None) for name in ("system", "reduced_system", "full_system")}
-    counters = list({id(c): c for c in counted.values() if isinstance(c, Counted)}.values())
+            setattr(prototype, name, counted(getattr(prototype, name)))
+    systems = [getattr(prototype, name, None) for name in ("system", "reduced_system", "full_system")]
+    counters = list({id(c): c for c in systems if isinstance(c, Counted)}.values())
     stepper, in_stepper = venv.unwrapped.stepper, [0.0]
 
     def timed_stepper(*args):
@@ -254,6 +286,140 @@ def shell_steppers(integrators, n: int, steps: int, seconds: float, seed: int = 
         )
 
 
+def training_rates(env_id: str, seed: int = 0):
+    """(PPO training steps/s on env_id, the same on Pendulum-v1, env_id's share of its training time, Pendulum-v1's
+    share), with TRAINING's settings and torch on one thread; the share is the time the same DummyVecEnv takes to
+    step as often with random actions over the training time."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    torch.set_num_threads(1)
+    results = []
+    for name, kwargs in ((env_id, make_kwargs(env_id)), ("Pendulum-v1", {})):
+        venv = make_vec_env(name, n_envs=TRAINING["n_envs"], seed=seed, env_kwargs=kwargs)
+        policy = "MultiInputPolicy" if isinstance(venv.observation_space, gym.spaces.Dict) else "MlpPolicy"
+        model = PPO(policy, venv, n_steps=TRAINING["n_steps"], seed=seed, device="cpu")
+        rollout = TRAINING["n_envs"] * TRAINING["n_steps"]
+        model.learn(rollout)  # warm-up: one rollout and one update
+        start = time.perf_counter()
+        model.learn(TRAINING["rollouts"] * rollout, reset_num_timesteps=False)
+        training = time.perf_counter() - start
+        actions = [np.stack([venv.action_space.sample() for _ in range(venv.num_envs)]) for _ in range(16)]
+        start = time.perf_counter()
+        for i in range(TRAINING["rollouts"] * TRAINING["n_steps"]):
+            venv.step(actions[i % 16])
+        stepping = time.perf_counter() - start
+        venv.close()
+        results.append((TRAINING["rollouts"] * rollout / training, stepping / training))
+    (rate, share), (pendulum_rate, pendulum_share) = results
+    return rate, pendulum_rate, share, pendulum_share
+
+
+def verdict(value: float, target: float | None, at_most: bool) -> str:
+    """ "met"/"MISSED" against a target (value ≤ target with at_most, else ≥), "" without one."""
+    if target is None:
+        return ""
+    return "met" if (value <= target if at_most else value >= target) else "MISSED"
+
+
+class Report:
+    """Tables printed as they fill, and kept to be written as a Markdown page."""
+
+    def __init__(self, header: str):
+        self.parts = [header]
+        print(header)
+
+    def table(self, title: str, columns: list[str], rows: list[list[str]]):
+        widths = [max(len(c), *(len(r[i]) for r in rows)) if rows else len(c) for i, c in enumerate(columns)]
+        print(f"\n{title}")
+        for line in [columns, *rows]:
+            print(
+                "  ".join(cell.ljust(w) if i == 0 else cell.rjust(w) for i, (cell, w) in enumerate(zip(line, widths)))
+            )
+        body = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+        self.parts.append(f"{title}\n\n" + "\n".join(body + ["| " + " | ".join(r) + " |" for r in rows]))
+
+    def note(self, text: str):
+        print(f"\n{text}")
+        self.parts.append(text)
+
+    def markdown(self, command: str) -> str:
+        intro = (
+            "# Throughput\n\n"
+            f"Generated by `{command}`; regenerate it with the same command rather than editing it. How each figure is "
+            "measured is in the docstring of `connenv/throughput.py`. Absolute times on a shared machine move by 2× "
+            "from hour to hour: read the ratios to Gymnasium's Pendulum-v1 and CartPole-v1, measured in the same run.\n"
+        )
+        return intro + "\n" + "\n\n".join(self.parts) + "\n"
+
+
+def single_table(report: Report, env_ids, steps: int, misses: list):
+    rows = []
+    for env_id in env_ids:
+        env_time, pendulum_time = single_step_times(env_id, steps)
+        ratio, target = env_time / pendulum_time, SINGLE_TARGETS.get(env_id)
+        result = verdict(ratio, target, at_most=True)
+        misses += [f"{env_id} single {ratio:.2f}× (target ≤ {target}×)"] if result == "MISSED" else []
+        rows.append(
+            [env_id, f"{env_time * 1e6:.1f}", f"{1 / env_time:.0f}", f"{pendulum_time * 1e6:.1f}", f"{ratio:.2f}",
+             f"≤ {target}: {result}" if target else ""]
+        )  # fmt: skip
+    columns = ["env", "µs/step", "steps/s", "Pendulum µs", "× Pendulum", "target"]
+    report.table("Single env: median of env.step of gym.make(id); Pendulum-v1 stepped alternately", columns, rows)
+
+
+def vector_table(report: Report, env_ids, sizes, seconds: float, sync_max: int, misses: list):
+    rows = []
+    for env_id in env_ids:
+        for n in sizes:
+            native, sync, cartpole = vector_rates(env_id, n, seconds, n <= sync_max)
+            fraction, target = native / cartpole, VECTOR_TARGETS.get(env_id) if n == 4096 else None
+            result = verdict(fraction, target, at_most=False)
+            misses += [f"{env_id} N={n} {fraction:.3f}× CartPole (target ≥ {target}×)"] if result == "MISSED" else []
+            rows.append(
+                [env_id, str(n), f"{native / 1e6:.4f}", f"{sync / 1e6:.4f}" if sync else "-",
+                 f"{native / sync:.1f}" if sync else "-", f"{cartpole / 1e6:.3f}", f"{fraction:.3f}",
+                 f"≥ {target}: {result}" if target else ""]
+            )  # fmt: skip
+    columns = ["env", "N", "native M/s", "sync M/s", "native/sync", "CartPole M/s", "× CartPole", "target at N=4096"]
+    title = (
+        "Vector envs: M env-steps/s, median of blocks, autoresets included; Gymnasium's native CartPole-v1 vector env "
+        "stepped alternately at the same N"
+    )
+    report.table(title, columns, rows)
+
+
+def breakdown_table(report: Report, env_ids, n: int, seconds: float):
+    rows = []
+    for env_id in env_ids:
+        step, stepper, calls, reset, amortized = step_breakdown(env_id, n, max(3, int(seconds * 20)))
+        rows.append(
+            [env_id, f"{step * 1e3:.2f}", f"{stepper * 1e3:.2f}", f"{(step - stepper) * 1e3:.2f}", f"{calls:.1f}",
+             f"{reset * 1e6:.1f}", f"{amortized * 1e3:.2f}"]
+        )  # fmt: skip
+    title = (
+        f"Where a native vector step goes at N={n}, random actions: ms per step, in the stepper and in the rest (task "
+        "code); vector-field calls per step (adaptive steppers); a row's reset (µs), and the autoresets' ms per step "
+        "when every episode runs to the time limit"
+    )
+    report.table(title, ["env", "step ms", "stepper ms", "rest ms", "rhs calls", "reset µs", "autoreset ms"], rows)
+
+
+def training_table(report: Report, env_ids):
+    rows = []
+    for env_id in env_ids:
+        rate, pendulum_rate, share, pendulum_share = training_rates(env_id)
+        rows.append(
+            [env_id, f"{rate:.0f}", f"{pendulum_rate:.0f}", f"{rate / pendulum_rate:.2f}", f"{share:.0%}",
+             f"{pendulum_share:.0%}"]
+        )  # fmt: skip
+    settings = ", ".join(f"{k} {v}" for k, v in TRAINING.items())
+    title = f"SB3 PPO training steps/s ({settings}, one torch thread), beside Pendulum-v1 with the same settings"
+    columns = ["env", "steps/s", "Pendulum steps/s", "× Pendulum", "env's share", "Pendulum's share"]
+    report.table(title, columns, rows)
+
+
 def main(argv=None):
     ids = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -265,10 +431,15 @@ def main(argv=None):
     parser.add_argument("--skip-single", action="store_true")
     parser.add_argument("--skip-vector", action="store_true")
     parser.add_argument("--breakdown", action="store_true", help="also where a native step goes at the largest N")
+    parser.add_argument("--training", action="store_true", help="also SB3 PPO training steps/s (the train extra)")
+    parser.add_argument("--write", metavar="PATH", help="write the tables as a Markdown page (docs/throughput.md)")
     parser.add_argument(
-        "--shell-steppers", nargs="*", metavar="INTEGRATOR", help="only the shell's reduced model under these "
+        "--shell-steppers",
+        nargs="*",
+        metavar="INTEGRATOR",
+        help="only the shell's reduced model under these "
         "integrators (default: dop853 magnus default; magnus:ATOL for another atol; default: the env's own stepper) "
-        "against Pendulum-v1 and CartPole-v1's native vector env, at the largest N"
+        "against Pendulum-v1 and CartPole-v1's native vector env, at the largest N",
     )
     parser.add_argument("--rigid-body", action="store_true", help="only the free rigid body's step against Pendulum-v1")
     args = parser.parse_args(argv)
@@ -281,60 +452,37 @@ def main(argv=None):
         integrators = args.shell_steppers or ["dop853", "magnus", "default"]
         shell_steppers(integrators, max(args.sizes), args.single_steps, args.seconds)
         return
-    print(
-        f"# {datetime.datetime.now():%Y-%m-%d %H:%M}, {platform.machine()}, {os.cpu_count()} cores, "
+    report = Report(
+        f"{datetime.datetime.now():%Y-%m-%d %H:%M}, {platform.machine()}, {os.cpu_count()} cores, "
         f"python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, "
-        f"gymnasium {gym.__version__}"
+        f"gymnasium {gym.__version__}, commit {commit()}"
     )
     misses = []
     if not args.skip_single:
-        print("\nsingle env, gym.make, median of env.step; Pendulum-v1 stepped alternately in the same loop")
-        print(f"{'env':28} {'µs/step':>9} {'steps/s':>9} {'Pendulum µs':>12} {'× Pendulum':>11}  target ≤ 1.0×")
-        for env_id in args.envs:
-            env_time, pendulum_time = single_step_times(env_id, args.single_steps)
-            ratio = env_time / pendulum_time
-            verdict = "met" if ratio <= 1.0 else "MISSED"
-            misses += [] if ratio <= 1.0 else [f"{env_id} single {ratio:.1f}×"]
-            print(
-                f"{env_id:28} {env_time * 1e6:9.1f} {1 / env_time:9.0f} {pendulum_time * 1e6:12.1f} "
-                f"{ratio:11.2f}  {verdict}"
-            )
+        single_table(report, args.envs, args.single_steps, misses)
     if not args.skip_vector:
-        print("\nvector envs, M env-steps/s (median of blocks; autoresets included); CartPole-v1's native vector env")
-        print("(Gymnasium's vector_entry_point) stepped alternately at the same N")
-        print(
-            f"{'env':28} {'N':>5} {'native':>9} {'sync':>9} {'native/sync':>12} {'CartPole':>9} {'× CartPole':>11}"
-            "  target at N=4096"
-        )
-        for env_id in args.envs:
-            for n in args.sizes:
-                native, sync, cartpole = vector_rates(env_id, n, args.seconds, n <= args.sync_max)
-                target = VECTOR_TARGETS.get(env_id) if n == 4096 else None
-                verdict = "" if target is None else f"≥ {target / 1e6:.0f} M: " + ("met" if native >= target else "MISSED")
-                if target is not None and native < target:
-                    misses.append(f"{env_id} N=4096 {native / 1e6:.2f} M/s")
-                sync_text = f"{sync / 1e6:9.4f}" if sync else f"{'-':>9}"
-                ratio_text = f"{native / sync:12.1f}" if sync else f"{'-':>12}"
-                print(
-                    f"{env_id:28} {n:5} {native / 1e6:9.4f} {sync_text} {ratio_text} {cartpole / 1e6:9.3f} "
-                    f"{native / cartpole:11.3f}  {verdict}"
-                )
+        vector_table(report, args.envs, args.sizes, args.seconds, args.sync_max, misses)
     if args.breakdown:
-        n = max(args.sizes)
-        print(
-            f"\nwhere a native vector step goes at N={n}, random actions: ms per step in all, in the stepper and in the"
-            "\nrest (task code); vector-field calls per step (adaptive steppers); a row's reset, µs, and the autoresets'"
-            "\nms per step when every episode runs to the time limit (N / max_episode_steps resets a step)"
+        breakdown_table(report, args.envs, max(args.sizes), args.seconds)
+    if args.training:
+        training_table(report, args.envs)
+    report.note("Targets missed: " + ("; ".join(misses) if misses else "none") + ".")
+    if args.write:
+        command = "python -m connenv.throughput " + " ".join(argv if argv is not None else sys.argv[1:])
+        pathlib.Path(args.write).write_text(report.markdown(command.strip()))
+        print(f"wrote {args.write}")
+
+
+def commit() -> str:
+    """The checkout's commit (with "+" where the work tree differs), or "unknown" outside a git checkout."""
+    here = pathlib.Path(__file__).parent
+    try:
+        run = lambda *a: subprocess.run(["git", *a], cwd=here, capture_output=True, text=True, check=True).stdout  # noqa: E731
+        return run("rev-parse", "--short", "HEAD").strip() + (
+            "+" if run("status", "--porcelain", "-uno").strip() else ""
         )
-        print(f"{'env':28} {'step':>7} {'stepper':>8} {'rest':>7} {'rhs':>6} {'reset µs':>9} {'autoreset ms':>13}")
-        for env_id in args.envs:
-            step, stepper, calls, reset, amortized = step_breakdown(env_id, n, max(3, int(args.seconds * 20)))
-            print(
-                f"{env_id:28} {step * 1e3:7.2f} {stepper * 1e3:8.2f} {(step - stepper) * 1e3:7.2f} {calls:6.1f} "
-                f"{reset * 1e6:9.1f} {amortized * 1e3:13.2f}"
-            )
-    if not (args.skip_single and args.skip_vector):
-        print("\nmissed: " + ("; ".join(misses) if misses else "none"))
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
 
 
 if __name__ == "__main__":

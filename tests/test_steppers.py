@@ -19,7 +19,7 @@ OMEGA = math.sqrt(SWING.g / R[0])
 
 @pytest.mark.parametrize(
     "integrator, order, substeps, rel",
-    [("euler", 1, 64, 0.1), ("semi_implicit_euler", 1, 64, 0.1), ("rk4", 4, 64, 0.1), ("rk8", 8, 2, 0.2)],
+    [("euler", 1, 64, 0.1), ("semi_implicit_euler", 1, 64, 0.1), ("rk4", 4, 64, 0.1), ("gauss6", 6, 8, 0.1), ("rk8", 8, 2, 0.2)],
 )
 def test_the_global_error_falls_as_the_order_of_the_method(integrator, order, substeps, rel):
     """Doubling the substeps divides the error against the closed-form pendulum flow by 2^order (RK8: from 2 to 4
@@ -70,7 +70,7 @@ def test_semi_implicit_euler_keeps_the_energy_bounded_where_euler_lets_it_grow()
     assert energies["semi_implicit_euler"] < OMEGA * 0.05 < energies["euler"]
 
 
-@pytest.mark.parametrize("integrator", ["euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy"])
+@pytest.mark.parametrize("integrator", ["euler", "semi_implicit_euler", "rk4", "gauss6", "rk8", "rk8_energy"])
 def test_fixed_step_methods_broadcast_over_a_batch(integrator):
     stepper = make_stepper(integrator, substeps=3)
     rng = np.random.default_rng(0)

@@ -231,6 +231,11 @@ CASES = {
         "max |E − E(0)| / (m g H)",
         energy_drift(lambda env: env.system.mass * env.system.g * env.trail.H),
         "m",
+        steppers=(
+            *(("rk8", {"substeps": n}) for n in (1, 2, 4)),
+            *(("rk8_energy", {"substeps": n}) for n in (1, 2)),
+            *(("gauss6", {"substeps": n}) for n in (1, 2, 4)),
+        ),
     ),
     "ball": Case(
         "connenv/RollingBall-v0",
@@ -484,6 +489,9 @@ STYLE = {
     "radau": ("tab:brown", "P"),
     "magnus": ("tab:cyan", "X"),
     "splitting": ("tab:olive", "h"),
+    "rk8": ("tab:pink", "p"),
+    "rk8_energy": ("tab:gray", "H"),
+    "gauss6": ("gold", "d"),
 }
 
 

@@ -11,7 +11,8 @@ leading batch axes of y.
 Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
 flow), ``"magnus"`` (the fourth-order Lie-group step of a system with a
 connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"``, ``"rk4"``, ``"rk8"`` (DOP853's formula at a fixed step) or
-``"rk8_energy"`` (the same, projected onto the energy level where u is held) with ``substeps``, or
+``"rk8_energy"`` (the same, projected onto the energy level where u is held), ``"gauss6"`` (Gauss–Legendre,
+order 6) with ``substeps``, or
 one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol``
 and ``atol``. The two Euler methods are Gymnasium classic control's
 integrators (its ``kinematics_integrator``), there to compare against: they are
@@ -173,6 +174,47 @@ class RK8:
 
 
 @dataclass(frozen=True)
+class Gauss6:
+    """The three-stage Gauss–Legendre collocation method (order 6, symplectic and symmetric) at ``substeps`` equal
+    steps per segment. Its stages are implicit; they are solved by fixed-point iteration from K = f(y), to
+    rounding (an increment below 1e-15 of the state) or StepperError after MAX_ITERATIONS sweeps, which a step
+    too long for the system's fastest motion reaches. Written here because scipy has no implicit fixed-step
+    collocation method."""
+
+    substeps: int = 1
+    MAX_ITERATIONS = 100
+
+    def __call__(self, system, y, u, u_dot, tau):
+        h = tau / self.substeps
+        for i in range(self.substeps):
+            controls = [u + (i * h + c * h) * u_dot for c in _GAUSS6_C]
+            K = [system.vector_field(y, controls[0], u_dot)] * 3
+            for _ in range(self.MAX_ITERATIONS):
+                new = [
+                    system.vector_field(y + h * _weighted(row, K), control, u_dot)
+                    for row, control in zip(_GAUSS6_A, controls)
+                ]
+                change = max(float(np.max(np.abs(h * (a - b)))) for a, b in zip(new, K))
+                K = new
+                if change <= 1e-15 * (1.0 + float(np.max(np.abs(y)))):
+                    break
+            else:
+                raise StepperError(f"{self}: the stages did not converge in {self.MAX_ITERATIONS} sweeps (step {h} s)")
+            y = y + h * _weighted(_GAUSS6_B, K)
+        return _finite(y, self)
+
+
+_ROOT15 = math.sqrt(15.0)
+_GAUSS6_C = (0.5 - _ROOT15 / 10, 0.5, 0.5 + _ROOT15 / 10)
+_GAUSS6_A = (
+    ((0, 5 / 36), (1, 2 / 9 - _ROOT15 / 15), (2, 5 / 36 - _ROOT15 / 30)),
+    ((0, 5 / 36 + _ROOT15 / 24), (1, 2 / 9), (2, 5 / 36 - _ROOT15 / 24)),
+    ((0, 5 / 36 + _ROOT15 / 30), (1, 2 / 9 + _ROOT15 / 15), (2, 5 / 36)),
+)
+_GAUSS6_B = ((0, 5 / 18), (1, 4 / 9), (2, 5 / 18))
+
+
+@dataclass(frozen=True)
 class EnergyProjected:
     """RK8 at ``substeps``, then one Newton step back onto the energy level the segment started on, where u is
     held: y ← y − (H(y) − H₀) ∇H / |∇H|², with ∇H = (−ṗ, q̇) read off Hamilton's equations (y = (q, p)). The flow
@@ -314,6 +356,7 @@ FIXED_STEP = {
     "semi_implicit_euler": SemiImplicitEuler,
     "rk4": RK4,
     "rk8": RK8,
+    "gauss6": Gauss6,
     "rk8_energy": EnergyProjected,
 }
 INTEGRATORS = ("exact", "magnus", *FIXED_STEP, *SCIPY_METHODS)
@@ -323,7 +366,7 @@ STEPPER_OPTIONS = ("substeps", "rtol", "atol")
 def make_stepper(integrator: str, system: SteppedSystem | None = None, **options):
     """Build a stepper by name, validating its options (and, for "exact", that the system has a flow).
 
-    euler, semi_implicit_euler, rk4, rk8 and rk8_energy take ``substeps`` (int ≥ 1), rk8_energy also ``atol``,
+    euler, semi_implicit_euler, rk4, rk8, rk8_energy and gauss6 take ``substeps`` (int ≥ 1), rk8_energy also ``atol``,
     its energy error per segment past which it doubles the substeps (default 1e-8, in H's units); the scipy
     methods take ``rtol`` and ``atol`` (> 0); exact takes the scipy options for
     the segments where u moves; magnus takes ``atol``, its error bound per
