@@ -239,7 +239,7 @@ MAPS = {
         held([1.0]),
         lambda value, dt: math.ceil(10.0 / dt),
         energy_unbounded(lambda env: env.system.mass * env.system.g * env.trail.H),
-        (*FIXED, ("dop853", {"rtol": 1e-8, "atol": 1e-10})),
+        (*FIXED, ("rk8", {}), ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("rk8_energy", {})),  # the default: ⌈dt/0.05⌉
     ),
     "ball": StabilityMap(
         "connenv/RollingBall-v0",

@@ -21,7 +21,7 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
-from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d
+from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d, six_d_angle
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until success
@@ -54,10 +54,12 @@ class BallState(State):
 
 @dataclass
 class GoalBallState(BallState):
-    """BallState with the goals of RollingBallGoal-v0: R (achieved) and R* (desired) in 6-D form, float32."""
+    """BallState with the goals of RollingBallGoal-v0: R (achieved) and R* (desired) in 6-D form, float32, and
+    the angle between them (compute_reward's, computed once for the reward and the success)."""
 
     achieved_goal: np.ndarray
     desired_goal: np.ndarray
+    goal_error: float
 
 
 class RollingBallEnv(TaskEnv):
@@ -368,27 +370,32 @@ class RollingBallGoalEnv(RollingBallEnv):
         """RollingBall-v0's state, with the achieved and the desired goal."""
         state = super().at(R, R_target, position, t, path_length, distance, ops)
         achieved, desired = six_d(R).astype(np.float32), six_d(R_target).astype(np.float32)
-        return GoalBallState(**vars(state), achieved_goal=achieved, desired_goal=desired)
+        error = ops.real(self.goal_angle(achieved, desired))
+        return GoalBallState(**vars(state), achieved_goal=achieved, desired_goal=desired, goal_error=error)
 
     def observe(self, s, ops=SCALAR):
         achieved = s.achieved_goal
         return {"observation": achieved.copy(), "achieved_goal": achieved.copy(), "desired_goal": s.desired_goal.copy()}
 
     def reward(self, before, after, info, ops=SCALAR):
-        return ops.real(self.compute_reward(after.achieved_goal, after.desired_goal, None))
+        """compute_reward(achieved, desired) of the state after, from its goal angle."""
+        return ops.real(-(np.asarray(after.goal_error) > self.tolerance).astype(np.float32))
 
     def success(self, s, ops=SCALAR):
-        return self.compute_terminated(s.achieved_goal, s.desired_goal, None)
+        """compute_terminated(achieved, desired) of the state, from its goal angle."""
+        return np.asarray(s.goal_error) <= self.tolerance
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
+        if np.ndim(achieved_goal) == 1 and np.ndim(desired_goal) == 1:  # one pair: Python floats
+            return six_d_angle(achieved_goal, desired_goal)
         return rotation_angle(attitude_error(from_six_d(achieved_goal), from_six_d(desired_goal)))
 
     def compute_reward(self, achieved_goal, desired_goal, info):
-        return -(self.goal_angle(achieved_goal, desired_goal) > self.tolerance).astype(np.float32)
+        return -(np.asarray(self.goal_angle(achieved_goal, desired_goal)) > self.tolerance).astype(np.float32)
 
     def compute_terminated(self, achieved_goal, desired_goal, info):
-        return self.goal_angle(achieved_goal, desired_goal) <= self.tolerance
+        return np.asarray(self.goal_angle(achieved_goal, desired_goal)) <= self.tolerance
 
     def compute_truncated(self, achieved_goal, desired_goal, info):
         return np.zeros(np.shape(self.goal_angle(achieved_goal, desired_goal)), bool)

@@ -242,7 +242,7 @@ class SwingEnv(TaskEnv):
         return ops.log(lift_after / lift_before) - TIME_COST
 
     def observe(self, s, ops=SCALAR):
-        theta, p, r = (*s.y.T, s.r)  # numpy scalars for one state (faster than y[..., 0], a 0-d array)
+        theta, p, r = (*(s.y.tolist() if ops is SCALAR else s.y.T), s.r)  # one state: Python floats
         r_mid, r_half = 0.5 * (self.r_max + self.r_min), 0.5 * (self.r_max - self.r_min)
         bound = self.obs_high[2]
         speed = ops.clip(p / (self.system.mass * r**2) / self.theta_dot_scale, -bound, bound)

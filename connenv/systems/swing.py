@@ -50,8 +50,11 @@ class Swing:
 
     def energy(self, y, r):
         """E = p²/(2 m r²) − m g r cos θ (zero at pivot height)."""
-        theta, p = y[..., 0], y[..., 1]
-        return p**2 / (2 * self.mass * r**2) - self.mass * self.g * r * np.cos(theta)
+        if type(y) is np.ndarray and y.ndim == 1 and np.ndim(r) == 0:  # one state: Python floats
+            (theta, p), cos = y.tolist(), math.cos
+        else:
+            theta, p, cos = y[..., 0], y[..., 1], np.cos
+        return p**2 / (2 * self.mass * r**2) - self.mass * self.g * r * cos(theta)
 
     def hamiltonian(self, y, u):
         """H(y, u) = E(y, r) (u = (r,)), the level the steppers' energy projection keeps."""
