@@ -31,7 +31,12 @@ POSITION_BOUND = 3.0  # |observed position| / (4πρ) is clipped here
 
 def check_so3(stepper, R):
     """StepperError if R (any row of a batch) is more than DRIFT_LIMIT off SO(3): the stepper has left it."""
-    drift = np.max(np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1)))
+    if R.ndim == 2:  # one attitude: ‖RᵀR − I‖ (Frobenius) on Python floats
+        columns = R.T.tolist()
+        gram = [sum(a * b for a, b in zip(u, v)) - (i == j) for i, u in enumerate(columns) for j, v in enumerate(columns)]
+        drift = math.sqrt(sum(x * x for x in gram))
+    else:
+        drift = np.max(np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1)))
     if not drift <= DRIFT_LIMIT:
         raise StepperError(f"{stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")
 

@@ -87,7 +87,10 @@ class RollingBall:
         return (hat @ R).reshape(np.shape(y))
 
     def exact_segment(self, y, u, u_dot, tau):
-        """R ← exp(τ ω̂) R, exact for v held over the segment."""
+        """R ← exp(τ ω̂) R, exact for v held over the segment: scipy's Rotation over a batch; for one state,
+        Rodrigues' formula on Python floats (scipy's Rotation costs more than a whole Pendulum-v1 step on one)."""
+        if type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
+            return np.array(_rodrigues_times(self.spin(u_dot).tolist(), float(tau), y.tolist()))
         R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))
         return (Rotation.from_rotvec(tau * self.spin(u_dot)).as_matrix() @ R).reshape(np.shape(y))
 
@@ -277,6 +280,9 @@ def attitude_error(R, R_target):
 
 def rotation_angle(P):
     """The angle of rotation matrices P (..., 3, 3), accurate near 0 and π: atan2(|vee(P − Pᵀ)|/2, (tr P − 1)/2)."""
+    if type(P) is np.ndarray and P.ndim == 2:  # one matrix: Python floats
+        (a, b, c), (d, e, f), (g, h, i) = P.tolist()
+        return math.atan2(0.5 * math.sqrt((h - f) ** 2 + (c - g) ** 2 + (d - b) ** 2), 0.5 * (a + e + i - 1.0))
     skew = np.stack([P[..., 2, 1] - P[..., 1, 2], P[..., 0, 2] - P[..., 2, 0], P[..., 1, 0] - P[..., 0, 1]], -1)
     return np.arctan2(0.5 * np.linalg.norm(skew, axis=-1), 0.5 * (np.trace(P, axis1=-2, axis2=-1) - 1.0))
 
@@ -284,6 +290,22 @@ def rotation_angle(P):
 def six_d(R):
     """The continuous 6-D form of rotations (Zhou et al. 2019): the first two columns, (..., 6)."""
     return np.concatenate([R[..., :, 0], R[..., :, 1]], axis=-1)
+
+
+def _rodrigues_times(w, tau, R):
+    """exp(τ ŵ) R, flattened, for a horizontal w (w_z = 0) and R flattened (9 floats): with θ = τ|w| and k = w/|w|,
+    exp(θ k̂) = I + sin θ k̂ + 2 sin²(θ/2) (k kᵀ − I)."""
+    theta = tau * math.hypot(w[0], w[1])
+    if theta == 0.0:
+        return R
+    kx, ky = tau * w[0] / theta, tau * w[1] / theta
+    s, c = math.sin(theta), 2.0 * math.sin(0.5 * theta) ** 2
+    step = (
+        (1.0 + c * (kx * kx - 1.0), c * kx * ky, s * ky),
+        (c * kx * ky, 1.0 + c * (ky * ky - 1.0), -s * kx),
+        (-s * ky, s * kx, 1.0 - c),
+    )
+    return [sum(step[i][k] * R[3 * k + j] for k in range(3)) for i in range(3) for j in range(3)]
 
 
 def six_d_angle(achieved, desired) -> float:
