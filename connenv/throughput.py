@@ -2,7 +2,7 @@
 native CartPole-v1 vector env and SyncVectorEnv, and SB3 PPO training steps/s against Pendulum-v1's.
 
     python -m connenv.throughput [--envs ID ...] [--sizes 1 64 1024 4096] [--sync-max 1024] [--seconds 0.5]
-                                 [--breakdown] [--training] [--write docs/throughput.md]
+                                 [--breakdown] [--training] [--bounds] [--write docs/throughput.md]
     python -m connenv.throughput --rigid-body [--single-steps 3000]
 
 Single envs: each env from ``gym.make(id)`` (its registered wrappers included) and Pendulum-v1 from
@@ -27,6 +27,10 @@ step when every episode runs to the time limit.
 DummyVecEnv, n_steps 256, torch on one thread, beside Pendulum-v1 with the same settings: training steps/s after a
 warm-up rollout, and the env's share of the training time (the time the same DummyVecEnv takes to step as often
 with random actions, over the training time). It needs the ``train`` extra.
+
+``--bounds``: what bounds the targets, measured: the calls a default step cannot skip (the elliptic functions of the
+swing's and Kapitza's closed form, the skier's vector field) on one state against Pendulum-v1's step and on the
+largest N against CartPole-v1's vector step, and the batched RK8 step of the swing with its error per step.
 
 ``--write PATH`` writes what was printed as a Markdown page (docs/throughput.md): regenerate it with the command, do
 not edit it.
@@ -420,6 +424,62 @@ def training_table(report: Report, env_ids):
     report.table(title, columns, rows)
 
 
+def bounds_table(report: Report, n: int, seed: int = 0):
+    """What bounds the missed targets, measured: the physics a default step cannot skip, on one state against
+    Pendulum-v1's env step and on n rows against CartPole-v1's native vector step; and the batched RK8 step of the
+    swing, the alternative to its elliptic functions, with its largest error per step against them."""
+    from scipy.special import ellipj, ellipkinc
+
+    from connenv.core.steppers import RK8, make_stepper
+    from connenv.systems.swing import Swing
+
+    rng = np.random.default_rng(seed)
+    skier = gym.make("connenv/Skier-v0").unwrapped
+    swing, r = Swing(), rng.uniform(1.6, 2.0, (n, 1))
+    theta_dot = rng.uniform(-4.0, 4.0, n) * np.sqrt(swing.g / r[:, 0])  # up to twice the separatrix's speed
+    rows = np.stack([rng.uniform(-np.pi, np.pi, n), swing.mass * r[:, 0] ** 2 * theta_dot], axis=-1)
+    held, exact = np.zeros((n, 1)), make_stepper("exact", swing)
+    closed_form = exact(swing, rows, r, held, 0.05)
+    rk8_error = float(
+        np.max(np.abs(RK8()(swing, rows, r, held, 0.05) - closed_form) / np.maximum(1.0, np.abs(closed_form)))
+    )
+    x = np.stack([rng.uniform(-5.0, 5.0, n), rng.uniform(-300.0, 300.0, n)], axis=-1)
+    h, m, u = np.ones((n, 1)), rng.uniform(0.0, 0.99, n), rng.uniform(0.0, 3.0, n)
+    pendulum, cartpole = (
+        gym.make("Pendulum-v1"),
+        gym.make_vec("CartPole-v1", n, vectorization_mode="vector_entry_point"),
+    )
+    pendulum.reset(seed=seed)
+    cartpole.reset(seed=seed)
+    one, push = np.zeros(1, np.float32), np.zeros(n, int)
+    cases = [
+        ("Pendulum-v1's env step (reference)", 1, lambda: pendulum.step(one)),
+        ("ellipkinc + ellipj on one float (the swing's, Kapitza's closed form)", 1, lambda: ellipj(ellipkinc(0.3, 0.2), 0.2)),
+        ("the skier's vector field on one state, ×13 (its default step)", 13,
+         lambda: skier.system.vector_field(x[0], h[0], held[0])),
+        (f"CartPole-v1's native vector step, N={n} (reference)", 1, lambda: cartpole.step(push)),
+        (f"ellipkinc + ellipj over N={n} rows", 1, lambda: ellipj(ellipkinc(u, m), m)),
+        (f"RK8, one step of 0.05 s on the swing's N={n} rows (error {rk8_error:.1e} of the closed form)", 1,
+         lambda: RK8()(swing, rows, r, held, 0.05)),
+        (f"the skier's vector field over N={n} rows, ×13", 13, lambda: skier.system.vector_field(x, h, held)),
+    ]  # fmt: skip
+    table = []
+    for label, count, call in cases:
+        times = []
+        for _ in range(200 if count == 1 and "N=" not in label else 30):
+            start = time.perf_counter()
+            call()
+            times.append(time.perf_counter() - start)
+        table.append((label, count * statistics.median(times)))
+    single_reference, vector_reference = table[0][1], table[3][1]
+    rows_out = [
+        [label, f"{t * 1e6:.1f}", f"{t / (vector_reference if 'N=' in label else single_reference):.2f}"]
+        for label, t in table
+    ]
+    title = "What bounds the targets: medians of the calls a default step makes, against the reference in the same run"
+    report.table(title, ["call", "µs", "× reference (Pendulum-v1 step; CartPole-v1 vector step)"], rows_out)
+
+
 def main(argv=None):
     ids = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -432,6 +492,7 @@ def main(argv=None):
     parser.add_argument("--skip-vector", action="store_true")
     parser.add_argument("--breakdown", action="store_true", help="also where a native step goes at the largest N")
     parser.add_argument("--training", action="store_true", help="also SB3 PPO training steps/s (the train extra)")
+    parser.add_argument("--bounds", action="store_true", help="also the measured cost of what bounds the targets")
     parser.add_argument("--write", metavar="PATH", help="write the tables as a Markdown page (docs/throughput.md)")
     parser.add_argument(
         "--shell-steppers",
@@ -466,7 +527,10 @@ def main(argv=None):
         breakdown_table(report, args.envs, max(args.sizes), args.seconds)
     if args.training:
         training_table(report, args.envs)
-    report.note("Targets missed: " + ("; ".join(misses) if misses else "none") + ".")
+    if args.bounds:
+        bounds_table(report, max(args.sizes))
+    if not (args.skip_single and args.skip_vector):
+        report.note("Targets missed: " + ("; ".join(misses) if misses else "none") + ".")
     if args.write:
         command = "python -m connenv.throughput " + " ".join(argv if argv is not None else sys.argv[1:])
         pathlib.Path(args.write).write_text(report.markdown(command.strip()))

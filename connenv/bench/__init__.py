@@ -1,7 +1,8 @@
 """Benchmarks of the steppers: speed against accuracy, and where methods fail. Not run in CI (the tests run a
 smoke version of each); every figure the README or docs/ quote is printed by one of these commands.
 
-    python -m connenv.bench all [--env NAME ...] [--quick]         both of the next two: every chart in docs/precision/
+    python -m connenv.bench all [--env NAME ...] [--quick]         the next two, then page: every chart in docs/precision/
+    python -m connenv.bench page                                   docs/speed-accuracy.md from the charts' CSVs
     python -m connenv.bench precision [--env NAME ...] [--quick]   work–precision charts, docs/precision/
     python -m connenv.bench stability [--env NAME ...] [--quick]   stability maps, docs/precision/
     python -m connenv.bench steppers [--env swing|skier|ball]      the energy-drift table that chose the defaults
@@ -19,7 +20,8 @@ import argparse
 import sys
 
 COMMANDS = {
-    "all": "precision, then stability: every chart in docs/precision/",
+    "all": "precision, then stability, then page: every chart in docs/precision/ and docs/speed-accuracy.md",
+    "page": "docs/speed-accuracy.md, generated from the charts' CSVs",
     "precision": "work-precision charts of every env's steppers, docs/precision/",
     "stability": "stability maps of the explicit steppers, docs/precision/",
     "steppers": "the energy-drift table that chose the defaults (also with no command and --env)",
@@ -49,15 +51,18 @@ def main(argv=None):
         argv.insert(0, "steppers")  # the older form: python -m connenv.bench --env NAME
     args, argv = parser().parse_known_args(argv)
     if args.command == "all":
-        from connenv.bench import precision, stability
+        from connenv.bench import page, precision, stability
 
         precision.main(argv)
         stability.main(argv)
+        page.main()
         return
     if args.command == "precision":
         from connenv.bench.precision import main as run
     elif args.command == "stability":
         from connenv.bench.stability import main as run
+    elif args.command == "page":
+        from connenv.bench.page import main as run
     elif args.command == "generic":
         from connenv.bench.generic import main as run
     else:

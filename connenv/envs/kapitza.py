@@ -247,9 +247,9 @@ class KapitzaPendulumEnv(TaskEnv):
     def _frame_energy(self, y, u, u_dot):
         """The system's E at y in the frame of u̇, on Python floats (without numpy's overhead)."""
         theta, p = float(y[0]), float(y[1])
-        m, l, c, s = self.system.mass, self.system.length, math.cos(theta), math.sin(theta)
-        theta_dot = (p - m * l * (float(u_dot[0]) * c + float(u_dot[1]) * s)) / (m * l * l)
-        return 0.5 * m * l * l * theta_dot * theta_dot - m * self.system.g * l * c
+        m, ell, c, s = self.system.mass, self.system.length, math.cos(theta), math.sin(theta)
+        theta_dot = (p - m * ell * (float(u_dot[0]) * c + float(u_dot[1]) * s)) / (m * ell * ell)
+        return 0.5 * m * ell * ell * theta_dot * theta_dot - m * self.system.g * ell * c
 
     def check_energy_error(self, energy_error):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound, without damping."""
