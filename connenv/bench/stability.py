@@ -315,6 +315,7 @@ MAPS = {
         lambda value, dt: math.ceil(10.0 / dt),
         lambda env, info, start: abs(info["energy"] - start["energy"]) > BOUND * start["energy"],
         (*FIXED, ("rk4", {"substeps": 8}), ("dop853", {"rtol": 1e-10, "atol": 1e-12})),
+        largest=lambda rho: 0.5,  # the env's longest dt
     ),
     "bead": StabilityMap(
         "connenv/BeadOnBar-v0",

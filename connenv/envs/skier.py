@@ -22,9 +22,10 @@ TIME_COST = 0.01  # reward paid per step until success
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g Δz) past which it has diverged: StepperError
 SPEED_BOUND = 3.0  # |observed speed| is clipped here
 START_OFFSETS = (0.5, 2.0)  # m from the trail's lowest point, either side
-DEFAULT_INTEGRATOR = "rk8_energy"  # on the Pareto front: python -m connenv.bench precision
-MAX_SUBSTEP = 0.05  # s: the default's substeps are ceil(dt / MAX_SUBSTEP)
-ENERGY_TOLERANCE = 1e-8  # the default's energy error per step, in m g Δz, past which it doubles its substeps
+RK8_MIN_LEVER = 0.5  # the default is the projected RK8 where min(1 − κ h_max) ≥ this, else DOP853 (see SkierEnv)
+MAX_SUBSTEP = 0.05  # s: the projected RK8's substeps are ceil(dt / MAX_SUBSTEP)
+ENERGY_TOLERANCE = 1e-8  # its energy error per step, in m g Δz, past which it doubles its substeps
+DOP853_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}
 
 
 @dataclass
@@ -133,16 +134,21 @@ class SkierEnv(TaskEnv):
     | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; user trails: domain=(lo, hi) and the expression's other symbols |
     | target_x | None | required for a trail without rims: a point of the domain above the bottom |
     | max_height_speed | None | None or (0, ∞) m/s |
-    | integrator | "rk8_energy", ⌈dt / 0.05 s⌉ substeps | "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4, rk8, rk8_energy) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "rk8_energy" (⌈dt / 0.05 s⌉ substeps) where 1 − κ h_max ≥ 0.5 on the whole trail, else "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "gauss6", "dop853", "rk45", "lsoda", "radau" |
+    | substeps (euler, semi_implicit_euler, rk4, rk8, rk8_energy, gauss6) / rtol, atol (scipy) / atol (rk8_energy) | | see `connenv.core.steppers` |
 
-    The default, "rk8_energy", is DOP853's eighth-order formula at a fixed substep of at most 0.05 s, followed,
-    where h is held, by one Newton step back onto the energy level the step started on (the flow conserves E
-    there). Removing the energy error removes what drives the phase error near the rims, where the period grows
-    steeply with E. It is on the Pareto front of the work–precision chart (`python -m connenv.bench precision`),
-    more accurate than the adaptive DOP853 at rtol 1e-8 (the default before) at a fraction of its cost, and
-    across 1 − κ h_max ≥ 0.01 and dt from 0.01 to 0.2 s it keeps the energy error within 2e-6 of m g Δz over
-    100 random steps (tests/test_precision.py).
+    The default stepper depends on how close the barycentre can come to the trail's centre of curvature. Where
+    1 − κ h_max ≥ 0.5 on the whole trail (the default valley and halfpipe), it is "rk8_energy": DOP853's
+    eighth-order formula at a fixed substep of at most 0.05 s, followed, where h is held, by one Newton step back
+    onto the energy level the step started on (the flow conserves E there). Removing the energy error removes
+    what drives the phase error near the rims, where the period grows steeply with E. A step whose energy error
+    passes 1e-8 m g Δz is taken again with twice the substeps. It is on the Pareto front of the work–precision
+    chart (`python -m connenv.bench precision`), more accurate there than the adaptive DOP853 at rtol 1e-8 at a
+    fraction of its cost. Nearer the centre of curvature, w = (1 − κh)σ gets small and the motion fast where it
+    is, and a fixed step needs many substeps to follow DOP853's accuracy, so the default stays the adaptive
+    DOP853 at rtol 1e-8 there. Across 1 − κ h_max ≥ 0.01 and dt from 0.01 to 0.2 s the default keeps the energy
+    error within 2e-6 of m g Δz over 100 random steps, and the state within 1e-6 of DOP853 at rtol 1e-13 until
+    the episode ends (tests/test_precision.py).
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or an energy error past 0.1 m g Δz (Δz as in the observation). The energy error is the
@@ -168,7 +174,7 @@ class SkierEnv(TaskEnv):
         trail_params: dict | None = None,
         target_x: float | None = None,
         max_height_speed: float | None = None,
-        integrator: str = DEFAULT_INTEGRATOR,
+        integrator: str | None = None,
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
@@ -196,19 +202,27 @@ class SkierEnv(TaskEnv):
         if self.z_goal <= self.z_floor:
             raise ValueError(f"target_x={target_x!r} is at the bottom of the trail; nothing to climb")
         self.speed_scale = math.sqrt(2.0 * self.system.g * (self.z_goal - self.z_floor))
-        if integrator == DEFAULT_INTEGRATOR:
-            energy_scale = self.system.mass * self.system.g * (self.z_goal - self.z_floor)  # m g Δz
-            default = {"substeps": math.ceil(self.dt / MAX_SUBSTEP), "atol": ENERGY_TOLERANCE * energy_scale}
-            stepper_options = {**default, **stepper_options}
-        self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.kappa_bound = float(np.max(np.abs(f2 / sigma**3))) * self.h_max
         self.min_lever = float(np.min(1.0 - f2 / sigma**3 * self.h_max))  # min of 1 − κ h_max on the trail
+        integrator, stepper_options = self._default_stepper(integrator, stepper_options)
+        self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         high = np.array([1.0, 1.0, 1.0, SPEED_BOUND, 1.0, self.kappa_bound], np.float32)
         low = -high
         low[2] = 0.0
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
         self.state = self.at(np.array([self.x_bottom, 0.0]), self.h_min, 0.0, 0.0, 0.0)
+
+    def _default_stepper(self, integrator, options):
+        """(integrator, options): the given ones, with the defaults filled in (see the class docstring)."""
+        if integrator is None:
+            integrator = "rk8_energy" if self.min_lever >= RK8_MIN_LEVER else "dop853"
+        if integrator == "rk8_energy":
+            energy_scale = self.system.mass * self.system.g * (self.z_goal - self.z_floor)  # m g Δz
+            options = {"substeps": math.ceil(self.dt / MAX_SUBSTEP), "atol": ENERGY_TOLERANCE * energy_scale, **options}
+        elif integrator == "dop853":
+            options = {**DOP853_TOLERANCES, **options}
+        return integrator, options
 
     def _make_renderer(self):
         from connenv.envs.rendering import SkierRenderer
