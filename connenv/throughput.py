@@ -454,7 +454,8 @@ def bounds_table(report: Report, n: int, seed: int = 0):
     one, push = np.zeros(1, np.float32), np.zeros(n, int)
     cases = [
         ("Pendulum-v1's env step (reference)", 1, lambda: pendulum.step(one)),
-        ("ellipkinc + ellipj on one float (the swing's, Kapitza's closed form)", 1, lambda: ellipj(ellipkinc(0.3, 0.2), 0.2)),
+        ("ellipkinc + ellipj on one float (the swing's, Kapitza's closed form)", 1,
+         lambda: ellipj(ellipkinc(0.3, 0.2), 0.2)),
         ("the skier's vector field on one state, ×13 (its default step)", 13,
          lambda: skier.system.vector_field(x[0], h[0], held[0])),
         (f"CartPole-v1's native vector step, N={n} (reference)", 1, lambda: cartpole.step(push)),
@@ -541,7 +542,9 @@ def commit() -> str:
     """The checkout's commit (with "+" where the work tree differs), or "unknown" outside a git checkout."""
     here = pathlib.Path(__file__).parent
     try:
-        run = lambda *a: subprocess.run(["git", *a], cwd=here, capture_output=True, text=True, check=True).stdout  # noqa: E731
+        def run(*args):
+            return subprocess.run(["git", *args], cwd=here, capture_output=True, text=True, check=True).stdout
+
         return run("rev-parse", "--short", "HEAD").strip() + (
             "+" if run("status", "--porcelain", "-uno").strip() else ""
         )

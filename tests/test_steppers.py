@@ -19,7 +19,13 @@ OMEGA = math.sqrt(SWING.g / R[0])
 
 @pytest.mark.parametrize(
     "integrator, order, substeps, rel",
-    [("euler", 1, 64, 0.1), ("semi_implicit_euler", 1, 64, 0.1), ("rk4", 4, 64, 0.1), ("gauss6", 6, 8, 0.1), ("rk8", 8, 2, 0.2)],
+    [
+        ("euler", 1, 64, 0.1),
+        ("semi_implicit_euler", 1, 64, 0.1),
+        ("rk4", 4, 64, 0.1),
+        ("gauss6", 6, 8, 0.1),
+        ("rk8", 8, 2, 0.2),
+    ],
 )
 def test_the_global_error_falls_as_the_order_of_the_method(integrator, order, substeps, rel):
     """Doubling the substeps divides the error against the closed-form pendulum flow by 2^order (RK8: from 2 to 4
@@ -88,7 +94,8 @@ def test_the_energy_projection_keeps_the_level_and_the_phase_of_rk8():
     scale = SWING.mass * SWING.g * R[0]
     drift, error = {}, {}
     for integrator in ("rk8", "rk8_energy"):
-        y, stepper = y0, make_stepper(integrator, SWING, substeps=1, **({"atol": 1.0} if "energy" in integrator else {}))
+        options = {"atol": 1.0} if "energy" in integrator else {}
+        y, stepper = y0, make_stepper(integrator, SWING, substeps=1, **options)
         for _ in range(steps):
             y = stepper(SWING, y, R, HELD, h)
         drift[integrator] = abs(SWING.energy(y, R[0]) - SWING.energy(y0, R[0])) / scale

@@ -1,7 +1,7 @@
 """Benchmarks of the steppers: speed against accuracy, and where methods fail. Not run in CI (the tests run a
 smoke version of each); every figure the README or docs/ quote is printed by one of these commands.
 
-    python -m connenv.bench all [--env NAME ...] [--quick]         the next two, then page: every chart in docs/precision/
+    python -m connenv.bench all [--env NAME ...] [--quick]         the next two, then page
     python -m connenv.bench page                                   docs/speed-accuracy.md from the charts' CSVs
     python -m connenv.bench precision [--env NAME ...] [--quick]   work–precision charts, docs/precision/
     python -m connenv.bench stability [--env NAME ...] [--quick]   stability maps, docs/precision/

@@ -10,9 +10,9 @@ leading batch axes of y.
 
 Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
 flow), ``"magnus"`` (the fourth-order Lie-group step of a system with a
-connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"``, ``"rk4"``, ``"rk8"`` (DOP853's formula at a fixed step) or
-``"rk8_energy"`` (the same, projected onto the energy level where u is held), ``"gauss6"`` (Gauss–Legendre,
-order 6) with ``substeps``, or
+connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"``, ``"rk4"``, ``"rk8"``
+(DOP853's formula at a fixed step), ``"rk8_energy"`` (the same, projected onto the energy level where u is
+held) or ``"gauss6"`` (Gauss–Legendre, order 6) with ``substeps``, or
 one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol``
 and ``atol``. The two Euler methods are Gymnasium classic control's
 integrators (its ``kinematics_integrator``), there to compare against: they are
@@ -225,8 +225,8 @@ class EnergyProjected:
     field jumps (a trail's f‴ at the end of its domain) the error is first order in the substep and doubling
     stops paying, while the projection still lands on the level; a diverged step, which the projection cannot
     bring back, leaves its energy error for the env's check (and a non-finite state raises StepperError).
-    Where u moves H is not conserved, and the step is RK8's alone. The system gives ``hamiltonian(y, u)`` and ``n`` (HamiltonianSystem). A batch decides per
-    row, as each row's single state would."""
+    Where u moves H is not conserved, and the step is RK8's alone. The system gives ``hamiltonian(y, u)`` and
+    ``n`` (HamiltonianSystem). A batch decides per row, as each row's single state would."""
 
     substeps: int = 1
     atol: float = 1e-8

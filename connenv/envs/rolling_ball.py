@@ -33,7 +33,7 @@ def check_so3(stepper, R):
     """StepperError if R (any row of a batch) is more than DRIFT_LIMIT off SO(3): the stepper has left it."""
     if R.ndim == 2:  # one attitude: ‖RᵀR − I‖ (Frobenius) on Python floats
         columns = R.T.tolist()
-        gram = [sum(a * b for a, b in zip(u, v)) - (i == j) for i, u in enumerate(columns) for j, v in enumerate(columns)]
+        gram = [sum(a * b for a, b in zip(u, v)) - (u is v) for u in columns for v in columns]
         drift = math.sqrt(sum(x * x for x in gram))
     else:
         drift = np.max(np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1)))
