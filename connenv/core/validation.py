@@ -91,6 +91,9 @@ def check_stepper_options(env_name: str, options, env_cls):
         raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {valid}")
 
 
+SMALL = 16  # numbers up to which a check on Python floats costs less than numpy's per-call overhead
+
+
 def ndim(x) -> int:
     """np.ndim(x), at an attribute's cost for an array (np.ndim's dispatch costs a step's microsecond)."""
     return x.ndim if type(x) is np.ndarray else np.ndim(x)
@@ -105,7 +108,9 @@ def finite_action(action, space):
     """The action as a float array of the space's shape, finite, else ValueError; not clipped."""
     if type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == space.shape:  # a policy's action
         a = action.astype(np.float64)
-        if all(map(math.isfinite, a.flat)):  # on Python floats: numpy's isfinite().all() costs more on a few numbers
+        if a.size <= SMALL and all(map(math.isfinite, a.flat)):  # Python floats: cheaper than numpy on a few numbers
+            return a
+        if a.size > SMALL and np.isfinite(a).all():
             return a
     try:
         kind = np.asarray(action).dtype.kind

@@ -29,14 +29,20 @@ DRIFT_LIMIT = 1e-6  # ‖RᵀR − I‖ past which a stepper has left SO(3): Ste
 POSITION_BOUND = 3.0  # |observed position| / (4πρ) is clipped here
 
 
+PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the distinct entries of a symmetric 3×3 matrix
+
+
 def check_so3(stepper, R):
     """StepperError if R (any row of a batch) is more than DRIFT_LIMIT off SO(3): the stepper has left it."""
     if R.ndim == 2:  # one attitude: ‖RᵀR − I‖ (Frobenius) on Python floats
         columns = R.T.tolist()
         gram = [sum(a * b for a, b in zip(u, v)) - (u is v) for u in columns for v in columns]
         drift = math.sqrt(sum(x * x for x in gram))
-    else:
-        drift = np.max(np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1)))
+    else:  # the six distinct entries of RᵀR − I elementwise over the rows: a stacked matmul costs 5x more
+        c = [R[..., :, k] for k in range(3)]
+        dot = [c[i][..., 0] * c[j][..., 0] + c[i][..., 1] * c[j][..., 1] + c[i][..., 2] * c[j][..., 2] for i, j in PAIRS]
+        square = sum((d - (i == j)) ** 2 * (1 if i == j else 2) for d, (i, j) in zip(dot, PAIRS))
+        drift = math.sqrt(float(np.max(square)))
     if not drift <= DRIFT_LIMIT:
         raise StepperError(f"{stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")
 
