@@ -154,3 +154,16 @@ def test_a_diverging_stepper_raises_naming_stepper_dt_and_parameter_never_nan(di
             alternating = env_id in ("connenv/KozlovShell-v0", "connenv/KapitzaPendulum-v0")
             obs = env.step(sign * (-1) ** k if alternating else sign)[0]
             assert np.all(np.isfinite(obs))
+
+
+def test_the_front_counts_times_within_the_timings_noise_as_equal():
+    """Two steppers with the same error whose times differ by 2% both stay on the front; 10% faster ousts."""
+    rows = [
+        {"ratio": 1.00, "error": 1e-9, "diverged": ""},
+        {"ratio": 1.02, "error": 1e-9, "diverged": ""},
+        {"ratio": 1.15, "error": 1e-9, "diverged": ""},
+        {"ratio": 0.50, "error": 1e-3, "diverged": ""},
+        {"ratio": 0.10, "error": 0.0, "diverged": "x"},
+    ]
+    precision.pareto(rows)
+    assert [row["pareto"] for row in rows] == [True, True, False, True, False]

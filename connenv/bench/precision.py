@@ -437,15 +437,20 @@ def measure_stepper(case, integrator, options, steps_of, clock, reference_envs):
     return row
 
 
+TIME_NOISE = 0.05  # relative differences of the median step time below this are within the timing's noise
+
+
 def pareto(rows):
     """Mark each row on the front of (ratio, error): it did not diverge, and no other row is at least as fast and
-    at least as accurate, and strictly better in one."""
+    at least as accurate, and strictly better in one. Times within TIME_NOISE of each other count as equal, so
+    that two steppers doing the same work (a rule that meets several tolerances) do not oust each other by noise."""
     for row in rows:
         row["pareto"] = not row["diverged"] and not any(
             o is not row
-            and o["ratio"] <= row["ratio"]
+            and not o["diverged"]
+            and o["ratio"] <= row["ratio"] * (1 + TIME_NOISE)
             and o["error"] <= row["error"]
-            and (o["ratio"] < row["ratio"] or o["error"] < row["error"])
+            and (o["ratio"] < row["ratio"] * (1 - TIME_NOISE) or o["error"] < row["error"])
             for o in rows
         )
 
