@@ -103,7 +103,11 @@ def bounded_segments(u, u_dot_cmd, low, high, dt: float):
     bounds nor jumps. A ramp toward a command stops there: low = min(u, u_cmd), high = max(u, u_cmd)."""
     u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
     u_end = u + u_dot * dt
-    if np.all((low <= u_end) & (u_end <= high)):  # no stop within the step
+    if np.ndim(low) == 0 and np.ndim(high) == 0 and u_end.ndim == 1:  # on Python floats: numpy's overhead dominates
+        inside = all(low <= end <= high for end in u_end.tolist())
+    else:
+        inside = np.all((low <= u_end) & (u_end <= high))
+    if inside:  # no stop within the step
         return [(u, u_dot, dt)], u_end, u_dot
     stops = np.where(u_dot > 0.0, high, low)
     with np.errstate(divide="ignore", invalid="ignore"):

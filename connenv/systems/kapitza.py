@@ -59,7 +59,12 @@ class KapitzaPendulum:
         return self.mass * self.g * (u[..., 1] - self.length * np.cos(q[..., 0]))
 
     def theta_dot(self, y, u_dot):
-        """θ̇ = (p − m l u̇·n) / (m l²)."""
+        """θ̇ = (p − m l u̇·n) / (m l²); on Python floats for one state, as exact_segment."""
+        if np.ndim(y) == 1 and np.ndim(u_dot) == 1:
+            (theta, p), (v1, v2) = y.tolist(), np.asarray(u_dot, float).tolist()
+            return (p - self.mass * self.length * (v1 * math.cos(theta) + v2 * math.sin(theta))) / (
+                self.mass * self.length**2
+            )
         theta, p = y[..., 0], y[..., 1]
         along = u_dot[..., 0] * np.cos(theta) + u_dot[..., 1] * np.sin(theta)
         return (p - self.mass * self.length * along) / (self.mass * self.length**2)
