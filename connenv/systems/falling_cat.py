@@ -165,7 +165,11 @@ def roll(g):
 
 
 def _cross(a, b):
-    """a × b over the last axis (…, 3): numpy's np.cross costs more than the arithmetic on 3-vectors."""
+    """a × b over the last axis (…, 3): numpy's np.cross costs more than the arithmetic on 3-vectors; two single
+    vectors on Python floats (the same products and differences)."""
+    if a.ndim == 1 and b.ndim == 1:
+        (a0, a1, a2), (b0, b1, b2) = a.tolist(), b.tolist()
+        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
     return a[..., [1, 2, 0]] * b[..., [2, 0, 1]] - a[..., [2, 0, 1]] * b[..., [1, 2, 0]]
 
 
@@ -219,7 +223,10 @@ def angular_momentum(g, s, s_dot, omega, transverse_inertia: float, axial_inerti
     cat frame), the shape s and ṡ (front: `front_half(s)` if at hand)."""
     s_dot, omega = np.asarray(s_dot, float), np.asarray(omega, float)
     Q, jacobian = front_half(s) if front is None else front
-    v_dot = 0.5 * np.stack([np.zeros_like(s_dot[..., 0]), -s_dot[..., 1], s_dot[..., 0]], -1)
+    if s_dot.ndim == 1:  # one shape velocity: np.stack of 0-d arrays costs more than the rest of the line
+        v_dot = 0.5 * np.array([0.0, -s_dot[1], s_dot[0]])
+    else:
+        v_dot = 0.5 * np.stack([np.zeros_like(s_dot[..., 0]), -s_dot[..., 1], s_dot[..., 0]], -1)
     inertia = np.array([axial_inertia, transverse_inertia, transverse_inertia])
     total, centres = 0.0, []
     for Q_i, w_i, sign in ((Q, jacobian @ v_dot[..., None], 1.0), (np.swapaxes(Q, -1, -2),
