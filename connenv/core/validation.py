@@ -8,7 +8,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from connenv.core.steppers import STEPPER_OPTIONS
+from connenv.core.steppers import SMALL, STEPPER_OPTIONS
 
 
 def check_number(
@@ -89,9 +89,6 @@ def check_stepper_options(env_name: str, options, env_cls):
         params = init_parameters(env_cls)
         valid = params + list(STEPPER_OPTIONS)
         raise ValueError(f"unknown parameter(s) {sorted(unknown)} for {env_name}; valid: {valid}")
-
-
-SMALL = 16  # numbers up to which a check on Python floats costs less than numpy's per-call overhead
 
 
 def ndim(x) -> int:

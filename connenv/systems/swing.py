@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ellipj, ellipk, ellipkinc
+from scipy.special import ellipj, ellipk
 
 from connenv.core.validation import ndim
 
@@ -70,14 +70,17 @@ class Swing:
         With ω² = g/r and the modulus k² = sin²(θ/2) + θ̇²/(4ω²) (= h/2):
         libration (k < 1): sin(θ/2) = k sn(ωt + t₀ | k²), θ̇ = 2kω cn;
         rotation (k > 1): θ/2 = am(kωt + t₀ | 1/k²), θ̇ = 2kω dn (with the sign of θ̇).
-        The two are one solution under Jacobi's reciprocal-modulus transformation,
-        so one call of each special function serves both: the phase t₀ is scipy's
-        incomplete elliptic integral F, and sn, cn, dn, am are scipy's ellipj.
-        The winding of θ is carried over. Within SEPARATRIX_BAND of k² = 1, where
-        the period diverges, scipy's ellipj loses its accuracy (it switches to a
-        first-order expansion in 1 − m) and the phase F is infinite at the
-        upright equilibrium: there the answer is NaN, which the exact stepper
-        hands to its numerical fallback.
+        The two are one solution under Jacobi's reciprocal-modulus transformation.
+        At t₀ the amplitude φ = am(t₀) is known from the state, hence sn, cn, dn
+        of t₀; Jacobi's addition theorem gives them at t₀ + w from one call of
+        scipy's ellipj at w, the step's own phase (the incomplete integral t₀ =
+        F(φ) is never needed). A rotation's winding over the step is the
+        whole turns nearest φ + πw/(2K) (the am's mean rate; the rest of am
+        is periodic and below π/2 in size), K from scipy's ellipk. Within
+        SEPARATRIX_BAND of k² = 1, where the period diverges, scipy's ellipj
+        loses its accuracy (it switches to a first-order expansion in 1 − m):
+        there the answer is NaN, which the exact stepper hands to its
+        numerical fallback.
         """
         # The formulas are written once. A single state (the env's case) runs them on
         # Python floats, about 5x faster than numpy with its per-call overhead on 0-d arrays.
@@ -85,11 +88,11 @@ class Swing:
         if one:
             (theta, p), r = (y.tolist() if type(y) is np.ndarray else map(float, y)), float(r[0])
             sin, cos, sqrt, atan2, copysign, maximum = math.sin, math.cos, math.sqrt, math.atan2, math.copysign, max
-            where = lambda condition, a, b: a if condition else b  # noqa: E731
+            where, rint, any_ = (lambda condition, a, b: a if condition else b), round, bool  # noqa: E731
         else:
             theta, p, r = y[..., 0], y[..., 1], np.asarray(r, float)[..., 0]
             sin, cos, sqrt, atan2, copysign, maximum = np.sin, np.cos, np.sqrt, np.arctan2, np.copysign, np.maximum
-            where = np.where
+            where, rint, any_ = np.where, np.rint, np.any
         omega = sqrt(self.g / r)
         v = p / (2 * omega * self.mass * r**2)  # θ̇/(2ω)
         wrapped = atan2(sin(theta), cos(theta))  # θ in (−π, π]
@@ -100,11 +103,25 @@ class Swing:
         phi = where(rotating, s * wrapped / 2, atan2(sin(wrapped / 2), v))
         stretch = maximum(k2, 1.0)  # 1 while librating, k² while rotating
         m = k2 / stretch**2  # the parameter: k² or 1/k²
-        sn, cn, dn, am = ellipj(ellipkinc(phi, m) + sqrt(stretch) * omega * tau, m)
-        k = sqrt(k2)
-        half = where(rotating, s * am, atan2(k * sn, dn))  # θ/2 modulo the winding
-        theta_dot = 2 * k * omega * where(rotating, s * dn, cn)
+        w = sqrt(stretch) * omega * tau
+        sn1, cn1 = sin(phi), cos(phi)
+        dn1 = sqrt(1.0 - m * sn1 * sn1)
+        sn2, cn2, dn2, _ = ellipj(w, m)
+        if one:
+            sn2, cn2, dn2 = float(sn2), float(cn2), float(dn2)
         outside = abs(k2 - 1.0) < SEPARATRIX_BAND
+        denominator = where(outside, 1.0, 1.0 - m * (sn1 * sn2) ** 2)  # 0 at the separatrix
+        sn = (sn1 * cn2 * dn2 + sn2 * cn1 * dn1) / denominator
+        cn = (cn1 * cn2 - sn1 * dn1 * sn2 * dn2) / denominator
+        dn = (dn1 * dn2 - m * sn1 * cn1 * sn2 * cn2) / denominator
+        k = sqrt(k2)
+        half = atan2(k * sn, dn)  # libration: θ/2
+        if any_(rotating):  # am = atan2(sn, cn) plus the whole turns
+            wrapped_am = atan2(sn, cn)
+            mean_am = phi + math.pi / 2 * w / ellipk(where(rotating, m, 0.0))  # float(ellipk) on one state
+            turns = rint((mean_am - wrapped_am) / (2 * math.pi))
+            half = where(rotating, s * (wrapped_am + 2 * math.pi * turns), half)
+        theta_dot = 2 * k * omega * where(rotating, s * dn, cn)
         theta = where(outside, math.nan, theta - wrapped + 2 * half)
         p = where(outside, math.nan, self.mass * r**2 * theta_dot)
         return np.array([theta, p]) if one else np.stack([theta, p], axis=-1)
