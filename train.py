@@ -19,6 +19,11 @@ becomes {"system": system}): enough to train on a user's own system,
 The module is imported from the working directory or the Python path; the analytic controller is then left out of
 the final evaluation (there is none for a user's system).
 
+With --checkpoint-freq N the run saves a checkpoint every N steps into {run}/checkpoints/ (SB3's CheckpointCallback:
+the model, the VecNormalize statistics, the replay buffer); with --resume a run whose folder holds one continues from
+it to the same n_timesteps, its periodic evaluations so far kept. agents.baselines uses both, so that a run whose
+process is killed is retried from its last checkpoint.
+
 With --vector-env the training and periodic-evaluation envs are the env's native vector env (gym.make_vec with its
 vector_entry_point, through agents.vec_env.NativeVecEnv) instead of SB3's DummyVecEnv of single envs; the final
 evaluation stays on single envs.
@@ -27,15 +32,18 @@ evaluation stays on single envs.
 from __future__ import annotations
 
 import argparse
+import os
 import time
 import warnings
 from pathlib import Path
 
+import numpy as np
 import torch as th
 from rl_zoo3.exp_manager import ExperimentManager
 from rl_zoo3.utils import ALGOS
-from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
+from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback, EvalCallback
 from stable_baselines3.common.utils import set_random_seed
+from stable_baselines3.common.vec_env import VecNormalize
 from tqdm import TqdmExperimentalWarning
 
 import agents
@@ -64,6 +72,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--num-threads", type=evaluate.positive_int, default=1, help="torch threads")
     parser.add_argument("--vector-env", action="store_true", help="train on the env's native vector env")
     parser.add_argument("--env-kwargs", help="module:factory returning the make kwargs (or the system) of --env")
+    parser.add_argument("--checkpoint-freq", type=int, default=0, help="steps between checkpoints, ≤ 0: none")
+    parser.add_argument("--resume", action="store_true", help="continue from the run folder's last checkpoint")
     args = parser.parse_args(argv)
     args.hyperparams = args.hyperparams or str(HYPERPARAMS / f"{args.algo}.yml")
     if not Path(args.hyperparams).is_file():
@@ -84,8 +94,40 @@ class SaveBestVecNormalize(BaseCallback):
         return True
 
 
+class Checkpoints(CheckpointCallback):
+    """SB3's CheckpointCallback, which then names the checkpoint it completed in {path}/latest (written atomically,
+    so that a run killed while saving resumes from the one before) and deletes the one before (a replay buffer's
+    checkpoint is as large as the buffer)."""
+
+    def __init__(self, save_freq: int, path: Path):
+        super().__init__(save_freq, str(path), save_replay_buffer=True, save_vecnormalize=True)
+
+    def _on_step(self) -> bool:
+        super()._on_step()
+        if self.n_calls % self.save_freq == 0:
+            path = Path(self.save_path)
+            before = latest_checkpoint(path.parent)
+            (path / "latest.tmp").write_text(str(self.num_timesteps))
+            os.replace(path / "latest.tmp", path / "latest")
+            if before is not None and before != self.num_timesteps:
+                for kind in ("", "replay_buffer_", "vecnormalize_"):
+                    for old in path.glob(f"rl_model_{kind}{before}_steps.*"):
+                        old.unlink()
+        return True
+
+
+def latest_checkpoint(run: Path) -> int | None:
+    """The steps of the run folder's last completed checkpoint, or None."""
+    latest = run / "checkpoints" / "latest"
+    return int(latest.read_text()) if latest.is_file() else None
+
+
 class BestStatsExperimentManager(ExperimentManager):
-    """rl-zoo3's ExperimentManager, keeping the VecNormalize statistics of the best model as well as the final."""
+    """rl-zoo3's ExperimentManager, keeping the VecNormalize statistics of the best model as well as the final; with
+    ``checkpoint_freq`` saving checkpoints, and ``after_eval`` (a callback) called after each periodic evaluation."""
+
+    checkpoint_freq = 0
+    after_eval: BaseCallback | None = None
 
     def create_callbacks(self):
         super().create_callbacks()
@@ -93,6 +135,43 @@ class BestStatsExperimentManager(ExperimentManager):
             if isinstance(callback, EvalCallback):
                 callback.callback_on_new_best = SaveBestVecNormalize(Path(self.params_path) / "best_vecnormalize.pkl")
                 callback.callback_on_new_best.parent = callback
+                if self.after_eval is not None:
+                    callback.callback, self.after_eval.parent = self.after_eval, callback
+        if self.checkpoint_freq > 0:
+            frequency = max(self.checkpoint_freq // self.n_envs, 1)
+            self.callbacks.append(Checkpoints(frequency, Path(self.save_path) / "checkpoints"))
+
+    def resume(self, model, steps: int):
+        """The model of the checkpoint at `steps`, on model's env, with its VecNormalize statistics, its replay buffer
+        and the periodic evaluations up to it."""
+        path = Path(self.save_path) / "checkpoints"
+        resumed = type(model).load(path / f"rl_model_{steps}_steps.zip", env=model.get_env(), device=model.device)
+        if (path / f"rl_model_replay_buffer_{steps}_steps.pkl").is_file():
+            resumed.load_replay_buffer(path / f"rl_model_replay_buffer_{steps}_steps.pkl")
+        normalize = resumed.get_vec_normalize_env()
+        if normalize is not None:
+            saved = VecNormalize.load(str(path / f"rl_model_vecnormalize_{steps}_steps.pkl"), normalize.venv)
+            normalize.obs_rms, normalize.ret_rms = saved.obs_rms, saved.ret_rms
+        evaluations = Path(self.save_path) / "evaluations.npz"
+        for callback in self.callbacks:
+            if isinstance(callback, EvalCallback) and evaluations.is_file():
+                kept = np.load(evaluations)["timesteps"] <= steps
+                data = {key: value[kept] for key, value in np.load(evaluations).items()}
+                callback.evaluations_timesteps = data["timesteps"].tolist()
+                callback.evaluations_results = data["results"].tolist()
+                callback.evaluations_length = data["ep_lengths"].tolist()
+                if len(data["results"]):
+                    callback.best_mean_reward = float(np.max(np.mean(data["results"], axis=1)))
+        return resumed
+
+    def learn(self, model):
+        """rl-zoo3's learn from scratch; a resumed model learns on to n_timesteps, its step count kept."""
+        if not model.num_timesteps:
+            return super().learn(model)
+        try:
+            model.learn(self.n_timesteps - model.num_timesteps, callback=self.callbacks, reset_num_timesteps=False)
+        finally:
+            model.env.close()
 
 
 class VectorExperimentManager(BestStatsExperimentManager):
@@ -116,8 +195,9 @@ class VectorExperimentManager(BestStatsExperimentManager):
         return self._maybe_normalize(env, eval_env)
 
 
-def train(args: argparse.Namespace, env_kwargs: dict | None = None):
-    """Train with rl-zoo3's ExperimentManager into the run folder; return the model and the path of its zip."""
+def train(args: argparse.Namespace, env_kwargs: dict | None = None, after_eval: BaseCallback | None = None):
+    """Train with rl-zoo3's ExperimentManager into the run folder, from its last checkpoint with --resume; return the
+    model and the path of its zip. after_eval: a callback run after each periodic evaluation."""
     set_random_seed(args.seed)
     th.set_num_threads(args.num_threads)
     manager = (VectorExperimentManager if args.vector_env else BestStatsExperimentManager)(
@@ -138,7 +218,12 @@ def train(args: argparse.Namespace, env_kwargs: dict | None = None):
     # One named folder per env, algo and seed instead of rl-zoo3's numbered {log_folder}/{algo}/{env}_{n}.
     manager.save_path = str(Path(args.runs) / f"{args.env.split('/')[-1]}_{args.algo}_s{args.seed}")
     manager.params_path = str(Path(manager.save_path) / manager.env_name)
+    manager.checkpoint_freq, manager.after_eval = args.checkpoint_freq, after_eval
+    steps = latest_checkpoint(Path(manager.save_path)) if args.resume else None
     model, _ = manager.setup_experiment()
+    if steps is not None:
+        model = manager.resume(model, steps)
+        print(f"resumed from the checkpoint at {steps} steps")
     manager.learn(model)
     manager.save_trained_model(model)
     return model, Path(manager.save_path) / f"{manager.env_name}.zip"

@@ -1,12 +1,15 @@
 """Reference results: SB3 baselines beside the analytic controllers, for every env (README, "Reference results").
 
-    python -m agents.baselines train     # 3 seeds per (env, algo) with train.py into runs/baselines/, 2 at a time
+    python -m agents.baselines train     # 3 seeds per (env, algo) with train.py into runs/baselines/, on Ray
     python -m agents.baselines collect   # best model per (env, algo) into agents/pretrained/, curves into docs/
     python -m agents.baselines table     # the README table, from agents/pretrained/ alone (offline, minutes)
 
-``train`` runs ``python train.py`` once per (env, algo, seed) with the hyperparameters of agents/hyperparams/ and
-skips runs that finished (their results.json exists). PPO trains on the native vector envs (``--vector-env``), SAC
-on one env. ``collect`` picks, for each (env, algo), the seed whose periodic evaluation scored best, copies its
+``train`` trains once per (env, algo, seed) with train.py's ``train.main`` and the hyperparameters of
+agents/hyperparams/, each run a Ray task of one CPU (``agents.cluster``): on a local Ray of ``--jobs`` CPUs by default,
+on a running cluster with ``--address``. It skips runs that finished (their results.json exists). A run checkpoints
+at each periodic evaluation; a run whose worker process dies is retried by Ray, from its last checkpoint, and the
+other runs go on. PPO trains on the native vector envs (``--vector-env``), SAC on one env.
+``collect`` picks, for each (env, algo), the seed whose periodic evaluation scored best, copies its
 best_model.zip with the VecNormalize statistics it was evaluated with to agents/pretrained/{env}_{algo}/, records
 the training steps and wall time of every seed in agents/pretrained/runs.json and writes the periodic evaluations
 of all seeds to docs/baselines/curves.csv. ``table`` evaluates random, each analytic controller and each pretrained
@@ -21,10 +24,10 @@ import argparse
 import csv
 import hashlib
 import json
+import os
 import shutil
-import subprocess
-import sys
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import redirect_stderr, redirect_stdout
 from operator import attrgetter
 from pathlib import Path
 
@@ -80,34 +83,63 @@ def run_config(folder: Path, env_id: str) -> dict | None:
     return dict(yaml.load(path.read_text(), Loader=yaml.UnsafeLoader)) if path.is_file() else None  # OrderedDict
 
 
-def run_folder(env_id: str, algo: str, seed: int) -> Path:
-    return RUNS / f"{short(env_id)}_{algo}_s{seed}"
+def run_folder(env_id: str, algo: str, seed: int, runs: Path = RUNS) -> Path:
+    return runs / f"{short(env_id)}_{algo}_s{seed}"
 
 
-def train_command(env_id: str, algo: str, seed: int) -> list[str]:
-    timesteps = int(float(hyperparams(algo, env_id)["n_timesteps"]))
-    command = [sys.executable, "train.py", "--env", env_id, "--algo", algo, "--seed", str(seed), "--runs", str(RUNS)]
-    command += ["--eval-freq", str(timesteps // EVALUATIONS), "--eval-episodes", str(FINAL_EPISODES)]
-    return command + (["--vector-env"] if algo == "ppo" else [])
+def train_argv(
+    env_id: str, algo: str, seed: int, runs: Path, timesteps: int | None = None, evaluations: int = EVALUATIONS
+) -> list[str]:
+    """train.py's arguments for a run: a periodic evaluation and a checkpoint `evaluations` times, resumed from its
+    last checkpoint if it has one."""
+    timesteps = timesteps or int(float(hyperparams(algo, env_id)["n_timesteps"]))
+    argv = ["--env", env_id, "--algo", algo, "--seed", str(seed), "--runs", str(runs), "--timesteps", str(timesteps)]
+    frequency = str(max(timesteps // evaluations, 1))
+    argv += ["--eval-freq", frequency, "--checkpoint-freq", frequency, "--eval-episodes", str(FINAL_EPISODES)]
+    return argv + ["--resume"] + (["--vector-env"] if algo == "ppo" else [])
 
 
-def train_one(env_id: str, algo: str, seed: int) -> str:
-    """Train one run unless it finished with the current hyperparameters; a run with others is trained anew."""
-    folder = run_folder(env_id, algo, seed)
-    if (folder / "results.json").is_file() and run_config(folder, env_id) == hyperparams(algo, env_id):
+def train_one(env_id: str, algo: str, seed: int, runs: Path = RUNS, **options) -> str:
+    """Train one run in this process unless it finished with the current hyperparameters. An unfinished run with
+    them resumes from its last checkpoint; a run with others is trained anew. Each attempt adds a line to the run's
+    attempts.log: the process and the step it starts from. options: train_argv's timesteps and evaluations."""
+    import train
+
+    folder = run_folder(env_id, algo, seed, runs)
+    same = run_config(folder, env_id) == hyperparams(algo, env_id)
+    if same and (folder / "results.json").is_file():
         return f"{folder.name}: done before"
-    shutil.rmtree(folder, ignore_errors=True)
-    folder.mkdir(parents=True)
-    with open(folder / "train.log", "w") as log:
-        code = subprocess.call(train_command(env_id, algo, seed), cwd=REPO, stdout=log, stderr=subprocess.STDOUT)
-    return f"{folder.name}: exit {code}"
+    if not same:
+        shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "attempts.log", "a") as log:
+        print(f"pid {os.getpid()} from step {train.latest_checkpoint(folder) or 0}", file=log, flush=True)
+    with open(folder / "train.log", "a") as log, redirect_stdout(log), redirect_stderr(log):
+        results = train.main(train_argv(env_id, algo, seed, runs, **options))
+    return f"{folder.name}: {results['timesteps']} steps in {results['train_seconds']:.0f} s"
 
 
-def train_all(jobs: int, envs: list[str], algos: list[str]):
-    runs = [(env_id, algo, seed) for env_id in envs for algo in algos for seed in SEEDS]
-    with ThreadPoolExecutor(jobs) as pool:
-        for message in pool.map(lambda run: train_one(*run), runs):
-            print(message, flush=True)
+def train_all(
+    envs: list[str], algos: list[str], jobs: int, address: str | None = None, seeds=SEEDS, **options
+) -> list[str]:
+    """Every (env, algo, seed) run as a Ray task of one CPU, retried from its checkpoint if its worker dies; print
+    each run's outcome as it ends. options: train_one's runs, timesteps and evaluations."""
+    from agents import cluster
+
+    ray = cluster.connect(address, jobs)
+    task = ray.remote(num_cpus=1, max_retries=cluster.MAX_RETRIES)(train_one)
+    pending = {task.remote(env_id, algo, seed, **options): (env_id, algo, seed)
+               for env_id in envs for algo in algos for seed in seeds}  # fmt: skip
+    outcomes = []
+    while pending:
+        (done,), _ = ray.wait(list(pending))
+        env_id, algo, seed = pending.pop(done)
+        try:
+            outcomes.append(ray.get(done))
+        except ray.exceptions.RayError as error:  # the run failed in train.py, or beyond its retries
+            outcomes.append(f"{run_folder(env_id, algo, seed).name}: FAILED ({type(error).__name__}: {error})")
+        print(outcomes[-1], flush=True)
+    return outcomes
 
 
 def evaluations(folder: Path) -> dict[str, np.ndarray]:
@@ -335,9 +367,15 @@ def table(jobs: int, envs: list[str]) -> str:
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("command", choices=("train", "collect", "table"))
-    parser.add_argument("--jobs", type=positive_int, default=2, help="runs or envs at a time (one core each)")
+    parser.add_argument(
+        "--jobs", type=positive_int, default=os.cpu_count(), help="CPUs of a local Ray / table's processes"
+    )
     parser.add_argument("--env", nargs="+", default=list(ENVS), choices=ENVS + UNTRAINED)
     parser.add_argument("--algo", nargs="+", default=list(ALGOS), choices=ALGOS)
+    parser.add_argument("--address", help="train: join the Ray cluster at ADDR (default: start a local Ray)")
+    parser.add_argument("--runs", type=Path, default=RUNS, help="train: folder of the run folders")
+    parser.add_argument("--timesteps", type=positive_int, help="train: steps per run (default: the hyperparameters')")
+    parser.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS), help="train: the seeds of each pair")
     return parser.parse_args(argv)
 
 
@@ -346,7 +384,10 @@ def main(argv: list[str] | None = None):
     if not (REPO / "train.py").is_file():
         raise SystemExit(f"python -m agents.baselines works in a clone of the repository; {REPO} is not one")
     if args.command == "train":
-        train_all(args.jobs, args.env, args.algo)
+        options = {"runs": args.runs, "timesteps": args.timesteps}
+        outcomes = train_all(args.env, args.algo, args.jobs, args.address, args.seeds, **options)
+        if any("FAILED" in outcome for outcome in outcomes):
+            raise SystemExit("some runs failed; their train.log says why")
     elif args.command == "collect":
         collect(args.env, args.algo)
     else:

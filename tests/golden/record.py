@@ -37,17 +37,23 @@ CASES = [
     ("skier", "connenv/Skier-v0", {"max_episode_steps": 80}, None),
     ("skier_ramp", "connenv/Skier-v0", {"max_episode_steps": 40, "max_height_speed": 3.0, "target_x": 0.3}, None),
     ("ball", "connenv/RollingBall-v0", {"max_episode_steps": 50, "tolerance": 1.5}, None),
-    ("ball_pose", "connenv/RollingBallPose-v0", {"max_episode_steps": 50, "tolerance": 2.5,
-                                                 "position_tolerance": 0.3}, None),
+    (
+        "ball_pose",
+        "connenv/RollingBallPose-v0",
+        {"max_episode_steps": 50, "tolerance": 2.5, "position_tolerance": 0.3},
+        None,
+    ),
     ("ball_goal", "connenv/RollingBallGoal-v0", {"max_episode_steps": 50, "tolerance": 1.5}, None),
     ("shell", "connenv/KozlovShell-v0", {"max_episode_steps": 60, "success_radius": 0.3}, None),
-    ("shell_dop853", "connenv/KozlovShell-v0", {"max_episode_steps": 60, "success_radius": 0.3,
-                                                "integrator": "dop853", "rtol": 1e-8, "atol": 1e-10}, None),
-    ("shell_full", "connenv/KozlovShell-v0", {"max_episode_steps": 60},
-     {"state": {"momentum": (0.3, -0.2, 0.1)}}),
+    (
+        "shell_dop853",
+        "connenv/KozlovShell-v0",
+        {"max_episode_steps": 60, "success_radius": 0.3, "integrator": "dop853", "rtol": 1e-8, "atol": 1e-10},
+        None,
+    ),
+    ("shell_full", "connenv/KozlovShell-v0", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),
     ("snake", "connenv/SnakeSwimmer-v0", {"max_episode_steps": 60, "success_radius": 2.9}, None),
-    ("snake_full", "connenv/SnakeSwimmer-v0", {"max_episode_steps": 60},
-     {"state": {"momentum": (0.3, -0.2, 0.1)}}),
+    ("snake_full", "connenv/SnakeSwimmer-v0", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),
     ("kapitza", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "planar"}, None),
     ("kapitza_fall", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "horizontal"}, None),
     ("sleigh", "connenv/ChaplyginSleigh-v0", {"max_episode_steps": 60, "tolerance": 0.5}, None),
@@ -56,8 +62,12 @@ CASES = [
     ("coin", "connenv/RollingCoin-v0", {"max_episode_steps": 60, "position_tolerance": 0.5}, None),
     ("beanie", "connenv/ElroysBeanie-v0", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),
     ("coin_surface", "connenv/RollingCoinSurface-v0", {"max_episode_steps": 40, "tolerance": 1.0}, None),
-    ("coin_plane", "connenv/RollingCoinSurface-v0", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"},
-     None),
+    (
+        "coin_plane",
+        "connenv/RollingCoinSurface-v0",
+        {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"},
+        None,
+    ),
     ("bead", "connenv/BeadOnBar-v0", {"max_episode_steps": 60}, None),
     ("tube", "connenv/TubeTwist-v0", {"max_episode_steps": 40, "tolerance": 0.6}, None),
     ("cat", "connenv/FallingCat-v0", {"max_episode_steps": 60, "fall_time": 0.4, "max_bend": 0.5}, None),
@@ -127,15 +137,22 @@ def projections(array):
 
 def fingerprint():
     """The floating-point platform: CPU model and the SIMD features numpy dispatches on, libc, numpy and scipy."""
-    model = platform.processor()
-    try:
-        model = next(line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
+    cpuinfo = Path("/proc/cpuinfo")
+    lines = cpuinfo.read_text().splitlines() if cpuinfo.is_file() else []
+    model = next(
+        (line.split(":", 1)[1].strip() for line in lines if line.startswith("model name")), platform.processor()
+    )
     features = getattr(getattr(np, "_core", None), "_multiarray_umath", None)
     features = sorted(k for k, v in getattr(features, "__cpu_features__", {}).items() if v)
     return " | ".join(
-        [platform.machine(), model, " ".join(features), "-".join(platform.libc_ver()), np.__version__, scipy.__version__]
+        [
+            platform.machine(),
+            model,
+            " ".join(features),
+            "-".join(platform.libc_ver()),
+            np.__version__,
+            scipy.__version__,
+        ]
     )
 
 

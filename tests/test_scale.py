@@ -1,0 +1,136 @@
+"""The baselines on Ray (agents.baselines train, agents.cluster): the same model as a direct run, and fault tolerance
+(a run whose worker is killed resumes from its checkpoint; the others are not repeated). A local Ray of two CPUs
+and tiny budgets."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+import pytest
+import torch
+
+from agents import baselines
+
+STEPS = 2048  # per run, with an evaluation and a checkpoint every 1024 steps
+TINY = {"timesteps": STEPS, "evaluations": 2}
+
+
+@pytest.fixture(scope="module")
+def ray_local():
+    from agents import cluster
+
+    ray = cluster.connect(num_cpus=2)
+    yield ray
+    ray.shutdown()
+
+
+def policy_parameters(folder):
+    from stable_baselines3 import PPO
+
+    return PPO.load(folder / "connenv-Swing-v0.zip", device="cpu").policy.state_dict()
+
+
+def test_a_run_on_ray_gives_the_model_of_a_direct_run(ray_local, tmp_path):
+    """Single-thread torch on CPU, the same seed: the final model is the same to the bit on either scheduler."""
+    import train
+
+    baselines.train_all(["connenv/Swing-v0"], ["ppo"], 2, seeds=[1], runs=tmp_path / "ray", **TINY)
+    train.main(baselines.train_argv("connenv/Swing-v0", "ppo", 1, tmp_path / "direct", **TINY))
+    on_ray = policy_parameters(baselines.run_folder("connenv/Swing-v0", "ppo", 1, tmp_path / "ray"))
+    direct = policy_parameters(baselines.run_folder("connenv/Swing-v0", "ppo", 1, tmp_path / "direct"))
+    assert on_ray.keys() == direct.keys()
+    assert all(torch.equal(on_ray[key], direct[key]) for key in on_ray)
+
+
+def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(ray_local, tmp_path, capsys):
+    """Kill the worker of seed 0 once it has checkpointed: Ray retries it from that checkpoint, seed 1 runs once,
+    and both runs finish."""
+    folders = [baselines.run_folder("connenv/Swing-v0", "ppo", seed, tmp_path) for seed in (0, 1)]
+    killed = []
+
+    def kill_seed_0():
+        checkpoint, attempts = folders[0] / "checkpoints" / "latest", folders[0] / "attempts.log"
+        deadline = time.monotonic() + 120
+        while not checkpoint.is_file() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        pid = int(attempts.read_text().split()[1])
+        os.kill(pid, signal.SIGKILL)
+        killed.append((pid, int(checkpoint.read_text())))
+
+    killer = threading.Thread(target=kill_seed_0)
+    killer.start()
+    outcomes = baselines.train_all(["connenv/Swing-v0"], ["ppo"], 2, seeds=(0, 1), runs=tmp_path, **TINY)
+    killer.join()
+    print("\n".join(outcomes), *(f.name + ": " + (f / "attempts.log").read_text() for f in folders), sep="\n")
+    ((pid, checkpoint_steps),) = killed
+    assert sorted(outcome.split(":")[0] for outcome in outcomes) == sorted(f.name for f in folders)
+    assert all((folder / "results.json").is_file() for folder in folders)
+    first, retry = (folders[0] / "attempts.log").read_text().splitlines()
+    assert first.startswith(f"pid {pid} from step 0") and retry.endswith(f"from step {checkpoint_steps}")
+    assert checkpoint_steps > 0
+    assert len((folders[1] / "attempts.log").read_text().splitlines()) == 1
+
+
+def test_a_sampled_configuration_becomes_rl_zoo3_hyperparameters():
+    """rl-zoo3's PPO sampler on a fixed configuration: the YAML form evaluates back to what the sampler returned."""
+    from rl_zoo3.hyperparams_opt import HYPERPARAMS_SAMPLER
+    from torch import nn
+
+    from agents import tune
+
+    config = {"batch_size_pow": 6, "n_steps_pow": 8, "one_minus_gamma": 0.01, "one_minus_gae_lambda": 0.05,
+              "learning_rate": 3e-4, "ent_coef": 1e-3, "clip_range": 0.2, "n_epochs": 10, "max_grad_norm": 0.5,
+              "net_arch": "medium", "activation_fn": "relu"}  # fmt: skip
+    hyperparams = tune.hyperparameters("connenv/KapitzaSwingUp-v0", "ppo", config)
+    assert hyperparams["n_steps"] == 256 and hyperparams["batch_size"] == 64 and hyperparams["gamma"] == 0.99
+    assert eval(hyperparams["policy_kwargs"], {"nn": nn}) == {
+        "net_arch": {"pi": [256, 256], "vf": [256, 256]},
+        "activation_fn": nn.ReLU,
+    }
+    assert hyperparams["normalize"] is True  # kept from agents/hyperparams/ppo.yml
+    arguments = tune.sampler_arguments("connenv/RollingBallGoal-v0", "sac")
+    assert arguments[2]["using_her_replay_buffer"]
+    her = {"one_minus_gamma": 0.02, "batch_size_pow": 8, "learning_rate": 1e-3, "train_freq": 1, "tau": 0.02,
+           "net_arch": "medium", "n_sampled_goal": 2, "goal_selection_strategy": "episode"}  # fmt: skip
+    assert HYPERPARAMS_SAMPLER["sac"](optuna_fixed(her), *arguments)["replay_buffer_kwargs"] == {
+        "n_sampled_goal": 2,
+        "goal_selection_strategy": "episode",
+    }
+    sampled = tune.hyperparameters("connenv/RollingBallGoal-v0", "sac", her)
+    assert eval(sampled["replay_buffer_kwargs"]) == {"n_sampled_goal": 2, "goal_selection_strategy": "episode"}
+
+
+def optuna_fixed(params):
+    import optuna
+
+    return optuna.trial.FixedTrial(params)
+
+
+def test_a_sweep_writes_its_best_hyperparameters_for_train_py_and_resumes(ray_local, tmp_path, capsys):
+    """Three trials of Optuna + ASHA; best.yml trains with train.py; the same command again restores the finished
+    sweep instead of running it anew."""
+    import yaml
+
+    import train
+    from agents import tune
+
+    argv = ["--env", "connenv/Swing-v0", "--algo", "sac", "--samples", "3", "--timesteps", "300"]
+    argv += ["--evaluations", "2", "--runs", str(tmp_path)]
+    best = tune.main(argv)
+    path = tmp_path / "Swing-v0_sac" / "best.yml"
+    assert yaml.safe_load(path.read_text()) == {"connenv/Swing-v0": best}
+    assert {"learning_rate", "batch_size", "gamma", "tau", "train_freq", "gradient_steps"} <= best.keys()
+    trials = sorted(p.name for p in (tmp_path / "Swing-v0_sac" / "trials").iterdir())
+    assert len(trials) == 3
+    results = train.main(["--env", "connenv/Swing-v0", "--algo", "sac", "--hyperparams", str(path), "--timesteps",
+                          "200", "--eval-freq", "0", "--eval-episodes", "1", "--runs", str(tmp_path / "check")])  # fmt: skip
+    assert results["timesteps"] >= 200  # SAC steps in chunks of train_freq
+    logs = {path: path.stat().st_mtime_ns for path in (tmp_path / "Swing-v0_sac" / "trials").glob("*/train.log")}
+    capsys.readouterr()
+    tune.main(argv)
+    assert "resuming the sweep" in capsys.readouterr().out
+    assert sorted(p.name for p in (tmp_path / "Swing-v0_sac" / "trials").iterdir()) == trials
+    assert {path: path.stat().st_mtime_ns for path in logs} == logs  # no trial trained again
