@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import functools
 import os
 import pathlib
 import platform
@@ -424,13 +425,24 @@ def training_table(report: Report, env_ids):
     report.table(title, columns, rows)
 
 
+def task_layer(env_id: str, seed: int):
+    """gym.make(env_id) twice, reset: as made, and with the identity for its stepper, whose step costs what the task
+    layer costs (the action's check, the segments, the state, observation, reward and info), the physics left out."""
+    pair = gym.make(env_id), gym.make(env_id)
+    pair[1].unwrapped.stepper = lambda system, y, u, u_dot, tau: y.copy()
+    for env in pair:
+        env.reset(seed=seed)
+        env.action_space.seed(seed)
+    return pair
+
+
 REFERENCES = ("Pendulum-v1's env step", "CartPole-v1's native vector step")
 
 
 def bounds_table(report: Report, n: int, seed: int = 0):
     """What bounds the missed targets, measured: the physics a default step cannot skip, on one state against
-    Pendulum-v1's env step and on n rows against CartPole-v1's native vector step; the task layer alone (Swing-v0
-    stepped with the identity for its stepper); and the batched RK8 step of the swing, the alternative to its
+    Pendulum-v1's env step and on n rows against CartPole-v1's native vector step; the task layer alone (each env
+    with a single-env target stepped with the identity for its stepper); and the batched RK8 step of the swing, the alternative to its
     elliptic functions, with its largest error per step against them."""
     from scipy.special import ellipj
 
@@ -453,16 +465,16 @@ def bounds_table(report: Report, n: int, seed: int = 0):
         gym.make("Pendulum-v1"),
         gym.make_vec("CartPole-v1", n, vectorization_mode="vector_entry_point"),
     )
-    task_layer = gym.make("connenv/Swing-v0")
-    task_layer.unwrapped.stepper = lambda system, y, u, u_dot, tau: y.copy()
-    for env in (pendulum, cartpole, task_layer):
+    task_layers = {env_id: task_layer(env_id, seed) for env_id in SINGLE_TARGETS}
+    for env in (pendulum, cartpole):
         env.reset(seed=seed)
     one, push = np.zeros(1, np.float32), np.zeros(n, int)
     cases = [
         ("Pendulum-v1's env step (reference)", 1, lambda: pendulum.step(one)),
         ("ellipj on one float (in the swing's, Kapitza's closed form)", 1, lambda: ellipj(0.3, 0.2)),
-        ("Swing-v0's env step with the identity for its stepper (the task layer alone)", 1,
-         lambda: task_layer.step(one)),
+        *((f"{env_id.split('/')[1]}'s env step, {kind}", 1, functools.partial(env.step, env.action_space.sample()))
+          for env_id, pair in task_layers.items()
+          for kind, env in zip(("its default stepper", "the identity for its stepper (the task layer)"), pair)),
         ("the skier's vector field on one state, ×13 (its default step)", 13,
          lambda: skier.system.vector_field(x[0], h[0], held[0])),
         (f"CartPole-v1's native vector step, N={n} (reference)", 1, lambda: cartpole.step(push)),
@@ -481,7 +493,9 @@ def bounds_table(report: Report, n: int, seed: int = 0):
             call()
             times.append(time.perf_counter() - start)
         table.append((label, count * statistics.median(times)))
-    single_reference, vector_reference = (next(t for label, t in table if label.startswith(name)) for name in REFERENCES)
+    single_reference, vector_reference = (
+        next(t for label, t in table if label.startswith(name)) for name in REFERENCES
+    )
     rows_out = [
         [label, f"{t * 1e6:.1f}", f"{t / (vector_reference if 'N=' in label else single_reference):.2f}"]
         for label, t in table
@@ -551,6 +565,7 @@ def commit() -> str:
     """The checkout's commit (with "+" where the work tree differs), or "unknown" outside a git checkout."""
     here = pathlib.Path(__file__).parent
     try:
+
         def run(*args):
             return subprocess.run(["git", *args], cwd=here, capture_output=True, text=True, check=True).stdout
 
