@@ -142,17 +142,20 @@ def imported_modules(path):
 
 
 def closure(requirements):
-    """The normalized names of the distributions these requirements install, their dependencies included (extras
-    of dependencies left out)."""
+    """The normalized names of the distributions these requirements install, their dependencies included, with the
+    extras each requirement asks for (``connenv[scale]`` in the test extra brings Ray)."""
     seen, todo = set(), [Requirement(r) for r in requirements]
     while todo:
         requirement = todo.pop()
-        name = canonicalize_name(requirement.name)
-        if name in seen or (requirement.marker and not requirement.marker.evaluate({"extra": ""})):
+        name, extras = canonicalize_name(requirement.name), ("", *sorted(requirement.extras))
+        if (name, extras) in seen:
             continue
-        seen.add(name)
-        todo += [Requirement(r) for r in importlib.metadata.requires(requirement.name) or []]
-    return seen
+        seen.add((name, extras))
+        for text in importlib.metadata.requires(requirement.name) or []:
+            dependency = Requirement(text)
+            if dependency.marker is None or any(dependency.marker.evaluate({"extra": e}) for e in extras):
+                todo.append(dependency)
+    return {name for name, _ in seen}
 
 
 def test_the_test_extra_installs_every_module_the_package_and_the_tests_that_do_not_train_import():
