@@ -1,4 +1,4 @@
-"""Reference results: SB3 baselines beside the analytic controllers, for every env (README, "Reference results").
+"""Reference results: SB3 baselines beside the analytic controllers, for every env (docs/guides/reference-results.md).
 
     python -m agents.baselines train     # 3 seeds per (env, algo) with train.py into runs/baselines/, on Ray
     python -m agents.baselines collect   # best model per (env, algo) into agents/pretrained/, curves into docs/

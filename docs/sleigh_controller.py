@@ -1,6 +1,6 @@
 """The reference controllers of ChaplyginSleigh-v0 over seeds 0..N−1 (N = 20, or --seeds N): success, steps to
 the target (docs/sleigh_controller.csv), and the paths of P on the first 20 (docs/sleigh_controller.png), quoted in
-docs/envs/ChaplyginSleigh.md.
+docs/physics/ChaplyginSleigh.md.
 
     PYTHONPATH=. python docs/sleigh_controller.py [--seeds N]   (from the repository root)
 """

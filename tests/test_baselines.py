@@ -1,5 +1,5 @@
 """Reference results: the pretrained models load offline, one per (env, algorithm), and reproduce the committed
-table (README, "Reference results")."""
+table (docs/guides/reference-results.md)."""
 
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ def test_readme_table_is_the_committed_results_formatted():
     assert [report["env"] for report in reports] == list(baselines.ENVS)
     table = baselines.format_results(reports)
     assert (baselines.DOCS / "results.md").read_text() == table + "\n"
-    assert table in (baselines.REPO / "README.md").read_text()
+    assert table in (baselines.REPO / "docs" / "guides" / "reference-results.md").read_text()
 
 
 def test_pretrained_zips_keep_their_own_algorithm_when_algo_is_given():

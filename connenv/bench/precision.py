@@ -45,7 +45,7 @@ Each env runs the same episodes under every candidate stepper (`connenv.bench.co
 - snake: SnakeSwimmer-v0, 300 steps of seeded random joint commands, from rest (the reduced model) and from the
   body momentum (0.3, 0.1, 0.05) (the full model), as the shell's; the same reference, errors and invariant. Of the
   Magnus step only the default (atol 1e-12; DOP853 at rtol 1e-10 on the full model): the rule it fixes for the
-  reduced model is the same over the usual range of atol (docs/envs/SnakeSwimmer.md, measured by this bench), so
+  reduced model is the same over the usual range of atol (docs/physics/SnakeSwimmer.md, measured by this bench), so
   rows of other atol would differ only in DOP853's atol on the full model.
 - connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:

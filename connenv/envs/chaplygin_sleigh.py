@@ -28,7 +28,7 @@ from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 DEFAULT_INTEGRATOR = "rk4"
-DEFAULT_SUBSTEPS = 2  # RK4 × 2: cheaper than DOP853 for the accuracy the task needs (docs/envs/ChaplyginSleigh.md)
+DEFAULT_SUBSTEPS = 2  # RK4 × 2: cheaper than DOP853 for the accuracy the task needs (docs/physics/ChaplyginSleigh.md)
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + E) past which it has diverged: StepperError
 TARGET_DISTANCE = (1.0, 2.0)  # m from the start, any direction
 SPEED_BOUND = 10.0  # |v| (m/s) given at reset
@@ -62,7 +62,7 @@ class ChaplyginSleighEnv(TaskEnv):
     sleigh). A mass m moves in a box on the sled; its offset from C, u = (u₁ along the axis, |u₁| ≤ box; u₂ across
     it, left positive, |u₂| ≤ rail), is assigned by the controller, an *active constraint*. Nothing else pushes the
     sled: shaking the mass across propels it (tail first), shaking it along and across together turns it (box=0 is
-    a transverse rail, which cannot steer from rest: docs/envs/ChaplyginSleigh.md). With p = (p₁, p₂) = (∂T/∂v,
+    a transverse rail, which cannot steer from rest: docs/physics/ChaplyginSleigh.md). With p = (p₁, p₂) = (∂T/∂v,
     ∂T/∂ω), v the forward velocity of P and ω = φ̇,
 
         ṗ₁ = ω P_w,   ṗ₂ = −v P_w,   P_w = M a ω + m ((a + u₁) ω + u̇₂),   (ẋ, ẏ, φ̇) = (v cos φ, v sin φ, ω)
@@ -138,7 +138,7 @@ class ChaplyginSleighEnv(TaskEnv):
     | substeps / rtol, atol | | see `connenv.core.steppers` |
     | render_mode | None | "human", "rgb_array" |
 
-    The default stepper, RK4 with 2 substeps, was measured against DOP853 (docs/envs/ChaplyginSleigh.md). A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or an energy
+    The default stepper, RK4 with 2 substeps, was measured against DOP853 (docs/physics/ChaplyginSleigh.md). A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or an energy
     error past 1e-2 (1 + T) (T is conserved where the mass is held). Every `info` has `"state"` (`x`, `y`, `phi`,
     `v`, `omega`, `u`, `u_dot`, `u_along`, `u_along_dot`, `t`), `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
     """

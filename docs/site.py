@@ -1,0 +1,351 @@
+"""The docs site's generated part: a page per registered env from its class docstring, with an animation of the env
+under its analytic controller, as Gymnasium's docs are made.
+
+    python docs/site.py                 # write docs/envs/{name}.md, the generated physics pages, README's gallery
+    python docs/site.py --animations    # also record docs/envs/{name}.gif (about a minute)
+    python docs/site.py --check         # exit 1 naming the pages that differ from what the docstrings make
+
+A subclass's docstring (RollingBallGoal-v0's, KapitzaSwingUp-v0's) gives what differs; the sections it leaves out
+are its base class's. The animations are recorded with imageio from ``render_mode="rgb_array"``: ANIMATION_WIDTH
+pixels wide, about ANIMATION_FPS frames a second, at most MAX_FRAMES frames (and MIN_FRAMES over MIN_SECONDS for a
+short episode, in slow motion), under the env's first analytic
+controller (agents/controllers.py), or a periodic shape change for the two builders, which have none.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import inspect
+import re
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import connenv
+from connenv.examples import MAKE_KWARGS
+
+DOCS = Path(__file__).resolve().parent
+PAGES = DOCS / "envs"
+SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End", "Arguments")
+ANIMATION_WIDTH, ANIMATION_FPS, MAX_FRAMES, MIN_FRAMES, MIN_SECONDS = 200, 12, 90, 30, 3.0
+PHYSICS = {
+    "ActiveConstraint-v0": "framework.md",
+    "BeadOnBar-v0": "BeadOnBar.md",
+    "ChaplyginSleigh-v0": "ChaplyginSleigh.md",
+    "Connection-v0": "connections.md",
+    "ElroysBeanie-v0": "ElroysBeanie.md",
+    "FallingCat-v0": "FallingCat.md",
+    "KapitzaPendulum-v0": "kapitza.md",
+    "KapitzaSwingUp-v0": "kapitza.md",
+    "KozlovShell-v0": "kozlov-shell.md",
+    "RollingBall-v0": "rolling-ball.md",
+    "RollingBallGoal-v0": "rolling-ball.md",
+    "RollingBallPose-v0": "rolling-ball.md",
+    "RollingCoin-v0": "RollingCoin.md",
+    "RollingCoinSurface-v0": "RollingCoinSurface.md",
+    "Skier-v0": "skier.md",
+    "SnakeSwimmer-v0": "SnakeSwimmer.md",
+    "Swing-v0": "swing.md",
+    "TubeTwist-v0": "TubeTwist.md",
+}
+"""Each env's physics page, under docs/physics/."""
+VERSION_HISTORY = "- v0: the first version, in connenv 0.1.0."
+GALLERY_MARKS = ("<!-- gallery: python docs/site.py -->", "<!-- end of gallery -->")
+GENERATED_PHYSICS = {
+    "framework.md": (
+        "Active constraints: Bressan's framework",
+        (
+            "A controller that assigns some coordinates of a mechanical system directly — a radius, a height, a pivot's "
+            "position — steers the others through the kinetic energy's coupling. Bressan's Hamiltonian gives the free "
+            "coordinates' motion for any control path, and how the control's velocity enters it sorts systems into "
+            "classes: those a jump of the control moves by a fixed amount, and those it does not."
+        ),
+        ["connenv.core.mechanics", "connenv.core.mechanics:JumpClass", "connenv.core.lagrangian"],
+        ["tests/test_core.py", "tests/test_active_constraint.py"],
+    ),
+    "connections.md": (
+        "Mechanical connections and holonomy",
+        (
+            "When a conserved momentum is zero, a body's motion is slaved to its shape: a connection A turns each shape "
+            "velocity into a group velocity, and a closed loop of shapes moves the body by the loop's holonomy — the "
+            "curvature of A integrated over the area the loop encloses, whatever the speed of the loop."
+        ),
+        ["connenv.core.lie", "connenv.envs.connection"],
+        ["tests/test_connection.py"],
+    ),
+    "swing.md": (
+        "The swing",
+        "A child pumps a swing by standing and squatting: the radius is the assigned coordinate.",
+        ["connenv.systems.swing", "connenv.systems.swing:Swing.exact_flow"],
+        ["tests/test_swing_physics.py"],
+    ),
+    "skier.md": (
+        "The skier",
+        "A skier on an undulating trail pumps by raising and lowering the barycentre along the trail's normal.",
+        ["connenv.systems.skier", "connenv.systems.trails"],
+        ["tests/test_skier_physics.py"],
+    ),
+    "rolling-ball.md": (
+        "The rolling ball",
+        (
+            "A ball rolled on a plane without slipping or turning about the vertical is reoriented by the loops its "
+            "contact point draws: the holonomy of the rolling distribution."
+        ),
+        ["connenv.systems.rolling_ball"],
+        ["tests/test_rolling_ball_physics.py"],
+    ),
+    "kozlov-shell.md": (
+        "Kozlov's shell in an ideal fluid",
+        (
+            "An elliptic shell swims through an ideal fluid by moving a mass inside it; the fluid acts only through "
+            "its added masses, in closed form."
+        ),
+        ["connenv.systems.kozlov_shell"],
+        ["tests/test_kozlov_shell_physics.py"],
+    ),
+    "kapitza.md": (
+        "Kapitza's pendulum",
+        "A pendulum whose pivot is assigned: fast vibration of the pivot holds it upright.",
+        ["connenv.systems.kapitza", "connenv.systems.kapitza:KapitzaPendulum.exact_segment"],
+        ["tests/test_kapitza_physics.py"],
+    ),
+}
+"""The physics pages written from the modules' docstrings (title, lead, modules, the test files that check them);
+the others under docs/physics/ are written by hand."""
+
+
+def env_ids() -> list[str]:
+    return sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+
+
+def name(env_id: str) -> str:
+    return env_id.split("/")[1]
+
+
+def env_class(env_id: str) -> type:
+    module, attribute = gym.spec(env_id).entry_point.split(":")
+    return getattr(importlib.import_module(module), attribute)
+
+
+def sections(cls: type) -> dict[str, str]:
+    """The '## ' sections of a class's docstring, each with its text, in order; a heading that joins several
+    ('Action Space, Observation Space, Arguments') stands for each."""
+    text = inspect.cleandoc(cls.__dict__.get("__doc__") or "")
+    found = {}
+    for part in re.split(r"^## ", text, flags=re.MULTILINE)[1:]:
+        heading, _, body = part.partition("\n")
+        for title in heading.split(", "):
+            found[title.strip()] = body.strip()
+    return found
+
+
+def merged_sections(cls: type) -> dict[str, str]:
+    """The class's sections, with those it leaves out taken from its base classes (nearest first)."""
+    merged = {}
+    for base in reversed(cls.__mro__):
+        merged.update(sections(base))
+    ordered = [title for title in SECTIONS if title in merged] + [t for t in merged if t not in SECTIONS]
+    return {title: merged[title] for title in ordered}
+
+
+def controller_name(env_id: str) -> str:
+    from agents.controllers import CONTROLLERS
+
+    known = CONTROLLERS.get(env_id)
+    return f"`{next(iter(known))}`" if known else "none (a builder): the animation is a periodic shape change"
+
+
+def make(env_id: str, **kwargs):
+    return gym.make(env_id, **(MAKE_KWARGS[env_id]() if env_id in MAKE_KWARGS else {}), **kwargs)
+
+
+def page(env_id: str) -> str:
+    """The env's page: summary table, animation, the docstring's sections, physics link, version history."""
+    cls, env = env_class(env_id), make(env_id)
+    summary = inspect.getmodule(cls).__doc__.strip().splitlines()[0]
+    rows = [
+        ("id", f"`{env_id}`"),
+        ("class", f"`{cls.__module__}.{cls.__qualname__}`"),
+        ("action space", f"`{env.action_space}`"),
+        ("observation space", f"`{env.observation_space}`".replace("\n", " ")),
+        ("time limit", f"{gym.spec(env_id).max_episode_steps} steps"),
+        ("analytic controller", controller_name(env_id)),
+        ("physics", f"[{PHYSICS[name(env_id)].removesuffix('.md')}](../physics/{PHYSICS[name(env_id)]})"),
+    ]
+    env.close()
+    lines = [f"# {name(env_id)}", "", summary, "", f"![{name(env_id)} under its controller]({name(env_id)}.gif)", ""]
+    lines += ["| | |", "|---|---|", *(f"| {key} | {value} |" for key, value in rows), ""]
+    for title, body in merged_sections(cls).items():
+        lines += [f"## {title}", "", body, ""]
+    lines += ["## Version History", "", VERSION_HISTORY, ""]
+    return "\n".join(lines)
+
+
+def tests_of(path: str) -> list[str]:
+    """'- `test_name`: its docstring's first line' for each test function of a test file."""
+    import ast
+
+    tree = ast.parse((DOCS.parent / path).read_text())
+    lines = []
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef) and node.name.startswith("test_"):
+            doc = (ast.get_docstring(node) or "").split("\n\n")[0].replace("\n", " ")
+            lines.append(f"- `{node.name}`" + (f": {doc}" if doc else ""))
+    return lines
+
+
+def docstring_of(target: str) -> str:
+    """The docstring of a module, or of 'module:Qualified.name' in it."""
+    module, _, qualname = target.partition(":")
+    found = importlib.import_module(module)
+    for part in qualname.split(".") if qualname else ():
+        found = getattr(found, part)
+    return found.__doc__
+
+
+def physics_page(filename: str) -> str:
+    """A physics page from its modules' docstrings and the names of the tests that check them."""
+    title, lead, modules, tests = GENERATED_PHYSICS[filename]
+    lines = [f"# {title}", "", lead, ""]
+    for module in modules:
+        lines += [f"## `{module}`", "", inspect.cleandoc(docstring_of(module)), ""]
+    lines += ["## What the tests check", ""]
+    for path in tests:
+        lines += [f"`{path}`:", "", *tests_of(path), ""]
+    envs = [f"[{name(e)}](../envs/{name(e)}.md)" for e in env_ids() if PHYSICS[name(e)] == filename]
+    return "\n".join(lines + ([f"Envs: {', '.join(envs)}.", ""] if envs else []))
+
+
+def shape_size(space) -> str:
+    """The size of a space: its shape's product, or the sizes of a Dict's parts."""
+    if isinstance(space, gym.spaces.Dict):
+        return " + ".join(f"{key} {shape_size(part)}" for key, part in space.spaces.items())
+    return str(int(np.prod(space.shape)))
+
+
+def gallery() -> str:
+    """The README's table of every env: its animation, class, action and observation sizes, analytic controller."""
+    from agents.controllers import CONTROLLERS
+
+    lines = ["| | env | class | action | observation | analytic controller |", "|---|---|---|---|---|---|"]
+    for env_id in env_ids():
+        env, cls, short = make(env_id), env_class(env_id), name(env_id)
+        controller = next(iter(CONTROLLERS[env_id])) if env_id in CONTROLLERS else "–"
+        lines.append(
+            f'| <img src="docs/envs/{short}.gif" width="80"> | [{short}](docs/envs/{short}.md) | `{cls.__name__}` '
+            f"| {shape_size(env.action_space)} | {shape_size(env.observation_space)} | {controller} |"
+        )
+        env.close()
+    return "\n".join(lines)
+
+
+def readme_with_gallery(readme: str) -> str:
+    """The README with its gallery (between GALLERY_MARKS) as the envs make it now."""
+    start, end = GALLERY_MARKS
+    before, rest = readme.split(start, 1)
+    return before + start + "\n" + gallery() + "\n" + end + rest.split(end, 1)[1]
+
+
+def expected_pages() -> dict[Path, str]:
+    """Every generated page by path: the env pages and the generated physics pages."""
+    pages = {PAGES / f"{name(env_id)}.md": page(env_id) for env_id in env_ids()}
+    pages.update((DOCS / "physics" / filename, physics_page(filename)) for filename in GENERATED_PHYSICS)
+    readme = DOCS.parent / "README.md"
+    pages[readme] = readme_with_gallery(readme.read_text())
+    pages[DOCS / "index.md"] = home(pages[readme])
+    return pages
+
+
+def home(readme: str) -> str:
+    """The site's home page: the README, its links made relative to docs/."""
+    return readme.replace("](docs/", "](").replace('src="docs/', 'src="')
+
+
+def write_pages() -> list[Path]:
+    PAGES.mkdir(exist_ok=True)
+    for path, text in expected_pages().items():
+        path.write_text(text)
+    return list(expected_pages())
+
+
+def stale_pages() -> list[str]:
+    """The generated pages that are missing or differ from what the docstrings make, and env pages of no registered
+    env."""
+    expected = {path: text for path, text in expected_pages().items()}
+    present = {path: path.read_text() for path in [*PAGES.glob("*.md"), *expected] if path.is_file()}
+    stale = (p for p in expected.keys() | present.keys() if expected.get(p) != present.get(p))
+    return sorted(str(p.relative_to(DOCS.parent)) for p in stale)
+
+
+def policy(env_id: str, env):
+    """The env's first analytic controller as a function of the observation, or a periodic shape change."""
+    from agents.controllers import CONTROLLERS, controller
+
+    if env_id in CONTROLLERS:
+        law, state = controller(env_id, env=env), None
+
+        def act(observation):
+            nonlocal state
+            action, state = law.predict(observation, state=state, deterministic=True)
+            return action
+
+        return act
+    clock = iter(range(10**9))
+    return lambda observation: np.full(env.action_space.shape, np.sin(0.2 * next(clock)), np.float32)
+
+
+def record(env_id: str, path: Path, seed: int = 0) -> int:
+    """An episode under the env's controller as a GIF, at about ANIMATION_FPS frames of the env's time a second, in
+    slow motion for an episode shorter than MIN_SECONDS; returns its frame count."""
+    import imageio.v3 as iio
+    from PIL import Image
+
+    env = make(env_id, render_mode="rgb_array")
+    observation, _ = env.reset(seed=seed)
+    fps = env.metadata["render_fps"]
+    act, stride = policy(env_id, env.unwrapped), max(1, round(fps / ANIMATION_FPS))
+    pictures, done = [], False
+    while not done and len(pictures) < MAX_FRAMES * stride:
+        pictures.append(env.render())
+        observation, _, terminated, truncated, _ = env.step(act(observation))
+        done = terminated or truncated
+    pictures.append(env.render())
+    env.close()
+    stride = max(1, min(stride, len(pictures) // MIN_FRAMES))
+    frames = [shrink(Image.fromarray(picture)) for picture in pictures[::stride]]
+    duration = max(1000.0 * stride / fps, 1000.0 * MIN_SECONDS / len(frames))
+    iio.imwrite(path, np.stack(frames), duration=duration, loop=0, plugin="pillow")
+    return len(frames)
+
+
+def shrink(picture):
+    from PIL import Image
+
+    height = round(picture.height * ANIMATION_WIDTH / picture.width)
+    return np.asarray(picture.resize((ANIMATION_WIDTH, height), Image.LANCZOS))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--check", action="store_true", help="compare the pages with the docstrings' instead")
+    parser.add_argument("--animations", action="store_true", help="also record the animations")
+    args = parser.parse_args(argv)
+    if args.check:
+        stale = stale_pages()
+        print(f"stale env pages: {stale}; regenerate with python docs/site.py" if stale else "env pages up to date")
+        return 1 if stale else 0
+    for path in write_pages():
+        print(f"wrote {path.relative_to(DOCS.parent)}")
+    for env_id in env_ids() if args.animations else ():
+        gif = PAGES / f"{name(env_id)}.gif"
+        frames = record(env_id, gif)
+        print(f"wrote {gif.relative_to(DOCS.parent)}: {frames} frames, {gif.stat().st_size // 1024} kB")
+    return 0
+
+
+if __name__ == "__main__":
+    assert connenv  # registers the envs
+    sys.exit(main())

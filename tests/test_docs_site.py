@@ -1,0 +1,117 @@
+"""The docs site: generated pages in step with the docstrings, an animated page per env, no link out of the
+repository, a strict mkdocs build, and the built pages in a real browser (headless Chromium, where installed)."""
+
+from __future__ import annotations
+
+import functools
+import http.server
+import importlib.util
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+ROOT = Path(__file__).resolve().parents[1]
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def site_module():
+    spec = importlib.util.spec_from_file_location("docs_site", ROOT / "docs" / "site.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_generated_pages_are_what_the_docstrings_make():
+    """Env pages, the generated physics pages, the README's gallery and the home page: regenerate with
+    `python docs/site.py` after changing a docstring."""
+    assert site_module().stale_pages() == []
+
+
+def test_every_registered_env_has_a_page_with_its_animation():
+    site = site_module()
+    for env_id in site.env_ids():
+        name = site.name(env_id)
+        page = (ROOT / "docs" / "envs" / f"{name}.md").read_text()
+        assert f"]({name}.gif)" in page and f"`{env_id}`" in page
+        gif = Image.open(ROOT / "docs" / "envs" / f"{name}.gif")
+        assert gif.n_frames >= 20 and gif.width == site.ANIMATION_WIDTH, name
+        assert (ROOT / "docs" / "envs" / f"{name}.gif").stat().st_size < 400_000, name
+
+
+def markdown_files():
+    return [ROOT / "README.md", ROOT / "mkdocs.yml", *sorted((ROOT / "docs").rglob("*.md"))]
+
+
+def test_no_link_points_outside_the_repository():
+    """No URL at all, and every relative link (Markdown or HTML) resolves to a file inside the repository."""
+    outside, missing = [], []
+    for path in markdown_files():
+        text = path.read_text()
+        outside += [f"{path.relative_to(ROOT)}: {url}" for url in re.findall(r"\b(?:https?|ftp)://\S+", text)]
+        targets = re.findall(r"\]\(([^)\s]+)\)", text) + re.findall(r'\bsrc="([^"]+)"', text)
+        for target in targets:
+            file = target.split("#", 1)[0]
+            if not file:
+                continue
+            resolved = (path.parent / file).resolve()
+            if not resolved.is_relative_to(ROOT):
+                outside.append(f"{path.relative_to(ROOT)}: {target}")
+            elif not resolved.exists():
+                missing.append(f"{path.relative_to(ROOT)}: {target}")
+    assert not outside, outside
+    assert not missing, missing
+
+
+@pytest.fixture(scope="module")
+def built_site(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("site")
+    subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-d", str(folder)], cwd=ROOT, check=True)
+    return folder
+
+
+def test_the_site_builds_strictly_with_a_page_per_env(built_site):
+    site = site_module()
+    for env_id in site.env_ids():
+        page = built_site / "envs" / site.name(env_id) / "index.html"
+        assert page.is_file() and f"{site.name(env_id)}.gif" in page.read_text()
+    assert (built_site / "envs" / "Swing-v0.gif").is_file()
+
+
+@pytest.fixture(scope="module")
+def served(built_site):
+    """The built site on a free localhost port."""
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(built_site))
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", port), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    yield f"http://127.0.0.1:{port}"
+    server.shutdown()
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (.ci/run installs Debian's package)")
+@pytest.mark.parametrize("page", ["", "envs/Swing-v0/"])
+def test_chromium_renders_the_home_page_and_an_env_page(served, page, tmp_path):
+    """Headless Chromium loads the page (a screenshot that is not blank) and the page's animation is served."""
+    import urllib.request
+
+    shot = tmp_path / "page.png"
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1200,900", f"--screenshot={shot}"]  # fmt: skip
+    subprocess.run([CHROMIUM, *flags, f"{served}/{page}"], check=True, capture_output=True, timeout=120)
+    pixels = np.asarray(Image.open(shot).convert("RGB"))
+    assert pixels.shape[:2] == (900, 1200) and len(np.unique(pixels.reshape(-1, 3), axis=0)) > 50
+    html = urllib.request.urlopen(f"{served}/{page}").read().decode()
+    gif = re.search(r'src="([^"]+\.gif)"', html).group(1)
+    response = urllib.request.urlopen(f"{served}/{page}{gif}")
+    assert response.status == 200 and response.headers["Content-Type"] == "image/gif"
