@@ -2,7 +2,7 @@
 
     python -m agents.baselines train     # 3 seeds per (env, algo) with train.py into runs/baselines/, on Ray
     python -m agents.baselines collect   # best model per (env, algo) into agents/pretrained/, curves into docs/
-    python -m agents.baselines table     # the README table, from agents/pretrained/ alone (offline, minutes)
+    python -m agents.baselines table     # the reference table, from agents/pretrained/ alone (offline, minutes)
 
 ``train`` trains once per (env, algo, seed) with train.py's ``train.main`` and the hyperparameters of
 agents/hyperparams/, each run a Ray task of one CPU (``agents.cluster``): on a local Ray of ``--jobs`` CPUs by default,

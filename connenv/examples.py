@@ -1,4 +1,4 @@
-"""Worked examples of the two builders, each as make kwargs: what the README shows, the benchmarks time and the
+"""Worked examples of the two builders, each as make kwargs: what the guide "Your own system" shows, the benchmarks time and the
 contract tests check the generic ids with.
 
 - ``rotor()``: ActiveConstraint-v0 on a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², fit for jumps;
