@@ -78,12 +78,15 @@ def hyperparameters(env_id: str, algo: str, config: dict) -> dict:
 
 
 class Report(BaseCallback):
-    """After each periodic evaluation (the EvalCallback is its parent): report the mean return to Tune."""
+    """After each periodic evaluation (the EvalCallback is its parent): report the mean return and the success rate
+    to Tune."""
 
     def _on_step(self) -> bool:
         from ray import tune
 
-        tune.report({METRIC: float(self.parent.last_mean_reward), "timesteps": self.num_timesteps})
+        successes = self.parent._is_success_buffer  # SB3's, filled from info["is_success"] by the evaluation
+        success = sum(successes) / len(successes) if successes else float("nan")
+        tune.report({METRIC: float(self.parent.last_mean_reward), "success": success, "timesteps": self.num_timesteps})
         return True
 
 
@@ -144,14 +147,19 @@ def write_best(results, env_id: str, algo: str, path: Path) -> dict:
 
 
 def summary(results) -> str:
-    """Every trial's best periodic return, evaluations and sampled parameters, best first."""
+    """Every trial's best periodic return and success rate, evaluations and sampled parameters, best first."""
     rows = []
     for result in results:
         frame = result.metrics_dataframe
-        best = float(frame[METRIC].max()) if frame is not None and METRIC in frame else float("nan")
-        rows.append((best, len(frame) if frame is not None else 0, result.config))
-    rows.sort(key=lambda row: -row[0] if row[0] == row[0] else float("inf"))
-    return "\n".join(f"{best:10.4g}  {n:3d} evaluations  {config}" for best, n, config in rows)
+        if frame is None or METRIC not in frame:
+            rows.append((float("-inf"), float("nan"), 0, result.config))
+            continue
+        success = float(frame["success"].max()) if "success" in frame else float("nan")
+        rows.append((float(frame[METRIC].max()), success, len(frame), result.config))
+    rows.sort(key=lambda row: -row[0])
+    return "\n".join(
+        f"{best:10.4g}  success {success:4.0%}  {n:3d} evaluations  {config}" for best, success, n, config in rows
+    )
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
