@@ -102,10 +102,11 @@ def bounded_segments(u, u_dot_cmd, low, high, dt: float):
     jump of u̇, admissible where only u̇ enters the equations: p is continuous across it and u never leaves its
     bounds nor jumps. A ramp toward a command stops there: low = min(u, u_cmd), high = max(u, u_cmd)."""
     u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
-    u_end = u + u_dot * dt
-    if np.ndim(low) == 0 and np.ndim(high) == 0 and u_end.ndim == 1:  # on Python floats: numpy's overhead dominates
-        inside = all(low <= end <= high for end in u_end.tolist())
+    if isinstance(low, float) and isinstance(high, float) and u.ndim == 1 and u_dot.shape == u.shape:
+        ends = [a + v * dt for a, v in zip(u.tolist(), u_dot.tolist())]  # Python floats: numpy's overhead dominates
+        u_end, inside = np.array(ends), all(low <= end <= high for end in ends)
     else:
+        u_end = u + u_dot * dt
         inside = np.all((low <= u_end) & (u_end <= high))
     if inside:  # no stop within the step
         return [(u, u_dot, dt)], u_end, u_dot
