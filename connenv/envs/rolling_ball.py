@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,7 +22,15 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
-from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d, six_d_angle
+from connenv.systems.rolling_ball import (
+    RollingBall,
+    attitude_error,
+    dot3,
+    from_six_d,
+    rotation_angle,
+    six_d,
+    six_d_angle,
+)
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until success
@@ -36,8 +45,8 @@ def check_so3(stepper, R):
     """StepperError if R (any row of a batch) is more than DRIFT_LIMIT off SO(3): the stepper has left it."""
     if R.ndim == 2:  # one attitude: ‖RᵀR − I‖ (Frobenius) on Python floats
         columns = R.T.tolist()
-        gram = [sum(a * b for a, b in zip(u, v)) - (u is v) for u in columns for v in columns]
-        drift = math.sqrt(sum(x * x for x in gram))
+        gram = [dot3(u, v) - (u is v) for u in columns for v in columns]
+        drift = math.sqrt(sum(map(operator.mul, gram, gram)))
     else:  # the six distinct entries of RᵀR − I elementwise over the rows: a stacked matmul costs 5x more
         c = [R[..., :, k] for k in range(3)]
         dot = [c[i][..., 0] * c[j][..., 0] + c[i][..., 1] * c[j][..., 1] + c[i][..., 2] * c[j][..., 2] for i, j in PAIRS]
@@ -235,7 +244,7 @@ class RollingBallEnv(TaskEnv):
         y = s.R.reshape(*s.R.shape[:-2], 9)
         R = run_segments(stepper, self.system, y, [(s.position, v, self.dt)])[0].reshape(s.R.shape)
         check_so3(stepper, R)
-        path_length = s.path_length + ops.hypot(v[..., 0], v[..., 1]) * self.dt
+        path_length = s.path_length + ops.hypot(*ops.components(v)) * self.dt
         return self.at(R, s.R_target, s.position + v * self.dt, s.t + self.dt, path_length, s.distance, ops)
 
     def _check_state(self, state):
@@ -251,7 +260,7 @@ class RollingBallEnv(TaskEnv):
     def command(self, a):
         """v = v_max a, with a projected radially onto the unit disk; a is one action (2,) or a batch (N, 2)."""
         ops = SCALAR if a.ndim == 1 else BATCH
-        return self.v_max * a / ops.column(ops.maximum(1.0, ops.hypot(a[..., 0], a[..., 1])))
+        return self.v_max * a / ops.column(ops.maximum(1.0, ops.hypot(*ops.components(a))))
 
     def observe(self, s, ops=SCALAR):
         return six_d(s.error).astype(np.float32)
@@ -267,8 +276,9 @@ class RollingBallEnv(TaskEnv):
         return s.angle_error <= self.tolerance
 
     def describe(self, s, ops=SCALAR):
+        x, y = ops.components(s.position)
         info = {
-            "state": {"x": s.position[..., 0], "y": s.position[..., 1], "R": s.R.copy(), "t": s.t},
+            "state": {"x": x, "y": y, "R": s.R.copy(), "t": s.t},
             "angle_error": s.angle_error,
             "path_length": s.path_length,
         }
@@ -390,11 +400,11 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     def reward(self, before, after, info, ops=SCALAR):
         """compute_reward(achieved, desired) of the state after, from its goal angle."""
-        return ops.real(-(np.asarray(after.goal_error) > self.tolerance).astype(np.float32))
+        return -ops.real(after.goal_error > self.tolerance)
 
     def success(self, s, ops=SCALAR):
         """compute_terminated(achieved, desired) of the state, from its goal angle."""
-        return np.asarray(s.goal_error) <= self.tolerance
+        return s.goal_error <= self.tolerance
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
