@@ -42,7 +42,7 @@ SCALAR = SimpleNamespace(
     pack=lambda parts: np.array(parts, np.float32),
     real=float,
     flag=bool,
-    vector=lambda a: tuple(map(float, a)),
+    vector=lambda a: tuple(np.asarray(a, float).tolist()),
     components=lambda a: a.tolist(),
 )
 """Operations on one state, as Python floats (the single env's): several times faster than numpy on one state."""
