@@ -19,6 +19,7 @@ from connenv.core.validation import (
     check_rotation,
     check_stepper_options,
     finite_action,
+    ndim,
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
@@ -408,7 +409,7 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
-        if np.ndim(achieved_goal) == 1 and np.ndim(desired_goal) == 1:  # one pair: Python floats
+        if ndim(achieved_goal) == 1 and ndim(desired_goal) == 1:  # one pair: Python floats
             return six_d_angle(achieved_goal, desired_goal)
         return rotation_angle(attitude_error(from_six_d(achieved_goal), from_six_d(desired_goal)))
 

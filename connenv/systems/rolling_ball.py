@@ -34,6 +34,8 @@ import numpy as np
 from scipy.optimize import brentq, root
 from scipy.spatial.transform import Rotation
 
+from connenv.core.validation import ndim
+
 E_Z = np.array([0.0, 0.0, 1.0])
 ARC_BRANCHES = 3
 """Branches m of the rotation vector searched by optimal_arc: 2(β + mπ) n̂ for m = −4 … 3 (see there)."""
@@ -92,7 +94,7 @@ class RollingBall:
     def exact_segment(self, y, u, u_dot, tau):
         """R ← exp(τ ω̂) R, exact for v held over the segment: scipy's Rotation over a batch; for one state,
         Rodrigues' formula on Python floats (scipy's Rotation costs more than a whole Pendulum-v1 step on one)."""
-        if type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
+        if type(y) is np.ndarray and y.ndim == 1 and ndim(tau) == 0:
             return np.array(_rodrigues_times(self.spin(u_dot).tolist(), float(tau), y.tolist()))
         R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))
         return (Rotation.from_rotvec(tau * self.spin(u_dot)).as_matrix() @ R).reshape(np.shape(y))
@@ -329,14 +331,13 @@ def six_d_angle(achieved, desired) -> float:
 
 def _frame(x):
     """from_six_d's Gram–Schmidt on one 6-D form: the three columns."""
-    values = np.asarray(x, float).tolist()
-    a, b = values[:3], values[3:]
-    norm = math.sqrt(dot3(a, a))
-    c1 = [v / norm for v in a]
-    dot = dot3(c1, b)
-    b = [v - dot * u for u, v in zip(c1, b)]
+    a0, a1, a2, b0, b1, b2 = np.asarray(x, float).tolist()
+    norm = math.sqrt(dot3((a0, a1, a2), (a0, a1, a2)))
+    c1 = (a0 / norm, a1 / norm, a2 / norm)
+    dot = dot3(c1, (b0, b1, b2))
+    b = (b0 - dot * c1[0], b1 - dot * c1[1], b2 - dot * c1[2])
     norm = math.sqrt(dot3(b, b))
-    c2 = [v / norm for v in b]
+    c2 = (b[0] / norm, b[1] / norm, b[2] / norm)
     return c1, c2, [c1[1] * c2[2] - c1[2] * c2[1], c1[2] * c2[0] - c1[0] * c2[2], c1[0] * c2[1] - c1[1] * c2[0]]
 
 
