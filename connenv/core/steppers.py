@@ -449,6 +449,6 @@ def _all_finite(y) -> bool:
 
 def _finite(y, stepper):
     """y, unless it holds a non-finite number (state or derivative), which raises StepperError."""
-    if not np.all(np.isfinite(y)):
+    if not (all(map(math.isfinite, y.ravel().tolist())) if y.size <= SMALL else np.isfinite(y).all()):
         raise StepperError(f"{stepper} produced a non-finite value {y}")
     return y
