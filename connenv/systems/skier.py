@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from connenv.core.validation import ndim
 from connenv.systems.trails import Trail
 
 
@@ -80,7 +81,7 @@ class Skier:
 
     def kinematics(self, y, h):
         """(E, ẋ, f′, σ, κ) at (y, h), from one evaluation of the trail's geometry."""
-        if np.ndim(y) == 1:  # one state: Python floats (a 0-d array would take the trail's array path)
+        if ndim(y) == 1:  # one state: Python floats (a 0-d array would take the trail's array path)
             (x, p), h = y.tolist(), float(h)
         else:
             x, p = y[..., 0], y[..., 1]
