@@ -337,18 +337,19 @@ class RollingBallPoseEnv(RollingBallEnv):
         return spaces.Box(-high, high, dtype=np.float32)
 
     def observe(self, s, ops=SCALAR):
-        scaled = np.clip(s.position / (4 * math.pi * self.system.radius), -POSITION_BOUND, POSITION_BOUND)
-        return np.concatenate([six_d(s.error), scaled], axis=-1).astype(np.float32)
+        scale = 4 * math.pi * self.system.radius
+        scaled = [ops.clip(v / scale, -POSITION_BOUND, POSITION_BOUND) for v in ops.components(s.position)]
+        return ops.pack([*ops.components(six_d(s.error)), *scaled])
 
     def progress(self, s, ops=SCALAR):
-        return s.angle_error + ops.hypot(s.position[..., 0], s.position[..., 1]) / self.system.radius
+        return s.angle_error + ops.hypot(*ops.components(s.position)) / self.system.radius
 
     def success(self, s, ops=SCALAR):
-        close = ops.hypot(s.position[..., 0], s.position[..., 1]) <= self.position_tolerance
+        close = ops.hypot(*ops.components(s.position)) <= self.position_tolerance
         return super().success(s, ops) & close
 
     def describe(self, s, ops=SCALAR):
-        return {**super().describe(s, ops), "position_error": ops.hypot(s.position[..., 0], s.position[..., 1])}
+        return {**super().describe(s, ops), "position_error": ops.hypot(*ops.components(s.position))}
 
 
 class RollingBallGoalEnv(RollingBallEnv):
