@@ -63,7 +63,7 @@ BATCH = SimpleNamespace(
     real=lambda x: np.asarray(x, float),
     flag=lambda x: np.asarray(x, bool),
     vector=lambda a: np.array(a, float),
-    components=lambda a: np.moveaxis(a, -1, 0),
+    components=lambda a: [a[..., i] for i in range(a.shape[-1])],
 )
 """The same operations on arrays over a batch (the vector env's). ``components`` splits the last axis: Python floats of
 one state, arrays over the rows of a batch."""

@@ -245,7 +245,7 @@ class RollingBallEnv(TaskEnv):
         y = s.R.reshape(*s.R.shape[:-2], 9)
         R = run_segments(stepper, self.system, y, [(s.position, v, self.dt)])[0].reshape(s.R.shape)
         check_so3(stepper, R)
-        path_length = s.path_length + ops.hypot(*ops.components(v)) * self.dt
+        path_length = s.path_length + ops.hypot(v[..., 0], v[..., 1]) * self.dt
         return self.at(R, s.R_target, s.position + v * self.dt, s.t + self.dt, path_length, s.distance, ops)
 
     def _check_state(self, state):
@@ -261,7 +261,7 @@ class RollingBallEnv(TaskEnv):
     def command(self, a):
         """v = v_max a, with a projected radially onto the unit disk; a is one action (2,) or a batch (N, 2)."""
         ops = SCALAR if a.ndim == 1 else BATCH
-        return self.v_max * a / ops.column(ops.maximum(1.0, ops.hypot(*ops.components(a))))
+        return self.v_max * a / ops.column(ops.maximum(1.0, ops.hypot(a[..., 0], a[..., 1])))
 
     def observe(self, s, ops=SCALAR):
         return six_d(s.error).astype(np.float32)
@@ -277,9 +277,8 @@ class RollingBallEnv(TaskEnv):
         return s.angle_error <= self.tolerance
 
     def describe(self, s, ops=SCALAR):
-        x, y = ops.components(s.position)
         info = {
-            "state": {"x": x, "y": y, "R": s.R.copy(), "t": s.t},
+            "state": {"x": s.position[..., 0], "y": s.position[..., 1], "R": s.R.copy(), "t": s.t},
             "angle_error": s.angle_error,
             "path_length": s.path_length,
         }
@@ -337,19 +336,19 @@ class RollingBallPoseEnv(RollingBallEnv):
         return spaces.Box(-high, high, dtype=np.float32)
 
     def observe(self, s, ops=SCALAR):
-        scale = 4 * math.pi * self.system.radius
-        scaled = [ops.clip(v / scale, -POSITION_BOUND, POSITION_BOUND) for v in ops.components(s.position)]
-        return ops.pack([*ops.components(six_d(s.error)), *scaled])
+        position = s.position / (4 * math.pi * self.system.radius)
+        scaled = np.minimum(np.maximum(position, -POSITION_BOUND), POSITION_BOUND)  # np.clip's wrapper costs more
+        return np.concatenate([six_d(s.error), scaled], axis=-1).astype(np.float32)
 
     def progress(self, s, ops=SCALAR):
-        return s.angle_error + ops.hypot(*ops.components(s.position)) / self.system.radius
+        return s.angle_error + ops.hypot(s.position[..., 0], s.position[..., 1]) / self.system.radius
 
     def success(self, s, ops=SCALAR):
-        close = ops.hypot(*ops.components(s.position)) <= self.position_tolerance
+        close = ops.hypot(s.position[..., 0], s.position[..., 1]) <= self.position_tolerance
         return super().success(s, ops) & close
 
     def describe(self, s, ops=SCALAR):
-        return {**super().describe(s, ops), "position_error": ops.hypot(*ops.components(s.position))}
+        return {**super().describe(s, ops), "position_error": ops.hypot(s.position[..., 0], s.position[..., 1])}
 
 
 class RollingBallGoalEnv(RollingBallEnv):
