@@ -155,7 +155,7 @@ class RK8:
     substeps: int = 1
 
     def __call__(self, system, y, u, u_dot, tau):
-        held = not (u_dot.any() if type(u_dot) is np.ndarray else np.any(u_dot))
+        held = not _moving(u_dot)
         if type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
             return _finite(np.array(self._one(system, y.tolist(), u, u_dot, tau, held)), self)
         h = tau / self.substeps
@@ -241,7 +241,7 @@ class EnergyProjected:
     atol: float = 1e-8
 
     def __call__(self, system, y, u, u_dot, tau):
-        if u_dot.any() if type(u_dot) is np.ndarray else np.any(u_dot):
+        if _moving(u_dot):
             return RK8(self.substeps)(system, y, u, u_dot, tau)
         return self._held(system, y, u, u_dot, tau, self.substeps)
 
