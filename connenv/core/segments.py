@@ -100,27 +100,32 @@ def bounded_segments(u, u_dot_cmd, low, high, dt: float):
 
     The Kapitza pendulum's pivot (bounds ±travel) and a connection's shape stop at their bounds so. Stopping is a
     jump of u̇, admissible where only u̇ enters the equations: p is continuous across it and u never leaves its
-    bounds nor jumps. A ramp toward a command stops there: low = min(u, u_cmd), high = max(u, u_cmd)."""
-    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
-    u_end = u + u_dot * dt
-    if np.ndim(low) == 0 and np.ndim(high) == 0 and u_end.ndim == 1:  # on Python floats: numpy's overhead dominates
-        inside = all(low <= end <= high for end in u_end.tolist())
-    else:
-        inside = np.all((low <= u_end) & (u_end <= high))
-    if inside:  # no stop within the step
-        return [(u, u_dot, dt)], u_end, u_dot
-    stops = np.where(u_dot > 0.0, high, low)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        reach = np.where(u_dot != 0.0, np.maximum((stops - u) / u_dot, 0.0), math.inf)
+    bounds nor jumps. A ramp toward a command stops there: low = min(u, u_cmd), high = max(u, u_cmd).
+
+    One state's few coordinates run as Python floats, where numpy's per-call overhead would dominate; max(0.0, x)
+    and the comparisons take numpy's choices, so a row of bounded_segments_batch gets the same numbers."""
+    u, u_dot = np.asarray(u, float).tolist(), np.asarray(u_dot_cmd, float).tolist()
+    low, high = _per_coordinate(low, len(u)), _per_coordinate(high, len(u))
+    u_end = [a + v * dt for a, v in zip(u, u_dot)]
+    if all(lo <= end <= hi for end, lo, hi in zip(u_end, low, high)):  # no stop within the step
+        u_dot = np.array(u_dot)
+        return [(np.array(u), u_dot, dt)], np.array(u_end), u_dot
+    stops = [hi if v > 0.0 else lo for v, lo, hi in zip(u_dot, low, high)]
+    reach = [max(0.0, (stop - a) / v) if v != 0.0 else math.inf for stop, a, v in zip(stops, u, u_dot)]
     segments, start = [], 0.0
-    for end in sorted({float(s) for s in reach if s < dt} | {dt}):
+    for end in sorted({r for r in reach if r < dt} | {dt}):
         if end > start:
-            segments.append((u.copy(), u_dot.copy(), end - start))
-            u = u + u_dot * (end - start)
-        stopped = reach <= end
-        u[stopped], u_dot[stopped] = stops[stopped], 0.0
+            segments.append((np.array(u), np.array(u_dot), end - start))
+            u = [a + v * (end - start) for a, v in zip(u, u_dot)]
+        u = [stop if r <= end else a for stop, r, a in zip(stops, reach, u)]
+        u_dot = [0.0 if r <= end else v for r, v in zip(reach, u_dot)]
         start = end
-    return segments, u, u_dot
+    return segments, np.array(u), np.array(u_dot)
+
+
+def _per_coordinate(bound, n: int) -> list:
+    """A bound (a number or one per coordinate) as n Python floats."""
+    return [bound] * n if isinstance(bound, float) else np.broadcast_to(np.asarray(bound, float), (n,)).tolist()
 
 
 def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):

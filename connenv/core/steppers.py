@@ -37,6 +37,14 @@ class SteppedSystem(Protocol):
 
 
 @runtime_checkable
+class OneStateField(Protocol):
+    """A system whose vector field also takes one state as Python floats: ``vector_field_one(y, u, u̇)``, y a list,
+    is ``vector_field``'s ẏ on that state as a list, by the same arithmetic (RK8's single state skips the arrays)."""
+
+    def vector_field_one(self, y, u, u_dot): ...
+
+
+@runtime_checkable
 class ExactSegment(Protocol):
     """A system with a closed-form step over any segment at constant u̇ (the Exact stepper uses it throughout)."""
 
@@ -147,7 +155,7 @@ class RK8:
     substeps: int = 1
 
     def __call__(self, system, y, u, u_dot, tau):
-        held = not (u_dot.any() if type(u_dot) is np.ndarray else np.any(u_dot))
+        held = not _moving(u_dot)
         if type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
             return _finite(np.array(self._one(system, y.tolist(), u, u_dot, tau, held)), self)
         h = tau / self.substeps
@@ -161,13 +169,14 @@ class RK8:
 
     def _one(self, system, y, u, u_dot, tau, held):
         """The step of one state y (a list of floats), in the batch's order of operations."""
+        field = _one_state_field(system)
         h = tau / self.substeps
         for i in range(self.substeps):
             K = [[] for _ in y]  # K[k][j]: component k of stage j
             for c, row in _DOP853_ROWS:
                 u_s = u if held else u + (i * h + c * h) * u_dot
                 stage = [y_k + h * _weighted(row, K_k) for y_k, K_k in zip(y, K)] if row else y
-                for K_k, f_k in zip(K, system.vector_field(np.array(stage), u_s, u_dot).tolist()):
+                for K_k, f_k in zip(K, field(stage, u_s, u_dot)):
                     K_k.append(f_k)
             y = [y_k + h * _weighted(_DOP853_B, K_k) for y_k, K_k in zip(y, K)]
         return y
@@ -232,7 +241,7 @@ class EnergyProjected:
     atol: float = 1e-8
 
     def __call__(self, system, y, u, u_dot, tau):
-        if u_dot.any() if type(u_dot) is np.ndarray else np.any(u_dot):
+        if _moving(u_dot):
             return RK8(self.substeps)(system, y, u, u_dot, tau)
         return self._held(system, y, u, u_dot, tau, self.substeps)
 
@@ -242,7 +251,7 @@ class EnergyProjected:
         if y_new.ndim == 1:  # one state, on Python floats (numpy's per-call overhead would double the step)
             if not abs(excess) <= self.atol and substeps < self.substeps << MAX_DOUBLINGS:
                 return self._held(system, y, u, u_dot, tau, 2 * substeps)
-            f = system.vector_field(y_new, u, u_dot).tolist()
+            f = _one_state_field(system)(y_new.tolist(), u, u_dot)
             gradient = [-v for v in f[system.n :]] + f[: system.n]
             norm = sum(v * v for v in gradient)
             shift = float(excess) / norm if norm > 0.0 else 0.0
@@ -270,6 +279,14 @@ class HamiltonianSystem(Protocol):
     n: int
 
     def hamiltonian(self, y, u): ...
+
+
+def _one_state_field(system):
+    """The system's vector field on one state as a list of floats: its vector_field_one, or vector_field through
+    an array."""
+    if conforms(system, OneStateField):
+        return system.vector_field_one
+    return lambda y, u, u_dot: system.vector_field(np.array(y), u, u_dot).tolist()
 
 
 def _weighted(row, K):
@@ -449,6 +466,6 @@ def _all_finite(y) -> bool:
 
 def _finite(y, stepper):
     """y, unless it holds a non-finite number (state or derivative), which raises StepperError."""
-    if not np.all(np.isfinite(y)):
+    if not (all(map(math.isfinite, y.ravel().tolist())) if y.size <= SMALL else np.isfinite(y).all()):
         raise StepperError(f"{stepper} produced a non-finite value {y}")
     return y

@@ -92,7 +92,9 @@ def check_stepper_options(env_name: str, options, env_cls):
 
 
 def ndim(x) -> int:
-    """np.ndim(x), at an attribute's cost for an array (np.ndim's dispatch costs a step's microsecond)."""
+    """np.ndim(x), at an attribute's cost for an array or a float (np.ndim's dispatch costs a step's microsecond)."""
+    if isinstance(x, float):
+        return 0
     return x.ndim if type(x) is np.ndarray else np.ndim(x)
 
 

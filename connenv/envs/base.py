@@ -42,7 +42,8 @@ SCALAR = SimpleNamespace(
     pack=lambda parts: np.array(parts, np.float32),
     real=float,
     flag=bool,
-    vector=lambda a: tuple(map(float, a)),
+    vector=lambda a: tuple(np.asarray(a, float).tolist()),
+    components=lambda a: a.tolist(),
 )
 """Operations on one state, as Python floats (the single env's): several times faster than numpy on one state."""
 
@@ -62,8 +63,10 @@ BATCH = SimpleNamespace(
     real=lambda x: np.asarray(x, float),
     flag=lambda x: np.asarray(x, bool),
     vector=lambda a: np.array(a, float),
+    components=lambda a: [a[..., i] for i in range(a.shape[-1])],
 )
-"""The same operations on arrays over a batch (the vector env's)."""
+"""The same operations on arrays over a batch (the vector env's). ``components`` splits the last axis: Python floats of
+one state, arrays over the rows of a batch."""
 
 
 @dataclasses.dataclass

@@ -246,9 +246,9 @@ class KapitzaPendulumEnv(TaskEnv):
 
     def _frame_energy(self, y, u, u_dot):
         """The system's E at y in the frame of u̇, on Python floats (without numpy's overhead)."""
-        theta, p = float(y[0]), float(y[1])
+        (theta, p), (v1, v2) = y.tolist(), u_dot.tolist()
         m, ell, c, s = self.system.mass, self.system.length, math.cos(theta), math.sin(theta)
-        theta_dot = (p - m * ell * (float(u_dot[0]) * c + float(u_dot[1]) * s)) / (m * ell * ell)
+        theta_dot = (p - m * ell * (v1 * c + v2 * s)) / (m * ell * ell)
         return 0.5 * m * ell * ell * theta_dot * theta_dot - m * self.system.g * ell * c
 
     def check_energy_error(self, energy_error):
@@ -297,7 +297,7 @@ class KapitzaPendulumEnv(TaskEnv):
 
     def deviation(self, y, ops=SCALAR):
         """|θ − π| with θ wrapped to (−π, π]: 0 inverted, π hanging."""
-        theta = y[..., 0]
+        theta = ops.components(y)[0]
         return math.pi - abs(ops.atan2(ops.sin(theta), ops.cos(theta)))
 
     def theta_dot(self, s, ops=SCALAR):
@@ -305,17 +305,18 @@ class KapitzaPendulumEnv(TaskEnv):
         return ops.real(self.system.theta_dot(s.y, s.u_dot))
 
     def observe(self, s, ops=SCALAR):
-        theta = s.y[..., 0]
+        theta, u, u_dot = ops.components(s.y)[0], ops.components(s.u), ops.components(s.u_dot)
         speed = ops.clip(self.theta_dot(s, ops) / self.theta_dot_scale, -SPEED_BOUND, SPEED_BOUND)
-        pivot = [s.u[..., i] / self.a_max for i in self.axes] + [s.u_dot[..., i] / self.v_max for i in self.axes]
+        pivot = [u[i] / self.a_max for i in self.axes] + [u_dot[i] / self.v_max for i in self.axes]
         return ops.pack([ops.cos(theta), ops.sin(theta), speed, *pivot])
 
     def describe_pendulum(self, s, ops=SCALAR):
         """The info both tasks give: the state, the energy and the deviation from inverted."""
+        theta, p = ops.components(s.y)
         state = {
-            "theta": ops.real(s.y[..., 0]),
+            "theta": theta,
             "theta_dot": self.theta_dot(s, ops),
-            "p": ops.real(s.y[..., 1]),
+            "p": p,
             "u": ops.vector(s.u),
             "u_dot": ops.vector(s.u_dot),
             "t": s.t,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,10 +19,19 @@ from connenv.core.validation import (
     check_rotation,
     check_stepper_options,
     finite_action,
+    ndim,
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
-from connenv.systems.rolling_ball import RollingBall, attitude_error, from_six_d, rotation_angle, six_d, six_d_angle
+from connenv.systems.rolling_ball import (
+    RollingBall,
+    attitude_error,
+    dot3,
+    from_six_d,
+    rotation_angle,
+    six_d,
+    six_d_angle,
+)
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until success
@@ -36,8 +46,8 @@ def check_so3(stepper, R):
     """StepperError if R (any row of a batch) is more than DRIFT_LIMIT off SO(3): the stepper has left it."""
     if R.ndim == 2:  # one attitude: ‖RᵀR − I‖ (Frobenius) on Python floats
         columns = R.T.tolist()
-        gram = [sum(a * b for a, b in zip(u, v)) - (u is v) for u in columns for v in columns]
-        drift = math.sqrt(sum(x * x for x in gram))
+        gram = [dot3(u, v) - (u is v) for u in columns for v in columns]
+        drift = math.sqrt(sum(map(operator.mul, gram, gram)))
     else:  # the six distinct entries of RᵀR − I elementwise over the rows: a stacked matmul costs 5x more
         c = [R[..., :, k] for k in range(3)]
         dot = [c[i][..., 0] * c[j][..., 0] + c[i][..., 1] * c[j][..., 1] + c[i][..., 2] * c[j][..., 2] for i, j in PAIRS]
@@ -326,7 +336,8 @@ class RollingBallPoseEnv(RollingBallEnv):
         return spaces.Box(-high, high, dtype=np.float32)
 
     def observe(self, s, ops=SCALAR):
-        scaled = np.clip(s.position / (4 * math.pi * self.system.radius), -POSITION_BOUND, POSITION_BOUND)
+        position = s.position / (4 * math.pi * self.system.radius)
+        scaled = np.minimum(np.maximum(position, -POSITION_BOUND), POSITION_BOUND)  # np.clip's wrapper costs more
         return np.concatenate([six_d(s.error), scaled], axis=-1).astype(np.float32)
 
     def progress(self, s, ops=SCALAR):
@@ -390,15 +401,15 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     def reward(self, before, after, info, ops=SCALAR):
         """compute_reward(achieved, desired) of the state after, from its goal angle."""
-        return ops.real(-(np.asarray(after.goal_error) > self.tolerance).astype(np.float32))
+        return -ops.real(after.goal_error > self.tolerance)
 
     def success(self, s, ops=SCALAR):
         """compute_terminated(achieved, desired) of the state, from its goal angle."""
-        return np.asarray(s.goal_error) <= self.tolerance
+        return s.goal_error <= self.tolerance
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
-        if np.ndim(achieved_goal) == 1 and np.ndim(desired_goal) == 1:  # one pair: Python floats
+        if ndim(achieved_goal) == 1 and ndim(desired_goal) == 1:  # one pair: Python floats
             return six_d_angle(achieved_goal, desired_goal)
         return rotation_angle(attitude_error(from_six_d(achieved_goal), from_six_d(desired_goal)))
 

@@ -322,15 +322,15 @@ class SkierEnv(TaskEnv):
         floor = PROGRESS_FLOOR
         return ops.log(ops.maximum(progress_after, floor) / ops.maximum(progress_before, floor)) - TIME_COST
 
-    def success(self, s):
+    def success(self, s, ops=SCALAR):
         """At or beyond a rim (side 0), or at or past the one goal from the side the episode started on."""
-        x = s.y[..., 0]
+        x = ops.components(s.y)[0]
         if len(self.goals) == 2:
             return (x <= self.goals[0]) | (x >= self.goals[1])
         return (x - self.goals[0]) * s.side <= 0.0
 
     def observe(self, s, ops=SCALAR):
-        x, h, sigma = s.y[..., 0], s.h, s.sigma
+        x, h, sigma = ops.components(s.y)[0], s.h, s.sigma
         mid, half = 0.5 * (self.trail.hi + self.trail.lo), 0.5 * (self.trail.hi - self.trail.lo)
         h_mid, h_half = 0.5 * (self.h_max + self.h_min), 0.5 * (self.h_max - self.h_min)
         speed = sigma * s.x_dot / self.speed_scale
@@ -346,11 +346,11 @@ class SkierEnv(TaskEnv):
         )
 
     def describe(self, s, ops=SCALAR):
-        x = s.y[..., 0]
+        x, p = ops.components(s.y)
         state = {
             "x": x,
             "x_dot": s.x_dot,
-            "p": s.y[..., 1],
+            "p": p,
             "h": s.h,
             "t": s.t,
             "s": ops.real(self.trail.arc_length(x)),
@@ -360,7 +360,7 @@ class SkierEnv(TaskEnv):
             "state": state,
             "energy": s.energy,
             "progress": self.progress(s.energy),
-            "is_success": ops.flag(self.success(s)),
+            "is_success": ops.flag(self.success(s, ops)),
         }
 
 

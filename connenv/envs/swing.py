@@ -207,9 +207,9 @@ class SwingEnv(TaskEnv):
     def _held_energy(self, y, r, r_dot):
         """E = p²/(2 m r²) − m g r cos θ where the radius is held, 0 where it moves; on Python floats (the
         system's, without numpy's overhead)."""
-        if r_dot[0] != 0.0:
+        (theta, p), (r,), (r_dot,), m = y.tolist(), r.tolist(), r_dot.tolist(), self.system.mass
+        if r_dot != 0.0:
             return 0.0
-        theta, p, r, m = float(y[0]), float(y[1]), float(r[0]), self.system.mass
         return p * p / (2 * m * r * r) - m * self.system.g * r * math.cos(theta)
 
     def check_energy_error(self, energy_error):
@@ -234,8 +234,9 @@ class SwingEnv(TaskEnv):
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def command(self, a):
-        """The commanded radius of action a."""
-        return self.r_min + 0.5 * (a.T[0] + 1.0) * (self.r_max - self.r_min)
+        """The commanded radius of action a (one, a float; or a batch)."""
+        ops = SCALAR if a.ndim == 1 else BATCH
+        return self.r_min + 0.5 * (ops.components(a)[0] + 1.0) * (self.r_max - self.r_min)
 
     def reward(self, before, after, info, ops=SCALAR):
         lift_before, lift_after = ops.maximum(before.lift, LIFT_FLOOR), ops.maximum(after.lift, LIFT_FLOOR)
@@ -249,7 +250,7 @@ class SwingEnv(TaskEnv):
         return ops.pack([ops.cos(theta), ops.sin(theta), speed, (r - r_mid) / r_half])
 
     def describe(self, s, ops=SCALAR):
-        theta, p = s.y[..., 0], s.y[..., 1]
+        theta, p = ops.components(s.y)
         return {
             "state": {"theta": theta, "theta_dot": p / (self.system.mass * s.r**2), "p": p, "r": s.r, "t": s.t},
             "energy": s.energy,

@@ -32,6 +32,7 @@ from functools import cached_property
 
 import numpy as np
 
+from connenv.core.validation import ndim
 from connenv.systems.swing import Swing
 
 SEPARATRIX_STEP = 0.01  # ω₀h of the RK4 steps near the separatrix, where the elliptic flow declines
@@ -60,7 +61,7 @@ class KapitzaPendulum:
 
     def theta_dot(self, y, u_dot):
         """θ̇ = (p − m l u̇·n) / (m l²); on Python floats for one state, as exact_segment."""
-        if np.ndim(y) == 1 and np.ndim(u_dot) == 1:
+        if ndim(y) == 1 and ndim(u_dot) == 1:
             (theta, p), (v1, v2) = y.tolist(), np.asarray(u_dot, float).tolist()
             return (p - self.mass * self.length * (v1 * math.cos(theta) + v2 * math.sin(theta))) / (
                 self.mass * self.length**2
@@ -102,10 +103,11 @@ class KapitzaPendulum:
         if self.damping != 0.0:
             return np.full(np.broadcast_shapes(np.shape(y), np.shape(u_dot)[:-1] + (2,)), math.nan)
         inertia = self.mass * self.length**2
-        if np.ndim(y) == 1 and np.ndim(u_dot) == 1:  # one state (the env's case): Python floats, 3x faster
-            (theta, p), (v1, v2), ml = map(float, y), map(float, u_dot), self.mass * self.length
+        if ndim(y) == 1 and ndim(u_dot) == 1:  # one state (the env's case): Python floats, 3x faster
+            (theta, p), (v1, v2) = np.asarray(y, float).tolist(), np.asarray(u_dot, float).tolist()
+            ml = self.mass * self.length
             spin = p - ml * (v1 * math.cos(theta) + v2 * math.sin(theta))  # m l² θ̇
-            flowed, flowed_spin = self._pendulum.exact_flow(np.array([theta, spin]), np.array([self.length]), tau)
+            flowed, flowed_spin = self._pendulum.pendulum_flow(theta, spin, float(self.length), tau)
             if math.isnan(flowed):
                 flowed, flowed_spin = self._near_separatrix(theta, spin, tau, math.sin)
             return np.array([flowed, flowed_spin + ml * (v1 * math.cos(flowed) + v2 * math.sin(flowed))])

@@ -34,6 +34,8 @@ import numpy as np
 from scipy.optimize import brentq, root
 from scipy.spatial.transform import Rotation
 
+from connenv.core.validation import ndim
+
 E_Z = np.array([0.0, 0.0, 1.0])
 ARC_BRANCHES = 3
 """Branches m of the rotation vector searched by optimal_arc: 2(β + mπ) n̂ for m = −4 … 3 (see there)."""
@@ -76,6 +78,9 @@ class RollingBall:
     def spin(self, v):
         """e_z × v / ρ: the angular velocity of rolling at v, and the rotation vector of a straight roll by v."""
         v = np.asarray(v, float)
+        if v.ndim == 1:  # one velocity: Python floats (np.stack costs more than a whole step of the ball)
+            vx, vy = v.tolist()
+            return np.array([-vy / self.radius, vx / self.radius, 0.0 / self.radius])
         return np.stack([-v[..., 1], v[..., 0], np.zeros_like(v[..., 0])], axis=-1) / self.radius
 
     def vector_field(self, y, u, u_dot):
@@ -89,7 +94,7 @@ class RollingBall:
     def exact_segment(self, y, u, u_dot, tau):
         """R ← exp(τ ω̂) R, exact for v held over the segment: scipy's Rotation over a batch; for one state,
         Rodrigues' formula on Python floats (scipy's Rotation costs more than a whole Pendulum-v1 step on one)."""
-        if type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
+        if type(y) is np.ndarray and y.ndim == 1 and ndim(tau) == 0:
             return np.array(_rodrigues_times(self.spin(u_dot).tolist(), float(tau), y.tolist()))
         R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))
         return (Rotation.from_rotvec(tau * self.spin(u_dot)).as_matrix() @ R).reshape(np.shape(y))
@@ -305,27 +310,34 @@ def _rodrigues_times(w, tau, R):
         (c * kx * ky, 1.0 + c * (ky * ky - 1.0), -s * kx),
         (-s * ky, s * kx, 1.0 - c),
     )
-    return [sum(step[i][k] * R[3 * k + j] for k in range(3)) for i in range(3) for j in range(3)]
+    columns = R[0::3], R[1::3], R[2::3]
+    return [dot3(row, column) for row in step for column in columns]
+
+
+def dot3(a, b) -> float:
+    """Σ a_k b_k of two 3-vectors of Python floats, from 0.0 left to right: sum()'s order, so the same bits, without
+    its generator's cost."""
+    return 0.0 + a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def six_d_angle(achieved, desired) -> float:
     """The angle between the rotations of two 6-D forms (sequences of 6 floats): rotation_angle(attitude_error(
     from_six_d(achieved), from_six_d(desired))) on Python floats, for one pair, without numpy's per-call cost."""
-    A, D = _frame(achieved), _frame(desired)  # columns
-    P = [[sum(A[k][i] * D[k][j] for k in range(3)) for j in range(3)] for i in range(3)]  # A Dᵀ
+    A, D = list(zip(*_frame(achieved))), list(zip(*_frame(desired)))  # rows
+    P = [[dot3(a, d) for d in D] for a in A]  # A Dᵀ
     skew = (P[2][1] - P[1][2], P[0][2] - P[2][0], P[1][0] - P[0][1])
-    return math.atan2(0.5 * math.sqrt(sum(v * v for v in skew)), 0.5 * (P[0][0] + P[1][1] + P[2][2] - 1.0))
+    return math.atan2(0.5 * math.sqrt(dot3(skew, skew)), 0.5 * (P[0][0] + P[1][1] + P[2][2] - 1.0))
 
 
 def _frame(x):
     """from_six_d's Gram–Schmidt on one 6-D form: the three columns."""
-    a, b = [float(v) for v in x[:3]], [float(v) for v in x[3:]]
-    norm = math.sqrt(sum(v * v for v in a))
-    c1 = [v / norm for v in a]
-    dot = sum(u * v for u, v in zip(c1, b))
-    b = [v - dot * u for u, v in zip(c1, b)]
-    norm = math.sqrt(sum(v * v for v in b))
-    c2 = [v / norm for v in b]
+    a0, a1, a2, b0, b1, b2 = np.asarray(x, float).tolist()
+    norm = math.sqrt(dot3((a0, a1, a2), (a0, a1, a2)))
+    c1 = (a0 / norm, a1 / norm, a2 / norm)
+    dot = dot3(c1, (b0, b1, b2))
+    b = (b0 - dot * c1[0], b1 - dot * c1[1], b2 - dot * c1[2])
+    norm = math.sqrt(dot3(b, b))
+    c2 = (b[0] / norm, b[1] / norm, b[2] / norm)
     return c1, c2, [c1[1] * c2[2] - c1[2] * c2[1], c1[2] * c2[0] - c1[0] * c2[2], c1[0] * c2[1] - c1[1] * c2[0]]
 
 

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from connenv.core.validation import ndim
 from connenv.systems.trails import Trail
 
 
@@ -59,12 +60,19 @@ class Skier:
 
     def vector_field(self, y, u, u_dot):
         """Hand-derived (ẋ, ṗ); u_dot is accepted for the common interface and drops out."""
-        single = y.ndim == 1  # one state: Python floats, which the trail evaluates without array calls
-        (x, p), h = (y.tolist(), float(u[0])) if single else ((y[..., 0], y[..., 1]), u[..., 0])
+        if y.ndim == 1:  # one state: Python floats, which the trail evaluates without array calls
+            return np.array(self.vector_field_one(y.tolist(), u, u_dot))
+        return np.stack(self._rates(y[..., 0], y[..., 1], u[..., 0]), axis=-1)
+
+    def vector_field_one(self, y, u, u_dot):
+        """vector_field of one state y = [x, p] of Python floats, as a list."""
+        return self._rates(*y, float(u[0]))
+
+    def _rates(self, x, p, h):
+        """[ẋ, ṗ] at (x, p) and height h."""
         _, f1, _, _, lever, w, w_1 = self.geometry(x, h)
         x_dot = p / (self.mass * w * w)
-        p_dot = x_dot * x_dot * self.mass * w * w_1 - self.mass * self.g * f1 * lever
-        return np.array([x_dot, p_dot]) if single else np.stack([x_dot, p_dot], axis=-1)
+        return [x_dot, x_dot * x_dot * self.mass * w * w_1 - self.mass * self.g * f1 * lever]
 
     def velocity(self, y, h):
         """ẋ = p / (m w²)."""
@@ -80,7 +88,7 @@ class Skier:
 
     def kinematics(self, y, h):
         """(E, ẋ, f′, σ, κ) at (y, h), from one evaluation of the trail's geometry."""
-        if np.ndim(y) == 1:  # one state: Python floats (a 0-d array would take the trail's array path)
+        if ndim(y) == 1:  # one state: Python floats (a 0-d array would take the trail's array path)
             (x, p), h = y.tolist(), float(h)
         else:
             x, p = y[..., 0], y[..., 1]

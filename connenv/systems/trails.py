@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import inspect
 import math
+from functools import cached_property
 
 import numpy as np
 from scipy.differentiate import derivative
@@ -60,10 +61,15 @@ class Trail:
     def arc_length(self, x):
         """s(x) = ∫ σ dx from the origin; continued in closed form along the parabola beyond the domain."""
         if isinstance(x, float) and self.lo <= x <= self.hi:  # a single state on the domain: no array calls
-            return float(self.arc_length_on_domain(x) - self.arc_length_on_domain(self.origin))
+            return float(self.arc_length_on_domain(x) - self._origin_arc) + 0.0  # + the parabola's 0, as below
         b = np.clip(x, self.lo, self.hi)
         _, f1, f2, _ = self.profile(b)
-        return self.arc_length_on_domain(b) - self.arc_length_on_domain(self.origin) + _parabola_arc(f1, f2, x - b)
+        return self.arc_length_on_domain(b) - self._origin_arc + _parabola_arc(f1, f2, x - b)
+
+    @cached_property
+    def _origin_arc(self):
+        """The primitive of σ at the origin, where s = 0."""
+        return self.arc_length_on_domain(self.origin)
 
     def arc_length_on_domain(self, x):
         """A primitive of σ on the domain: tabulated (Simpson on GRID points) and splined, unless a subclass knows it."""
