@@ -5,12 +5,12 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-from scipy.special import ellipk
+from scipy.special import ellipj, ellipk
 
 import connenv  # noqa: F401  (registers the envs)
 from agents.controllers import PiccoliKulkarni
 from connenv.core import make_stepper
-from connenv.systems.swing import Swing
+from connenv.systems.swing import Swing, ellipj_one
 
 G = 9.81
 R_MIN, R_MAX = 1.6, 2.0
@@ -147,6 +147,17 @@ def test_closed_form_flow_broadcasts_over_a_batch():
     batched = swing.exact_flow(y, r, 0.5)
     single = np.array([swing.exact_flow(y[i], r[i], 0.5) for i in range(7)])
     np.testing.assert_allclose(batched, single, rtol=1e-14, atol=1e-14)
+
+
+def test_one_state_flow_takes_scipys_own_elliptic_functions():
+    """The single env's direct call of Jacobi's sn, cn, dn is scipy's ufunc to the bit, across the phase and the
+    parameter up to the separatrix band, so one state and a batch follow the same closed form."""
+    rng = np.random.default_rng(0)
+    w = rng.uniform(0.0, 30.0, 2000)
+    m = np.concatenate([rng.uniform(0.0, 1.0, 1000), 1.0 - 10.0 ** rng.uniform(-6, -1, 1000)])
+    ufunc = np.stack(ellipj(w, m), axis=-1)
+    direct = np.array([ellipj_one(float(a), float(b)) for a, b in zip(w, m)])
+    assert np.array_equal(direct, ufunc)
 
 
 def pumped_amplitudes(theta0):
