@@ -80,7 +80,7 @@ class RollingBall:
         v = np.asarray(v, float)
         if v.ndim == 1:  # one velocity: Python floats (np.stack costs more than a whole step of the ball)
             vx, vy = v.tolist()
-            return np.array([-vy / self.radius, vx / self.radius, 0.0 / self.radius])
+            return np.array([-vy / self.radius, vx / self.radius, 0.0])
         return np.stack([-v[..., 1], v[..., 0], np.zeros_like(v[..., 0])], axis=-1) / self.radius
 
     def vector_field(self, y, u, u_dot):
