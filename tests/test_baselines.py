@@ -19,16 +19,24 @@ def test_every_env_has_a_pretrained_model_per_algorithm_that_loads_offline(env_i
         evaluate.load_model(model, env_id)  # the algorithm from its args.yml, its spaces checked against the env's
 
 
+RETURN_RTOL = 1e-6
+"""A network policy runs in float32 through torch's CPU kernels, which round by the CPU's SIMD set: its actions move
+in their last float32 bit (6e-8) from one CPU to another, and an episode's return by a little more."""
+
+
 def test_pretrained_models_reproduce_the_committed_swing_rows():
-    """Seeded episodes are bit-identical, so the regenerated rows equal the committed ones."""
+    """Seeded episodes replay the committed rows: the successes and the measure (a count of steps) exactly, the
+    returns to RETURN_RTOL."""
     (committed,) = [
         r for r in json.loads((baselines.DOCS / "results.json").read_text()) if r["env"] == "connenv/Swing-v0"
     ]
     report = baselines.evaluate_env("connenv/Swing-v0")
     assert [row["label"] for row in report["policies"]] == ["random", "pumping (analytic)", "PPO", "SAC"]
     for row, expected in zip(report["policies"], committed["policies"], strict=True):
-        for key in ("success_rate", "return_mean", "return_std", "measure"):
-            assert row[key] == expected[key], (row["label"], key)  # JSON keeps a float's every bit
+        for key in ("success_rate", "measure"):
+            assert row[key] == expected[key], (row["label"], key)
+        for key in ("return_mean", "return_std"):
+            assert row[key] == pytest.approx(expected[key], rel=RETURN_RTOL, abs=0), (row["label"], key)
 
 
 def test_pretrained_policy_without_models_names_the_env_and_folder(monkeypatch, tmp_path):

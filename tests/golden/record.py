@@ -7,9 +7,10 @@ the floating-point platform it was recorded on. tests/test_golden.py replays the
 that moved. Re-record only on a change of behaviour that is meant, and say which trajectory changed and why.
 
 The bits depend on the platform as well as the code: numpy picks its SIMD kernels for sin, exp, … by CPU (AVX2,
-AVX-512, …), and they round the last bit differently. On the recording's platform (same fingerprint) the test
-compares digests, to the bit; elsewhere it compares projections to a tolerance that such roundings, grown along an
-episode and through an adaptive stepper's step choices, stay within.
+AVX-512, …), OpenBLAS picks its matrix kernels by CPU (Haswell, SkylakeX, …), and they round the last bit
+differently. On the recording's platform (same fingerprint) the test compares digests, to the bit; elsewhere it
+compares projections to a tolerance that such roundings, grown along an episode and through an adaptive stepper's
+step choices, stay within.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import scipy
+import threadpoolctl
 
 import connenv  # noqa: F401  (registers the envs)
 
@@ -136,23 +138,25 @@ def projections(array):
 
 
 def fingerprint():
-    """The floating-point platform: CPU model and the SIMD features numpy dispatches on, libc, numpy and scipy."""
-    cpuinfo = Path("/proc/cpuinfo")
-    lines = cpuinfo.read_text().splitlines() if cpuinfo.is_file() else []
-    model = next(
-        (line.split(":", 1)[1].strip() for line in lines if line.startswith("model name")), platform.processor()
+    """The floating-point platform: what decides the last bits of a run. numpy's SIMD kernel per function (as
+    dispatched now, so NPY_DISABLE_CPU_FEATURES counts), each loaded BLAS library's kernel (OpenBLAS picks one per
+    CPU, and OPENBLAS_CORETYPE overrides it; seen through threadpoolctl), libc (libm), numpy and scipy. The CPU's
+    model name is left out: two CPUs that dispatch the same kernels give the same bits."""
+    import scipy.linalg  # noqa: F401  (loads scipy's BLAS, so that threadpoolctl sees it)
+
+    umath = np._core._multiarray_umath
+    targets = getattr(umath, "__cpu_targets_info__", None)
+    if targets is None:  # numpy < 2.4: the features numpy dispatches on
+        simd = sorted(k for k, v in umath.__cpu_features__.items() if v)
+    else:
+        simd = sorted({info["current"] for loops in targets.values() for info in loops.values()})
+    blas = sorted(
+        f"{lib['internal_api']} {lib['version']} {lib.get('architecture')}"
+        for lib in threadpoolctl.threadpool_info()
+        if lib["user_api"] == "blas"
     )
-    features = getattr(getattr(np, "_core", None), "_multiarray_umath", None)
-    features = sorted(k for k, v in getattr(features, "__cpu_features__", {}).items() if v)
     return " | ".join(
-        [
-            platform.machine(),
-            model,
-            " ".join(features),
-            "-".join(platform.libc_ver()),
-            np.__version__,
-            scipy.__version__,
-        ]
+        [platform.machine(), " ".join(simd), "; ".join(blas), "-".join(platform.libc_ver()), np.__version__, scipy.__version__]
     )
 
 
