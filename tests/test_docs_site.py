@@ -14,6 +14,7 @@ import subprocess
 import sys
 import threading
 import urllib.parse
+from html import unescape
 from pathlib import Path
 
 import numpy as np
@@ -123,6 +124,13 @@ def served(built_site):
     server.shutdown()
 
 
+def chromium_flags(tmp_path: Path) -> list[str]:
+    """Headless Chromium with a fresh profile, reaching out to nothing."""
+    return ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync",
+            f"--user-data-dir={tmp_path / 'profile'}"]  # fmt: skip
+
+
 @pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (.ci/run installs Debian's package)")
 @pytest.mark.parametrize("page", ["", "envs/Swing-v0/"])
 def test_chromium_renders_the_home_page_and_an_env_page(served, page, tmp_path):
@@ -130,9 +138,7 @@ def test_chromium_renders_the_home_page_and_an_env_page(served, page, tmp_path):
     import urllib.request
 
     shot = tmp_path / "page.png"
-    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-             "--disable-background-networking", "--disable-component-update", "--disable-sync",
-             f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1200,900", f"--screenshot={shot}"]  # fmt: skip
+    flags = [*chromium_flags(tmp_path), "--window-size=1200,900", f"--screenshot={shot}"]
     subprocess.run([CHROMIUM, *flags, f"{served}/{page}"], check=True, capture_output=True, timeout=120)
     pixels = np.asarray(Image.open(shot).convert("RGB"))
     assert pixels.shape[:2] == (900, 1200) and len(np.unique(pixels.reshape(-1, 3), axis=0)) > 50
@@ -140,3 +146,52 @@ def test_chromium_renders_the_home_page_and_an_env_page(served, page, tmp_path):
     gif = re.search(r'src="([^"]+\.gif)"', html).group(1)
     response = urllib.request.urlopen(f"{served}/{page}{gif}")
     assert response.status == 200 and response.headers["Content-Type"] == "image/gif"
+
+
+LAYOUT_PAGES = ["", "envs/ActiveConstraint-v0/", "guides/own-system/"]
+LAYOUT_PROBE = """<!doctype html><pre id="result"></pre><script>
+// Each page in a 1200 px frame, after the theme's scripts have added the copy buttons: for each code block, how far
+// its lines run past its right edge and how many of its line boxes lie under its copy button; for each image in a
+// table, its width attribute and its drawn width; for each code span in a table, how many lines it takes.
+const pages = %s, found = {};
+for (const page of pages) {
+  const frame = document.body.appendChild(Object.assign(document.createElement("iframe"), {width: 1200, height: 900}));
+  frame.onload = () => setTimeout(() => {
+    const d = frame.contentDocument;
+    const blocks = [...d.querySelectorAll("pre > code")].map(code => {
+      const button = code.parentElement.querySelector(".md-code__button").getBoundingClientRect(), range = d.createRange();
+      range.selectNodeContents(code);
+      const covered = [...range.getClientRects()].filter(r => r.width > 0 && r.right > button.left
+        && r.left < button.right && r.bottom > button.top && r.top < button.bottom);
+      return {start: code.textContent.slice(0, 40), overflow: code.scrollWidth - code.clientWidth, covered: covered.length};
+    });
+    const images = [...d.querySelectorAll("table img")].map(img => [+img.getAttribute("width"), img.width]);
+    const spans = [...d.querySelectorAll("td code")].map(code => [code.textContent, code.getClientRects().length]);
+    found[page] = {blocks, images, spans};
+    if (Object.keys(found).length === pages.length) document.getElementById("result").textContent = JSON.stringify(found);
+  }, 500);
+  frame.src = "/" + page;
+}
+</script>"""
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (.ci/run installs Debian's package)")
+def test_chromium_lays_out_code_thumbnails_and_class_names_readably(served, built_site, tmp_path):
+    """At 1200 px, in the home page, an env page and the guide with the longest command: no code block runs off its
+    right edge and no copy button covers code; the gallery's thumbnails are drawn at the animations' own width;
+    no code span in a table (a class name) breaks across lines."""
+    import json
+
+    (built_site / "layout-probe.html").write_text(LAYOUT_PROBE % json.dumps(LAYOUT_PAGES))
+    flags = [*chromium_flags(tmp_path), "--virtual-time-budget=10000", "--dump-dom"]
+    dom = subprocess.run([CHROMIUM, *flags, f"{served}/layout-probe.html"], check=True, capture_output=True, text=True,
+                         timeout=120).stdout  # fmt: skip
+    found = json.loads(unescape(re.search(r'<pre id="result">(.*?)</pre>', dom, re.DOTALL).group(1)))
+    assert found.keys() == set(LAYOUT_PAGES) and found[""]["images"] and found["guides/own-system/"]["blocks"]
+    width, problems = site_module().ANIMATION_WIDTH, []  # the animations' own width: a thumbnail not scaled down
+    for page, layout in found.items():
+        problems += [(page, block) for block in layout["blocks"] if block["overflow"] > 0 or block["covered"]]
+        problems += [(page, "image", image) for image in layout["images"] if image != [width, width]]
+        problems += [(page, "code span", span) for span in layout["spans"] if span[1] != 1]
+    assert not problems, problems
+
