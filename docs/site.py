@@ -52,6 +52,9 @@ PHYSICS = {
     "TubeTwist-v0": "TubeTwist.md",
 }
 """Each env's physics page, under docs/physics/."""
+ANIMATION_RESET = {"connenv/ActiveConstraint-v0": {"state": {"q": [0.5]}}}
+"""Reset options of an animation whose default start shows nothing: ActiveConstraint-v0's example is the swing, which
+at rest at the bottom stays there whatever its radius does (pumping grows a swing; it cannot start one)."""
 VERSION_HISTORY = "- v0: the first version, in connenv 0.1.0."
 GALLERY_MARKS = ("<!-- gallery: python docs/site.py -->", "<!-- end of gallery -->")
 GENERATED_PHYSICS = {
@@ -177,7 +180,8 @@ def page(env_id: str) -> str:
     ]
     env.close()
     lines = [f"# {name(env_id)}", "", summary, "", f"![{name(env_id)} under its controller]({name(env_id)}.gif)", ""]
-    lines += ["| | |", "|---|---|", *(f"| {key} | {value} |" for key, value in rows), ""]
+    header, *rest = (f"| {key} | {value} |" for key, value in rows)  # the id row heads the table: no empty header row
+    lines += [header, "|---|---|", *rest, ""]
     for title, body in merged_sections(cls).items():
         lines += [f"## {title}", "", body, ""]
     lines += ["## Version History", "", VERSION_HISTORY, ""]
@@ -227,7 +231,8 @@ def shape_size(space) -> str:
 
 
 def gallery() -> str:
-    """The README's table of every env: its animation, class, action and observation sizes, analytic controller."""
+    """The README's table of every env: its animation at its own width, class, action and observation sizes, analytic
+    controller."""
     from agents.controllers import CONTROLLERS
 
     lines = ["| | env | class | action | observation | analytic controller |", "|---|---|---|---|---|---|"]
@@ -235,7 +240,8 @@ def gallery() -> str:
         env, cls, short = make(env_id), env_class(env_id), name(env_id)
         controller = next(iter(CONTROLLERS[env_id])) if env_id in CONTROLLERS else "–"
         lines.append(
-            f'| <img src="docs/envs/{short}.gif" width="80"> | [{short}](docs/envs/{short}.md) | `{cls.__name__}` '
+            f'| <img src="docs/envs/{short}.gif" width="{ANIMATION_WIDTH}"> | [{short}](docs/envs/{short}.md) '
+            f"| `{cls.__name__}` "
             f"| {shape_size(env.action_space)} | {shape_size(env.observation_space)} | {controller} |"
         )
         env.close()
@@ -304,7 +310,7 @@ def record(env_id: str, path: Path, seed: int = 0) -> int:
     from PIL import Image
 
     env = make(env_id, render_mode="rgb_array")
-    observation, _ = env.reset(seed=seed)
+    observation, _ = env.reset(seed=seed, options=ANIMATION_RESET.get(env_id))
     fps = env.metadata["render_fps"]
     act, stride = policy(env_id, env.unwrapped), max(1, round(fps / ANIMATION_FPS))
     pictures, done = [], False

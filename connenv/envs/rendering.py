@@ -216,8 +216,8 @@ class KapitzaRenderer:
 
 
 class CoordinatePlot:
-    """The coordinates against time: each q and u over the last PLOT_WINDOW seconds, scaled to the range they
-    have covered; or, with a user's ``draw(state, canvas)``, that picture on a Canvas spanning [-1, 1]² (metres
+    """The coordinates against time: each q and u over the last WINDOW seconds (from the left edge, scrolling once
+    the window is full), scaled to the range they have covered; or, with a user's ``draw(state, canvas)``, that picture on a Canvas spanning [-1, 1]² (metres
     by default: the callback may change ``canvas.scale``)."""
 
     WINDOW = 10.0  # s of history shown
@@ -243,7 +243,7 @@ class CoordinatePlot:
         half = max(0.5 * (high - low), 1e-9)
         mid = 0.5 * (high + low)
         top, height = 40, SIZE - 60
-        x = 10 + (trace[:, 0] - (state["t"] - self.WINDOW)) / self.WINDOW * (SIZE - 20)
+        x = 10 + (trace[:, 0] - trace[0, 0]) / self.WINDOW * (SIZE - 20)
         for k, label in enumerate(self.labels):
             y = top + height * (0.5 - 0.45 * (trace[:, 1 + k] - mid) / half)
             color = self.COLORS[k % len(self.COLORS)]
