@@ -9,13 +9,13 @@ agents/hyperparams/, each run a Ray task of one CPU (``agents.cluster``): on a l
 on a running cluster with ``--address``. It skips runs that finished (their results.json exists). A run checkpoints
 at each periodic evaluation; a run whose worker process dies is retried by Ray, from its last checkpoint, and the
 other runs go on. PPO trains on the native vector envs (``--vector-env``), SAC on one env.
-``collect`` picks, for each (env, algo), the seed (of ``--seeds``, in ``--runs``) whose periodic evaluation scored
-best, copies its best_model.zip with the VecNormalize statistics it was evaluated with to
-agents/pretrained/{env}_{algo}/, records the training steps and wall time of every seed in agents/pretrained/runs.json
-and writes the periodic evaluations of all seeds to docs/baselines/curves.csv. ``table`` evaluates random, each
-analytic controller and each pretrained model on the same 100 episodes (seeds 0..99) with agents.evaluate, writes
-docs/baselines/results.{json,md} and draws docs/baselines/{env}.png: the learning curves (mean and range over seeds)
-with the analytic controller's mean return as a horizontal line.
+``collect`` picks, for each (env, algo), the seed whose periodic evaluation scored best, copies its
+best_model.zip with the VecNormalize statistics it was evaluated with to agents/pretrained/{env}_{algo}/, records
+the training steps and wall time of every seed in agents/pretrained/runs.json and writes the periodic evaluations
+of all seeds to docs/baselines/curves.csv. ``table`` evaluates random, each analytic controller and each pretrained
+model on the same 100 episodes (seeds 0..99) with agents.evaluate, writes docs/baselines/results.{json,md} and
+draws docs/baselines/{env}.png: the learning curves (mean and range over seeds) with the analytic controller's mean
+return as a horizontal line.
 """
 
 from __future__ import annotations
