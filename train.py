@@ -11,13 +11,16 @@ is laid out as rl-zoo3's: the model {env}.zip, best_model.zip and evaluations.np
 with the final ones), and results.json, the final evaluation of agents.evaluate on the same episodes for every
 policy.
 
-With --env-kwargs module:factory the envs are made with the kwargs factory() returns (a dict, or a system, which
-becomes {"system": system}): enough to train on a user's own system,
+With --env-kwargs the envs are made with the kwargs given as a JSON object ('{"dt": 0.02}') or as module:factory,
+the kwargs factory() returns (a dict, or a system, which becomes {"system": system}); several update one another in
+order. Enough to train on a user's own system,
 
     python train.py --env connenv/ActiveConstraint-v0 --env-kwargs my_robot:env_kwargs --algo ppo
+    python train.py --env connenv/ActiveConstraint-v0 --env-kwargs my_robot:system '{"u_low": -3, "u_high": 3}'
 
 The module is imported from the working directory or the Python path; the analytic controller is then left out of
-the final evaluation (there is none for a user's system).
+the final evaluation (there is none for a user's system). Bad input of any argument ends train.py in one line
+naming it, before any training.
 
 With --checkpoint-freq N the run saves a checkpoint every N steps into {run}/checkpoints/ (SB3's CheckpointCallback:
 the model, the VecNormalize statistics, the replay buffer); with --resume a run whose folder holds one continues from
@@ -39,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 import torch as th
+import yaml
 from rl_zoo3.exp_manager import ExperimentManager
 from rl_zoo3.utils import ALGOS
 from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback, EvalCallback
@@ -50,14 +54,16 @@ import agents
 from agents import evaluate
 from agents.controllers import CONTROLLERS
 from agents.vec_env import make_native_vec_env
+from connenv import cli
 
+PROG = "train.py"
 HYPERPARAMS = Path(agents.__file__).parent / "hyperparams"
 PERIODIC_EVAL_EPISODES = 10
 warnings.filterwarnings("ignore", category=TqdmExperimentalWarning)  # SB3's progress bar is tqdm.rich, "experimental"
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default="connenv/Swing-v0", choices=evaluate.ENV_IDS)
     parser.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
     parser.add_argument("--timesteps", type=evaluate.positive_int, help="default: n_timesteps of the hyperparameters")
@@ -68,17 +74,30 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument(
         "--eval-seed", type=evaluate.seed_int, default=0, help="final episode i is reset with eval-seed + i"
     )
-    parser.add_argument("--runs", default="runs", help="folder of the run folders")
+    parser.add_argument("--runs", type=cli.writable_dir, default="runs", help="folder of the run folders")
     parser.add_argument("--num-threads", type=evaluate.positive_int, default=1, help="torch threads")
     parser.add_argument("--vector-env", action="store_true", help="train on the env's native vector env")
-    parser.add_argument("--env-kwargs", help="module:factory returning the make kwargs (or the system) of --env")
+    parser.add_argument("--env-kwargs", nargs="+", metavar="KWARGS", help=evaluate.ENV_KWARGS_HELP)
     parser.add_argument("--checkpoint-freq", type=int, default=0, help="steps between checkpoints, ≤ 0: none")
     parser.add_argument("--resume", action="store_true", help="continue from the run folder's last checkpoint")
     args = parser.parse_args(argv)
     args.hyperparams = args.hyperparams or str(HYPERPARAMS / f"{args.algo}.yml")
     if not Path(args.hyperparams).is_file():
         parser.error(f"--hyperparams {args.hyperparams!r}: no such file; give a YAML file for --algo {args.algo}")
+    if fault := hyperparams_fault(Path(args.hyperparams), args.env):
+        parser.error(f"--hyperparams {args.hyperparams!r} {fault}")
     return args
+
+
+def hyperparams_fault(path: Path, env_id: str) -> str | None:
+    """What keeps rl-zoo3 from reading env_id's hyperparameters from the YAML file at path, or None."""
+    try:
+        loaded = yaml.safe_load(path.read_text())
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        return f"is not YAML ({error})"
+    if not (isinstance(loaded, dict) and isinstance(loaded.get(env_id), dict)):
+        return f"holds no hyperparameters for {env_id} (rl-zoo3's layout: the env id as key of a mapping)"
+    return None
 
 
 class SaveBestVecNormalize(BaseCallback):
@@ -232,7 +251,7 @@ def train(args: argparse.Namespace, env_kwargs: dict | None = None, after_eval: 
 def main(argv: list[str] | None = None) -> dict:
     """Train, evaluate beside the analytic controller and a random policy, print the table, write results.json."""
     args = parse_args(argv)
-    env_kwargs = evaluate.env_kwargs_of(args.env_kwargs)
+    env_kwargs = evaluate.make_kwargs(args.env, args.env_kwargs)
     start = time.perf_counter()
     model, model_path = train(args, env_kwargs)
     train_seconds = time.perf_counter() - start
@@ -254,4 +273,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    cli.run(main, PROG)

@@ -34,9 +34,13 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from agents import cluster
 from agents.controllers import CONTROLLERS
-from agents.evaluate import PRETRAINED, compare, load_model, positive_int, pretrained_models
+from agents.evaluate import PRETRAINED, compare, load_model, pretrained_models
+from connenv import cli
+from connenv.cli import positive_int
 
+PROG = "python -m agents.baselines"
 REPO = Path(__file__).resolve().parent.parent
 HYPERPARAMS = Path(__file__).resolve().parent / "hyperparams"
 DOCS = REPO / "docs" / "baselines"
@@ -124,8 +128,6 @@ def train_all(
 ) -> list[str]:
     """Every (env, algo, seed) run as a Ray task of one CPU, retried from its checkpoint if its worker dies; print
     each run's outcome as it ends. options: train_one's runs, timesteps and evaluations."""
-    from agents import cluster
-
     ray = cluster.connect(address, jobs)
     task = ray.remote(num_cpus=1, max_retries=cluster.MAX_RETRIES)(train_one)
     pending = {task.remote(env_id, algo, seed, **options): (env_id, algo, seed)
@@ -187,28 +189,29 @@ def seed_record(folder: Path) -> tuple[dict, list[dict]]:
     return record, rows
 
 
-def collect_pair(env_id: str, algo: str, entry: dict | None) -> tuple[dict, list[dict]]:
-    """The runs.json entry and curve rows of an (env, algo) whose 3 seeds finished with the current
+def collect_pair(env_id: str, algo: str, entry: dict | None, runs: Path = RUNS, seeds=SEEDS) -> tuple[dict, list[dict]]:
+    """The runs.json entry and curve rows of an (env, algo) whose seeds (in runs) finished with the current
     hyperparameters; its best model copied to agents/pretrained/ unless the same file is there already."""
-    folders = [run_folder(env_id, algo, seed) for seed in SEEDS]
+    folders = [run_folder(env_id, algo, seed, runs) for seed in seeds]
     for folder in folders:
         if not (folder / "results.json").is_file() or run_config(folder, env_id) != hyperparams(algo, env_id):
             raise FileNotFoundError(f"{folder}: not finished with the current hyperparameters; run train first")
-    seeds, rows = {}, []
-    for seed, folder in zip(SEEDS, folders, strict=True):
-        seeds[seed], seed_rows = seed_record(folder)
+    records, rows = {}, []
+    for seed, folder in zip(seeds, folders, strict=True):
+        records[seed], seed_rows = seed_record(folder)
         rows += [{"env": env_id, "algo": algo, **row} for row in seed_rows]
-    best = max(seeds, key=lambda seed: seeds[seed]["best_periodic_return"])
-    digest = hashlib.sha256((run_folder(env_id, algo, best) / "best_model.zip").read_bytes()).hexdigest()
+    best = max(records, key=lambda seed: records[seed]["best_periodic_return"])
+    digest = hashlib.sha256((run_folder(env_id, algo, best, runs) / "best_model.zip").read_bytes()).hexdigest()
     target = PRETRAINED / f"{short(env_id)}_{algo}"
     if entry is None or entry.get("source_sha256") != digest or not (target / "best_model.zip").is_file():
-        copy_best_model(run_folder(env_id, algo, best), target, env_id, algo)
-    return {"pretrained_seed": best, "source_sha256": digest, "seeds": seeds}, rows
+        copy_best_model(run_folder(env_id, algo, best, runs), target, env_id, algo)
+    return {"pretrained_seed": best, "source_sha256": digest, "seeds": records}, rows
 
 
-def collect(envs: list[str], algos: list[str]):
-    """Best seed's best model per (env, algo) into agents/pretrained/, the training steps and wall time of every
-    seed into agents/pretrained/runs.json, every seed's periodic evaluations into docs/baselines/curves.csv."""
+def collect(envs: list[str], algos: list[str], runs: Path = RUNS, seeds=SEEDS):
+    """Best seed's best model per (env, algo) (its runs in `runs`) into agents/pretrained/, the training steps and
+    wall time of every seed into agents/pretrained/runs.json, every seed's periodic evaluations into
+    docs/baselines/curves.csv."""
     record_path, curves_path = PRETRAINED / "runs.json", DOCS / "curves.csv"
     record = json.loads(record_path.read_text()) if record_path.is_file() else {}
     rows = []
@@ -217,7 +220,7 @@ def collect(envs: list[str], algos: list[str]):
             rows = list(csv.DictReader(file))
     for env_id in envs:
         for algo in algos:
-            entry, pair_rows = collect_pair(env_id, algo, record.get(env_id, {}).get(algo))
+            entry, pair_rows = collect_pair(env_id, algo, record.get(env_id, {}).get(algo), runs, seeds)
             record.setdefault(env_id, {})[algo] = entry
             rows = [row for row in rows if (row["env"], row["algo"]) != (env_id, algo)] + pair_rows
             print(f"{short(env_id)} {algo}: pretrained seed {entry['pretrained_seed']}", flush=True)
@@ -365,17 +368,21 @@ def table(jobs: int, envs: list[str]) -> str:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("command", choices=("train", "collect", "table"))
     parser.add_argument(
         "--jobs", type=positive_int, default=os.cpu_count(), help="CPUs of a local Ray / table's processes"
     )
     parser.add_argument("--env", nargs="+", default=list(ENVS), choices=ENVS + UNTRAINED)
     parser.add_argument("--algo", nargs="+", default=list(ALGOS), choices=ALGOS)
-    parser.add_argument("--address", help="train: join the Ray cluster at ADDR (default: start a local Ray)")
-    parser.add_argument("--runs", type=Path, default=RUNS, help="train: folder of the run folders")
+    parser.add_argument(
+        "--address", type=cluster.address, help="train: join the Ray cluster at ADDR (default: start a local Ray)"
+    )
+    parser.add_argument("--runs", type=cli.writable_dir, default=RUNS, help="train, collect: folder of the run folders")
     parser.add_argument("--timesteps", type=positive_int, help="train: steps per run (default: the hyperparameters')")
-    parser.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS), help="train: the seeds of each pair")
+    parser.add_argument(
+        "--seeds", nargs="+", type=cli.seed_int, default=list(SEEDS), help="train, collect: the seeds of each pair"
+    )
     return parser.parse_args(argv)
 
 
@@ -384,15 +391,15 @@ def main(argv: list[str] | None = None):
     if not (REPO / "train.py").is_file():
         raise SystemExit(f"python -m agents.baselines works in a clone of the repository; {REPO} is not one")
     if args.command == "train":
-        options = {"runs": args.runs, "timesteps": args.timesteps}
+        options = {"runs": Path(args.runs), "timesteps": args.timesteps}
         outcomes = train_all(args.env, args.algo, args.jobs, args.address, args.seeds, **options)
         if any("FAILED" in outcome for outcome in outcomes):
             raise SystemExit("some runs failed; their train.log says why")
     elif args.command == "collect":
-        collect(args.env, args.algo)
+        collect(args.env, args.algo, Path(args.runs), args.seeds)
     else:
         print(table(args.jobs, args.env))
 
 
 if __name__ == "__main__":
-    main()
+    cli.run(main, PROG)

@@ -19,6 +19,10 @@ import argparse
 import copy
 import importlib
 import json
+import os
+import sys
+import zipfile
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -29,7 +33,10 @@ from gymnasium.wrappers import RenderCollection
 
 import connenv  # noqa: F401  (registers the envs)
 from agents.controllers import CONTROLLERS, controller, controller_names
+from connenv import cli
+from connenv.cli import positive_int, seed_int, writable_file
 
+PROG = "python -m agents.evaluate"
 PRETRAINED = Path(__file__).parent / "pretrained"
 ENV_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
 CONTROLLER_NAMES = sorted({name for env_id in CONTROLLERS for name in controller_names(env_id)})
@@ -70,38 +77,50 @@ class NormalizedPolicy:
         return self.model.predict(self.vec_normalize.normalize_obs(obs), state, episode_start, deterministic)
 
 
-def positive_int(text: str) -> int:
-    """argparse type: an integer > 0, also written as 1e5."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = 0.0
-    if value <= 0 or not value.is_integer():
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer (valid: 1, 2, ...)")
-    return int(value)
-
-
-SEED_MAX = 2**32 - 1  # numpy's global seed, which SB3's set_random_seed sets, takes at most this
-
-
-def seed_int(text: str) -> int:
-    """argparse type: a seed, an integer in [0, 2³² − 1]."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if not 0 <= value <= SEED_MAX:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a seed (valid: an integer in [0, {SEED_MAX}])")
-    return value
-
-
 def policy_spec(text: str) -> str:
-    """argparse type: a controller name, 'random', 'pretrained' or an existing model zip."""
-    if text in (*CONTROLLER_NAMES, "random", "pretrained") or (text.endswith(".zip") and Path(text).is_file()):
+    """argparse type: a controller name, 'random', 'pretrained' or an existing model zip that SB3 saved."""
+    if text in (*CONTROLLER_NAMES, "random", "pretrained"):
         return text
-    raise argparse.ArgumentTypeError(
-        f"{text!r} is not one of {CONTROLLER_NAMES}, 'random', 'pretrained' or an existing PATH.zip"
-    )
+    if not (text.endswith(".zip") and Path(text).is_file()):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not one of {CONTROLLER_NAMES}, 'random', 'pretrained' or an existing PATH.zip"
+        )
+    try:
+        check_model_zip(Path(text))
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from error
+    return text
+
+
+def check_policy(env_id: str, spec: str):
+    """ValueError if spec names a controller the env lacks, or 'pretrained' for an env without pretrained models:
+    checked before any policy runs its episodes."""
+    names = controller_names(env_id) if env_id in CONTROLLERS else []
+    if spec in CONTROLLER_NAMES and spec not in names:
+        raise ValueError(f"{spec!r} is no controller of {env_id}; its controllers: {names or 'none'}")
+    if spec == "pretrained":
+        pretrained_models(env_id)
+
+
+def gif_file(text: str) -> str:
+    """argparse type: a writable path ending in .gif (save_gif writes GIFs only)."""
+    if Path(text).suffix.lower() != ".gif":
+        raise argparse.ArgumentTypeError(f"{text!r} does not end in .gif (the video is a GIF)")
+    return writable_file(text)
+
+
+def check_model_zip(path: Path):
+    """ValueError unless path is a zip whose members are intact (their CRCs) and hold SB3's "data" (the model's
+    parameters as JSON), so that an empty, truncated or foreign file is named as such rather than by SB3's loader."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            broken, names = archive.testzip(), archive.namelist()
+    except (zipfile.BadZipFile, EOFError) as error:
+        raise ValueError(f"{str(path)!r} is not a zip file ({error}); give a model zip that SB3 saved") from error
+    if broken is not None:
+        raise ValueError(f"{str(path)!r} is corrupt: its member {broken!r} fails its CRC check")
+    if "data" not in names:
+        raise ValueError(f"{str(path)!r} is a zip, but no SB3 model: it holds no 'data' member")
 
 
 def pretrained_models(env_id: str) -> list[Path]:
@@ -125,19 +144,52 @@ def algo_of(model_path: Path) -> str:
     return yaml.load(args_file.read_text(), Loader=yaml.UnsafeLoader)["algo"]  # rl-zoo3 writes an OrderedDict
 
 
-def env_kwargs_of(spec: str | None) -> dict:
-    """The make kwargs named by ``module:factory``: factory() returns the kwargs dict, or a system, which becomes
-    {"system": system} (connenv/ActiveConstraint-v0's). None: no kwargs."""
-    if spec is None:
-        return {}
-    module, _, name = spec.partition(":")
-    if not module or not name:
-        raise ValueError(f"env kwargs {spec!r} must name a factory as module:factory (e.g. my_robot:env_kwargs)")
-    factory = getattr(importlib.import_module(module), name, None)
-    if not callable(factory):
-        raise ValueError(f"env kwargs {spec!r}: module {module!r} has no callable {name!r}")
-    made = factory()
-    return dict(made) if isinstance(made, dict) else {"system": made}
+def env_kwargs_of(specs: str | list[str] | None) -> dict:
+    """The make kwargs of --env-kwargs: each spec a JSON object (``'{"dt": 0.02}'``) or ``module:factory``, a
+    function of a module in the working directory or on the Python path that returns the kwargs dict or a system,
+    which becomes {"system": system} (connenv/ActiveConstraint-v0's); a later spec updates the earlier ones, so that
+    ``my_robot:system '{"u_low": -3, "u_high": 3}'`` completes a system with its bounds. None: no kwargs. A spec
+    that gives no kwargs raises ValueError naming it."""
+    kwargs = {}
+    for spec in [specs] if isinstance(specs, str) else specs or []:
+        kwargs.update(json_kwargs(spec) if spec.lstrip().startswith("{") else factory_kwargs(spec))
+    return kwargs
+
+
+def json_kwargs(spec: str) -> dict:
+    try:
+        return json.loads(spec)
+    except json.JSONDecodeError as error:
+        raise ValueError(f"--env-kwargs {spec!r} is not a JSON object ({error})") from error
+
+
+def factory_kwargs(spec: str) -> dict:
+    """factory()'s kwargs (a system alone as {"system": system}) of module:factory, the module imported from the
+    working directory first, where `python train.py` (whose path starts at its own folder) would not look."""
+    module_name, _, name = spec.partition(":")
+    if not module_name or not name:
+        raise ValueError(f"--env-kwargs {spec!r} is neither a JSON object ('{{\"dt\": 0.02}}') nor module:factory")
+    here = os.getcwd()
+    sys.path.insert(0, here)
+    try:
+        made = getattr(importlib.import_module(module_name), name)()
+    except Exception as error:  # the user's module or factory: name the spec and the error it raised
+        raise ValueError(f"--env-kwargs {spec!r}: {type(error).__name__}: {error}") from error
+    finally:
+        sys.path.remove(here)
+    return dict(made) if isinstance(made, Mapping) else {"system": made}
+
+
+def make_kwargs(env_id: str, specs: str | list[str] | None) -> dict:
+    """env_kwargs_of(specs), checked by making the env once: kwargs it refuses (or missing ones it needs) end the
+    command before its work, in a ValueError naming --env-kwargs."""
+    kwargs = env_kwargs_of(specs)
+    try:
+        gym.make(env_id, **kwargs).close()
+    except (ValueError, TypeError) as error:
+        given = " ".join([specs] if isinstance(specs, str) else specs or ["(none)"])
+        raise ValueError(f"{env_id} refuses --env-kwargs {given}: {error}") from error
+    return kwargs
 
 
 def load_model(model_path: str | Path, env_id: str, algo: str | None = None, env_kwargs: dict | None = None):
@@ -148,12 +200,19 @@ def load_model(model_path: str | Path, env_id: str, algo: str | None = None, env
     model_path = Path(model_path)
     if not model_path.is_file():
         raise FileNotFoundError(f"policy {str(model_path)!r}: no such file; give 'analytic', 'random' or a model zip")
+    check_model_zip(model_path)
     algo = algo or algo_of(model_path)
     if algo not in ALGOS:
         raise ValueError(f"algo {algo!r} is not one of {sorted(ALGOS)}")
     env = gym.make(env_id, **(env_kwargs or {}))
     goal_env = isinstance(env.observation_space, gym.spaces.Dict)  # SB3 loads a HER model only with its env
-    model = ALGOS[algo].load(model_path, device="cpu", **({"env": DummyVecEnv([lambda: env])} if goal_env else {}))
+    try:
+        model = ALGOS[algo].load(model_path, device="cpu", **({"env": DummyVecEnv([lambda: env])} if goal_env else {}))
+    except (AssertionError, AttributeError, KeyError, TypeError, ValueError) as error:  # SB3's, of a file not algo's
+        raise ValueError(
+            f"{model_path}: SB3's {algo.upper()} cannot load it ({type(error).__name__}: {error}); "
+            "was it trained with another algorithm (--algo)?"
+        ) from error
     for space in ("observation_space", "action_space"):
         if getattr(model, space) != getattr(env, space):
             raise ValueError(
@@ -200,6 +259,7 @@ def save_gif(frames: list[np.ndarray], path: str | Path, fps: float):
     """A small looping GIF: every GIF_FRAME_STRIDE-th frame, GIF_SIZE pixels wide."""
     from PIL import Image
 
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     images = [Image.fromarray(frame) for frame in frames[::GIF_FRAME_STRIDE]]
     images = [image.resize((GIF_SIZE, GIF_SIZE * image.height // image.width)) for image in images]
     duration = round(1000 * GIF_FRAME_STRIDE / fps)
@@ -294,8 +354,14 @@ def write_json(report: dict, path: str | Path):
     path.write_text(json.dumps(report, indent=1))
 
 
+ENV_KWARGS_HELP = (
+    "the make kwargs of --env: a JSON object ('{\"dt\": 0.02}') or module:factory (a function of a module in the "
+    "working directory returning the kwargs or a system); several update one another in order"
+)
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default="connenv/Swing-v0", choices=ENV_IDS)
     parser.add_argument(
         "--policy",
@@ -308,17 +374,30 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)
     parser.add_argument("--seed", type=seed_int, default=0, help="episode i is reset with seed + i")
-    parser.add_argument("--json", help="default: runs/eval_{env}_s{seed}.json")
-    parser.add_argument("--video", help="GIF of the first policy's first episode")
-    parser.add_argument("--env-kwargs", help="module:factory returning the make kwargs (or the system) of --env")
+    parser.add_argument("--json", type=writable_file, help="default: runs/eval_{env}_s{seed}.json")
+    parser.add_argument("--video", type=gif_file, help="GIF of the first policy's first episode")
+    parser.add_argument("--env-kwargs", nargs="+", metavar="KWARGS", help=ENV_KWARGS_HELP)
     args = parser.parse_args(argv)
-    args.json = args.json or f"runs/eval_{args.env.split('/')[-1]}_s{args.seed}.json"
+    for spec in args.policy:
+        try:
+            check_policy(args.env, spec)
+        except ValueError as error:
+            parser.error(f"argument --policy: {error}")
+    if args.algo is not None:
+        from rl_zoo3.utils import ALGOS
+
+        if args.algo not in ALGOS:
+            parser.error(f"argument --algo: invalid choice: {args.algo!r} (choose from {', '.join(sorted(ALGOS))})")
+    if args.json is None:
+        args.json = f"runs/eval_{args.env.split('/')[-1]}_s{args.seed}.json"
+        if reason := cli.unwritable(Path(args.json), directory=False):
+            parser.error(f"argument --json: the default {args.json!r} {reason}")
     return args
 
 
 def main(argv: list[str] | None = None) -> dict:
     args = parse_args(argv)
-    env_kwargs = env_kwargs_of(args.env_kwargs)
+    env_kwargs = make_kwargs(args.env, args.env_kwargs)
     report = compare(args.env, args.policy, args.episodes, args.seed, args.algo, args.video, env_kwargs)
     print(format_table(report))
     write_json(report, args.json)
@@ -327,4 +406,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    cli.run(main, PROG)

@@ -29,8 +29,11 @@ from rl_zoo3.hyperparams_opt import HYPERPARAMS_SAMPLER
 from stable_baselines3.common.callbacks import BaseCallback
 
 from agents import baselines, cluster
-from agents.evaluate import ENV_IDS, positive_int
+from agents.evaluate import ENV_IDS
+from connenv import cli
+from connenv.cli import positive_int
 
+PROG = "python -m agents.tune"
 RUNS = baselines.REPO / "runs" / "tune"
 ALGOS = ("ppo", "sac")
 METRIC = "return"
@@ -163,16 +166,18 @@ def summary(results) -> str:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", required=True, choices=[e for e in ENV_IDS if e in baselines.ENVS])
     parser.add_argument("--algo", required=True, choices=ALGOS)
     parser.add_argument("--samples", type=positive_int, required=True, help="trials")
     parser.add_argument("--timesteps", type=positive_int, required=True, help="training steps per trial")
     parser.add_argument("--evaluations", type=positive_int, default=10, help="periodic evaluations per trial")
-    parser.add_argument("--seed", type=int, default=0, help="of the sampler and of every trial's training")
-    parser.add_argument("--address", help="join the Ray cluster at ADDR (default: start a local Ray)")
+    parser.add_argument("--seed", type=cli.seed_int, default=0, help="of the sampler and of every trial's training")
+    parser.add_argument(
+        "--address", type=cluster.address, help="join the Ray cluster at ADDR (default: start a local Ray)"
+    )
     parser.add_argument("--jobs", type=positive_int, help="CPUs of the local Ray (default: all)")
-    parser.add_argument("--runs", type=Path, default=RUNS, help="folder of the sweeps")
+    parser.add_argument("--runs", type=cli.writable_dir, default=RUNS, help="folder of the sweeps")
     return parser.parse_args(argv)
 
 
@@ -190,4 +195,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    cli.run(main, PROG)

@@ -24,8 +24,10 @@ import gymnasium as gym
 import numpy as np
 
 import connenv  # noqa: F401  (registers the envs)
+from connenv import cli
 from connenv.examples import MAKE_KWARGS
 
+PROG = "python -m connenv.play"
 PUMPED = {"connenv/Swing-v0": -1.0, "connenv/Skier-v0": 1.0, "connenv/ActiveConstraint-v0": -1.0}
 """Envs pumped with the space bar: the action while it is held (the swing's child stands: r_min; the skier rises:
 h_max); released, the opposite end."""
@@ -140,14 +142,20 @@ def parse_kwargs(pairs: list[str]) -> dict:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("env_id", metavar="ENV_ID", help="a connenv id, e.g. connenv/Swing-v0")
-    parser.add_argument("--seed", type=int, help="of the first episode")
-    parser.add_argument("--scale", type=float, default=1.0, help="of the window against the env's 500-pixel frame")
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("env_id", metavar="ENV_ID", choices=env_ids(), help="a connenv id, e.g. connenv/Swing-v0")
+    parser.add_argument("--seed", type=cli.seed_int, help="of the first episode")
+    parser.add_argument(
+        "--scale", type=cli.positive_float, default=1.0, help="of the window against the env's 500-pixel frame"
+    )
     parser.add_argument("--kwargs", nargs="*", default=[], metavar="KEY=VALUE", help="the env's make kwargs")
     parser.add_argument("--fast", action="store_true", help="as fast as possible, not at the env's frame rate")
-    parser.add_argument("--frames", type=int, help="quit after this many frames (a scripted or headless run)")
-    parser.add_argument("--screenshot", metavar="PNG", help="save the window to this file at each frame")
+    parser.add_argument(
+        "--frames", type=cli.positive_int, help="quit after this many frames (a scripted or headless run)"
+    )
+    parser.add_argument(
+        "--screenshot", type=cli.writable_file, metavar="PNG", help="save the window to this file at each frame"
+    )
     return parser.parse_args(argv)
 
 
@@ -156,16 +164,19 @@ def main(argv: list[str] | None = None) -> Player:
     import pygame
 
     args = parse_args(argv)
-    if not args.scale > 0:
-        raise ValueError(f"--scale {args.scale} must be > 0")
     try:
         player = Player(args.env_id, args.seed, parse_kwargs(args.kwargs))
-    except ValueError as error:
-        raise SystemExit(f"connenv.play: {error}") from error
-    pygame.display.init()
-    pygame.font.init()
+    except (ValueError, TypeError) as error:  # the env's refusal of the kwargs, named as given
+        raise ValueError(f"{args.env_id} refuses --kwargs {' '.join(args.kwargs) or '(none)'}: {error}") from error
     size = tuple(round(args.scale * n) for n in player.frame().shape[1::-1])
-    screen, font, clock = pygame.display.set_mode(size), pygame.font.Font(None, 22), pygame.time.Clock()
+    try:
+        pygame.display.init()
+        screen = pygame.display.set_mode(size)
+    except pygame.error as error:  # no display: the machine's, not a bug, so an OSError that cli.run reports
+        player.close()
+        raise OSError(f"no display for the window (SDL: {error}); to run headless: SDL_VIDEODRIVER=dummy") from error
+    pygame.font.init()
+    font, clock = pygame.font.Font(None, 22), pygame.time.Clock()
     pygame.display.set_caption(f"connenv: {args.env_id}")
     frames = 0
     while player.running and (args.frames is None or frames < args.frames):
@@ -187,4 +198,4 @@ def main(argv: list[str] | None = None) -> Player:
 
 
 if __name__ == "__main__":
-    main()
+    cli.run(main, PROG)

@@ -58,8 +58,11 @@ import numpy as np
 import scipy
 
 import connenv  # noqa: F401  (registers the envs)
+from connenv import cli
+from connenv.core.steppers import INTEGRATORS
 from connenv.examples import MAKE_KWARGS
 
+PROG = "python -m connenv.throughput"
 SINGLE_STEPS = 3000
 REFERENCE = "CartPole-v1"  # Gymnasium's native vector env, the vector table's reference (issue 15)
 ROUNDS = 5
@@ -505,23 +508,45 @@ def bounds_table(report: Report, n: int, seed: int = 0):
     report.table(title, ["call", "µs", "× reference (Pendulum-v1 step; CartPole-v1 vector step)"], rows_out)
 
 
+def shell_stepper(text: str) -> str:
+    """argparse type of --shell-steppers: 'default' or an integrator of connenv.core.steppers, with :ATOL > 0."""
+    integrator, colon, atol = text.partition(":")
+    try:
+        atol_ok = not colon or 0 < float(atol) < float("inf")
+    except ValueError:
+        atol_ok = False
+    if integrator not in ("default", *INTEGRATORS) or not atol_ok:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not INTEGRATOR[:ATOL], INTEGRATOR one of {('default', *INTEGRATORS)}, ATOL a number > 0"
+        )
+    return text
+
+
 def main(argv=None):
     ids = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--envs", nargs="+", default=ids, choices=ids, metavar="ID")
-    parser.add_argument("--sizes", nargs="+", type=int, default=list(SIZES), help="N of the vector envs")
-    parser.add_argument("--sync-max", type=int, default=1024, help="largest N at which SyncVectorEnv runs")
-    parser.add_argument("--seconds", type=float, default=0.5, help="timed seconds per vector env and N")
-    parser.add_argument("--single-steps", type=int, default=SINGLE_STEPS)
+    parser.add_argument("--sizes", nargs="+", type=cli.positive_int, default=list(SIZES), help="N of the vector envs")
+    parser.add_argument(
+        "--sync-max", type=cli.non_negative_int, default=1024, help="largest N at which SyncVectorEnv runs"
+    )
+    parser.add_argument("--seconds", type=cli.positive_float, default=0.5, help="timed seconds per vector env and N")
+    parser.add_argument("--single-steps", type=cli.positive_int, default=SINGLE_STEPS)
     parser.add_argument("--skip-single", action="store_true")
     parser.add_argument("--skip-vector", action="store_true")
     parser.add_argument("--breakdown", action="store_true", help="also where a native step goes at the largest N")
     parser.add_argument("--training", action="store_true", help="also SB3 PPO training steps/s (the train extra)")
     parser.add_argument("--bounds", action="store_true", help="also the measured cost of what bounds the targets")
-    parser.add_argument("--write", metavar="PATH", help="write the tables as a Markdown page (docs/throughput.md)")
+    parser.add_argument(
+        "--write",
+        type=cli.writable_file,
+        metavar="PATH",
+        help="write the tables as a Markdown page (docs/throughput.md)",
+    )
     parser.add_argument(
         "--shell-steppers",
         nargs="*",
+        type=shell_stepper,
         metavar="INTEGRATOR",
         help="only the shell's reduced model under these "
         "integrators (default: dop853 magnus default; magnus:ATOL for another atol; default: the env's own stepper) "
@@ -578,4 +603,4 @@ def commit() -> str:
 
 
 if __name__ == "__main__":
-    main()
+    cli.run(main, PROG)

@@ -19,6 +19,10 @@ from __future__ import annotations
 import argparse
 import sys
 
+from connenv import cli
+
+PROG = "python -m connenv.bench"
+
 COMMANDS = {
     "all": "precision, then stability, then page: every chart in docs/precision/ and docs/speed-accuracy.md",
     "page": "docs/speed-accuracy.md, generated from the charts' CSVs",
@@ -31,8 +35,8 @@ COMMANDS = {
 
 def parser() -> argparse.ArgumentParser:
     """The top-level command line: the subcommands with their descriptions; each parses its own options."""
-    top = argparse.ArgumentParser(
-        prog="python -m connenv.bench",
+    top = cli.ArgumentParser(
+        prog=PROG,
         description=__doc__.split(". ")[0] + ".",
         formatter_class=lambda prog: argparse.HelpFormatter(prog, width=120),
     )
@@ -53,9 +57,11 @@ def main(argv=None):
     if args.command == "all":
         from connenv.bench import page, precision, stability
 
+        for command in (precision, stability):  # both take argv: check it before either runs
+            command.parse_args(argv)
         precision.main(argv)
         stability.main(argv)
-        page.main()
+        page.main([])
         return
     if args.command == "precision":
         from connenv.bench.precision import main as run

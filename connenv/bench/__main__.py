@@ -1,3 +1,4 @@
-from connenv.bench import main
+from connenv import cli
+from connenv.bench import PROG, main
 
-main()
+cli.run(main, PROG)

@@ -21,6 +21,7 @@ import argparse
 import numpy as np
 import sympy as sp
 
+from connenv import cli
 from connenv.bench.common import describe, header, pendulum, run
 from connenv.envs.active_constraint import ActiveConstraintEnv
 
@@ -71,7 +72,11 @@ class Counting:
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = cli.ArgumentParser(
+        prog="python -m connenv.bench generic",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--quick", action="store_true", help="50 steps instead of 200")
     args = parser.parse_args(argv)
     header("generic")

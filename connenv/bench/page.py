@@ -14,6 +14,7 @@ import csv
 import datetime
 from pathlib import Path
 
+from connenv import cli
 from connenv.bench.common import OUTPUT
 
 PAGE = OUTPUT.parent / "speed-accuracy.md"
@@ -103,5 +104,6 @@ def page(folder: Path = OUTPUT) -> str:
 
 
 def main(argv=None):
+    cli.ArgumentParser(prog="python -m connenv.bench page", description=__doc__.split("\n")[0]).parse_args(argv)
     PAGE.write_text(page())
     print(f"wrote {PAGE.relative_to(PAGE.parents[1])}")

@@ -70,7 +70,6 @@ episode.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import dataclasses
 import functools
@@ -79,6 +78,7 @@ import time
 
 import numpy as np
 
+from connenv import cli
 from connenv.bench.common import OUTPUT, candidates, describe, header, make_env, pendulum, run
 from connenv.systems.rolling_ball import rotation_angle
 
@@ -584,11 +584,15 @@ def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
     return rows, write_csv(name, case, rows, folder), plot(name, case, rows, folder, fraction)
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m connenv.bench precision", description=__doc__.split("\n")[0])
+def parse_args(argv=None):
+    parser = cli.ArgumentParser(prog="python -m connenv.bench precision", description=__doc__.split("\n")[0])
     parser.add_argument("--env", nargs="+", choices=sorted([*CASES, "rigid_body"]), default=[*CASES, "rigid_body"])
     parser.add_argument("--quick", action="store_true", help="a fifth of every episode")
-    args = parser.parse_args(argv)
+    return parser.parse_args(argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
     header("precision")
     OUTPUT.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()

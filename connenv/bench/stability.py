@@ -67,7 +67,6 @@ grid held.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import dataclasses
 import math
@@ -75,6 +74,7 @@ import time
 
 import numpy as np
 
+from connenv import cli
 from connenv.bench.common import OUTPUT, describe, header, make_env
 from connenv.core import StepperError
 
@@ -462,11 +462,15 @@ def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
     return rows, path, plot(name, stability_map, rows, grid, folder)
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m connenv.bench stability", description=__doc__.split("\n")[0])
+def parse_args(argv=None):
+    parser = cli.ArgumentParser(prog="python -m connenv.bench stability", description=__doc__.split("\n")[0])
     parser.add_argument("--env", nargs="+", choices=sorted([*MAPS, "rigid_body"]), default=[*MAPS, "rigid_body"])
     parser.add_argument("--quick", action="store_true", help="dt down to 1e-3 only")
-    args = parser.parse_args(argv)
+    return parser.parse_args(argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
     header("stability")
     OUTPUT.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()

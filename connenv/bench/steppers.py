@@ -35,7 +35,6 @@ absolute times do not. The default is the fastest passing candidate. Candidates 
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import datetime
 import math
@@ -49,6 +48,7 @@ import scipy
 from scipy.spatial.transform import Rotation
 
 import connenv  # noqa: F401  (registers the envs)
+from connenv import cli
 from connenv.core.steppers import INTEGRATORS
 from connenv.systems.rolling_ball import rotation_angle
 
@@ -143,7 +143,7 @@ def describe(options):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m connenv.bench steppers", description=__doc__.split("\n")[0])
+    parser = cli.ArgumentParser(prog="python -m connenv.bench steppers", description=__doc__.split("\n")[0])
     parser.add_argument("--env", choices=sorted(BENCHES), default="swing")
     parser.add_argument("--quick", action="store_true", help="only the first start (half the time)")
     parser.add_argument("--integrators", nargs="+", choices=INTEGRATORS, metavar="NAME", help="only these integrators")
