@@ -4,6 +4,7 @@ and tiny budgets."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import threading
@@ -16,6 +17,7 @@ from agents import baselines
 
 STEPS = 2048  # per run, with an evaluation and a checkpoint every 1024 steps
 TINY = {"timesteps": STEPS, "evaluations": 2}
+ROLLOUT = 8 * 256  # PPO's on Swing-v0: 8 envs × n_steps
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +49,8 @@ def test_a_run_on_ray_gives_the_model_of_a_direct_run(ray_local, tmp_path):
 
 def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(ray_local, tmp_path, capsys):
     """Kill the worker of seed 0 once it has checkpointed: Ray retries it from that checkpoint, seed 1 runs once,
-    and both runs finish."""
+    and both runs finish. The checkpoint lies between rollouts (an evaluation and a checkpoint are due every 1536
+    steps, inside PPO's second rollout), so the resumed run trains the two rollouts of the run never stopped."""
     folders = [baselines.run_folder("connenv/Swing-v0", "ppo", seed, tmp_path) for seed in (0, 1)]
     killed = []
 
@@ -62,16 +65,18 @@ def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(r
 
     killer = threading.Thread(target=kill_seed_0)
     killer.start()
-    outcomes = baselines.train_all(["connenv/Swing-v0"], ["ppo"], 2, seeds=(0, 1), runs=tmp_path, **TINY)
+    budget = {"timesteps": 3 * ROLLOUT // 2, "evaluations": 2}
+    outcomes = baselines.train_all(["connenv/Swing-v0"], ["ppo"], 2, seeds=(0, 1), runs=tmp_path, **budget)
     killer.join()
     print("\n".join(outcomes), *(f.name + ": " + (f / "attempts.log").read_text() for f in folders), sep="\n")
     ((pid, checkpoint_steps),) = killed
     assert sorted(outcome.split(":")[0] for outcome in outcomes) == sorted(f.name for f in folders)
-    assert all((folder / "results.json").is_file() for folder in folders)
+    assert all(baselines.finished(folder) for folder in folders)
     first, retry = (folders[0] / "attempts.log").read_text().splitlines()
     assert first.startswith(f"pid {pid} from step 0") and retry.endswith(f"from step {checkpoint_steps}")
-    assert checkpoint_steps > 0
+    assert checkpoint_steps == ROLLOUT
     assert len((folders[1] / "attempts.log").read_text().splitlines()) == 1
+    assert [json.loads((folder / "results.json").read_text())["timesteps"] for folder in folders] == [2 * ROLLOUT] * 2
 
 
 def test_a_sampled_configuration_becomes_rl_zoo3_hyperparameters():
