@@ -112,8 +112,10 @@ def train_one(env_id: str, algo: str, seed: int, runs: Path = RUNS, **options) -
     """Train one run in this process, a Ray task's worker, unless it finished with the current hyperparameters. An
     unfinished run with them resumes from its last checkpoint; a folder with none, or with other hyperparameters, is
     moved aside (train.py's --overwrite, done here so that the logs below start in the new folder) and the run
-    trained anew. Each attempt adds a line to the run's attempts.log: the process and the step it starts from.
-    options: train_argv's timesteps and evaluations."""
+    trained anew. Each attempt adds a line to the run's attempts.log: the process, the step it starts from and the
+    Ray node. options: train_argv's timesteps and evaluations."""
+    import ray
+
     import train
 
     folder = run_folder(env_id, algo, seed, runs)
@@ -124,7 +126,8 @@ def train_one(env_id: str, algo: str, seed: int, runs: Path = RUNS, **options) -
         train.move_aside(folder)
     folder.mkdir(parents=True, exist_ok=True)
     with open(folder / "attempts.log", "a") as log:
-        print(f"pid {os.getpid()} from step {train.latest_checkpoint(folder) or 0}", file=log, flush=True)
+        start, node = train.latest_checkpoint(folder) or 0, ray.get_runtime_context().get_node_id()
+        print(f"pid {os.getpid()} from step {start} on node {node}", file=log, flush=True)
     with open(folder / "train.log", "a") as log, redirect_stdout(log), redirect_stderr(log):
         results = train.main(train_argv(env_id, algo, seed, runs, **options))
     return f"{folder.name}: {results['timesteps']} steps in {results['train_seconds']:.0f} s"
