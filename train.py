@@ -174,10 +174,12 @@ def holds_run(run: Path) -> bool:
 
 def move_aside(run: Path) -> Path:
     """Rename the run folder to {run}.{date-time} (with a counter if that is taken); return the new path."""
-    stamp = time.strftime("%Y%m%d-%H%M%S")
-    names = itertools.chain([stamp], (f"{stamp}-{n}" for n in itertools.count(1)))
-    aside = next(path for path in (run.with_name(f"{run.name}.{name}") for name in names) if not path.exists())
-    return run.rename(aside)
+    name = f"{run.name}.{time.strftime('%Y%m%d-%H%M%S')}"
+    aside = run.with_name(name)
+    for n in itertools.count(1):
+        if not aside.exists():
+            return run.rename(aside)
+        aside = run.with_name(f"{name}-{n}")
 
 
 def claim_run_folder(run: Path, resume: bool, overwrite: bool) -> int | None:

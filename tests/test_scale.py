@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 import torch
+import yaml
 
 from agents import baselines
 
@@ -35,6 +36,10 @@ def ray_local():
     ray = cluster.connect(num_cpus=2)
     yield ray
     ray.shutdown()
+
+
+def files_of(folder: Path) -> dict[str, bytes]:
+    return {str(path.relative_to(folder)): path.read_bytes() for path in folder.rglob("*") if path.is_file()}
 
 
 def policy_parameters(folder):
@@ -58,8 +63,14 @@ def test_a_run_on_ray_gives_the_model_of_a_direct_run(ray_local, tmp_path):
 def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(ray_local, tmp_path, capsys):
     """Kill the worker of seed 0 once it has checkpointed: Ray retries it from that checkpoint, seed 1 runs once,
     and both runs finish. The checkpoint lies between rollouts (an evaluation and a checkpoint are due every 1536
-    steps, inside PPO's second rollout), so the resumed run trains the two rollouts of the run never stopped."""
+    steps, inside PPO's second rollout), so the resumed run trains the two rollouts of the run never stopped. Seed
+    1's folder holds a run interrupted before its first checkpoint: it is moved aside whole, and seed 1 trains anew."""
     folders = [baselines.run_folder("connenv/Swing-v0", "ppo", seed, tmp_path) for seed in (0, 1)]
+    (folders[1] / "connenv-Swing-v0").mkdir(parents=True)
+    hyperparams = yaml.safe_dump(baselines.hyperparams("ppo", "connenv/Swing-v0"))
+    (folders[1] / "connenv-Swing-v0" / "config.yml").write_text(hyperparams)
+    (folders[1] / "results.json").write_text(json.dumps({"status": "interrupted", "timesteps": 1024}))
+    interrupted = files_of(folders[1])
     killed = []
 
     def kill_seed_0():
@@ -83,7 +94,10 @@ def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(r
     first, retry = (folders[0] / "attempts.log").read_text().splitlines()
     assert first.startswith(f"pid {pid} from step 0 on node") and f" from step {checkpoint_steps} on node" in retry
     assert checkpoint_steps == ROLLOUT
-    assert len((folders[1] / "attempts.log").read_text().splitlines()) == 1
+    (attempt,) = (folders[1] / "attempts.log").read_text().splitlines()
+    assert " from step 0 on node " in attempt
+    (aside,) = tmp_path.glob(f"{folders[1].name}.*")
+    assert files_of(aside) == interrupted
     assert [json.loads((folder / "results.json").read_text())["timesteps"] for folder in folders] == [2 * ROLLOUT] * 2
 
 
