@@ -6,9 +6,11 @@
 
 ``train`` trains once per (env, algo, seed) with train.py's ``train.main`` and the hyperparameters of
 agents/hyperparams/, each run a Ray task of one CPU (``agents.cluster``): on a local Ray of ``--jobs`` CPUs by default,
-on a running cluster with ``--address``. It skips runs that finished (their results.json exists). A run checkpoints
-at each periodic evaluation; a run whose worker process dies is retried by Ray, from its last checkpoint, and the
-other runs go on. PPO trains on the native vector envs (``--vector-env``), SAC on one env.
+on a running cluster with ``--address``. It skips runs that finished (their results.json says so). A run checkpoints
+after each periodic evaluation, between rollouts; a run whose worker process dies is retried by Ray, from its last
+checkpoint, and the other runs go on; a run folder that cannot be resumed (other hyperparameters, or no checkpoint
+yet) is moved aside to {folder}.{date-time} and the run trained anew. PPO trains on the native vector envs
+(``--vector-env``), SAC on one env.
 ``collect`` picks, for each (env, algo), the seed whose periodic evaluation scored best, copies its
 best_model.zip with the VecNormalize statistics it was evaluated with to agents/pretrained/{env}_{algo}/, records
 the training steps and wall time of every seed in agents/pretrained/runs.json and writes the periodic evaluations
@@ -91,6 +93,13 @@ def run_folder(env_id: str, algo: str, seed: int, runs: Path = RUNS) -> Path:
     return runs / f"{short(env_id)}_{algo}_s{seed}"
 
 
+def finished(folder: Path) -> bool:
+    """Whether a run folder holds a finished run: train.py's results.json, of status "finished" (or of none: written
+    before an interrupted run was told apart), not "interrupted"."""
+    results = folder / "results.json"
+    return results.is_file() and json.loads(results.read_text()).get("status", "finished") == "finished"
+
+
 def train_argv(
     env_id: str, algo: str, seed: int, runs: Path, timesteps: int | None = None, evaluations: int = EVALUATIONS
 ) -> list[str]:
@@ -104,20 +113,25 @@ def train_argv(
 
 
 def train_one(env_id: str, algo: str, seed: int, runs: Path = RUNS, **options) -> str:
-    """Train one run in this process unless it finished with the current hyperparameters. An unfinished run with
-    them resumes from its last checkpoint; a run with others is trained anew. Each attempt adds a line to the run's
-    attempts.log: the process and the step it starts from. options: train_argv's timesteps and evaluations."""
+    """Train one run in this process, a Ray task's worker, unless it finished with the current hyperparameters. An
+    unfinished run with them resumes from its last checkpoint; a folder with none, or with other hyperparameters, is
+    moved aside (train.py's --overwrite, done here so that the logs below start in the new folder) and the run
+    trained anew. Each attempt adds a line to the run's attempts.log: the process, the step it starts from and the
+    Ray node. options: train_argv's timesteps and evaluations."""
+    import ray
+
     import train
 
     folder = run_folder(env_id, algo, seed, runs)
     same = run_config(folder, env_id) == hyperparams(algo, env_id)
-    if same and (folder / "results.json").is_file():
+    if same and finished(folder):
         return f"{folder.name}: done before"
-    if not same:
-        shutil.rmtree(folder, ignore_errors=True)
+    if folder.exists() and (not same or train.latest_checkpoint(folder) is None):
+        train.move_aside(folder)
     folder.mkdir(parents=True, exist_ok=True)
     with open(folder / "attempts.log", "a") as log:
-        print(f"pid {os.getpid()} from step {train.latest_checkpoint(folder) or 0}", file=log, flush=True)
+        start, node = train.latest_checkpoint(folder) or 0, ray.get_runtime_context().get_node_id()
+        print(f"pid {os.getpid()} from step {start} on node {node}", file=log, flush=True)
     with open(folder / "train.log", "a") as log, redirect_stdout(log), redirect_stderr(log):
         results = train.main(train_argv(env_id, algo, seed, runs, **options))
     return f"{folder.name}: {results['timesteps']} steps in {results['train_seconds']:.0f} s"
@@ -194,7 +208,7 @@ def collect_pair(env_id: str, algo: str, entry: dict | None, runs: Path = RUNS, 
     hyperparameters; its best model copied to agents/pretrained/ unless the same file is there already."""
     folders = [run_folder(env_id, algo, seed, runs) for seed in seeds]
     for folder in folders:
-        if not (folder / "results.json").is_file() or run_config(folder, env_id) != hyperparams(algo, env_id):
+        if not finished(folder) or run_config(folder, env_id) != hyperparams(algo, env_id):
             raise FileNotFoundError(f"{folder}: not finished with the current hyperparameters; run train first")
     records, rows = {}, []
     for seed, folder in zip(seeds, folders, strict=True):

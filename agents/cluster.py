@@ -2,7 +2,8 @@
 
 On one machine nothing needs setting up: ``ray.init()`` starts a local Ray with one worker per CPU and stops it with
 the driver. On a cluster, start Ray on each machine (``ray start --head`` on one, ``ray start --address HEAD:6379`` on
-the others) and give the head's address (``--address HEAD:6379``, or ``auto`` on a cluster machine): the repository's
+the others, each with RAY_AUTH_MODE=token and the head's token: docs/scaling.md) and give the head's address
+(``--address HEAD:6379``, or ``auto`` on a cluster machine) from a shell with the same two: the repository's
 code is shipped to the workers (Ray's runtime_env working_dir), and the run folders must be on storage that every
 machine mounts at the same path (``--runs``), as Ray Tune's storage_path must.
 """

@@ -10,9 +10,10 @@ also samples n_sampled_goal and the goal-selection strategy. A trial reports the
 quarter of the evaluations on. Optuna's sampler (TPE) learns from the reported returns.
 
 Results, run folders and checkpoints go under runs/tune/{env}_{algo}/. The same command again resumes an interrupted
-sweep: Tune restores it, and an unfinished trial resumes from its run's last checkpoint. At the end it writes
-runs/tune/{env}_{algo}/best.yml: the hyperparameters of the trial with the best periodic return in rl-zoo3's YAML
-form, the env id as key, ready for agents/hyperparams/{algo}.yml, and prints every trial's best return.
+sweep: Tune restores it, and an unfinished trial resumes from its run's last checkpoint (one stopped before its first
+starts anew, its run moved aside). At the end it writes runs/tune/{env}_{algo}/best.yml: the hyperparameters of the
+trial with the best periodic return in rl-zoo3's YAML form, the env id as key, ready for
+agents/hyperparams/{algo}.yml, and prints every trial's best return.
 """
 
 from __future__ import annotations
@@ -106,7 +107,8 @@ def run_trial(config: dict, env_id: str, algo: str, timesteps: int, evaluations:
     path.write_text(yaml.safe_dump({env_id: hyperparameters(env_id, algo, config)}))
     frequency = str(max(timesteps // evaluations, 1))
     argv = ["--env", env_id, "--algo", algo, "--seed", str(seed), "--hyperparams", str(path), "--runs", str(folder)]
-    argv += ["--timesteps", str(timesteps), "--eval-freq", frequency, "--checkpoint-freq", frequency, "--resume"]
+    argv += ["--timesteps", str(timesteps), "--eval-freq", frequency, "--checkpoint-freq", frequency]
+    argv += ["--resume", "--overwrite"]  # a restored trial resumes from its checkpoint, or starts anew if it has none
     args = train.parse_args(argv + (["--vector-env"] if algo == "ppo" else []))
     with open(folder / "train.log", "a") as log, redirect_stdout(log), redirect_stderr(log):
         train.train(args, after_eval=Report())

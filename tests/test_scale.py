@@ -1,21 +1,32 @@
-"""The baselines on Ray (agents.baselines train, agents.cluster): the same model as a direct run, and fault tolerance
-(a run whose worker is killed resumes from its checkpoint; the others are not repeated). A local Ray of two CPUs
-and tiny budgets."""
+"""The baselines on Ray (agents.baselines train, agents.cluster): the same model as a direct run, fault tolerance
+(a run whose worker is killed resumes from its checkpoint; the others are not repeated), and a cluster of two nodes
+started as docs/scaling.md says. A local Ray of two CPUs and tiny budgets."""
 
 from __future__ import annotations
 
+import json
 import os
+import secrets
+import shutil
 import signal
+import socket
+import subprocess
+import sys
+import tempfile
 import threading
 import time
+from pathlib import Path
 
 import pytest
 import torch
+import yaml
 
 from agents import baselines
 
+ROOT = Path(__file__).resolve().parents[1]
 STEPS = 2048  # per run, with an evaluation and a checkpoint every 1024 steps
 TINY = {"timesteps": STEPS, "evaluations": 2}
+ROLLOUT = 8 * 256  # PPO's on Swing-v0: 8 envs × n_steps
 
 
 @pytest.fixture(scope="module")
@@ -25,6 +36,10 @@ def ray_local():
     ray = cluster.connect(num_cpus=2)
     yield ray
     ray.shutdown()
+
+
+def files_of(folder: Path) -> dict[str, bytes]:
+    return {str(path.relative_to(folder)): path.read_bytes() for path in folder.rglob("*") if path.is_file()}
 
 
 def policy_parameters(folder):
@@ -47,8 +62,15 @@ def test_a_run_on_ray_gives_the_model_of_a_direct_run(ray_local, tmp_path):
 
 def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(ray_local, tmp_path, capsys):
     """Kill the worker of seed 0 once it has checkpointed: Ray retries it from that checkpoint, seed 1 runs once,
-    and both runs finish."""
+    and both runs finish. The checkpoint lies between rollouts (an evaluation and a checkpoint are due every 1536
+    steps, inside PPO's second rollout), so the resumed run trains the two rollouts of the run never stopped. Seed
+    1's folder holds a run interrupted before its first checkpoint: it is moved aside whole, and seed 1 trains anew."""
     folders = [baselines.run_folder("connenv/Swing-v0", "ppo", seed, tmp_path) for seed in (0, 1)]
+    (folders[1] / "connenv-Swing-v0").mkdir(parents=True)
+    hyperparams = yaml.safe_dump(baselines.hyperparams("ppo", "connenv/Swing-v0"))
+    (folders[1] / "connenv-Swing-v0" / "config.yml").write_text(hyperparams)
+    (folders[1] / "results.json").write_text(json.dumps({"status": "interrupted", "timesteps": 1024}))
+    interrupted = files_of(folders[1])
     killed = []
 
     def kill_seed_0():
@@ -62,16 +84,21 @@ def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(r
 
     killer = threading.Thread(target=kill_seed_0)
     killer.start()
-    outcomes = baselines.train_all(["connenv/Swing-v0"], ["ppo"], 2, seeds=(0, 1), runs=tmp_path, **TINY)
+    budget = {"timesteps": 3 * ROLLOUT // 2, "evaluations": 2}
+    outcomes = baselines.train_all(["connenv/Swing-v0"], ["ppo"], 2, seeds=(0, 1), runs=tmp_path, **budget)
     killer.join()
     print("\n".join(outcomes), *(f.name + ": " + (f / "attempts.log").read_text() for f in folders), sep="\n")
     ((pid, checkpoint_steps),) = killed
     assert sorted(outcome.split(":")[0] for outcome in outcomes) == sorted(f.name for f in folders)
-    assert all((folder / "results.json").is_file() for folder in folders)
+    assert all(baselines.finished(folder) for folder in folders)
     first, retry = (folders[0] / "attempts.log").read_text().splitlines()
-    assert first.startswith(f"pid {pid} from step 0") and retry.endswith(f"from step {checkpoint_steps}")
-    assert checkpoint_steps > 0
-    assert len((folders[1] / "attempts.log").read_text().splitlines()) == 1
+    assert first.startswith(f"pid {pid} from step 0 on node") and f" from step {checkpoint_steps} on node" in retry
+    assert checkpoint_steps == ROLLOUT
+    (attempt,) = (folders[1] / "attempts.log").read_text().splitlines()
+    assert " from step 0 on node " in attempt
+    (aside,) = tmp_path.glob(f"{folders[1].name}.*")
+    assert files_of(aside) == interrupted
+    assert [json.loads((folder / "results.json").read_text())["timesteps"] for folder in folders] == [2 * ROLLOUT] * 2
 
 
 def test_a_sampled_configuration_becomes_rl_zoo3_hyperparameters():
@@ -134,3 +161,69 @@ def test_a_sweep_writes_its_best_hyperparameters_for_train_py_and_resumes(ray_lo
     assert "resuming the sweep" in capsys.readouterr().out
     assert sorted(p.name for p in (tmp_path / "Swing-v0_sac" / "trials").iterdir()) == trials
     assert {path: path.stat().st_mtime_ns for path in logs} == logs  # no trial trained again
+
+
+def free_ports(n: int) -> list[int]:
+    sockets = [socket.socket() for _ in range(n)]
+    for sock in sockets:
+        sock.bind(("", 0))
+    ports = [sock.getsockname()[1] for sock in sockets]
+    for sock in sockets:
+        sock.close()
+    return ports
+
+
+def ray_start(args: list[str], env: dict, log: Path) -> subprocess.Popen:
+    """`ray start ARGS --block` in a process group of its own, once it says "Ray runtime started."."""
+    ray = shutil.which("ray", path=os.pathsep.join([str(Path(sys.executable).parent), os.environ.get("PATH", "")]))
+    with log.open("w") as out:
+        process = subprocess.Popen([ray, "start", *args, "--block"], env=env, stdout=out, stderr=subprocess.STDOUT,
+                                   start_new_session=True)  # fmt: skip
+    deadline = time.monotonic() + 60
+    while "Ray runtime started." not in log.read_text():
+        assert process.poll() is None and time.monotonic() < deadline, log.read_text()[-3000:]
+        time.sleep(0.2)
+    return process
+
+
+@pytest.fixture
+def two_node_ray():
+    """A Ray cluster of two nodes of one CPU each on this machine, started as docs/scaling.md says: token
+    authentication on (RAY_AUTH_MODE=token, the cluster's token in RAY_AUTH_TOKEN), a head, and a node that joins it
+    at 127.0.0.1:PORT. Free ports, a temp dir each, Ray's variables of this process left out. Yields the head's
+    address and the environment of a driver; kills the process groups of both `ray start --block` (the nodes'
+    processes) even on failure."""
+    env = {key: value for key, value in os.environ.items() if not key.startswith("RAY_")}
+    env.update(RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=secrets.token_hex(32), RAY_USAGE_STATS_ENABLED="0")
+    gcs, dashboard, head_agent, node_agent = free_ports(4)
+    address = f"127.0.0.1:{gcs}"
+    each = ["--num-cpus", "1", "--object-store-memory", str(100 * 2**20)]
+    temp = Path(tempfile.mkdtemp(prefix="ray"))  # short: Ray's socket paths must fit in 107 characters
+    processes = []
+    try:
+        head = ["--head", "--port", str(gcs), "--include-dashboard", "false", "--dashboard-port", str(dashboard)]
+        head += ["--dashboard-agent-listen-port", str(head_agent), "--temp-dir", str(temp / "head"), *each]
+        processes.append(ray_start(head, env, temp / "head.log"))
+        node = ["--address", address, "--dashboard-agent-listen-port", str(node_agent)]
+        processes.append(ray_start([*node, "--temp-dir", str(temp / "node"), *each], env, temp / "node.log"))
+        yield address, env
+    finally:  # SIGKILL: Ray's graceful stop takes seconds per process; the workers end with their raylet
+        for process in processes:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+        shutil.rmtree(temp, ignore_errors=True)
+
+
+def test_a_cluster_joined_with_the_token_runs_a_run_on_each_node(two_node_ray, tmp_path):
+    """agents.baselines train --address on the two-node cluster: two runs of one CPU each, at once, one per node
+    (the Ray node each attempt ran on is in its attempts.log)."""
+    address, env = two_node_ray
+    command = [sys.executable, "-m", "agents.baselines", "train", "--env", "connenv/FallingCat-v0", "--algo", "ppo"]
+    command += ["--seeds", "0", "1", "--timesteps", "2048", "--runs", str(tmp_path), "--address", address]
+    done = subprocess.run(command, check=False, cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    folders = [baselines.run_folder("connenv/FallingCat-v0", "ppo", seed, tmp_path) for seed in (0, 1)]
+    assert all(baselines.finished(folder) for folder in folders)
+    attempts = [(folder / "attempts.log").read_text().splitlines() for folder in folders]
+    assert [len(lines) for lines in attempts] == [1, 1]
+    assert len({lines[0].split(" on node ")[1] for lines in attempts}) == 2

@@ -6,6 +6,7 @@ import json
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import gymnasium as gym
@@ -23,10 +24,11 @@ DT = 0.05  # Swing-v0's default step, s
 
 @pytest.fixture(scope="module")
 def ppo_run(tmp_path_factory, train):
-    """A PPO run of one rollout (8 envs × 256 steps), evaluated periodically every 1024 steps."""
+    """A PPO run of one rollout (8 envs × 256 steps), evaluated periodically every 1024 steps, checkpointed at its
+    end."""
     runs = tmp_path_factory.mktemp("runs")
     argv = ["--algo", "ppo", "--timesteps", "300", "--runs", str(runs), "--eval-episodes", "2", "--eval-freq", "1024"]
-    return train.main(argv)
+    return train.main([*argv, "--checkpoint-freq", "1024"])
 
 
 def test_ppo_run_folder_holds_normalized_model_and_periodic_evaluations(ppo_run, train, check_run):
@@ -61,6 +63,107 @@ def test_off_policy_run_folder_holds_model_that_reloads(algo, tmp_path, train, c
     results = train.main(argv)
     assert results["timesteps"] == 1100  # past learning_starts, so some gradient steps were taken
     check_run(results, algo)
+
+
+def files_of(folder: Path) -> dict[str, bytes]:
+    return {str(path.relative_to(folder)): path.read_bytes() for path in folder.rglob("*") if path.is_file()}
+
+
+@pytest.mark.parametrize(
+    ("flags", "checkpoint", "named"),
+    [
+        ([], True, ["--resume continues it from its checkpoint at step 2048", "--overwrite moves it aside"]),
+        ([], False, ["no checkpoint to resume from", "--overwrite moves it aside"]),
+        (["--resume"], False, ["no checkpoint to resume from", "--overwrite moves it aside"]),
+    ],
+)
+def test_a_second_run_in_a_run_folder_is_refused_naming_the_folder_and_the_ways_out(
+    flags, checkpoint, named, ppo_run, tmp_path, train
+):
+    """One folder, one run: train.py stops before it changes anything, in one line that names the folder."""
+    run = shutil.copytree(Path(ppo_run["model"]).parent, tmp_path / "Swing-v0_ppo_s0")
+    if not checkpoint:
+        shutil.rmtree(run / "checkpoints")
+    before = files_of(run)
+    argv = ["--algo", "ppo", "--timesteps", "300", "--runs", str(tmp_path), "--eval-episodes", "1", *flags]
+    with pytest.raises(SystemExit) as exit_info:
+        train.main(argv)
+    message = str(exit_info.value.code)
+    assert "\n" not in message and f"{run} holds a run" in message
+    assert all(words in message for words in named), message
+    assert files_of(run) == before and [path.name for path in tmp_path.iterdir()] == [run.name]
+
+
+def test_overwrite_moves_the_earlier_run_aside_whole_and_trains_anew(ppo_run, tmp_path, train, capsys):
+    """The earlier run's files, best model and evaluations included, go to {run}.{date-time} unchanged; the new
+    run's folder holds none of them (it has no periodic evaluation)."""
+    earlier = files_of(Path(ppo_run["model"]).parent)
+    run = shutil.copytree(Path(ppo_run["model"]).parent, tmp_path / "Swing-v0_ppo_s0")
+    argv = ["--algo", "ppo", "--timesteps", "300", "--runs", str(tmp_path), "--eval-episodes", "1", "--eval-freq", "0"]
+    results = train.main([*argv, "--overwrite"])
+    (aside,) = [path for path in tmp_path.iterdir() if path != run]
+    assert aside.name.startswith(f"{run.name}.") and f"moved aside to {aside}" in capsys.readouterr().out
+    assert files_of(aside) == earlier
+    assert results["status"] == "finished" and Path(results["model"]).parent == run
+    assert not {"best_model.zip", "evaluations.npz", "checkpoints"} & {path.name for path in run.iterdir()}
+
+
+def test_resume_in_a_folder_with_no_run_says_it_starts_from_step_0(tmp_path, train, capsys):
+    argv = ["--algo", "sac", "--timesteps", "10", "--runs", str(tmp_path), "--eval-episodes", "1", "--eval-freq", "0"]
+    results = train.main([*argv, "--resume"])
+    run = tmp_path / "Swing-v0_sac_s0"
+    assert f"{run}: no checkpoint to resume from, training from step 0" in capsys.readouterr().out
+    assert results["timesteps"] == 10
+
+
+@pytest.mark.parametrize(
+    ("argv", "every"),
+    [
+        (["--env", "connenv/RollingBall-v0", "--algo", "sac", "--timesteps", "20000"], 2000),  # the README's example
+        ([], 15_000),  # PPO's 150 000 steps on Swing-v0
+        (["--timesteps", "300"], 8 * 256),  # PPO trains one rollout: its policy changes once
+    ],
+)
+def test_periodic_evaluations_fit_the_budget_by_default(argv, every, tmp_path, train):
+    """A tenth of the budget (ten evaluations, the last at its end, so that there is a best model) but not more
+    often than an on-policy algorithm's policy changes."""
+    from stable_baselines3.common.callbacks import EvalCallback
+
+    manager = train.experiment(train.parse_args([*argv, "--runs", str(tmp_path)]))
+    model, _ = manager.setup_experiment()
+    (evaluation,) = [callback for callback in manager.callbacks if isinstance(callback, EvalCallback)]
+    assert evaluation.eval_freq * model.n_envs == every
+    model.env.close()
+    evaluation.eval_env.close()
+
+
+def test_an_interrupted_run_saves_its_model_marks_its_results_and_exits_130(tmp_path):
+    """Ctrl-C (SIGINT) once the run has checkpointed: the model so far is saved, results.json says "interrupted",
+    and the exit status tells a calling script."""
+    import signal
+
+    run = tmp_path / "Swing-v0_ppo_s0"
+    command = [sys.executable, str(ROOT / "train.py"), "--timesteps", "1000000", "--eval-freq", "0"]
+    command += ["--checkpoint-freq", "2048", "--runs", str(tmp_path)]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not (run / "checkpoints" / "latest").is_file() and process.poll() is None:
+            assert time.monotonic() < deadline, "no checkpoint within 120 s"
+            time.sleep(0.05)
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert process.returncode == 130, err[-2000:]
+    results = json.loads((run / "results.json").read_text())
+    assert results["status"] == "interrupted" and results["evaluation"] is None
+    assert 2048 <= results["timesteps"] < 1_000_000
+    checkpoint = int((run / "checkpoints" / "latest").read_text())
+    last = err.strip().splitlines()[-1]
+    assert last.startswith(f"training interrupted at step {results['timesteps']}; the model so far is {run}")
+    assert last.endswith(f"--resume continues it from its checkpoint at step {checkpoint}")
+    assert PPO.load(run / "connenv-Swing-v0.zip").num_timesteps == results["timesteps"]
 
 
 def test_train_table_evaluates_all_policies_on_the_same_episodes(ppo_run):
