@@ -12,7 +12,8 @@ a NaN reward or an infinite observation passed on to the learner:
 - ``terminated``, ``is_success``: a bool, a number or a 0-d array (TypeError); without ``is_success`` it is False;
 - ``observation``: real numbers, finite in float32, of the shape it had at construction (TypeError, ValueError).
 
-The vector env calls the task's methods row by row, with the same checks.
+The vector env calls the task's methods row by row, with the same checks. An answer is checked where the step
+uses it, after the step's physics: the error names the task's method, and the env's state is the new one.
 """
 
 from __future__ import annotations
