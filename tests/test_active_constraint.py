@@ -304,3 +304,25 @@ def test_explicit_euler_on_the_held_swing_trips_the_energy_check():
     with pytest.raises(StepperError, match=r"Euler\(substeps=1\) diverged: \|energy error\|"):
         for _ in range(20):
             env.step(np.array([1.0]))
+
+
+class TurnTo(StopAtQuarterTurn):
+    """StopAtQuarterTurn that also judges: a success where the body turned to π/2 within 0.05 rad and stopped
+    there (|p| < 0.1)."""
+
+    def is_success(self, state):
+        return self.terminated(state) and abs(state["p"][0]) < 0.1
+
+
+@pytest.mark.parametrize("task", [StopAtQuarterTurn(), TurnTo()], ids=["without is_success", "with is_success"])
+def test_is_success_is_the_tasks_own_and_false_without_it_apart_from_the_end(task):
+    """info["is_success"] is task.is_success(state) where the task has it, else False (an end is not always a
+    success), while task.terminated ends the episode either way: a jump of the rotor by Δu = −π turns the body
+    from rest at θ = π/2 − J π/(I + J) by −J Δu/(I + J), to θ = π/2, and leaves it there, at p = 0."""
+    env = ActiveConstraintEnv(rotor_system(), -math.pi, math.pi, task=task)
+    theta0 = math.pi / 2 - J * math.pi / (I + J)
+    _, info = env.reset(options={"state": {"q": [theta0], "p": [0.0], "u": [0.0]}})
+    assert info["is_success"] is False
+    _, _, terminated, _, info = env.step(np.array([-1.0]))
+    assert terminated and abs(info["state"]["q"][0] - math.pi / 2) < 1e-9
+    assert info["is_success"] is isinstance(task, TurnTo)

@@ -409,17 +409,87 @@ def test_a_closed_form_exact_segment_is_the_default_step_and_the_flow_magnus_int
 
 
 @pytest.mark.parametrize(
-    ("exact_segment", "words"),
+    ("exact_segment", "error", "words"),
     [
-        (lambda g, s, s_dot, tau: np.zeros(3), "of shape (2,)"),  # SE2's size, not R2's
-        (lambda g, s, s_dot, tau: g + s_dot[0] / s_dot[1], "finite"),  # NaN at ṡ = 0
-        (lambda g, s, s_dot, tau: g + np.tanh(s_dot) * np.inf, "finite"),  # ±inf once ṡ ≠ 0
-        (lambda g, s, s_dot, tau: "moved", "of shape (2,)"),
+        (lambda g, s, s_dot, tau: np.zeros(3), ValueError, "of shape (2,)"),  # SE2's size, not R2's
+        (lambda g, s, s_dot, tau: g + s_dot[0] / s_dot[1], ValueError, "finite"),  # NaN at ṡ = 0
+        (lambda g, s, s_dot, tau: g + np.tanh(s_dot) * np.inf, ValueError, "finite"),  # ±inf once ṡ ≠ 0
+        (lambda g, s, s_dot, tau: "moved", TypeError, "of shape (2,)"),  # no numbers at all
     ],
 )
-def test_an_exact_segment_that_does_not_return_a_finite_g_of_its_group_is_refused_at_make(exact_segment, words):
+def test_an_exact_segment_that_does_not_return_a_finite_g_of_its_group_is_refused_at_make(exact_segment, error, words):
     """The user's exact_segment is tried at construction (g = identity, the start shape, τ = dt, ṡ = 0 and ṡ at top
-    speed): a wrong shape or a non-finite g is a ValueError naming exact_segment, before any step uses it."""
+    speed): a wrong shape or a non-finite g is a ValueError naming exact_segment (a TypeError where it returns no
+    numbers), before any step uses it."""
     kwargs = {"group": "R2", "connection": lambda s: np.eye(2), "shape_low": [-1.0, -1.0], "shape_high": [1.0, 1.0]}
-    with np.errstate(all="ignore"), pytest.raises(ValueError, match=r"exact_segment=.*" + re.escape(words)):
+    with np.errstate(all="ignore"), pytest.raises(error, match=r"exact_segment=.*" + re.escape(words)):
         gym.make(ID, exact_segment=exact_segment, **kwargs)
+
+
+@pytest.mark.parametrize("frame", ["body", "space"])
+def test_magnus_meets_its_tolerance_on_a_long_segment_of_a_curved_connection(frame):
+    """Over 4 s of a strongly curved connection (twisted at 6 s) the estimate from one and two substeps is not yet
+    in its asymptotic regime, and the substeps it chose missed atol by orders of magnitude on SO(3); checked against
+    twice as many, the step meets its atol of 1e-10 (against DOP853 at rtol 1e-13 on Ṙ = R ξ^ or ξ^ R)."""
+    system = Connection("SO3", frame, lambda s: twisted(6.0 * np.asarray(s)))
+    s0, s_dot, tau, R0 = np.array([0.3, -0.5]), np.array([-0.4, 0.6]), 4.0, np.eye(3).ravel()
+    reference = solve_ivp(lambda t, y: system.vector_field(y, s0 + t * s_dot, s_dot), (0.0, tau), R0, method="DOP853",
+                          rtol=1e-13, atol=1e-15).y[:, -1]  # fmt: skip
+    assert np.max(np.abs(make_stepper("magnus")(system, R0, s0, s_dot, tau) - reference)) <= 1e-10
+
+
+class Reach:
+    """A task: end when s reaches 0.5; a success only where g has turned by less than a quarter turn then."""
+
+    def __init__(self, judge=True):
+        if judge:
+            self.is_success = lambda state: abs(math.atan2(state["g"][1, 0], state["g"][0, 0])) < math.pi / 4
+
+    def reset(self, np_random):
+        return {"s": [0.0]}
+
+    def reward(self, state, next_state):
+        return 0.0
+
+    def terminated(self, state):
+        return state["s"][0] >= 0.5
+
+
+@pytest.mark.parametrize(("turn", "judge", "success"), [(1.0, True, True), (3.0, True, False), (1.0, False, False)])
+def test_is_success_is_the_tasks_own_and_false_without_it_apart_from_the_end(turn, judge, success):
+    """info["is_success"] is in every info (agents.evaluate reads it): task.is_success(state) where the task has it,
+    else False, while task.terminated ends the episode either way; alone and in the vector env."""
+    kwargs = {"group": "SO2", "connection": np.array([[turn]]), "shape_low": [-1.0], "shape_high": [1.0],
+              "task": Reach(judge)}  # fmt: skip
+    env = gym.make(ID, **kwargs)
+    _, info = env.reset(seed=0)
+    assert info["is_success"] is judge  # at g = identity: no turn yet, a success where the task judges it
+    for _ in range(5):
+        _, _, terminated, _, info = env.step(np.array([1.0], np.float32))
+    assert terminated and info["is_success"] == success
+    vector = gym.make_vec(ID, 2, vectorization_mode="vector_entry_point", **kwargs)
+    vector.reset(seed=0)
+    for _ in range(5):
+        _, _, terminated, _, info = vector.step(np.ones((2, 1), np.float32))
+    assert terminated.all() and info["is_success"].tolist() == [success, success]
+
+
+def test_evaluate_runs_an_episode_of_the_beanie_with_a_random_policy():
+    """Issue 30: agents.evaluate on Connection-v0 (examples.beanie(), random policy) raised KeyError 'is_success'."""
+    from agents.evaluate import RandomPolicy, run_episode
+    from connenv import examples
+
+    env = gym.make(ID, **examples.beanie(), max_episode_steps=20)
+    episode = run_episode(env, RandomPolicy(env.action_space, 0), seed=0)
+    assert episode.length == 20 and episode.success is False
+
+
+@pytest.mark.parametrize("env_id", ["connenv/ActiveConstraint-v0", "connenv/Connection-v0"])
+def test_the_builders_docstrings_state_the_registrations_time_limit(env_id):
+    """Connection-v0's docstring said its registration had no time limit; the registration has 1000 steps, as
+    ActiveConstraint-v0's, and both docstrings say so."""
+    from connenv import examples
+
+    env = gym.make(env_id, **examples.MAKE_KWARGS[env_id]())
+    limit = gym.spec(env_id).max_episode_steps
+    assert limit == 1000 and f"truncates after {limit} steps" in " ".join(type(env.unwrapped).__doc__.split())

@@ -187,6 +187,21 @@ def test_each_row_of_the_vector_env_is_the_single_env_over_episodes_and_autorese
     assert terminated > 0 or case.env_id not in short_episodes
 
 
+def test_every_info_has_is_success_a_bool_alone_and_one_per_row(case):
+    """info["is_success"] is part of every env's info contract (agents.evaluate and SB3's success rate read it):
+    a bool after reset and after every step of the single env, and a bool per row in the vector env's info."""
+    env = case.make()
+    _, info = env.reset(seed=0, options=case.options)
+    env.action_space.seed(0)
+    infos = [info] + [env.step(env.action_space.sample())[4] for _ in range(3)]
+    assert all(isinstance(info["is_success"], (bool, np.bool_)) for info in infos)
+    vector = gym.make_vec(case.env_id, 2, vectorization_mode="vector_entry_point", **case.kwargs)
+    vector.action_space.seed(0)
+    for vector_info in (vector.reset(seed=0, options=case.options)[1], vector.step(vector.action_space.sample())[4]):
+        success = np.asarray(vector_info["is_success"])
+        assert success.dtype == bool and success.shape == (2,)
+
+
 def test_rgb_array_render_is_an_image(case):
     """At the start and after a few steps: an (H, W, 3) uint8 image with something drawn on its background."""
     env = case.make(render_mode="rgb_array")

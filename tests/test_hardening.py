@@ -10,7 +10,10 @@ import importlib.metadata
 import pickle
 import re
 import sys
+import time
+import warnings
 from pathlib import Path
+from typing import NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -20,6 +23,7 @@ from packaging.utils import canonicalize_name
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import examples
+from connenv.core import StepperError
 from connenv.core.validation import DT_MIN
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -315,3 +319,276 @@ def test_a_ball_started_at_its_target_reports_a_finite_path_ratio():
     env = gym.make("connenv/RollingBall-v0")
     _, info = env.reset(seed=0, options={"target": np.eye(3)})
     assert info["distance"] == 0.0 and info["path_ratio"] == 1.0
+
+
+# -- issue 30 §2: the builders under hostile systems -----------------------------------------------------------
+
+
+class MetricSystem:
+    """A system for ActiveConstraint-v0 given by plain functions (n = m = 1): metric(q, u) -> (G11, G12, G22),
+    potential(q, u), and optionally vector_field(y, u, u̇) and exact_segment(y, u, u̇, τ). By default a unit mass
+    and a free rotor, G = I, V = 0."""
+
+    n = m = 1
+
+    def __init__(self, metric=None, potential=None, **methods):
+        self._metric, self._potential = metric, potential
+        for name, method in methods.items():
+            setattr(self, name, method)
+
+    def metric(self, q, u):
+        if self._metric is not None:
+            return self._metric(q, u)
+        one = np.ones(np.shape(q)[:-1] + (1, 1))
+        return one, 0.0 * one, one
+
+    def potential(self, q, u):
+        return 0.0 * np.asarray(q)[..., 0] if self._potential is None else self._potential(q, u)
+
+
+class Task:
+    """A task for either builder whose methods answer what they are given (a value, or a function of the state)."""
+
+    def __init__(self, reward=0.0, observation=None, reset=None):
+        self._reward, self._reset = reward, reset or {}
+        if observation is not None:
+            self.observation = observation
+
+    def reset(self, np_random):
+        return self._reset
+
+    def reward(self, state, next_state):
+        return self._reward
+
+    def terminated(self, state):
+        return False
+
+
+def ones(q):
+    return np.ones(np.shape(q)[:-1] + (1, 1))
+
+
+def lagrangian(kinetic, potential):
+    """ActiveConstraint-v0's kwargs for T, V in (q, u) through from_lagrangian's system."""
+    import sympy as sp
+
+    from connenv.core.lagrangian import LagrangianSystem
+
+    q, u = sp.symbols("q u")
+    return {"system": LagrangianSystem(kinetic, potential, [q], [u])}
+
+
+def q_dot_u_dot():
+    import sympy as sp
+
+    return sp.symbols("q_dot u_dot")
+
+
+AC = {"u_low": -1.0, "u_high": 1.0}
+SO2 = {"group": "SO2", "shape_low": [-1.0], "shape_high": [1.0]}
+IDENTITY = {**SO2, "connection": lambda s: np.eye(1)}
+
+
+class Hostile(NamedTuple):
+    label: str
+    kwargs: object  # () -> the builder's kwargs ("system" in them: ActiveConstraint-v0, else Connection-v0)
+    error: type
+    words: str  # a regex the message matches: it names the argument, or the user's function, and what is expected
+    steps: int = 0  # 0: refused at construction; else raised within that many steps (the single and vector env)
+    physics: bool = False  # raised by the step's physics, before the state changes (a task's answer comes after)
+
+
+HOSTILE = [
+    # ActiveConstraint-v0: the system's functions, tried at construction
+    Hostile("metric raises", lambda: {"system": MetricSystem(lambda q, u: 1 / 0), **AC}, ValueError,
+            r"system\.metric\(q, u\) at a batch of 12 points raised ZeroDivisionError"),
+    Hostile("metric returns None", lambda: {"system": MetricSystem(lambda q, u: None), **AC}, TypeError,
+            r"system\.metric\(q, u\) .* returned None; expected \(G11, G12, G22\)"),
+    Hostile("metric complex", lambda: {"system": MetricSystem(lambda q, u: ((1 + 1j) * ones(q), 0 * ones(q), ones(q))),
+            **AC}, ValueError, r"system\.metric\(q, u\) .* block G11, returned complex values"),
+    Hostile("metric NaN", lambda: {"system": MetricSystem(lambda q, u: (np.nan * ones(q), 0 * ones(q), ones(q))), **AC},
+            ValueError, r"system\.metric\(q, u\) .* block G11, returned non-finite values"),
+    Hostile("potential None", lambda: {"system": type("S", (MetricSystem,), {"potential": None})(), **AC},
+            ValueError, r"system\.potential=None is not callable"),
+    Hostile("potential raises", lambda: {"system": MetricSystem(potential=lambda q, u: 1 / 0), **AC}, ValueError,
+            r"system\.potential\(q, u\) .* raised ZeroDivisionError"),
+    Hostile("potential None returned", lambda: {"system": MetricSystem(potential=lambda q, u: None), **AC}, TypeError,
+            r"system\.potential\(q, u\) .* returned None; expected V"),
+    Hostile("vector_field None", lambda: {"system": MetricSystem(vector_field=lambda y, u, u_dot: None), **AC},
+            TypeError, r"system\.vector_field\(y, u, u_dot\) .* returned None; expected real finite arrays of y's"),
+    Hostile("vector_field shape", lambda: {"system": MetricSystem(vector_field=lambda y, u, u_dot: np.zeros(5)), **AC},
+            ValueError, r"system\.vector_field\(y, u, u_dot\) .* returned shape \(5,\); expected .* shape \(2,\)"),
+    Hostile("Lagrangian zoo", lambda: lagrangian(q_dot_u_dot()[0] ** 2 / 2 + q_dot_u_dot()[1] ** 2 / 2, "zoo"),
+            ValueError, r"potential=zoo holds zoo, oo or nan: it must be finite"),
+    Hostile("Lagrangian None", lambda: lagrangian(q_dot_u_dot()[0] ** 2 / 2 + q_dot_u_dot()[1] ** 2 / 2, None),
+            TypeError, r"potential=None must be a sympy expression"),
+    Hostile("Lagrangian complex", lambda: lagrangian(q_dot_u_dot()[0] ** 2 / 2 + q_dot_u_dot()[1] ** 2 / 2, "I*q"),
+            ValueError, r"potential=I\*q holds the imaginary unit I"),
+    Hostile("control speed 1e300", lambda: {"system": MetricSystem(), **AC, "max_control_speed": 1e300}, ValueError,
+            r"max_control_speed=1e\+300 is out of range: must be finite and in \(0.0, 1000.0\]"),
+    Hostile("ac task=3", lambda: {"system": MetricSystem(), **AC, "task": 3}, TypeError,
+            r"task=3 must be an object with methods reset\(np_random\) -> state dict, reward"),
+    # ActiveConstraint-v0: at a step
+    Hostile("ac exact_segment shape", lambda: {"system": MetricSystem(vector_field=lambda y, u, u_dot: 0 * y,
+            exact_segment=lambda y, u, u_dot, tau: np.zeros(5)), **AC}, ValueError,
+            r"MetricSystem\.exact_segment returned \(5,\) .* the state's shape", 1, True),
+    Hostile("ac reward NaN", lambda: {"system": MetricSystem(), **AC, "task": Task(reward=np.nan)}, ValueError,
+            r"task\.reward\(state, next_state\) returned nan; expected a finite number", 1),
+    Hostile("ac reward None", lambda: {"system": MetricSystem(), **AC, "task": Task(reward=None)}, TypeError,
+            r"task\.reward\(state, next_state\) returned None; expected a real number", 1),
+    Hostile("ac observation inf", lambda: {"system": MetricSystem(), **AC,
+            "task": Task(observation=lambda s: [np.inf if s["t"] > 0 else 0.0])}, ValueError,
+            r"task\.observation\(state\) returned non-finite values", 1),
+    Hostile("ac observation beyond float32", lambda: {"system": MetricSystem(), **AC,
+            "task": Task(observation=lambda s: [1e300 * s["t"]])}, ValueError,
+            r"task\.observation\(state\) returned .* beyond float32's range", 1),
+    Hostile("ac state beyond float32", lambda: {**lagrangian("1e-40 * q_dot**2 / 2 + u_dot**2 / 2", 0), **AC,
+            "task": Task(reset={"p": [1.0]})}, StepperError, r"\(q, p\) = .* has left float32's range", 1, True),
+    # Connection-v0: the connection and exact_segment, tried at construction
+    Hostile("connection raises", lambda: {**SO2, "connection": lambda s: 1 / 0}, ValueError,
+            r"connection\(s\) at s=\[0\.\] raised ZeroDivisionError"),
+    Hostile("connection None", lambda: {**SO2, "connection": lambda s: None}, TypeError,
+            r"connection\(s\) at s=\[0\.\] returned None; expected A\(s\), finite real numbers of shape \(1, 1\)"),
+    Hostile("connection complex", lambda: {**SO2, "connection": lambda s: np.array([[1j]])}, ValueError,
+            r"connection\(s\) at s=\[0\.\] returned complex values"),
+    Hostile("constant A complex", lambda: {**SO2, "connection": np.array([[1 + 1j]])}, ValueError,
+            r"connection=array\(\[\[1\.\+1\.j\]\]\) is complex"),
+    Hostile("vectorized, connection is not", lambda: {**SO2, "connection": lambda s: np.array([[float(s[0])]]),
+            "vectorized": True}, ValueError, r"connection\(s\) at a batch of 2 shapes .* \(vectorized=True\) raised"),
+    Hostile("vectorized not a bool", lambda: {**IDENTITY, "vectorized": "yes"}, TypeError,
+            r"vectorized='yes' must be True or False"),
+    Hostile("exact_segment raises", lambda: {**IDENTITY, "exact_segment": lambda g, s, s_dot, tau: 1 / 0},
+            ValueError, r"exact_segment=.* raised ZeroDivisionError"),
+    Hostile("shape speed 1e300", lambda: {**IDENTITY, "max_shape_speed": 1e300}, ValueError,
+            r"max_shape_speed=1e\+300 is out of range: must be finite and in \(0.0, 1000.0\]"),
+    Hostile("cn task=3", lambda: {**IDENTITY, "task": 3}, TypeError,
+            r"task=3 must be an object with methods reset\(np_random\) -> state dict, reward"),
+    Hostile("cn task observation_space", lambda: {**IDENTITY, "task": type("T", (Task,), {"observation_space": 3})()},
+            TypeError, r"task\.observation_space=3 must be a gymnasium\.spaces\.Space"),
+    # Connection-v0: at a step
+    Hostile("exact_segment corrupts g", lambda: {**IDENTITY, "exact_segment": lambda g, s, s_dot, tau: g if np.all(
+            s[..., 0] < 0.05) else np.zeros(5)}, ValueError, r"exact_segment returned \(5,\) .* the state's shape", 2,
+            True),
+    Hostile("cn reward inf", lambda: {**IDENTITY, "task": Task(reward=np.inf)}, ValueError,
+            r"task\.reward\(state, next_state\) returned inf", 1),
+    Hostile("cn observation inf", lambda: {**IDENTITY, "task": Task(observation=lambda s: [np.inf if s["t"] else 0])},
+            ValueError, r"task\.observation\(state\) returned non-finite values", 1),
+    Hostile("cn task reset no dict", lambda: {**IDENTITY, "task": Task(reset=3)}, ValueError,
+            r"the state of task\.reset\(np_random\)=3 must be a mapping", 1),
+    Hostile("g beyond float32", lambda: {"group": "R2", "connection": lambda s: np.full((2, 1), 1e300),
+            "shape_low": [-1.0], "shape_high": [1.0]}, StepperError, r"g = .* has left float32's range", 1, True),
+]  # fmt: skip
+
+
+def build(kwargs, vector=False):
+    env_id = "connenv/ActiveConstraint-v0" if "system" in kwargs else "connenv/Connection-v0"
+    if vector:
+        return gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", **kwargs)
+    return gym.make(env_id, **kwargs)
+
+
+@pytest.mark.parametrize("case", HOSTILE, ids=[case.label for case in HOSTILE])
+def test_a_hostile_system_or_task_is_a_clear_error_at_construction_or_at_its_step(case):
+    """Each case of issue 30's list, and its kin: a user's metric, potential, vector_field, connection, exact_segment
+    or task that raises, returns no real numbers, complex or non-finite ones or the wrong shape, and kwargs whose
+    state the float32 observation cannot hold. What construction can know is refused there, naming the argument;
+    the rest raises at the step that meets it, in the single env and in the vector env, naming the function, and
+    a step refused so leaves the single env's state as it was."""
+    with np.errstate(all="ignore"):
+        if not case.steps:
+            with pytest.raises(case.error, match=case.words):
+                build(case.kwargs())
+            return
+        for vector in (False, True):
+            env = build(case.kwargs(), vector)
+            with pytest.raises(case.error, match=case.words):
+                env.reset(seed=0)
+                action = np.ones(env.action_space.shape, np.float32)
+                for _ in range(case.steps):
+                    before = copy.deepcopy(env.unwrapped.state) if not vector else None
+                    env.step(action)
+            if case.physics and not vector:  # the step did not happen
+                for key, value in before.fields().items():
+                    assert np.array_equal(getattr(env.unwrapped.state, key), value)
+
+
+def singular_metric(q, u):
+    """G11 = 1 − q²: positive definite for |q| < 1 only, singular at q = ±1."""
+    return (1.0 - np.asarray(q)[..., :1] ** 2)[..., None], 0.0 * ones(q), ones(q)
+
+
+def test_a_step_that_stalls_on_a_numerical_gradient_raises_within_seconds():
+    """Issue 30's stall: G11 = 1 − q² and V = −q², from q = 0.5 at rest. The potential pushes q outward, and on the
+    level E = H the speed q̇ = √(2 (E + q²)/(1 − q²)) diverges at q = 1, reached in finite time: there is no flow
+    past it. DOP853 on the system's numerical gradient (no vector_field of its own) then shrinks its step without
+    end (the gradient's stencil reaches past q = 1); the budget of evaluations per segment of a numerical field
+    makes that a StepperError within seconds, where it ran for minutes. The steps before move q outward, finite."""
+    from connenv import ActiveConstraintEnv
+
+    env = ActiveConstraintEnv(MetricSystem(singular_metric, lambda q, u: -np.asarray(q)[..., 0] ** 2), -1.0, 1.0)
+    env.reset(options={"state": {"q": [0.5]}})
+    trace, start = [], time.monotonic()
+    with pytest.raises(StepperError, match=r"1000 evaluations of MetricField's vector field brought it to s ="):
+        for _ in range(30):
+            trace.append(env.step(np.array([0.0]))[4]["state"]["q"][0])
+    assert time.monotonic() - start < 30.0
+    assert 0.5 < trace[0] and np.all(np.diff(trace) > 0) and trace[-1] < 1.0 and len(trace) >= 10
+
+
+def test_every_adaptive_stepper_keeps_a_systems_own_evaluation_budget():
+    """A system may set max_evaluations, its budget per segment (MetricField does): scipy's methods and the vector
+    env's per-row DOP853 stop there with a StepperError, as they do at MAX_EVALUATIONS for any other system."""
+    from connenv.core.batched import EmbeddedRK
+    from connenv.core.steppers import MAX_EVALUATIONS, Scipy, evaluation_budget
+
+    class Stiff:
+        max_evaluations = 50
+
+        def vector_field(self, y, u, u_dot):  # ẏ = −10⁴ y: DOP853 takes hundreds of evaluations over 1 s
+            return -1e4 * y
+
+    assert evaluation_budget(Stiff()) == 50 and evaluation_budget(object()) == MAX_EVALUATIONS
+    for stepper, y in ((Scipy("DOP853"), np.ones(2)), (Scipy("LSODA"), np.ones(2)), (EmbeddedRK(), np.ones((3, 2)))):
+        with pytest.raises(StepperError, match="cannot meet its tolerance: 50 evaluations"):
+            stepper(Stiff(), y, np.zeros(1), np.zeros(1), 1.0)
+
+
+def test_a_connection_with_a_pole_on_the_shapes_path_raises_instead_of_returning_a_finite_wrong_g():
+    """Issue 30's pole: on SO2, A(s) = 1/(1 − s) and ṡ = 1 give θ = ln(1 − s), which diverges at s = 1. Nine steps
+    of 0.1 follow the closed form; the tenth ends on the pole, where every quadrature is finite (−10.78 was
+    returned) but more substeps keep moving it: the Lie-group step checks its substeps against twice as many and
+    raises StepperError, alone and in the vector env."""
+    from connenv import ConnectionEnv
+
+    env = ConnectionEnv("SO2", lambda s: np.array([[1.0 / (1.0 - s[0])]]), [-2.0], [2.0])
+    env.reset(seed=0)
+    for k in range(1, 10):
+        env.step(np.array([1.0]))
+        assert env.state.g[0] == pytest.approx(np.log(1.0 - 0.1 * k), abs=1e-9)
+    with pytest.raises(StepperError, match=r"cannot meet atol: with \d+ substeps .* a pole on the shape's path"):
+        env.step(np.array([1.0]))
+    vector = gym.make_vec("connenv/Connection-v0", 2, vectorization_mode="vector_entry_point", group="SO2",
+                          connection=lambda s: np.array([[1.0 / (1.0 - s[0])]]), shape_low=[-2.0], shape_high=[2.0])
+    vector.reset(seed=0, options={"state": {"s": [0.9]}})
+    with pytest.raises(StepperError, match="cannot meet atol"):
+        vector.step(np.ones((2, 1)))
+
+
+@pytest.mark.parametrize(
+    ("env_id", "state", "key"),
+    [
+        ("connenv/ActiveConstraint-v0", {"q": np.array([0.1 + 2j])}, "q"),
+        ("connenv/ActiveConstraint-v0", {"p": np.array([0.1 + 2j])}, "p"),
+        ("connenv/ActiveConstraint-v0", {"u": np.complex128(1.7)}, "u"),
+        ("connenv/Connection-v0", {"s": np.array([2 + 3j])}, "s"),
+        ("connenv/Connection-v0", {"g": np.eye(2) * (1 + 1e-3j)}, "g"),
+    ],
+)
+def test_a_complex_array_in_a_builders_reset_state_is_refused_not_made_real(env_id, state, key):
+    """numpy makes a complex array real with only a ComplexWarning; the builders refuse it as they refuse a complex
+    list, naming the key."""
+    env = make(env_id)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=rf"(?s)state {key}=.* is complex; expected real numbers"):
+            env.reset(options={"state": state})

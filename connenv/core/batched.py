@@ -47,15 +47,16 @@ class EmbeddedRK:
         u = np.broadcast_to(u, (*lead, np.shape(u)[-1])).reshape(len(rows), -1)
         u_dot = np.broadcast_to(u_dot, u.shape[:-1] + (np.shape(u_dot)[-1],)).reshape(len(rows), -1)
 
-        evaluations = np.zeros(len(rows), int)  # per row, with Scipy's budget of MAX_EVALUATIONS per segment
+        evaluations = np.zeros(len(rows), int)  # per row, with Scipy's budget per segment (the system's, if it has one)
+        budget = getattr(system, "max_evaluations", MAX_EVALUATIONS)
 
         def rhs(s, states, idx):
             """ẏ at times s of the rows idx (a slice or an index array)."""
             evaluations[idx] += 1
-            if evaluations.max() > MAX_EVALUATIONS:
-                over = np.flatnonzero(evaluations > MAX_EVALUATIONS)
+            if evaluations.max() > budget:
+                over = np.flatnonzero(evaluations > budget)
                 raise StepperError(
-                    f"{self} cannot meet its tolerance: {MAX_EVALUATIONS} evaluations of the vector field brought "
+                    f"{self} cannot meet its tolerance: {budget} evaluations of the vector field brought "
                     f"rows {over.tolist()} to s = {np.atleast_1d(s)[0]:.9g} of segments of {tau[over].tolist()} s"
                 )
             u_rows, u_dot_rows = u[idx], u_dot[idx]

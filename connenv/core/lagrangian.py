@@ -32,7 +32,7 @@ class LagrangianSystem:
         q, u = _symbols("q", q), _symbols("u", u)
         if set(q) & set(u):
             raise ValueError(f"q={q} and u={u} share the symbol(s) {sorted(map(str, set(q) & set(u)))}")
-        kinetic, potential = sp.sympify(kinetic), sp.sympify(potential)
+        kinetic, potential = _expression("kinetic", kinetic), _expression("potential", potential)
         q_dot, u_dot = _velocities(q), _velocities(u)
         coordinates = set(q) | set(u)
         kinetic = _check_symbols("kinetic", kinetic, coordinates | set(q_dot) | set(u_dot), q, u)
@@ -109,6 +109,27 @@ def _symbols(name, symbols):
     if len(set(symbols)) != len(symbols):
         raise ValueError(f"{name}={symbols!r} repeats a symbol")
     return symbols
+
+
+NOT_FINITE = (sp.S.ComplexInfinity, sp.S.Infinity, sp.S.NegativeInfinity, sp.S.NaN)
+
+
+def _expression(name, value):
+    """value as a real, finite sympy expression (a number, a string sympy parses, an expression), else TypeError
+    (nothing sympy reads as an expression) or ValueError (zoo, ±oo, nan or I in it), naming it: T and V are real
+    functions, finite on the configuration space."""
+    expected = f"{name}={value!r} must be a sympy expression (or a number) in q, u and their velocities"
+    try:
+        expression = sp.sympify(value, strict=not isinstance(value, str))
+    except (sp.SympifyError, TypeError, ValueError, SyntaxError) as error:
+        raise TypeError(expected) from error
+    if not isinstance(expression, sp.Expr) or expression.is_Matrix:
+        raise TypeError(expected)
+    if expression.has(*NOT_FINITE):
+        raise ValueError(f"{name}={expression} holds zoo, oo or nan: it must be finite")
+    if expression.has(sp.I):
+        raise ValueError(f"{name}={expression} holds the imaginary unit I: it must be real")
+    return expression
 
 
 def _velocities(symbols):

@@ -28,9 +28,10 @@ group to rounding. Where ξ is the same at every node (A constant along the path
 exponential, the exact flow.
 
 By default each segment's substeps come from a Richardson estimate (two extra flows per segment), which serves any
-connection. A caller that knows every segment it can ask for (a box of shapes and a step dt) fixes the rule once
-instead, with `fixed_rule`: the fewest nodes, pieces × Gauss points, that meet the tolerance on its worst segments;
-on SE(2) in the body frame `se2_body_flow` then takes one state on Python floats and a batch in blocks of rows.
+connection; where it asks for more substeps, their result is checked against twice as many. A caller that knows
+every segment it can ask for (a box of shapes and a step dt) fixes the rule once instead, with `fixed_rule`: the
+fewest nodes, pieces × Gauss points, that meet the tolerance on its worst segments; on SE(2) in the body frame
+`se2_body_flow` then takes one state on Python floats and a batch in blocks of rows.
 """
 
 from __future__ import annotations
@@ -501,9 +502,13 @@ class Magnus:
     Substeps: each segment is stepped with one and with two substeps; their difference d (max-norm of the
     coordinates of g) estimates the error of the two-step result as d/(2^order − 1) (Richardson). Where that is
     ≤ atol the two-step result is taken; elsewhere the segment is stepped again with
-    n = ⌈1.2 · 2 (d/((2^order − 1) atol))^(1/order)⌉ substeps, the count that brings the error to atol. Where ξ is the
-    same at every node (A constant along the path) the step is one exponential, the exact flow. Rows of a batch
-    choose their substeps alone.
+    n = ⌈1.2 · 2 (d/((2^order − 1) atol))^(1/order)⌉ substeps, the count that brings the error to atol, and checked
+    against 2n substeps: while their difference (times 2^order/(2^order − 1), Richardson's estimate of the error
+    with n) is past atol, n doubles (StepperError past MAX_SUBSTEPS). The estimate from one and two substeps holds
+    where the error already falls as h^order; on a long segment of a curved connection it may not yet, and where A
+    has a pole on the shape's path it never does (the flow diverges while every quadrature of it is finite). Where
+    ξ is the same at every node (A constant along the path) the step is one exponential, the exact flow. Rows of a
+    batch choose their substeps alone.
 
     With ``pieces`` given, every segment is stepped once with that many pieces (substeps on SO3), without the
     estimate: for a caller that knows its admissible segments and has chosen the rule for them once (`fixed_rule`),
@@ -569,7 +574,7 @@ class Magnus:
                 return _finite(np.array(exact), self)
             if error <= self.atol:
                 return _finite(np.array(two), self)
-            return _finite(np.array(flow(g, u, u_dot, tau, self._substeps(error, order))[0]), self)
+            return _finite(np.array(self._checked(flow, g, u, u_dot, tau, self._substeps(error, order), order)), self)
         error = np.max(np.abs(np.subtract(one, two)), axis=0) / (2**order - 1)
         out = np.stack(two, -1)
         if np.any(constant):
@@ -578,8 +583,46 @@ class Magnus:
         if rough.size:
             g_rows, tau_rows = tuple(c[rough] for c in g), tau[rough] if np.ndim(tau) else tau
             counts = self._substeps(error[rough], order)
-            out[rough] = np.stack(flow(g_rows, u[rough], u_dot[rough], tau_rows, counts)[0], -1)
+            out[rough] = np.stack(self._checked(flow, g_rows, u[rough], u_dot[rough], tau_rows, counts, order), -1)
         return _finite(out, self)
+
+    def _checked(self, flow, g, s, s_dot, tau, n, order):
+        """flow's g after n substeps, checked against 2n: while |g(2n) − g(n)| 2^order/(2^order − 1), the
+        (Richardson) estimate of g(n)'s error, is past atol, n doubles; past MAX_SUBSTEPS, StepperError. The
+        estimate from one and two substeps that chose n assumes that the error already falls as h^order, which it
+        may not yet on a long segment of a curved connection, and never does where A has a pole on the shape's
+        path: there g(n) is a finite, wrong number, and more substeps keep moving it. One state (n an int) or rows
+        (n one per row, each doubling alone); a result that passes is the one its n gave."""
+        scale = 2**order / (2**order - 1)
+        coarse = flow(g, s, s_dot, tau, n)[0]
+        if np.ndim(n) == 0:
+            while True:
+                fine = flow(g, s, s_dot, tau, 2 * n)[0]
+                error = max(abs(a - b) for a, b in zip(coarse, fine)) * scale
+                if error <= self.atol:
+                    return coarse
+                if 2 * n > MAX_SUBSTEPS:
+                    raise self._diverging(error, n)
+                n, coarse = 2 * n, fine
+        out, rows, n = [np.array(c) for c in coarse], np.arange(len(n)), np.array(n)
+        while rows.size:
+            rows_tau = tau[rows] if np.ndim(tau) else tau
+            fine = flow(tuple(c[rows] for c in g), s[rows], s_dot[rows], rows_tau, 2 * n[rows])[0]
+            error = np.max(np.abs(np.subtract([o[rows] for o in out], fine)), axis=0) * scale
+            failed = ~(error <= self.atol)
+            if np.any(2 * n[rows[failed]] > MAX_SUBSTEPS):
+                raise self._diverging(np.max(error[failed]), np.max(n[rows[failed]]))
+            for o, c in zip(out, fine):
+                o[rows[failed]] = c[failed]
+            n[rows[failed]] *= 2
+            rows = rows[failed]
+        return tuple(out)
+
+    def _diverging(self, error, n):
+        return StepperError(
+            f"{self} cannot meet atol: with {n} substeps the estimated error is {error:.3g}, and doubling them up to "
+            f"{MAX_SUBSTEPS} does not bring it down (a connection with a pole on the shape's path?)"
+        )
 
     def _fixed(self, system, y, u, u_dot, tau):
         """One flow of ``pieces`` pieces: floats for one state, arrays over rows for a batch."""

@@ -308,29 +308,37 @@ def _tableau_rows():
 _DOP853_ROWS, _DOP853_B = _tableau_rows()
 
 
-MAX_EVALUATIONS = 100_000  # of the vector field per segment: past it an adaptive stepper has failed (about 1 s)
+MAX_EVALUATIONS = 100_000  # of a closed-form vector field per segment: past it an adaptive stepper has failed
+
+
+def evaluation_budget(system) -> int:
+    """The evaluations of the system's vector field an adaptive stepper may spend on one segment: the system's own
+    ``max_evaluations`` if it sets one, else MAX_EVALUATIONS. A system whose vector field is dear (a numerical
+    gradient: connenv.envs.active_constraint's MetricField) sets a smaller budget, so that a step that cannot
+    succeed ends as soon as on a closed-form field, and a stall is an error rather than minutes of work."""
+    return getattr(system, "max_evaluations", MAX_EVALUATIONS)
 
 
 @dataclass(frozen=True)
 class Scipy:
     """One of scipy.integrate.solve_ivp's methods (DOP853, RK45, LSODA, Radau), adaptive. It raises StepperError
-    when scipy gives up (a step below the spacing of floats) or after MAX_EVALUATIONS evaluations of the vector
-    field in one segment, which a segment needing ever smaller steps reaches."""
+    when scipy gives up (a step below the spacing of floats) or after the system's evaluation budget
+    (`evaluation_budget`) of the vector field in one segment, which a segment needing ever smaller steps reaches."""
 
     method: str = "DOP853"
     rtol: float = 1e-10
     atol: float = 1e-12
 
     def __call__(self, system, y, u, u_dot, tau):
-        shape, evaluations = np.shape(y), 0
+        shape, evaluations, budget = np.shape(y), 0, evaluation_budget(system)
 
         def rhs(s, flat):
             nonlocal evaluations
             evaluations += 1
-            if evaluations > MAX_EVALUATIONS:  # LSODA creeps on toward a singularity instead of failing
+            if evaluations > budget:  # LSODA creeps on toward a singularity instead of failing
                 raise StepperError(
-                    f"{self} cannot meet its tolerance: {MAX_EVALUATIONS} evaluations of the vector field brought "
-                    f"it to s = {s:.9g} of a segment of {tau} s"
+                    f"{self} cannot meet its tolerance: {budget} evaluations of {type(system).__name__}'s vector "
+                    f"field brought it to s = {s:.9g} of a segment of {tau} s"
                 )
             return _finite(system.vector_field(flat.reshape(shape), u + s * u_dot, u_dot).ravel(), self)
 
@@ -355,6 +363,8 @@ class Exact:
             return self.fallback(system, y, u, u_dot, tau)
         else:
             flow = system.exact_flow(y, u, tau)
+        if type(flow) is not np.ndarray or flow.dtype.kind != "f" or flow.shape != y.shape:
+            _wrong_flow(system, flow, y)
         if _all_finite(flow):  # the common case: no NaN (nor ±inf) anywhere
             return flow
         outside = np.isnan(flow).any(axis=-1)
@@ -365,6 +375,17 @@ class Exact:
             tau = tau if np.ndim(tau) == 0 else np.broadcast_to(tau, outside.shape)[outside]  # one per row
             flow[outside] = self.fallback(system, y[outside], u[outside], u_dot[outside], tau)
         return _finite(flow, self)
+
+
+def _wrong_flow(system, flow, y):
+    """ValueError for a closed-form flow (a user's exact_segment or exact_flow) that is not a real array of the
+    state's shape: written into the state, it would corrupt it."""
+    method = "exact_segment" if conforms(system, ExactSegment) else "exact_flow"
+    shape = np.shape(flow) if isinstance(flow, np.ndarray) else type(flow).__name__
+    raise ValueError(
+        f"{type(system).__name__}.{method} returned {shape} {_shown(flow)}; it must return the state after the "
+        f"segment, a real array of the state's shape {np.shape(y)}"
+    )
 
 
 SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
@@ -469,3 +490,27 @@ def _finite(y, stepper):
     if not (all(map(math.isfinite, y.ravel().tolist())) if y.size <= SMALL else np.isfinite(y).all()):
         raise StepperError(f"{stepper} produced a non-finite value {y}")
     return y
+
+
+FLOAT32_MAX = float(np.finfo(np.float32).max)  # observations are float32: a state beyond it is observed as ±inf
+
+
+def check_observable(name: str, value):
+    """StepperError if an entry of value (a state's array, one state or a batch) lies beyond ±FLOAT32_MAX, where the
+    float32 observation of a finite state would be ±inf. A few numbers are compared as Python floats."""
+    worst = max(map(abs, value.ravel().tolist()), default=0.0) if value.size <= SMALL else np.max(np.abs(value))
+    if not worst <= FLOAT32_MAX:
+        raise StepperError(
+            f"{name} = {_shown(value)} has left float32's range ±{FLOAT32_MAX:.4g}, in which it is observed"
+        )
+
+
+def _shown(value) -> str:
+    """value for a message, on one line: a few numbers as a list, a larger array as its shape and extremes."""
+    if not isinstance(value, np.ndarray):
+        return repr(value)
+    if value.size <= SMALL:
+        return repr(value.tolist())
+    if value.dtype.kind not in "biuf":
+        return f"array {value.shape} of {value.dtype}"
+    return f"array {value.shape} in [{np.min(value):.4g}, {np.max(value):.4g}]"

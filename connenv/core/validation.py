@@ -186,3 +186,51 @@ def check_rotation(name: str, value) -> np.ndarray:
             f"both must be within {ORTHONORMAL_TOL} of 0 and 1"
         )
     return R
+
+
+def is_complex(value) -> bool:
+    """Whether value is complex numbers (a complex scalar, array or sequence), which numpy would make real with only
+    a ComplexWarning."""
+    try:
+        return np.asarray(value).dtype.kind == "c"
+    except (TypeError, ValueError):  # a ragged sequence: not numbers at all, for the caller's own check
+        return False
+
+
+def check_not_complex(name: str, value):
+    """value, unless it is complex (ValueError naming it): before a cast to float, which would drop the imaginary
+    part."""
+    if is_complex(value):
+        raise ValueError(f"{name}={value!r} is complex; expected real numbers")
+    return value
+
+
+def check_returned(name: str, value, shape: tuple | None = None, expected: str = "") -> np.ndarray:
+    """What a user's function returned, as a float64 array: TypeError unless it is real numbers (None, a string,
+    an object), ValueError if it is complex, of another shape than ``shape`` (when given) or not finite. ``name``
+    says which function at which arguments, ``expected`` what it must return; both go into the message."""
+    try:
+        kind = np.asarray(value).dtype.kind
+    except (TypeError, ValueError):  # a ragged sequence
+        kind = "O"
+    if kind == "c":
+        raise ValueError(f"{name} returned complex values {value!r}; expected {expected or 'real numbers'}")
+    if kind not in "biuf":
+        raise TypeError(f"{name} returned {value!r}; expected {expected or 'real numbers'}")
+    array = np.asarray(value, dtype=float)
+    if shape is not None and array.shape != tuple(shape):
+        raise ValueError(f"{name} returned shape {array.shape}; expected {expected or f'shape {tuple(shape)}'}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} returned non-finite values {value!r}; expected {expected or 'finite numbers'}")
+    return array
+
+
+def probe(name: str, function, *args):
+    """function(*args) for a check at construction, or ValueError naming the function (``name``, with the
+    arguments) and what it raised: a user's function that fails on a valid input fails at construction, under its
+    own name, not inside a step."""
+    try:
+        return function(*args)
+    except Exception as error:  # any failure of a user's function is reported under its name
+        raise ValueError(f"{name} raised {type(error).__name__}: {error}") from error
+

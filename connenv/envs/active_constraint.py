@@ -10,22 +10,29 @@ from gymnasium import spaces
 from connenv.core.batched import batched
 from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.steppers import ExactFlow, ExactSegment, Scipy, make_stepper
+from connenv.core.steppers import MAX_EVALUATIONS, ExactFlow, ExactSegment, Scipy, check_observable, make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
     check_dt,
     check_keys,
+    check_not_complex,
     check_number,
+    check_returned,
     check_stepper_options,
     check_vector,
+    probe,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv, each_row
+from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.user_task import UserTask
 from connenv.envs.vector import TaskVectorEnv
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
 JUMP_STEPPER = Scipy("DOP853", rtol=1e-13, atol=1e-13)  # the jump flow over s ∈ [0, 1]
+NUMERICAL_EVALUATIONS = 1_000  # per segment, of a vector field that is a numerical gradient (MetricField, JumpFlow
+# without jump_field): each evaluation is a scipy.differentiate gradient, dozens of calls of the metric, so that a
+# step that cannot succeed fails within seconds, as one on a closed-form field does within MAX_EVALUATIONS
 
 CONTROLS = ("position", "velocity")
 
@@ -43,9 +50,11 @@ class ActiveConstraintState(State):
 
 @dataclass(frozen=True)
 class MetricField:
-    """A system given by its metric and potential alone, with connenv.core.mechanics' numerical vector field."""
+    """A system given by its metric and potential alone, with connenv.core.mechanics' numerical vector field, and
+    the adaptive stepper's budget of evaluations per segment for it (connenv.core.steppers.evaluation_budget)."""
 
     system: object
+    max_evaluations = NUMERICAL_EVALUATIONS
 
     @property
     def n(self):
@@ -62,6 +71,11 @@ class JumpFlow:
     ∂/∂q by scipy.differentiate. A stepper over the segment (u, Δu, 1) is then the jump."""
 
     system: object
+
+    @property
+    def max_evaluations(self):
+        """The stepper's budget per jump: a numerical field's, unless the system gives its jump_field."""
+        return MAX_EVALUATIONS if hasattr(self.system, "jump_field") else NUMERICAL_EVALUATIONS
 
     def vector_field(self, y, u, delta_u):
         if hasattr(self.system, "jump_field"):
@@ -119,26 +133,30 @@ class ActiveConstraintEnv(TaskEnv):
 
     ## Observation Space
 
-    Default: (q, p, u), `Box(-inf, inf, (2n + m,), float32)`. With a task that has `observation(state)`, its
-    value as float32 in an unbounded Box of its shape.
+    Default: (q, p, u), `Box(-inf, inf, (2n + m,), float32)`; a step that would take an entry beyond float32's
+    range (±3.4e38), which the observation would hold as ±inf, raises `connenv.core.StepperError`. With a task
+    that has `observation(state)`, its value as float32 (finite, of one shape) in its `observation_space` if it has
+    one, else in an unbounded Box of its shape.
 
     ## Rewards
 
-    Default 0. With `task`, `task.reward(state, next_state)` on the state dicts before and after the step.
+    Default 0. With `task`, `task.reward(state, next_state)` on the state dicts before and after the step: a finite
+    real number, else TypeError or ValueError naming it.
 
     ## Starting State
 
     Default q = 0, p = 0, u at the midpoint of finite bounds (0 on a coordinate with an infinite bound), t = 0.
     With `task`, `task.reset(np_random)` returns a state dict with any of q, p, u (the rest default).
     `reset(options={"state": {...}})` sets any of `q`, `p`, `u` exactly (arrays of n, n, m finite numbers; u
-    within its bounds; every entry within ±1e3, beyond which a user's system may outrun any stepper), else
-    ValueError. Finite bounds `u_low`, `u_high` lie within ±1e3 too.
+    within its bounds; every entry within ±1e3, beyond which a user's system may outrun any stepper; complex numbers
+    refused), else ValueError. Finite bounds `u_low`, `u_high` lie within ±1e3 too.
 
     ## Episode End
 
-    Default: never terminates. With `task`, terminated when `task.terminated(state)` (also
-    `info["is_success"]`). `gym.make("connenv/ActiveConstraint-v0", ...)` truncates after 1000 steps (the
-    registration's time limit; `max_episode_steps=` to change it).
+    Default: never terminates. With `task`, terminated when `task.terminated(state)`. `info["is_success"]` is
+    `task.is_success(state)` for a task that has it, else False (an end is not always a success).
+    `gym.make("connenv/ActiveConstraint-v0", ...)` truncates after 1000 steps (the registration's time limit;
+    `max_episode_steps=` to change it).
 
     ## Arguments
 
@@ -148,10 +166,10 @@ class ActiveConstraintEnv(TaskEnv):
     | u_low, u_high | required | numbers or m of them, u_low < u_high; ±inf allowed (velocity control) |
     | dt | 0.05 | [1e-12, 1] s |
     | control | by jump_class (above) | "position", "velocity" |
-    | max_control_speed | None | None or (0, ∞), per unit of u per second |
+    | max_control_speed | None | None or (0, 1e3], per unit of u per second |
     | integrator | below | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps / rtol, atol | | see `connenv.core.steppers` |
-    | task | None | an object with reset, reward, terminated and optionally observation (below) |
+    | task | None | an object with reset, reward, terminated and optionally observation, is_success (below) |
     | draw | None | `draw(state, canvas)`: draws a state dict on a `connenv.envs.rendering.Canvas` |
     | render_mode | None | "human", "rgb_array" |
 
@@ -162,17 +180,30 @@ class ActiveConstraintEnv(TaskEnv):
     count; `python -m connenv.bench generic` measures the candidates (evaluations of the vector field per step, time,
     error against DOP853 at 1e-13) on a swing and a bead on a bar, where DOP853 reaches round-off for the cost of
     RK4 with 4 to 8 substeps. A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or
-    an energy error (the change of E = ½ pᵀ A p + V over the segments where u is held) past 1e-2 (1 + |E|).
+    an energy error (the change of E = ½ pᵀ A p + V over the segments where u is held) past 1e-2 (1 + |E|), or a
+    segment that needs more than a budget of evaluations of the vector field (a stall: ever smaller steps). A
+    system without its own `vector_field` is stepped on a numerical gradient of H (scipy.differentiate, dozens of
+    calls of the metric per evaluation); its budget is 1000 evaluations per segment, against 100 000 for a
+    closed-form field, so that a step that cannot succeed (a metric turning singular ahead of the state) fails in
+    seconds. A system given through `from_lagrangian`, or with its own `vector_field`, is both faster and exact.
+
+    The system's functions are tried at construction, at the samples of q and u that decide its class: a metric,
+    potential, vector_field or jump_field that raises, returns no real numbers (None, a string, complex numbers),
+    arrays of the wrong shape or non-finite values is a ValueError or TypeError naming it there, not an error at the
+    first step.
 
     Every `info` has `"state"`: `{"q": array(n), "p": array(n), "u": array(m), "t": float}` and
-    `"is_success"`.
+    `"is_success"` (a bool).
 
     ## A task
 
     `task` is any object with `reset(np_random) -> state dict`, `reward(state, next_state) -> float`,
-    `terminated(state) -> bool` and optionally `observation(state) -> array`, all on state dicts as in
-    `info["state"]`. To turn a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², to θ = 0.5 rad: at rest
-    θ + J u/(I + J) is conserved, so with I = 2, J = 1/2 the rotor turns to u ≈ −2.5 to get there:
+    `terminated(state) -> bool` and optionally `observation(state) -> array`, `is_success(state) -> bool` and an
+    `observation_space`, all on state dicts as in `info["state"]` (`connenv.envs.user_task`, as Connection-v0's). An
+    object without the three methods is a TypeError at construction; an answer of the wrong kind (a NaN reward, an
+    infinite observation, a reset state that is no dict of q, p, u) is a TypeError or ValueError naming the method.
+    To turn a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², to θ = 0.5 rad: at rest θ + J u/(I + J) is conserved,
+    so with I = 2, J = 1/2 the rotor turns to u ≈ −2.5 to get there:
 
         theta, theta_dot, u, u_dot = sp.symbols("theta theta_dot u u_dot")
         rotor = LagrangianSystem(theta_dot**2 + (theta_dot + u_dot) ** 2 / 4, 0, [theta], [u])
@@ -186,6 +217,9 @@ class ActiveConstraintEnv(TaskEnv):
 
             def terminated(self, state):
                 return abs(state["q"][0] - 0.5) < 0.01
+
+            def is_success(self, state):
+                return self.terminated(state)
 
         env = gym.make("connenv/ActiveConstraint-v0", system=rotor, u_low=-math.pi, u_high=math.pi,
                        task=TurnTo(), max_episode_steps=200)
@@ -209,21 +243,14 @@ class ActiveConstraintEnv(TaskEnv):
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
-        if system is None or not all(hasattr(system, key) for key in ("n", "m", "metric", "potential")):
-            raise ValueError(
-                f"system={system!r} must have integer attributes n, m and methods metric(q, u) -> (G11, G12, G22) "
-                "and potential(q, u); or use ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u)"
-            )
-        for name in ("n", "m"):
-            value = getattr(system, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"system.{name}={value!r} must be an integer ≥ 1")
+        check_system(system)
         self.system, self.n, self.m = system, int(system.n), int(system.m)
-        self.u_low, self.u_high = check_bounds("u_low", u_low, "u_high", u_high, self.m)
+        self.u_low, self.u_high = check_bounds("u_low", check_not_complex("u_low", u_low), "u_high",
+                                               check_not_complex("u_high", u_high), self.m)  # fmt: skip
         self.max_control_speed = (
             None
             if max_control_speed is None
-            else check_number("max_control_speed", max_control_speed, 0.0, open_low=True)
+            else check_number("max_control_speed", max_control_speed, 0.0, MAGNITUDE_BOUND, open_low=True)
         )
         finite = np.isfinite(self.u_low) & np.isfinite(self.u_high)
         midpoint = 0.5 * (np.where(finite, self.u_low, 0.0) + np.where(finite, self.u_high, 0.0))
@@ -231,8 +258,10 @@ class ActiveConstraintEnv(TaskEnv):
         q_samples, u_samples = self._samples()
         try:
             check_metric(system, q_samples, u_samples)
-        except ValueError as error:  # u is sampled within [u_low, u_high], which may hold the fault
-            raise ValueError(f"{error}; u sampled within u_low={self.u_low.tolist()}, u_high={self.u_high.tolist()}")
+            check_fields(system, q_samples, u_samples)
+        except (TypeError, ValueError) as error:  # u is sampled within [u_low, u_high], which may hold the fault
+            bounds = f"u_low={self.u_low.tolist()}, u_high={self.u_high.tolist()}"
+            raise type(error)(f"{error}; u sampled within {bounds}") from error
         self.jump_class = getattr(system, "jump_class", None) or classify(system, q_samples, u_samples)
         self.control = self._check_control(control)
         self.field = system if hasattr(system, "vector_field") else MetricField(system)
@@ -240,15 +269,17 @@ class ActiveConstraintEnv(TaskEnv):
         default = "exact" if isinstance(self.field, (ExactSegment, ExactFlow)) else "dop853"
         self.stepper = make_stepper(integrator or default, self.field, **stepper_options)
         self.jump = JumpFlow(system)
-        self.task, self.draw = task, draw
+        if draw is not None and not callable(draw):
+            raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
+        self.task, self.draw = (None if task is None else UserTask(task, ("q", "p", "u"))), draw
         self.action_space = spaces.Box(-1.0, 1.0, (self.m,), np.float32)
         self.state = self.at(np.zeros(2 * self.n), self.u_start.copy(), 0.0, 0.0)
-        size = 2 * self.n + self.m
-        if task is not None and hasattr(task, "observation"):
-            size = np.shape(np.asarray(task.observation(self.state_dict(self.state)), np.float32))
-            size = size[0] if len(size) == 1 else size
-        shape = size if isinstance(size, tuple) else (size,)
-        self.observation_space = spaces.Box(-np.inf, np.inf, shape, np.float32)
+        if self.task is not None and self.task.has_observation:
+            self.observation_space = self.task.observation_space(self.observe(self.state))
+        else:
+            self.observation_space = spaces.Box(-np.inf, np.inf, (2 * self.n + self.m,), np.float32)
+        own = self.task is not None and self.task.has_observation
+        self.observes_state = type(self).observe is ActiveConstraintEnv.observe and not own  # (q, p, u) as float32
 
     @classmethod
     def from_lagrangian(cls, kinetic, potential, q, u, **kwargs):
@@ -296,10 +327,11 @@ class ActiveConstraintEnv(TaskEnv):
         high = np.where(np.isfinite(self.u_high), self.u_high, self.u_start + 1.0)
         return q, np.stack([self.u_start, low, high, 0.75 * low + 0.25 * high])
 
-    def _check_state(self, state, defaults):
-        check_keys("options['state']", state, {"q", "p", "u"})
+    def _check_state(self, state, defaults, name="options['state']"):
+        check_keys(name, state, {"q", "p", "u"})
         values = dict(defaults)
         for key, value in state.items():
+            check_not_complex(f"state {key}", value)
             value = np.ravel(value) if np.ndim(value) == 0 else value  # a number for a single coordinate
             bounds = (self.u_low, self.u_high) if key == "u" else (-np.inf, np.inf)
             bounds = np.maximum(bounds[0], -MAGNITUDE_BOUND), np.minimum(bounds[1], MAGNITUDE_BOUND)
@@ -315,7 +347,7 @@ class ActiveConstraintEnv(TaskEnv):
         check_keys("reset options", options, {"state"})
         defaults = {"q": np.zeros(self.n), "p": np.zeros(self.n), "u": self.u_start.copy()}
         if self.task is not None:
-            defaults = self._check_state(dict(self.task.reset(self.np_random)), defaults)
+            defaults = self._check_state(self.task.reset(self.np_random), defaults, "the state of task.reset")
         values = self._check_state(options.get("state", {}), defaults)
         return self.at(np.concatenate([values["q"], values["p"]]), values["u"], 0.0, 0.0)
 
@@ -347,6 +379,8 @@ class ActiveConstraintEnv(TaskEnv):
             y = JUMP_STEPPER(self.jump, y, s.u, delta, 1.0)
         y, change = run_segments(self.stepper, self.field, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
+        if self.observes_state:
+            self.check_observable(y, u_end)
         return self.at(y, u_end, s.t + self.dt, s.energy_error + change)
 
     def held_energy(self, y, u, u_dot):
@@ -363,6 +397,13 @@ class ActiveConstraintEnv(TaskEnv):
         energy = hamiltonian(self.system, y[..., :n], y[..., n:], u, np.zeros_like(u))
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
 
+    @staticmethod
+    def check_observable(y, u):
+        """StepperError where (q, p) or u (one state or a batch) has left float32's range, in which the default
+        observation holds them: a step that would make it ±inf raises, and leaves the state as it was."""
+        check_observable("(q, p)", y)
+        check_observable("u", u)
+
     # -- task: one state, or a batch with ops=BATCH (the vector env) -----------
 
     def state_dict(self, s, ops=SCALAR):
@@ -371,22 +412,22 @@ class ActiveConstraintEnv(TaskEnv):
         return {"q": q, "p": p, "u": np.array(s.u, float), "t": ops.real(s.t)}
 
     def observe(self, s, ops=SCALAR):
-        if self.task is not None and hasattr(self.task, "observation"):
-            return each_row(lambda d: np.asarray(self.task.observation(d), np.float32), [self.state_dict(s, ops)], ops)
+        if self.task is not None and self.task.has_observation:
+            return self.task.observation(self.state_dict(s, ops), ops)
         return np.concatenate([s.y, s.u], axis=-1).astype(np.float32)
 
     def reward(self, before, after, info, ops=SCALAR):
         if self.task is None:
             return ops.real(0.0 * after.t)
-        return each_row(lambda b, a: float(self.task.reward(b, a)), [self.state_dict(before, ops), info["state"]], ops)
+        return self.task.reward(self.state_dict(before, ops), info["state"], ops)
 
     def describe(self, s, ops=SCALAR):
         state = self.state_dict(s, ops)
-        if self.task is None:
-            success = ops.flag(0.0 * s.t != 0.0)
-        else:
-            success = each_row(lambda d: bool(self.task.terminated(d)), [state], ops)
+        success = ops.flag(0.0 * s.t != 0.0) if self.task is None else self.task.is_success(state, ops)
         return {"state": state, "is_success": success}
+
+    def terminated(self, s, info, ops=SCALAR):
+        return info["is_success"] if self.task is None else self.task.terminated(info["state"], ops)
 
     # -- rendering -------------------------------------------------------------
 
@@ -399,39 +440,84 @@ class ActiveConstraintEnv(TaskEnv):
         return renderer.draw(self.state_dict(self.state))
 
 
+SYSTEM = (
+    "integer attributes n, m and methods metric(q, u) -> (G11, G12, G22) and potential(q, u) -> V, "
+    "broadcasting over leading axes; or use ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u)"
+)
+
+
+def check_system(system):
+    """ValueError unless system has integer attributes n, m ≥ 1 and callable metric and potential."""
+    if system is None or not all(hasattr(system, key) for key in ("n", "m", "metric", "potential")):
+        raise ValueError(f"system={system!r} must have {SYSTEM}")
+    for name in ("n", "m"):
+        value = getattr(system, name)
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"system.{name}={value!r} must be an integer ≥ 1")
+    for name in ("metric", "potential", "vector_field", "jump_field"):
+        if hasattr(system, name) and not callable(getattr(system, name)):
+            raise ValueError(
+                f"system.{name}={getattr(system, name)!r} is not callable; system must have {SYSTEM} (and may have "
+                "methods vector_field(y, u, u_dot) and jump_field(y, u, delta_u))"
+            )
+
+
 def check_metric(system, q, u):
-    """ValueError unless the metric at every sample (each q with each u) has blocks of shapes (n, n), (n, m),
-    (m, m) that make a finite, symmetric G, positive semidefinite with G11 positive definite (the bead at the
-    pivot of its bar has G22 = 0), and the potential is finite."""
+    """ValueError (TypeError for what is no real numbers) unless the metric at every sample (each q with each u)
+    has blocks of shapes (n, n), (n, m), (m, m) that make a finite, symmetric G, positive semidefinite with G11
+    positive definite (the bead at the pivot of its bar has G22 = 0), and the potential is finite; a metric or
+    potential that raises is a ValueError naming it."""
     n, m = system.n, system.m
     q, u = np.repeat(q, len(u), axis=0), np.tile(u, (len(q), 1))
-    blocks = [np.asarray(block, float) for block in system.metric(q, u)]
-    for name, block, shape in zip(("G11", "G12", "G22"), blocks, ((n, n), (n, m), (m, m))):
+    name = f"system.metric(q, u) at a batch of {len(q)} points"
+    expected = f"(G11, G12, G22), real arrays of shapes (n, n), (n, m), (m, m) (n = {n}, m = {m}) over the batch"
+    blocks = probe(name, system.metric, q, u)
+    if not isinstance(blocks, (tuple, list)) or len(blocks) != 3:
+        raise TypeError(f"{name} returned {blocks!r}; expected {expected}")
+    blocks = [check_returned(f"{name}, block {b},", block, expected=expected) for b, block in zip(("G11", "G12", "G22"),
+                                                                                                  blocks)]  # fmt: skip
+    for block_name, block, shape in zip(("G11", "G12", "G22"), blocks, ((n, n), (n, m), (m, m))):
         if block.shape != (len(q), *shape):
             raise ValueError(
-                f"metric block {name} has shape {block.shape[1:]} at a batch of {len(q)} points; expected {shape} "
-                f"(n = {n}, m = {m}), broadcast over leading axes"
+                f"metric block {block_name} has shape {block.shape[1:]} at a batch of {len(q)} points; expected "
+                f"{shape} (n = {n}, m = {m}), broadcast over leading axes"
             )
     G11, G12, G22 = blocks
     G = np.block([[G11, G12], [np.swapaxes(G12, -1, -2), G22]])
-    for name, block in (("G11", G11), ("G22", G22)):
-        if not np.all(np.isfinite(block)) or not np.allclose(block, np.swapaxes(block, -1, -2), rtol=1e-12, atol=0):
+    for block_name, block in (("G11", G11), ("G22", G22)):
+        if not np.allclose(block, np.swapaxes(block, -1, -2), rtol=1e-12, atol=0):
             i = np.argmax(np.abs(block - np.swapaxes(block, -1, -2)).reshape(len(q), -1).max(-1))
-            raise ValueError(f"metric block {name} = {block[i].tolist()} at q = {q[i]}, u = {u[i]} is not symmetric")
-    for name, matrix, floor in (("G11", G11, 0.0), ("G", G, -1e-12)):
+            raise ValueError(
+                f"metric block {block_name} = {block[i].tolist()} at q = {q[i]}, u = {u[i]} is not symmetric"
+            )
+    for block_name, matrix, floor in (("G11", G11, 0.0), ("G", G, -1e-12)):
         eigenvalues = np.linalg.eigvalsh(matrix)
         scale = np.max(np.abs(eigenvalues), axis=-1)
         if not np.all(eigenvalues[..., 0] > floor * scale):
             i = np.argmin(eigenvalues[..., 0] / scale)
-            kind = "positive definite (q̇ must cost kinetic energy)" if name == "G11" else "positive semidefinite"
+            kind = "positive definite (q̇ must cost kinetic energy)" if block_name == "G11" else "positive semidefinite"
             raise ValueError(
-                f"the metric {'block G11' if name == 'G11' else 'G'} = {matrix[i].tolist()} at q = {q[i]}, "
+                f"the metric {'block G11' if block_name == 'G11' else 'G'} = {matrix[i].tolist()} at q = {q[i]}, "
                 f"u = {u[i]} is not {kind}: eigenvalues {eigenvalues[i].tolist()}"
             )
-    potential = np.asarray(system.potential(q, u), float)
-    if potential.shape != (len(q),) or not np.all(np.isfinite(potential)):
-        raise ValueError(f"potential has shape {potential.shape} or non-finite values at {len(q)} points; expected "
-                         f"({len(q)},) finite")
+    name = f"system.potential(q, u) at a batch of {len(q)} points"
+    check_returned(name, probe(name, system.potential, q, u), (len(q),), f"V, {len(q)} finite real numbers")
+
+
+def check_fields(system, q, u):
+    """Where the system gives its own vector_field (and jump_field), each tried at construction: at one state
+    y = (q, 0) and over the batch of samples (each q with each u) at rest, it must return real finite arrays of
+    y's shape, else TypeError or ValueError naming it (not a failure at the first step)."""
+    q, u = np.repeat(q, len(u), axis=0), np.tile(u, (len(q), 1))
+    y = np.concatenate([q, np.zeros_like(q)], axis=-1)
+    for method in ("vector_field", "jump_field"):
+        if not hasattr(system, method):
+            continue
+        for point in (0, slice(None)):  # one state, then the batch
+            where = "y = (q, p = 0)" if point == 0 else f"a batch of {len(y)} states y = (q, p = 0)"
+            name = f"system.{method}(y, u, {'u_dot' if method == 'vector_field' else 'delta_u'}) at {where}"
+            value = probe(name, getattr(system, method), y[point], u[point], np.zeros_like(u[point]))
+            check_returned(name, value, y[point].shape, f"real finite arrays of y's shape {y[point].shape}")
 
 
 class ActiveConstraintVectorEnv(TaskVectorEnv):
@@ -452,4 +538,6 @@ class ActiveConstraintVectorEnv(TaskVectorEnv):
             y = self.jump_stepper(env.jump, y, s.u, delta, np.ones(len(y)))
         y, change = run_segments(self.stepper, env.field, y, segments, env.held_energy)
         env.check_energy_error(s.energy_error + change, y, u_end)
+        if env.observes_state:
+            env.check_observable(y, u_end)
         return env.at(y, u_end, s.t + env.dt, s.energy_error + change)

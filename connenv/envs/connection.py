@@ -11,17 +11,21 @@ from gymnasium import spaces
 
 from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, Connection, ExactConnection, constant_connection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
-from connenv.core.steppers import StepperError, make_stepper
+from connenv.core.steppers import StepperError, check_observable, make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
     check_dt,
     check_keys,
+    check_not_complex,
     check_number,
+    check_returned,
     check_stepper_options,
     check_vector,
+    probe,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv, each_row
+from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.user_task import UserTask
 from connenv.envs.vector import TaskVectorEnv
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -72,25 +76,29 @@ class ConnectionEnv(TaskEnv):
     ## Observation Space
 
     Default: `Box(-inf, inf, (n + k,), float32)`, g flattened (4 numbers for SO2, 9 for SE2 and SO3, 2 for R2)
-    followed by s. With a `task` that has `observation(state)`, its value (float32), in an unbounded Box of its
-    shape, or the task's `observation_space` if it has one.
+    followed by s; a step that would take a coordinate of g or s beyond float32's range (±3.4e38), which the
+    observation would hold as ±inf, raises `connenv.core.StepperError`. With a `task` that has
+    `observation(state)`, its value as float32 (finite, of one shape), in the task's `observation_space` if it has
+    one, else in an unbounded Box of its shape.
 
     ## Rewards
 
-    Default 0. With a `task`: `task.reward(state, next_state)`, the states as in `info["state"]`.
+    Default 0. With a `task`: `task.reward(state, next_state)`, the states as in `info["state"]`: a finite real
+    number, else TypeError or ValueError naming it.
 
     ## Starting State
 
     g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0. With
     a `task`: `task.reset(np_random)` returns a dict with any of "g" and "s" (np_random is the env's generator: all
     randomness from it). `reset(options={"state": {"g": ..., "s": ...}})` sets either exactly (checked: g on its
-    group to 1e-9, s of shape (k,) within the bounds, every entry of both within ±1e3), else ValueError. Finite
-    shape bounds lie within ±1e3 too.
+    group to 1e-9, s of shape (k,) within the bounds, every entry of both within ±1e3, real), else ValueError.
+    Finite shape bounds lie within ±1e3 too.
 
     ## Episode End
 
-    Never terminates by default; with a `task`, when `task.terminated(state)`. No time limit of its own (the
-    registration's `max_episode_steps` is None: pass one to `gym.make`).
+    Never terminates by default; with a `task`, when `task.terminated(state)`. `info["is_success"]` is
+    `task.is_success(state)` for a task that has it, else False. `gym.make("connenv/Connection-v0", ...)` truncates
+    after 1000 steps (the registration's time limit; `max_episode_steps=` to change it).
 
     ## Arguments
 
@@ -101,10 +109,10 @@ class ConnectionEnv(TaskEnv):
     | shape_low, shape_high | (required) | arrays of shape (k,), low < high, ±inf allowed |
     | dt | 0.1 | [1e-12, 100] s |
     | frame | "body" | "body", "space" |
-    | max_shape_speed | 1.0 | (0, ∞) |
-    | task | None | an object with reset, reward, terminated and optionally observation (above) |
+    | max_shape_speed | 1.0 | (0, 1e3] |
+    | task | None | an object with reset, reward, terminated and optionally observation, is_success (below) |
     | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
-    | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the vector env calls it once |
+    | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the steps call it once per batch |
     | exact_segment | None | callable (g, s, ṡ, τ) -> g after a segment at constant ṡ, in closed form (below) |
     | integrator | "exact" with exact_segment or a constant A, else "magnus" | "exact" (with exact_segment or a |
     | | | constant A), "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
@@ -115,15 +123,32 @@ class ConnectionEnv(TaskEnv):
     translation; with substeps chosen per segment for an error ≤ atol on the coordinates of g. Where A is constant
     along the shape's path the step is one exponential, the exact flow. g stays on its group to rounding (the other
     integrators step ġ in coordinates and leave SO(3) slowly). A g further than 1e-9 from its group after a step raises
-    `connenv.core.StepperError`, as does a non-finite state or a segment that needs more than 4096 substeps.
+    `connenv.core.StepperError`, as does a non-finite state or a segment that needs more than 4096 substeps: the
+    substeps chosen from the estimate are checked against twice as many, and doubled while the two disagree by more
+    than atol, so that a connection with a pole on the shape's path (A → ∞) raises rather than returning a finite,
+    wrong g.
+
+    A callable connection is tried at construction, at the start shape and at a quarter of the way from the low
+    bound to the high one (and, with `vectorized=True`, on both at once, row for row): one that raises, returns no
+    real numbers, complex numbers, non-finite values or the wrong shape is a ValueError or TypeError naming it.
 
     A system that knows its flow in closed form gives it as `exact_segment(g, s, ṡ, τ)`: the coordinates of g after
     a segment of length τ at constant ṡ from the shape s, for one state or a batch of rows (arrays with leading axes,
     τ a float or one per row). It is then the default step, `integrator="exact"` (`connenv.core.lie.ExactConnection`).
     It is tried once at construction, from g = identity at the start shape over τ = dt with ṡ = 0 and with every
-    shape coordinate at max_shape_speed: a result that is not finite of g's coordinates' shape is a ValueError.
+    shape coordinate at max_shape_speed: a result that is not finite real numbers of g's coordinates' shape is a
+    ValueError (TypeError for no numbers at all). Every step checks its result's shape and type again (a wrong one is a
+    ValueError naming it, before it reaches the state); a row of NaN is stepped by the generic integrator instead
+    (`connenv.core.steppers.Exact`), an infinite one raises StepperError.
 
-    Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`.
+    Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}` and `"is_success"` (a bool).
+
+    A `task` is any object with `reset(np_random) -> state dict` (of "g" and "s"), `reward(state, next_state) ->
+    float`, `terminated(state) -> bool` and optionally `observation(state) -> array`, `is_success(state) -> bool` and
+    an `observation_space`, all on state dicts as in `info["state"]` (`connenv.envs.user_task`, as
+    ActiveConstraint-v0's). An object without the three methods is a TypeError at construction; an answer of the
+    wrong kind (a NaN reward, an infinite observation) is a TypeError or ValueError naming the method. The vector env
+    calls a task's functions row by row.
     """
 
     name = "Connection-v0"  # the id bad make kwargs are reported against
@@ -151,11 +176,14 @@ class ConnectionEnv(TaskEnv):
         if frame not in FRAMES:
             raise ValueError(f"frame={frame!r} is not one of {list(FRAMES)}")
         self.group = GROUPS[group]
-        self.low, self.high = check_bounds("shape_low", shape_low, "shape_high", shape_high)
-        self.max_shape_speed = check_number("max_shape_speed", max_shape_speed, 0.0, open_low=True)
+        self.low, self.high = check_bounds("shape_low", check_not_complex("shape_low", shape_low), "shape_high",
+                                           check_not_complex("shape_high", shape_high))  # fmt: skip
+        self.max_shape_speed = check_number("max_shape_speed", max_shape_speed, 0.0, MAGNITUDE_BOUND, open_low=True)
         if draw is not None and not callable(draw):
             raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
-        self.task, self.draw = task, draw
+        if not isinstance(vectorized, (bool, np.bool_)):
+            raise TypeError(f"vectorized={vectorized!r} must be True or False")
+        self.task, self.draw = (None if task is None else UserTask(task, ("g", "s"))), draw
         if not callable(connection):
             if exact_segment is not None:
                 raise ValueError(f"exact_segment={exact_segment!r} is for a callable connection; a constant A "
@@ -163,10 +191,10 @@ class ConnectionEnv(TaskEnv):
             A = _check_constant(connection, self.group, self.low.size)
             self.system = ConstantConnection(group, frame, functools.partial(constant_connection, A=A), True)
         elif exact_segment is None:
-            connection = _check_connection(connection, self.group, self.start_shape())
+            connection = _check_connection(connection, self.group, self.sample_shapes(), bool(vectorized))
             self.system = Connection(group, frame, connection, bool(vectorized))
         else:
-            connection = _check_connection(connection, self.group, self.start_shape())
+            connection = _check_connection(connection, self.group, self.sample_shapes(), bool(vectorized))
             exact_segment = _check_exact_segment(exact_segment, self.group, self.start_shape(), self.dt,
                                                  self.max_shape_speed)  # fmt: skip
             self.system = ExactConnection(group, frame, connection, bool(vectorized), exact_segment)
@@ -177,6 +205,8 @@ class ConnectionEnv(TaskEnv):
         self.state = ConnectionState(np.array(self.group.identity()), self.start_shape(), 0.0)
         self.action_space = spaces.Box(-1.0, 1.0, self.low.shape, np.float32)
         self.observation_space = self._observation_space()
+        own = self.task is not None and self.task.has_observation
+        self.observes_state = type(self).observe is ConnectionEnv.observe and not own  # (g, s) as float32
 
     def start_shape(self):
         """The default s: the midpoint of finite bounds, else the finite bound, else 0."""
@@ -184,9 +214,16 @@ class ConnectionEnv(TaskEnv):
         middle = 0.5 * (np.where(low, self.low, 0.0) + np.where(high, self.high, 0.0))
         return np.where(low & high, middle, np.where(low, self.low, np.where(high, self.high, 0.0)))
 
+    def sample_shapes(self):
+        """Two shapes within the bounds at which a callable connection is tried: the start shape, and a quarter of
+        the way from the low bound to the high one (± 0.5 from the start where a bound is infinite)."""
+        low = np.where(np.isfinite(self.low), self.low, self.start_shape() - 0.5)
+        high = np.where(np.isfinite(self.high), self.high, self.start_shape() + 0.5)
+        return np.stack([self.start_shape(), 0.75 * low + 0.25 * high])
+
     def _observation_space(self):
-        if self.task is not None and hasattr(self.task, "observation_space"):
-            return self.task.observation_space
+        if self.task is not None and self.task.has_observation:
+            return self.task.observation_space(self.observe(self.state))
         shape = self.observe(self.state).shape
         return spaces.Box(-np.inf, np.inf, shape, np.float32)
 
@@ -197,8 +234,7 @@ class ConnectionEnv(TaskEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state"})
-        given = dict(self.task.reset(self.np_random)) if self.task is not None else {}
-        check_keys("the task's reset state", given, {"g", "s"})
+        given = self.task.reset(self.np_random) if self.task is not None else {}
         check_keys("options['state']", options.get("state", {}), {"g", "s"})
         given.update(options.get("state", {}))
         g = self._check_g(given["g"]) if "g" in given else np.array(self.group.identity())
@@ -212,7 +248,17 @@ class ConnectionEnv(TaskEnv):
         segments, s, _ = bounded_segments(state.s, s_dot, self.low, self.high, self.dt)
         g, _ = run_segments(self.stepper, self.system, state.g, segments)
         self.check_group(g)
+        if self.observes_state:
+            self.check_observable(g, s)
         return state.replace(g=g, s=s, t=state.t + self.dt)
+
+    @staticmethod
+    def check_observable(g, s):
+        """StepperError where the coordinates of g or s (one state or a batch) have left float32's range, in which
+        the default observation holds them (SE2's and R2's position, s; an angle that large has lost all
+        precision): a step that would make it ±inf raises, and leaves the state as it was."""
+        check_observable("g", g)
+        check_observable("s", s)
 
     def check_group(self, g):
         """StepperError if g (any row of a batch) has left its group by more than GROUP_BOUND (SO3's matrices; the
@@ -225,6 +271,7 @@ class ConnectionEnv(TaskEnv):
 
     def _check_g(self, value):
         shape = (2,) if self.group.name == "R2" else (2, 2) if self.group.name == "SO2" else (3, 3)
+        check_not_complex("state g", value)
         try:
             g = np.array(value, dtype=float)
         except (TypeError, ValueError):
@@ -240,7 +287,7 @@ class ConnectionEnv(TaskEnv):
 
     def _check_s(self, value):
         low, high = np.maximum(self.low, -MAGNITUDE_BOUND), np.minimum(self.high, MAGNITUDE_BOUND)
-        return check_vector("state s", value, self.low.size, low, high)
+        return check_vector("state s", check_not_complex("state s", value), self.low.size, low, high)
 
     # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
@@ -249,23 +296,28 @@ class ConnectionEnv(TaskEnv):
         return {"g": self.group.matrix(state.g), "s": np.array(state.s), "t": state.t}
 
     def observe(self, state, ops=SCALAR):
-        if self.task is not None and hasattr(self.task, "observation"):
-            return each_row(lambda d: np.asarray(self.task.observation(d), np.float32), [self.state_dict(state)], ops)
+        if self.task is not None and self.task.has_observation:
+            return self.task.observation(self.state_dict(state), ops)
         g = self.group.matrix(state.g)
         return np.concatenate([g.reshape(*np.shape(state.s)[:-1], -1), state.s], axis=-1).astype(np.float32)
 
     def describe(self, state, ops=SCALAR):
-        return {"state": self.state_dict(state)}
+        info = {"state": self.state_dict(state)}
+        if self.task is None:
+            info["is_success"] = False if ops is SCALAR else np.zeros(len(state.t), bool)
+        else:
+            info["is_success"] = self.task.is_success(info["state"], ops)
+        return info
 
     def reward(self, before, after, info, ops=SCALAR):
         if self.task is None:
             return ops.real(0.0) if ops is SCALAR else np.zeros(len(after.t))
-        return each_row(lambda b, a: float(self.task.reward(b, a)), [self.state_dict(before), info["state"]], ops)
+        return self.task.reward(self.state_dict(before), info["state"], ops)
 
     def terminated(self, state, info, ops=SCALAR):
         if self.task is None:
             return False if ops is SCALAR else np.zeros(len(state.t), bool)
-        return each_row(lambda d: bool(self.task.terminated(d)), [info["state"]], ops)
+        return self.task.terminated(info["state"], ops)
 
     # -- rendering ---------------------------------------------------------------
 
@@ -294,6 +346,8 @@ class ConnectionVectorEnv(TaskVectorEnv):
         segments, s, _ = bounded_segments_batch(state.s, s_dot, env.low, env.high, env.dt)
         g, _ = run_segments(self.stepper, env.system, state.g, segments)
         env.check_group(g)
+        if env.observes_state:
+            env.check_observable(g, s)
         return state.replace(g=g, s=s, t=state.t + env.dt)
 
 
@@ -328,7 +382,8 @@ def draw_plain(canvas, group: str, state: dict, low, high):
 
 
 def _check_constant(connection, group, k):
-    """A constant connection as a float array, if it is finite of shape (dim 𝔤, k)."""
+    """A constant connection as a float array, if it is real, finite, of shape (dim 𝔤, k)."""
+    check_not_complex("connection", connection)
     try:
         A = np.array(connection, dtype=float)
     except (TypeError, ValueError):
@@ -341,34 +396,37 @@ def _check_constant(connection, group, k):
     return A
 
 
-def _check_connection(connection, group, s):
-    """The connection, if it is callable and A(s) at the start shape is finite of shape (dim 𝔤, k)."""
+def _check_connection(connection, group, shapes, vectorized):
+    """The connection, if it is callable and A(s) at each sample shape is real, finite, of shape (dim 𝔤, k); with
+    vectorized, A of the batch of samples is (N, dim 𝔤, k) and row i is A of shape i (to rounding). Else
+    ValueError (TypeError for what is no real numbers) naming connection, or vectorized."""
     if not callable(connection):
         raise ValueError(f"connection={connection!r} must be a callable s -> A(s)")
-    value = np.asarray(connection(s), dtype=float)
-    shape = (group.dim, s.size)
-    if value.shape != shape or not np.all(np.isfinite(value)):
-        raise ValueError(
-            f"connection(s) at s={s} returned {value!r} of shape {value.shape}; for group {group.name} and a shape "
-            f"of {s.size} coordinates it must be finite of shape {shape} (dim 𝔤, k)"
-        )
+    shape = (group.dim, shapes.shape[-1])
+    expected = (f"A(s), finite real numbers of shape {shape} (dim 𝔤, k) for group {group.name} and a shape of "
+                f"{shape[1]} coordinates")  # fmt: skip
+    single = []
+    for s in shapes:
+        name = f"connection(s) at s={s}"
+        single.append(check_returned(name, probe(name, connection, s.copy()), shape, expected))
+    if vectorized:
+        name = f"connection(s) at a batch of {len(shapes)} shapes s={shapes.tolist()} (vectorized=True)"
+        expected = f"(N, dim 𝔤, k) = {(len(shapes), *shape)}, A of each shape, or vectorized=False"
+        batch = check_returned(name, probe(name, connection, shapes.copy()), (len(shapes), *shape), expected)
+        if not np.allclose(batch, single, rtol=1e-9, atol=1e-12 * (1.0 + np.max(np.abs(single)))):
+            raise ValueError(f"{name} returned {batch.tolist()}, not A of each shape {np.stack(single).tolist()}; "
+                             "expected A of each row, or vectorized=False")  # fmt: skip
     return connection
 
 
 def _check_exact_segment(exact_segment, group, s, dt, speed):
-    """exact_segment, if it is callable and from g = identity at the shape s gives a finite g of its group's size
-    after τ = dt, both at ṡ = 0 and with every shape coordinate at the top speed."""
+    """exact_segment, if it is callable and from g = identity at the shape s gives a real, finite g of its group's
+    size after τ = dt, both at ṡ = 0 and with every shape coordinate at the top speed."""
     if not callable(exact_segment):
         raise ValueError(f"exact_segment={exact_segment!r} must be a callable (g, s, ṡ, τ) -> g, or None")
     identity = np.array(group.identity(), dtype=float)
+    expected = f"the coordinates of g on {group.name}: finite real numbers of shape {identity.shape}"
     for s_dot in (np.zeros_like(s), np.full_like(s, speed)):
-        try:
-            value = np.asarray(exact_segment(identity.copy(), s.copy(), s_dot, dt), dtype=float)
-        except (TypeError, ValueError):
-            value = None
-        if value is None or value.shape != identity.shape or not np.all(np.isfinite(value)):
-            raise ValueError(
-                f"exact_segment={exact_segment!r} at g = identity, s={s}, ṡ={s_dot}, τ={dt} returned "
-                f"{value!r}; it must return the coordinates of g on {group.name}: finite, of shape {identity.shape}"
-            )
+        name = f"exact_segment={exact_segment!r} at g = identity, s={s}, ṡ={s_dot}, τ={dt}"
+        check_returned(name, probe(name, exact_segment, identity.copy(), s.copy(), s_dot, dt), identity.shape, expected)
     return exact_segment

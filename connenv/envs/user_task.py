@@ -1,0 +1,118 @@
+"""A user's task for the two builders (ActiveConstraint-v0, Connection-v0), checked where it meets the env.
+
+A task is any object with ``reset(np_random) -> state dict``, ``reward(state, next_state) -> float`` and
+``terminated(state) -> bool``, and optionally ``observation(state) -> array``, ``is_success(state) -> bool`` and an
+``observation_space`` (a Gymnasium space), all on the state dicts of ``info["state"]``. `UserTask` holds it for
+both builders alike: the interface is checked at construction (``task=3`` is a TypeError naming ``task`` and what
+it needs), and every answer where it is used, so that a task's mistake is an error naming the task's method, never
+a NaN reward or an infinite observation passed on to the learner:
+
+- ``reset``: a mapping of the builder's state keys (ValueError otherwise; the builder checks the values);
+- ``reward``: a real number, finite (TypeError, ValueError);
+- ``terminated``, ``is_success``: a bool, a number or a 0-d array (TypeError); without ``is_success`` it is False;
+- ``observation``: real numbers, finite in float32, of the shape it had at construction (TypeError, ValueError).
+
+The vector env calls the task's methods row by row, with the same checks. An answer is checked where the step
+uses it, after the step's physics: the error names the task's method, and the env's state is the new one.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+from gymnasium import spaces
+
+from connenv.core.validation import check_keys, check_returned
+from connenv.envs.base import SCALAR, each_row
+
+REQUIRED = {
+    "reset": "reset(np_random) -> state dict",
+    "reward": "reward(state, next_state) -> float",
+    "terminated": "terminated(state) -> bool",
+}
+OPTIONAL = {"observation": "observation(state) -> array", "is_success": "is_success(state) -> bool"}
+
+
+class UserTask:
+    """A user's task object (see the module), behind the builders' task functions; ``keys`` are the builder's state
+    keys that ``reset`` may give."""
+
+    def __init__(self, task, keys):
+        missing = [name for name in REQUIRED if not callable(getattr(task, name, None))]
+        missing += [name for name in OPTIONAL if hasattr(task, name) and not callable(getattr(task, name))]
+        if missing:
+            needs = ", ".join(REQUIRED.values())
+            raise TypeError(
+                f"task={task!r} must be an object with methods {needs}, and optionally "
+                f"{' and '.join(OPTIONAL.values())}, on state dicts as in info['state']; its {missing} "
+                f"{'is' if len(missing) == 1 else 'are'} missing or not callable"
+            )
+        space = getattr(task, "observation_space", None)
+        if space is not None and not isinstance(space, spaces.Space):
+            raise TypeError(f"task.observation_space={space!r} must be a gymnasium.spaces.Space, or absent")
+        self.task, self.keys, self.shape = task, set(keys), None
+        self.has_observation = hasattr(task, "observation")
+
+    def __repr__(self):
+        return repr(self.task)
+
+    def reset(self, np_random) -> dict:
+        state = self.task.reset(np_random)
+        check_keys("the state of task.reset(np_random)", state, self.keys)
+        return dict(state)
+
+    def reward(self, before, after, ops=SCALAR):
+        return each_row(lambda b, a: _real("task.reward(state, next_state)", self.task.reward(b, a)), [before, after],
+                        ops)  # fmt: skip
+
+    def terminated(self, state, ops=SCALAR):
+        return each_row(lambda d: _flag("task.terminated(state)", self.task.terminated(d)), [state], ops)
+
+    def is_success(self, state, ops=SCALAR):
+        """task.is_success(state), False without it (a bool, or one per row)."""
+        if not hasattr(self.task, "is_success"):
+            return False if ops is SCALAR else np.zeros(len(state["t"]), bool)
+        return each_row(lambda d: _flag("task.is_success(state)", self.task.is_success(d)), [state], ops)
+
+    def observation(self, state, ops=SCALAR):
+        return each_row(self._observation, [state], ops)
+
+    def observation_space(self, first):
+        """The task's observation_space, else an unbounded float32 Box of the shape of ``first`` (an observation at
+        construction), which every later observation must have."""
+        self.shape = first.shape
+        space = getattr(self.task, "observation_space", None)
+        return space if space is not None else spaces.Box(-np.inf, np.inf, first.shape, np.float32)
+
+    def _observation(self, state):
+        name = "task.observation(state)"
+        observation = check_returned(name, self.task.observation(state), expected="real numbers, finite in float32")
+        observation = observation.astype(np.float32)
+        if not np.all(np.isfinite(observation)):
+            raise ValueError(f"{name} returned {observation!r} in float32, beyond float32's range; expected finite")
+        if self.shape is not None and observation.shape != self.shape:
+            raise ValueError(f"{name} returned shape {observation.shape}; it was {self.shape} at construction")
+        return observation
+
+
+def _real(name, value) -> float:
+    """value as a finite float: a real number or a 0-d array of one, else TypeError or ValueError naming it."""
+    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "biuf":
+        value = value.item()
+    if not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} returned {value!r}; expected a real number")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{name} returned {value!r}; expected a finite number")
+    return value
+
+
+def _flag(name, value) -> bool:
+    """value as a bool: a bool, a number or a 0-d array of one, else TypeError naming it."""
+    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "biuf":
+        value = value.item()
+    if not isinstance(value, (bool, np.bool_, numbers.Real)):
+        raise TypeError(f"{name} returned {value!r}; expected a bool")
+    return bool(value)
