@@ -39,8 +39,11 @@ class TurnTo:
     def reward(self, state, next_state):
         return -abs(next_state["q"][0] - TARGET)
 
-    def terminated(self, state):
+    def is_success(self, state):
         return abs(state["q"][0] - TARGET) < TOLERANCE
+
+    def terminated(self, state):
+        return self.is_success(state)
 
 
 def env_kwargs() -> dict:
