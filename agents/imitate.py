@@ -2,7 +2,7 @@
 (docs/guides/reference-results.md, "Why it did not learn, and what did").
 
     python -m agents.imitate --env connenv/BeadOnBar-v0 --episodes 20 --epochs 30 --seed 0 --out runs/imitate
-    python -m agents.imitate --diagnose --write docs/baselines/diagnosis.json
+    python -m agents.imitate --diagnose --jobs 2 --write docs/baselines/diagnosis.json
 
 A clone is the policy of SB3's PPO with the env's entry of agents/hyperparams/ppo.yml (its policy class, net_arch
 and gSDE), trained by supervised regression: the mean squared error between its deterministic action and the
@@ -17,17 +17,17 @@ Then DAgger (Ross, Gordon & Bagnell 2011): the clone drives, the controller runs
 observations, its own memory threaded through the episode, and labels every visited state; the clone is trained
 on all labels so far. This is sound only where the controller answers for a state it did not plan for, which
 `diagnose` measures as the success of the controller made memoryless (`Memoryless`: it forgets its plan and mode
-before every step). BeadOnBar's tilt law and RollingCoin's planner keep no memory; RollingBallGoal's optimal arc is
-replanned from any state into the rest of the same arc; KapitzaSwingUp's mode (pumping or holding, a hysteresis of
+before every step). BeadOnBar's tilt law and RollingCoin's planner keep no memory; the balls' optimal arc
+(RollingBall-v0, RollingBallGoal-v0) is replanned from any state into the rest of the same arc; KapitzaSwingUp's mode (pumping or holding, a hysteresis of
 the angle) is threaded along the clone's episode. RollingBallPose's holonomy planner and SnakeSwimmer's gait planner
 cannot label: planned afresh from a state inside a plan, the ball's loops are placed anew and the snake returns to
 its base shape, and neither then reaches the target. Those two are cloned from demonstrations alone (no DAgger
 rounds), which tests whether a memoryless MLP reproduces the plans on the states they visit.
 
-The diagnosis evaluates, on EVAL_EPISODES episodes reset with seeds EVAL_SEED, EVAL_SEED + 1, ... (seeds that no
-training, tuning or selection used): the analytic controller, the same made memoryless, a clone per seed, the best
+The diagnosis evaluates, on the episodes reset with seeds EVAL_SEED, EVAL_SEED + 1, ... (EVAL_EPISODES of them, 50
+for the swing-up; seeds that no training, tuning or selection used): the analytic controller, the same made memoryless, a clone per seed, the best
 pretrained RL model (chosen by the committed table, docs/baselines/results.json, seeds 0..99), random and, on the
-dense-shaped nonholonomic tasks, a one-step greedy ascent of the reward (`GreedyReward`). Returns carry a 95%
+dense-shaped nonholonomic tasks, a one-step greedy ascent of the reward (`GreedyReward`, on the first 20). Returns carry a 95%
 bootstrap interval (scipy.stats.bootstrap, BCa); the clones' mean over seeds a percentile-bootstrap interval over
 the seeds.
 """
@@ -37,7 +37,7 @@ from __future__ import annotations
 import argparse
 import copy
 import json
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
@@ -75,7 +75,10 @@ DIAGNOSED = (
     "connenv/RollingBallGoal-v0",
     "connenv/RollingCoin-v0",
     "connenv/SnakeSwimmer-v0",
+    "connenv/RollingBall-v0",
 )
+"""The six tasks of issue 31's table, and RollingBall-v0 as a control for RollingBallGoal-v0: the same ball, the same
+optimal-arc controller and its dense reward, but the attitude error P = R R*ᵀ as observation instead of R and R*."""
 CLONE_SEEDS = (0, 1, 2)
 DAGGER_EPISODES = 10  # clone episodes a DAgger round
 
@@ -96,6 +99,7 @@ class Budget:
 BUDGETS = {
     "connenv/BeadOnBar-v0": Budget(demonstrations=20),
     "connenv/RollingBallGoal-v0": Budget(demonstrations=200),
+    "connenv/RollingBall-v0": Budget(demonstrations=200),
     "connenv/RollingBallPose-v0": Budget(demonstrations=200, epochs=300, rounds=0),
     "connenv/SnakeSwimmer-v0": Budget(rounds=0),
     "connenv/KapitzaSwingUp-v0": Budget(demonstrations=10, epochs=30, eval_episodes=50),
@@ -398,41 +402,57 @@ def diagnose_env(env_id: str, seeds=CLONE_SEEDS, out: Path | None = None, plan: 
     }
 
 
-def diagnose(envs=DIAGNOSED, jobs: int = 1, out: Path | None = None, plans: dict | None = None) -> list[dict]:
+def diagnose(envs=DIAGNOSED, jobs: int = 1, out: Path | None = None, plans: dict | None = None,
+             write: Path | None = None) -> list[dict]:  # fmt: skip
     """diagnose_env for each env, `jobs` envs at a time (one process each); plans: budgets by env (default each
-    env's)."""
+    env's). With `write`, each env's report replaces its old one in that JSON file as soon as it is done, the
+    other envs' kept. Returns the reports of the file (or of these envs), in DIAGNOSED's order."""
     plans = plans or {}
+    reports = json.loads(write.read_text()) if write and write.is_file() else []
     with ProcessPoolExecutor(jobs) as pool:
         futures = [pool.submit(diagnose_env, env_id, CLONE_SEEDS, out, plans.get(env_id)) for env_id in envs]
-        return [future.result() for future in futures]
+        for future in as_completed(futures):
+            report = future.result()
+            reports = [r for r in reports if r["env"] != report["env"]] + [report]
+            reports.sort(key=lambda r: DIAGNOSED.index(r["env"]) if r["env"] in DIAGNOSED else len(DIAGNOSED))
+            if write:
+                write.parent.mkdir(parents=True, exist_ok=True)
+                write.write_text(json.dumps(reports, indent=1) + "\n")
+            print(f"{short(report['env'])}: done", flush=True)
+    return reports
 
 
 def percent(value: float) -> str:
     return f"{100 * value:.0f}%"
 
 
+def header(columns: list[str]) -> str:
+    """A markdown table's header and separator rows."""
+    return f"| {' | '.join(columns)} |\n|{'---|' * len(columns)}"
+
+
 def format_diagnosis(reports: list[dict]) -> str:
     """Two markdown tables from diagnosis.json: success (analytic, memoryless, each clone seed and their mean with
-    its interval, best RL, random, greedy), and mean returns with their 95% intervals."""
-    success = [
-        "| env | analytic | analytic, memoryless | BC clone per seed | BC clone, mean [95% CI] | best RL | random | greedy |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    returns = [
-        "| env | analytic | BC clone, mean over seeds | best RL | random | greedy |",
-        "|---|---|---|---|---|---|",
-    ]
+    its interval, the clones' RMS action error on held-out demonstrations over the spread of the controller's
+    actions there, best RL, random, greedy), and mean returns with their 95% intervals."""
+    success_columns = ["env", "analytic", "analytic, memoryless", "BC clone per seed", "BC clone, mean [95% CI]",
+                       "BC action error / spread", "best RL", "random", "greedy"]  # fmt: skip
+    return_columns = ["env", "analytic", "BC clone, mean over seeds", "best RL", "random", "greedy"]
+    success, returns = [header(success_columns)], [header(return_columns)]
     for report in reports:
         rows, summary = report["rows"], report["clone_summary"]
         greedy = rows.get("greedy")
         rounds = report["budget"]["rounds"]
         dagger = f"DAgger ×{rounds}" if rounds else "BC only"
         seeds = ", ".join(percent(c["success_rate"]) for c in report["clones"])
+        error = np.mean(
+            [c["training"]["held_out_rmse"] / c["training"]["held_out_label_std"] for c in report["clones"]]
+        )
         lo, hi = summary["success_ci"]
         success.append(
             f"| {short(report['env'])} | {percent(rows['analytic']['success_rate'])} "
             f"| {percent(rows['memoryless']['success_rate'])} | {seeds} ({dagger}) "
-            f"| {percent(summary['success_mean'])} [{percent(lo)}, {percent(hi)}] "
+            f"| {percent(summary['success_mean'])} [{percent(lo)}, {percent(hi)}] | {error:.2f} "
             f"| {percent(rows['rl']['success_rate'])} ({rows['rl']['policy']}) | {percent(rows['random']['success_rate'])} "
             f"| {percent(greedy['success_rate']) if greedy else '–'} |"
         )
@@ -461,7 +481,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--out", type=Path, default=Path("runs/imitate"), help="folder of the clones' run folders")
     parser.add_argument("--eval-episodes", type=positive_int, help="--diagnose's (default: the env's budget)")
     parser.add_argument("--jobs", type=positive_int, default=1, help="--diagnose: envs at a time, one process each")
-    parser.add_argument("--write", type=Path, help="--diagnose: write the reports here (JSON)")
+    parser.add_argument("--write", type=Path, help="--diagnose: update the reports in this JSON file, env by env")
     args = parser.parse_args(argv)
     if not args.diagnose and args.env is None:
         parser.error("give --env ID to clone its controller, or --diagnose")
@@ -487,11 +507,9 @@ def main(argv: list[str] | None = None):
     if args.diagnose:
         envs = [args.env] if args.env else list(DIAGNOSED)
         plans = {env_id: overridden(env_id, args) for env_id in envs}
-        reports = diagnose(envs, args.jobs, args.out, plans)
+        reports = diagnose(envs, args.jobs, args.out, plans, args.write)
         print(format_diagnosis(reports))
         if args.write:
-            args.write.parent.mkdir(parents=True, exist_ok=True)
-            args.write.write_text(json.dumps(reports, indent=1) + "\n")
             print(f"wrote {args.write}")
         return reports
     clone = imitate(args.env, overridden(args.env, args), args.seed, args.out)
