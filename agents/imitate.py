@@ -101,11 +101,14 @@ BUDGETS = {
     "connenv/RollingBallGoal-v0": Budget(demonstrations=200),
     "connenv/RollingBall-v0": Budget(demonstrations=200),
     "connenv/RollingBallPose-v0": Budget(demonstrations=200, epochs=300, rounds=0),
+    "connenv/RollingCoin-v0": Budget(rounds=0),
     "connenv/SnakeSwimmer-v0": Budget(rounds=0),
     "connenv/KapitzaSwingUp-v0": Budget(demonstrations=10, epochs=30, eval_episodes=50),
 }
 """Each env's budget where not Budget()'s. No DAgger where the controller cannot label a state it did not plan for
-(see the module docstring); fewer, longer epochs and evaluation episodes for the swing-up, whose episodes are 30
+(see the module docstring), nor on RollingCoin-v0, whose planner rolls only within ALIGNED (1e-4 rad) of the line to
+the target and so labels every state a clone visits near that line "turn, do not roll": the DAgger rollouts' own
+success fell round by round there; fewer, longer epochs and evaluation episodes for the swing-up, whose episodes are 30
 times longer than the others'."""
 GREEDY = ("connenv/RollingBallPose-v0", "connenv/RollingCoin-v0")
 """The dense-shaped nonholonomic tasks (RollingBallGoal-v0's reward is sparse: a greedy step sees −1 everywhere)."""
