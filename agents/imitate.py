@@ -46,7 +46,7 @@ import numpy as np
 import yaml
 
 import connenv  # noqa: F401  (registers the envs)
-from agents.baselines import DOCS, REPO, hyperparams, pretrained_label, short
+from agents.baselines import DOCS, HYPERPARAMS, hyperparams, pretrained_label, short
 from agents.controllers import CONTROLLERS, controller
 from agents.evaluate import (
     RandomPolicy,
@@ -106,16 +106,15 @@ BUDGETS = {
     "connenv/KapitzaSwingUp-v0": Budget(demonstrations=10, epochs=30, eval_episodes=50),
 }
 """Each env's budget where not Budget()'s. No DAgger where the controller cannot label a state it did not plan for
-(see the module docstring), nor on RollingCoin-v0, whose planner rolls only within ALIGNED (1e-4 rad) of the line to
-the target and so labels every state a clone visits near that line "turn, do not roll": the DAgger rollouts' own
-success fell round by round there; fewer, longer epochs and evaluation episodes for the swing-up, whose episodes are 30
-times longer than the others'."""
+(see the module docstring), nor on RollingCoin-v0, whose planner rolls only within `agents.lawton.ALIGNED` of the
+line to the target and so labels every state a clone visits near that line "turn, do not roll": the DAgger
+rollouts' own success fell over the rounds there. Fewer demonstrations, epochs and evaluation episodes for the
+swing-up, whose episodes are many times longer than the others'."""
 GREEDY = ("connenv/RollingBallPose-v0", "connenv/RollingCoin-v0")
 """The dense-shaped nonholonomic tasks (RollingBallGoal-v0's reward is sparse: a greedy step sees −1 everywhere)."""
 GREEDY_POINTS = 5  # candidate actions per action dimension: a grid of GREEDY_POINTS^dim over the action box
-CLONABLE = sorted(
-    env_id for env_id in CONTROLLERS if env_id in yaml.safe_load((REPO / "agents/hyperparams/ppo.yml").read_text())
-)
+CLONABLE = sorted(set(CONTROLLERS) & set(yaml.safe_load((HYPERPARAMS / "ppo.yml").read_text())))
+"""The envs with an analytic controller and PPO hyperparameters."""
 
 
 class Memoryless:
@@ -473,6 +472,13 @@ def format_diagnosis(reports: list[dict]) -> str:
     return "\n".join(success) + "\n\n" + "\n".join(returns)
 
 
+def non_negative_int(text: str) -> int:
+    """argparse type: an integer ≥ 0."""
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer ≥ 0 (valid: 0, 1, 2, ...)")
+    return int(text)
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", choices=CLONABLE, help="clone this env's analytic controller (with --diagnose: its)")
@@ -489,13 +495,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     if not args.diagnose and args.env is None:
         parser.error("give --env ID to clone its controller, or --diagnose")
     return args
-
-
-def non_negative_int(text: str) -> int:
-    """argparse type: an integer ≥ 0."""
-    if not text.isdigit():
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer ≥ 0 (valid: 0, 1, 2, ...)")
-    return int(text)
 
 
 def overridden(env_id: str, args: argparse.Namespace) -> Budget:
