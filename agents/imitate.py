@@ -46,6 +46,7 @@ import numpy as np
 import yaml
 
 import connenv  # noqa: F401  (registers the envs)
+from connenv import cli
 from agents.baselines import DOCS, HYPERPARAMS, hyperparams, pretrained_label, short
 from agents.controllers import CONTROLLERS, controller
 from agents.evaluate import (
@@ -59,6 +60,7 @@ from agents.evaluate import (
     summarize,
 )
 
+PROG = "python -m agents.imitate"
 DEMO_SEED = 20_000
 """Demonstrations and DAgger rollouts of clone seed s reset with seeds DEMO_SEED + 1000 s + i: disjoint from the
 evaluation's EVAL_SEED.. and from the reference table's 0..99."""
@@ -472,28 +474,22 @@ def format_diagnosis(reports: list[dict]) -> str:
     return "\n".join(success) + "\n\n" + "\n".join(returns)
 
 
-def non_negative_int(text: str) -> int:
-    """argparse type: an integer ≥ 0."""
-    if not text.isdigit():
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer ≥ 0 (valid: 0, 1, 2, ...)")
-    return int(text)
-
-
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", choices=CLONABLE, help="clone this env's analytic controller (with --diagnose: its)")
     parser.add_argument("--diagnose", action="store_true", help=f"the diagnosis of {', '.join(map(short, DIAGNOSED))}")
     parser.add_argument("--episodes", type=positive_int, help="demonstrations (default: the env's budget)")
     parser.add_argument("--epochs", type=positive_int, help="regression epochs, at the start and after each round")
-    parser.add_argument("--dagger", type=non_negative_int, help="DAgger rounds (default: the env's budget)")
+    parser.add_argument("--dagger", type=cli.non_negative_int, help="DAgger rounds (default: the env's budget)")
     parser.add_argument("--seed", type=seed_int, default=0, help="the clone's seed (--diagnose: 0, 1, 2)")
-    parser.add_argument("--out", type=Path, default=Path("runs/imitate"), help="folder of the clones' run folders")
+    parser.add_argument("--out", type=cli.writable_dir, default="runs/imitate", help="folder of the clones' run folders")
     parser.add_argument("--eval-episodes", type=positive_int, help="--diagnose's (default: the env's budget)")
     parser.add_argument("--jobs", type=positive_int, default=1, help="--diagnose: envs at a time, one process each")
-    parser.add_argument("--write", type=Path, help="--diagnose: update the reports in this JSON file, env by env")
+    parser.add_argument("--write", type=cli.writable_file, help="--diagnose: update the reports in this JSON file, env by env")
     args = parser.parse_args(argv)
     if not args.diagnose and args.env is None:
         parser.error("give --env ID to clone its controller, or --diagnose")
+    args.out, args.write = Path(args.out), args.write and Path(args.write)
     return args
 
 
@@ -521,4 +517,4 @@ def main(argv: list[str] | None = None):
 
 
 if __name__ == "__main__":
-    main()
+    cli.run(main, PROG)

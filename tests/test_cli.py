@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from agents import baselines, evaluate, tune
+from agents import baselines, evaluate, imitate, tune
 from connenv import bench, cli, play, throughput
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -48,6 +48,13 @@ not_callable = 3
 
 # (program, argv, words the one line holds: the argument and what is wrong)
 CASES = [
+    ("imitate", [], ["--env ID", "--diagnose"]),
+    ("imitate", ["--env", "connenv/Nope-v0"], ["--env", "'connenv/Nope-v0'"]),
+    ("imitate", ["--env", "connenv/BeadOnBar-v0", "--episodes", "0"], ["--episodes", "'0'"]),
+    ("imitate", ["--env", "connenv/BeadOnBar-v0", "--dagger", "-1"], ["--dagger", "'-1'"]),
+    ("imitate", ["--env", "connenv/BeadOnBar-v0", "--seed", "-1"], ["--seed", "'-1'"]),
+    ("imitate", ["--env", "connenv/BeadOnBar-v0", "--out", "a_file/clones"], ["--out", "'a_file' is a file"]),
+    ("imitate", ["--diagnose", "--jobs", "0"], ["--jobs", "'0'"]),
     ("train", ["--env-kwargs", '{"dt": -1}'], ["--env-kwargs", "dt=-1"]),
     ("train", ["--env-kwargs", '{"bogus": 1}'], ["--env-kwargs", "bogus"]),
     ("train", ["--env-kwargs", "{bad json"], ["--env-kwargs", "not a JSON object"]),
@@ -189,6 +196,7 @@ def mains(train):
         "throughput": (throughput.main, throughput.PROG),
         "play": (play.main, play.PROG),
         "bench": (bench.main, bench.PROG),
+        "imitate": (imitate.main, imitate.PROG),
     }
 
 
