@@ -26,11 +26,16 @@ ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 
-def site_module():
-    spec = importlib.util.spec_from_file_location("docs_site", ROOT / "docs" / "site.py")
+def load(name, path):
+    """The module at path, imported under name (docs/ and examples/ are no packages)."""
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def site_module():
+    return load("docs_site", ROOT / "docs" / "site.py")
 
 
 def test_the_generated_pages_are_what_the_docstrings_make():
@@ -211,10 +216,7 @@ def test_chromium_lays_out_code_thumbnails_and_class_names_readably(served, buil
 
 def guide_example():
     """examples/my_robot.py, the module that docs/guides/own-system.md trains on."""
-    spec = importlib.util.spec_from_file_location("my_robot", ROOT / "examples" / "my_robot.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load("my_robot", ROOT / "examples" / "my_robot.py")
 
 
 def test_the_own_system_guide_trains_on_its_example_module():

@@ -103,6 +103,14 @@ def check_action(action, space):
     return np.minimum(np.maximum(finite_action(action, space), space.low), space.high)
 
 
+def dtype_kind(value) -> str:
+    """numpy's dtype kind of value ("f", "c", "U", ...), "O" for a ragged sequence."""
+    try:
+        return np.asarray(value).dtype.kind
+    except (TypeError, ValueError):
+        return "O"
+
+
 def finite_action(action, space):
     """The action as a float array of the space's shape, finite, else ValueError; not clipped."""
     if type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == space.shape:  # a policy's action
@@ -111,10 +119,7 @@ def finite_action(action, space):
             return a
         if a.size > SMALL and np.isfinite(a).all():
             return a
-    try:
-        kind = np.asarray(action).dtype.kind
-    except (TypeError, ValueError):  # a ragged sequence
-        kind = "O"
+    kind = dtype_kind(action)
     if kind == "c":
         raise ValueError(f"action={action!r} is complex; expected real numbers in [{space.low}, {space.high}]")
     if kind not in "biuf":
@@ -209,10 +214,7 @@ def check_returned(name: str, value, shape: tuple | None = None, expected: str =
     """What a user's function returned, as a float64 array: TypeError unless it is real numbers (None, a string,
     an object), ValueError if it is complex, of another shape than ``shape`` (when given) or not finite. ``name``
     says which function at which arguments, ``expected`` what it must return; both go into the message."""
-    try:
-        kind = np.asarray(value).dtype.kind
-    except (TypeError, ValueError):  # a ragged sequence
-        kind = "O"
+    kind = dtype_kind(value)
     if kind == "c":
         raise ValueError(f"{name} returned complex values {value!r}; expected {expected or 'real numbers'}")
     if kind not in "biuf":
