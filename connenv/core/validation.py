@@ -47,10 +47,16 @@ def check_scale(name: str, value, default: float, high: float = math.inf, *, zer
     may vanish: a fluid's density, an offset). The span reaches from a toy to a ship, and keeps the products of a
     few such scales an env forms (energies, momenta, rates, the observation's bounds and the reward) far inside
     float64 and its float32 observation, where the whole positive axis would overflow or divide by zero."""
-    low, top = 0.0 if zero else default / SCALE_SPAN, default * SCALE_SPAN
+    low, top = (0.0 if zero else decimal(default / SCALE_SPAN)), decimal(default * SCALE_SPAN)
     if high < top:
         return check_number(name, value, low, high, open_high=open_high, high_name=high_name)
     return check_number(name, value, low, top)
+
+
+def decimal(x: float) -> float:
+    """x rounded to 12 significant digits: a bound as the docstrings write it (0.1/1e6 is 1.0000000000000001e-07 in
+    floats, and 1e-7 would be refused)."""
+    return float(f"{x:.12g}")
 
 
 ANGLE_BOUND = 2.0 * math.pi  # |an angle| given at reset: every configuration lies within it
