@@ -12,11 +12,12 @@ Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
 flow), ``"magnus"`` (the fourth-order Lie-group step of a system with a
 connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"``, ``"rk4"``, ``"rk8"``
 (DOP853's formula at a fixed step), ``"rk8_energy"`` (the same, projected onto the energy level where u is
-held) or ``"gauss6"`` (Gauss–Legendre, order 6) with ``substeps``, or
+held) or ``"gauss6"`` (Gauss–Legendre, order 6) with ``substeps`` (1 to SUBSTEPS_MAX = 1000), or
 one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol``
-and ``atol``. The two Euler methods are Gymnasium classic control's
-integrators (its ``kinematics_integrator``), there to compare against: they are
-first order, and written here because scipy has no fixed-step methods; so is RK8, which takes scipy's tableau.
+(RTOL_MIN = 100 ε to 1) and ``atol`` (1e-100 to 1e100); ``make_stepper`` refuses an option outside its
+range, at make rather than at a step that stalls or diverges. The two Euler methods are Gymnasium classic
+control's integrators (its ``kinematics_integrator``), there to compare against: they are first order, and
+written here because scipy has no fixed-step methods; so is RK8, which takes scipy's tableau.
 """
 
 from __future__ import annotations
