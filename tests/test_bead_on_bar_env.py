@@ -132,7 +132,7 @@ def test_renders_the_bar_and_the_bead(mode, monkeypatch):
         ({"g": -1.0}, "g=-1.0"),
         ({"mass": math.nan}, "mass=nan"),
         ({"omega_max": 0}, "omega_max=0"),
-        ({"omega_max": 1e3}, r"omega_max=1000.0.*\(0.0, 500.0\]"),
+        ({"omega_max": 1e3}, r"omega_max=1000.0.*\[6.28318530718e-06, 500.0\]"),
         ({"hold_time": -0.5}, "hold_time=-0.5"),
         ({"exit_penalty": -1.0}, "exit_penalty=-1.0"),
         ({"dt": 2.0}, "dt=2.0"),

@@ -324,9 +324,11 @@ def test_bad_reset_state_is_refused(state, words):
         env.reset(options={"state": state})
 
 
-def test_a_stepper_that_cannot_meet_its_tolerance_raises():
-    """A tolerance below what floats resolve needs more than MAX_SUBSTEPS substeps: StepperError, not a silent step."""
-    env = make(group="SO3", connection=twisted, atol=1e-300)
+def test_a_stepper_that_cannot_meet_its_tolerance_raises(monkeypatch):
+    """A tolerance the step cannot meet within MAX_SUBSTEPS substeps (here 2): StepperError, not a silent step. (A
+    tolerance below what floats resolve is refused at make: make_stepper's MAGNUS_ATOL_MIN.)"""
+    monkeypatch.setattr(connenv.core.lie, "MAX_SUBSTEPS", 2)
+    env = make(group="SO3", connection=twisted, atol=1e-15)
     env.reset(seed=0)
     with pytest.raises(StepperError, match="substeps"):
         env.step(np.array([1.0, 0.5], np.float32))

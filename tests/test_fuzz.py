@@ -1,83 +1,46 @@
-"""Fuzz over every registered id (issue 16): seeded random bad make kwargs, reset states and actions, a few
-seconds per id. Each is refused with a ValueError naming the bad key, or else every number that leaves the env,
-observation, reward and info, is finite.
+"""Fuzz over every registered id (issue 16), and every input at the edges of float64 (issue 30).
 
-Make kwargs are drawn among values that are no finite real, dt of any magnitude, and each number's default
-scaled by up to 10 either way: the physical parameters' ranges are open above, so a mass of 1e300 is accepted
-and its physics is not fuzzed here."""
+The seeded random fuzz draws bad make kwargs, reset states and actions, a few seconds per id: each is refused
+with a ValueError naming the bad key, or else every number that leaves the env, observation, reward and info, is
+finite. Its make kwargs are values that are no finite real, dt of any magnitude, and each number's default scaled
+by up to 10 either way.
+
+The edge tests run cases of the bad-input audit (tests/audit.py, which runs them all: `python tests/audit.py`) with
+few steps each: every numeric make kwarg at zero, the subnormals and powers of ten out to the largest float, and
+given a string, a bool or a complex number; the stepper options; reset states and actions that are subnormal,
+huge, non-finite, complex or of the wrong shape. Each is refused at make or reset (ValueError or TypeError naming
+the argument, before the state moved) or runs with every number finite and no warning, single and vector env
+alike. The two builders' make kwargs (ActiveConstraint-v0, Connection-v0) are left to their own tests."""
 
 from __future__ import annotations
 
-import inspect
 import math
+import re
 import time
+import warnings
 import zlib
 
+import audit
 import gymnasium as gym
 import numpy as np
 import pytest
+from audit import OPTION_KEYS, STATE_KEYS, make_kwargs
 
 import connenv  # noqa: F401  (registers the envs)
-from connenv import examples
-from connenv.core.validation import init_parameters
+from connenv.core.steppers import SUBSTEPS_MAX
 
 IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+BUILDERS = ("connenv/ActiveConstraint-v0", "connenv/Connection-v0")
 BUDGET = 3.0  # s of fuzzing per id
 STEPS = 5  # random steps after each accepted make or reset
 
-STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
-    "connenv/Swing-v0": {"theta": 0, "theta_dot": 0, "p": 0, "r": 0},
-    "connenv/Skier-v0": {"x": 0, "x_dot": 0, "p": 0, "h": 0},
-    "connenv/RollingBall-v0": {"x": 0, "y": 0},
-    "connenv/RollingBallPose-v0": {"x": 0, "y": 0},
-    "connenv/RollingBallGoal-v0": {"x": 0, "y": 0},
-    "connenv/KozlovShell-v0": {"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3},
-    "connenv/ChaplyginSleigh-v0": {key: 0 for key in ("x", "y", "phi", "v", "omega", "u", "u_dot", "u_along",
-                                                         "u_along_dot")},
-    "connenv/SnakeSwimmer-v0": {"x": 0, "y": 0, "theta": 0, "alpha": 0, "beta": 0, "momentum": 3},
-    "connenv/KapitzaPendulum-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
-    "connenv/KapitzaSwingUp-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
-    "connenv/RollingCoinSurface-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0, "phi_dot": 0},
-    "connenv/ActiveConstraint-v0": {"q": 1, "p": 1, "u": 1},  # examples.swing(): n = m = 1
-    "connenv/Connection-v0": {"s": 1},  # examples.beanie(): k = 1
-    "connenv/RollingCoin-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0},
-    "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
-    "connenv/BeadOnBar-v0": {"r": 0, "r_dot": 0, "theta": 0},
-    "connenv/TubeTwist-v0": {},  # R: a rotation matrix (tests/test_tube_env.py)
-    "connenv/FallingCat-v0": {"bend": 2},  # R: a rotation matrix (tests/test_falling_cat_env.py)
-}
-OPTION_KEYS = {  # reset options beside "state"
-    "connenv/KozlovShell-v0": {"target": 2},
-    "connenv/RollingCoin-v0": {"target": 3},
-    "connenv/ElroysBeanie-v0": {"target": 0},
-    "connenv/RollingCoinSurface-v0": {"target": 2},
-    "connenv/BeadOnBar-v0": {"target": 0},
-    "connenv/TubeTwist-v0": {"target": 0},
-    "connenv/SnakeSwimmer-v0": {"target": 2},
-    "connenv/ChaplyginSleigh-v0": {"target": 2},
-}
-NOT_NUMBERS = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
-               "control", "integrator", "pivot", "vectorized", "surface", "surface_params"}
 INVALID = [math.nan, math.inf, -math.inf, "1", 1j, True, [1.0], 0.0]
 SPECIAL = [*INVALID, None, -1.0, 1e308, -1e308, 1e-308, 1e30, -1e30]
 
 
-def make_kwargs(env_id):
-    return examples.MAKE_KWARGS[env_id]() if env_id in examples.MAKE_KWARGS else {}
-
-
 def numeric_parameters(env_id):
     """The make kwargs of env_id that take a number (or None for a number): name -> default."""
-    cls = gym.spec(env_id).entry_point
-    module, name = cls.split(":")
-    cls = getattr(__import__(module, fromlist=[name]), name)
-    defaults = {}
-    for klass in cls.__mro__:
-        if "__init__" in vars(klass):
-            for p in inspect.signature(klass.__init__).parameters.values():
-                defaults.setdefault(p.name, p.default)
-    names = [n for n in init_parameters(cls) if n not in NOT_NUMBERS]
-    return {n: defaults.get(n) for n in names if isinstance(defaults.get(n), (int, float, type(None)))}
+    return {k: v for k, v in audit.numeric_parameters(env_id).items() if not isinstance(v, list)}
 
 
 def bad_number(rng):
@@ -186,3 +149,114 @@ def test_bad_kwargs_states_and_actions_are_refused_naming_the_key_or_leave_every
                 assert_finite(f"{env_id} step with action={action!r}", *step[0][:2], step[0][4])
         cases += 1
     assert cases >= 20, f"only {cases} cases in {BUDGET} s"
+
+
+# -- the edges of float64 (issue 30): cases of tests/audit.py, few steps each --------------------------------------
+
+EDGE_STEPS = 3  # random steps of an env made with an edge kwarg (then a reset); its vector env takes 2
+MAGNITUDES = (5e-324, 1e-310, 1e-300, 1e-100, 1e-30, 1e-10, 1e10, 1e30, 1e100, 1e300, 1.7e308)
+EDGES = [0.0, *MAGNITUDES, *(-m for m in MAGNITUDES)]
+NOT_NUMBERS = ["1.0", True, 1 + 0j, np.complex128(2 + 3j), np.array([1.0])]
+
+
+HANG = 30.0  # s a case may run before it counts as a hang (a bound of "does not hang", not a timing)
+
+
+def open_cases(cases):
+    """The audit's verdict on each case; the cases that ended neither in a clear error nor in a finite run."""
+    verdicts = [(case, audit.judge(case, timeout=HANG)) for case in cases]
+    return [f"{case.what[:120]}: {verdict.detail}" for case, verdict in verdicts if verdict.kind == "open"]
+
+
+@pytest.mark.parametrize("env_id", [env_id for env_id in IDS if env_id not in BUILDERS])
+def test_every_numeric_kwarg_at_the_float64_edges_is_refused_naming_it_or_runs_finite_single_and_vector(env_id):
+    """Zero, subnormals, powers of ten out to the largest float, either sign, and values that are no real number
+    (a string, a bool, complex numbers, an array): refused at make naming the kwarg, or reset and stepped with
+    every number finite and no warning, by the single env and the vector env."""
+    cases = audit.make_kwarg_cases([env_id], values=EDGES + NOT_NUMBERS, steps=EDGE_STEPS, vector_steps=2)
+    assert open_cases(cases) == []
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_stepper_options_out_of_their_ranges_are_refused_at_make(env_id):
+    """substeps beyond SUBSTEPS_MAX (10⁹ stalled a step), rtol below scipy's floor, atol at the float64 edges:
+    refused at make naming the option; within the ranges the env steps."""
+    values = {"substeps": [0, 1, SUBSTEPS_MAX + 1, 10**9, 2**63, 2.0],
+              "rtol": [5e-324, 1e-15, 1e-8, 2.0, 1e300], "atol": [5e-324, 1e-150, 1e-8, 1e150, 1.7e308]}
+    assert open_cases(audit.stepper_cases([env_id], values=values)) == []
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_reset_states_subnormal_huge_complex_or_of_the_wrong_type_are_refused_or_run_finite(env_id):
+    """Every reset state key and option at the edge numbers, non-finite, complex (numpy casts a complex array to
+    its real part with only a warning), a string or a bool, of the wrong shape; rotations given complex: refused
+    at reset naming the key, or stepped finite without a warning."""
+    assert open_cases(audit.reset_cases([env_id])) == []
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_actions_subnormal_huge_non_finite_or_complex_step_finite_without_warnings_single_and_vector(env_id):
+    """From rest, an action with an entry (or all) subnormal, huge, non-finite, complex, of the wrong shape or
+    type: refused naming the action with the state unchanged, or stepped three times with every number finite
+    and no warning (a subnormal joint command once divided by zero in SnakeSwimmer-v0, and leaked overflow
+    warnings from the vector envs' segments)."""
+    assert open_cases(audit.action_cases([env_id])) == []
+
+
+EDGE_REGRESSIONS = [  # (env_id, make kwargs): issue 30's cases, each once an exception other than ValueError
+    ("connenv/Swing-v0", {"r_max": 1e300}),  # OverflowError
+    ("connenv/Swing-v0", {"r_min": 1e-300}),  # OverflowError
+    ("connenv/KozlovShell-v0", {"a": 1e300}),  # OverflowError
+    ("connenv/KozlovShell-v0", {"b": 1e-300}),  # OverflowError
+    ("connenv/KozlovShell-v0", {"u1_max": 1e300}),  # OverflowError
+    ("connenv/KapitzaPendulum-v0", {"length": 1e300}),  # OverflowError
+    ("connenv/KapitzaPendulum-v0", {"v_max": 1e300}),  # OverflowError at the first step
+    ("connenv/KapitzaPendulum-v0", {"tolerance": 1e-300}),  # OverflowError; the vector env's rewards -inf
+    ("connenv/FallingCat-v0", {"max_bend": 1e-300}),  # ZeroDivisionError
+    ("connenv/Skier-v0", {"g": 1e300}),  # StepperError at the first step
+    ("connenv/Skier-v0", {"substeps": 10**9}),  # a step stalled
+    ("connenv/ChaplyginSleigh-v0", {"substeps": 10**9}),
+    ("connenv/RollingCoinSurface-v0", {"substeps": 10**9}),
+]
+
+
+@pytest.mark.parametrize(("env_id", "kwargs"), EDGE_REGRESSIONS, ids=[f"{c[0][8:]}-{c[1]}" for c in EDGE_REGRESSIONS])
+def test_issue_30s_edge_kwargs_are_value_errors_at_make_naming_kwarg_value_and_range_single_and_vector(env_id, kwargs):
+    (key, value), = kwargs.items()
+    for make in (gym.make, lambda env_id, **kw: gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", **kw)):
+        with pytest.raises(ValueError, match=rf"^{re.escape(f'{key}={value!r}')} .*\[") as error:
+            make(env_id, **kwargs)
+        assert "must" in str(error.value)
+
+
+def test_a_subnormal_joint_command_from_rest_leaves_the_snake_where_it_was():
+    """(1e-310, 0) from rest: a move below what floats resolve is none, single and vector (it raised "math domain
+    error", and StepperError on NaN in the vector env)."""
+    single = gym.make("connenv/SnakeSwimmer-v0")
+    single.reset(seed=0)
+    info = single.step(np.array([1e-310, 0.0]))[4]
+    assert info["state"]["x"] == info["state"]["y"] == info["state"]["theta"] == 0.0
+    vector = gym.make_vec("connenv/SnakeSwimmer-v0", 2, vectorization_mode="vector_entry_point")
+    vector.reset(seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        info = vector.step(np.array([[1e-310, 0.0], [0.5, 0.0]]))[4]
+    assert info["state"]["x"][0] == 0.0 and info["state"]["x"][1] != 0.0
+
+
+def test_a_step_at_the_most_substeps_ends_within_a_generous_bound():
+    """SUBSTEPS_MAX substeps on the env whose steps cost most per substep (RK8 with its energy projection): a step
+    ends, where 10⁹ substeps stalled for minutes. A bound of "does not hang", not a timing."""
+    env = gym.make("connenv/Skier-v0", substeps=SUBSTEPS_MAX)
+    env.reset(seed=0)
+    start = time.monotonic()
+    env.step(np.array([1.0]))
+    assert time.monotonic() - start < 30.0
+
+
+@pytest.mark.parametrize("bad", ["1.0", True, 1 + 0j, np.array([1.0 + 0j]), [True]], ids=repr)
+def test_a_bound_that_is_no_real_number_is_refused_naming_it(bad):
+    """The shared check of bounds (the builders' u_low, u_high, shape_low, shape_high) refuses what numpy's cast
+    would take: a numeric string, a bool, a complex number (u_low="1.0" and u_low=True were accepted)."""
+    with pytest.raises(ValueError, match=r"^u_low=.* must be real numbers"):
+        gym.make("connenv/ActiveConstraint-v0", **{**make_kwargs("connenv/ActiveConstraint-v0"), "u_low": bad})

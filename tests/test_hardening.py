@@ -168,7 +168,7 @@ def test_the_test_extra_installs_every_module_the_package_and_the_tests_that_do_
     installed = closure(project["dependencies"] + project["optional-dependencies"]["test"])
     files = [*ROOT.glob("connenv/**/*.py"), *ROOT.glob("agents/**/*.py"), *ROOT.glob("tests/**/*.py")]
     modules = set().union(*(imported_modules(f) for f in files if f.name != "test_training.py"))
-    local = {"connenv", "agents", "golden", "train", "conftest"}
+    local = {"connenv", "agents", "golden", "train", "conftest", "audit"}
     third_party = modules - set(sys.stdlib_module_names) - local
     providers = importlib.metadata.packages_distributions()
     missing = {m for m in third_party if not {canonicalize_name(d) for d in providers.get(m, [m])} & installed}

@@ -136,7 +136,7 @@ def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):
     u_end = u + u_dot * dt
     free = np.all((low <= u_end) & (u_end <= high), axis=-1, keepdims=True)  # no stop within the step
     stops = np.where(u_dot > 0.0, high, low)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a subnormal u̇ never reaches: inf
         reach = np.where((u_dot != 0.0) & ~free, np.maximum((stops - u) / u_dot, 0.0), math.inf)
     ends = np.concatenate([np.sort(np.minimum(reach, dt), axis=-1), np.full(free.shape, dt)], axis=-1)
     segments, start = [], 0.0

@@ -12,11 +12,12 @@ Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
 flow), ``"magnus"`` (the fourth-order Lie-group step of a system with a
 connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"``, ``"rk4"``, ``"rk8"``
 (DOP853's formula at a fixed step), ``"rk8_energy"`` (the same, projected onto the energy level where u is
-held) or ``"gauss6"`` (Gauss–Legendre, order 6) with ``substeps``, or
+held) or ``"gauss6"`` (Gauss–Legendre, order 6) with ``substeps`` (1 to SUBSTEPS_MAX = 1000), or
 one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol``
-and ``atol``. The two Euler methods are Gymnasium classic control's
-integrators (its ``kinematics_integrator``), there to compare against: they are
-first order, and written here because scipy has no fixed-step methods; so is RK8, which takes scipy's tableau.
+(RTOL_MIN = 100 ε to 1) and ``atol`` (1e-100 to 1e100); ``make_stepper`` refuses an option outside its
+range, at make rather than at a step that stalls or diverges. The two Euler methods are Gymnasium classic
+control's integrators (its ``kinematics_integrator``), there to compare against: they are first order, and
+written here because scipy has no fixed-step methods; so is RK8, which takes scipy's tableau.
 """
 
 from __future__ import annotations
@@ -401,16 +402,27 @@ INTEGRATORS = ("exact", "magnus", *FIXED_STEP, *SCIPY_METHODS)
 STEPPER_OPTIONS = ("substeps", "rtol", "atol")
 
 
+SUBSTEPS_MAX = 1000  # a fixed-step segment's substeps: with RK8's 12 stages a segment's evaluations stay within
+# MAX_EVALUATIONS, the adaptive steppers' budget, so that a step ends as theirs do instead of stalling
+RTOL_MIN = 100 * np.finfo(float).eps  # scipy's floor: below it solve_ivp raises rtol to it itself, with a warning
+ATOL_RANGE = (1e-100, 1e100)  # an absolute tolerance, in the state's units: scipy's error norm squares y/atol and
+# err/atol, which past these leave float64 (a first step of NaN, or none at all)
+MAGNUS_ATOL_MIN = 1e-15  # the Lie-group step's error estimate on coordinates of g of order 1 is rounding below it
+
+
 def make_stepper(integrator: str, system: SteppedSystem | None = None, **options):
     """Build a stepper by name, validating its options (and, for "exact", that the system has a flow).
 
-    euler, semi_implicit_euler, rk4, rk8, rk8_energy and gauss6 take ``substeps`` (int ≥ 1), rk8_energy also ``atol``,
-    its energy error per segment past which it doubles the substeps (default 1e-8, in H's units); the scipy
-    methods take ``rtol`` and ``atol`` (> 0); exact takes the scipy options for
-    the segments where u moves; magnus takes ``atol``, its error bound per
-    segment on the coordinates of g (default 1e-10), and hands ``rtol`` and
-    ``atol`` to DOP853 for systems without a connection (the shell's full model).
+    euler, semi_implicit_euler, rk4, rk8, rk8_energy and gauss6 take ``substeps`` (an integer in [1, SUBSTEPS_MAX]),
+    rk8_energy also ``atol``, its energy error per segment past which it doubles the substeps (default 1e-8, in H's
+    units); the scipy methods take ``rtol`` (in [RTOL_MIN, 1]: 100 times the spacing of floats at 1, up to an error
+    the size of the state) and ``atol`` (in ATOL_RANGE); exact takes the scipy options for the segments where u
+    moves; magnus takes ``atol``, its error bound per segment on the coordinates of g (default 1e-10, at least
+    MAGNUS_ATOL_MIN), and hands ``rtol`` and ``atol`` to DOP853 for systems without a connection (the shell's full
+    model). Each option out of its range is a ValueError naming it, its value and the range.
     """
+    from connenv.core.validation import check_number  # validation builds on this module
+
     if integrator not in INTEGRATORS:
         raise ValueError(f"integrator={integrator!r} is not one of {INTEGRATORS}")
     allowed = {"substeps"} if integrator in FIXED_STEP else {"rtol", "atol"}
@@ -422,8 +434,9 @@ def make_stepper(integrator: str, system: SteppedSystem | None = None, **options
         )
     if integrator in FIXED_STEP:
         substeps = options.get("substeps", 1)
-        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
-            raise ValueError(f"substeps={substeps!r} must be an integer ≥ 1")
+        integer = isinstance(substeps, (int, np.integer)) and not isinstance(substeps, bool)
+        if not (integer and 1 <= substeps <= SUBSTEPS_MAX):
+            raise ValueError(f"substeps={substeps!r} must be an integer in [1, {SUBSTEPS_MAX}]")
         if integrator == "semi_implicit_euler" and system is not None and not isinstance(system, CanonicalSystem):
             raise ValueError(
                 f"integrator='semi_implicit_euler' needs a state (q, p) split by the system's n, which "
@@ -435,26 +448,22 @@ def make_stepper(integrator: str, system: SteppedSystem | None = None, **options
                 f"{type(system).__name__} has not; 'rk8' is the step without the projection"
             )
         if integrator == "rk8_energy":
-            return EnergyProjected(int(substeps), _positive("atol", options.get("atol", EnergyProjected.atol)))
+            atol = check_number("atol", options.get("atol", EnergyProjected.atol), *ATOL_RANGE)
+            return EnergyProjected(int(substeps), atol)
         return FIXED_STEP[integrator](int(substeps))
-    for name in ("rtol", "atol"):
-        _positive(name, options.get(name, 1.0))
+    for name, low, high in (("rtol", RTOL_MIN, 1.0), ("atol", *ATOL_RANGE)):
+        if name in options:
+            check_number(name, options[name], low, high)
     if integrator == "magnus":
         from connenv.core.lie import Magnus  # lie builds on this module
 
+        check_number("atol", options.get("atol", Magnus.atol), MAGNUS_ATOL_MIN, ATOL_RANGE[1])
         return Magnus(options.get("atol", Magnus.atol), Scipy(**options))
     if integrator == "exact":
         if system is not None and not isinstance(system, (ExactFlow, ExactSegment)):
             raise ValueError(f"integrator='exact' needs a closed-form flow, which {type(system).__name__} has not")
         return Exact(Scipy(**options))
     return Scipy(SCIPY_METHODS[integrator], **options)
-
-
-def _positive(name: str, value):
-    """value if a finite number > 0, else ValueError naming it."""
-    if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
-        raise ValueError(f"{name}={value!r} must be a finite number > 0")
-    return value
 
 
 _CONFORMS: dict = {}

@@ -36,6 +36,29 @@ def check_number(
     return value
 
 
+SCALE_SPAN = 1e6  # a physical scale may lie within this factor of its default, either way
+
+
+def check_scale(name: str, value, default: float, high: float = math.inf, *, zero=False, open_high=False,
+                high_name: str | None = None) -> float:
+    """A physical scale (a length, mass, inertia, density, g, a speed or rate bound, a tolerance), a finite real
+    within SCALE_SPAN of its default either way, [default/SCALE_SPAN, default·SCALE_SPAN], and at most high if given
+    (below it with open_high; high_name names the parameter that sets it). With zero, the low end is 0 (a scale that
+    may vanish: a fluid's density, an offset). The span reaches from a toy to a ship, and keeps the products of a
+    few such scales an env forms (energies, momenta, rates, the observation's bounds and the reward) far inside
+    float64 and its float32 observation, where the whole positive axis would overflow or divide by zero."""
+    low, top = (0.0 if zero else decimal(default / SCALE_SPAN)), decimal(default * SCALE_SPAN)
+    if high < top:
+        return check_number(name, value, low, high, open_high=open_high, high_name=high_name)
+    return check_number(name, value, low, top)
+
+
+def decimal(x: float) -> float:
+    """x rounded to 12 significant digits: a bound as the docstrings write it (0.1/1e6 is 1.0000000000000001e-07 in
+    floats, and 1e-7 would be refused)."""
+    return float(f"{x:.12g}")
+
+
 ANGLE_BOUND = 2.0 * math.pi  # |an angle| given at reset: every configuration lies within it
 MAGNITUDE_BOUND = 1e3  # |a coordinate or momentum of a user's system| given at reset, or a finite bound of one
 
@@ -133,14 +156,29 @@ def finite_action(action, space):
     return a
 
 
+def real_array(name: str, value, expected: str) -> np.ndarray:
+    """value as a float64 array if every entry is a real number (an int or a float: a numeric array, or numbers
+    nested in sequences), else ValueError naming it and what is ``expected``. numpy's own cast would take a complex
+    number's real part (with only a ComplexWarning), a bool as 0 or 1 and a numeric string as its number."""
+    if isinstance(value, np.ndarray):
+        real = value.dtype.kind in "iuf"
+    else:
+        try:
+            entries = np.array(value, dtype=object).ravel().tolist()
+        except (TypeError, ValueError):  # a ragged sequence
+            entries = [None]
+        real = all(isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) for x in entries)
+    if not real:
+        raise ValueError(f"{name}={value!r} must be {expected}")
+    return np.array(value, dtype=np.float64)
+
+
 def check_vector(name: str, value, size: int, low=-math.inf, high=math.inf):
-    """value as a float array of shape (size,), every entry finite and within [low, high] (bounds a number or one
-    per entry), else ValueError naming it, the entry and the range."""
-    try:
-        vector = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        vector = None
-    if vector is None or vector.shape != (size,) or not np.all(np.isfinite(vector)):
+    """value as a float array of shape (size,), every entry a finite real within [low, high] (bounds a number or
+    one per entry), else ValueError naming it, the entry and the range."""
+    expected = f"a sequence of {size} finite real numbers"
+    vector = real_array(name, value, expected)
+    if vector.shape != (size,) or not np.all(np.isfinite(vector)):
         raise ValueError(f"{name}={value!r} must be a sequence of {size} finite real numbers")
     low, high = np.broadcast_to(low, (size,)), np.broadcast_to(high, (size,))
     for i in np.flatnonzero((vector < low) | (vector > high)):
@@ -154,13 +192,14 @@ def check_bounds(low_name: str, low, high_name: str, high, size: int | None = No
     in every coordinate, finite ones within ±MAGNITUDE_BOUND, ±inf allowed for no bound, NaN not; else ValueError
     naming both as given."""
     given = f"{low_name}={low!r}, {high_name}={high!r}"
+    count = "one number per coordinate" if size is None else f"a number or {size} of them"
+    expected = f"real numbers, {count}, ±inf for no bound"
+    lows, highs = real_array(low_name, low, expected), real_array(high_name, high, expected)
     try:
-        lows, highs = (np.array(v, dtype=float) for v in (low, high))
         if size is not None:
             lows, highs = (np.broadcast_to(v, (size,)).copy() for v in (lows, highs))
-    except (TypeError, ValueError) as error:
-        count = "one number per coordinate" if size is None else f"a number or {size} of them"
-        raise ValueError(f"{given} must be real numbers, {count}, ±inf for no bound") from error
+    except ValueError as error:
+        raise ValueError(f"{given} must be {expected}") from error
     if lows.ndim != 1 or lows.shape != highs.shape or lows.size == 0:
         raise ValueError(f"{given} must have one shape (k,), k ≥ 1")
     if np.isnan(lows).any() or np.isnan(highs).any():
@@ -178,8 +217,8 @@ ORTHONORMAL_TOL = 1e-9  # ‖RᵀR − I‖ and |det R − 1| allowed in a given
 
 def check_rotation(name: str, value) -> np.ndarray:
     """value as a 3×3 rotation matrix (float64), or ValueError: never re-orthonormalized."""
-    R = np.asarray(value, dtype=np.float64) if np.size(value) == 9 else None
-    if R is None or R.shape != (3, 3):
+    R = real_array(name, value, "a 3×3 rotation matrix of real numbers")
+    if R.shape != (3, 3):
         raise ValueError(f"{name} has shape {np.shape(value)}; expected a 3×3 rotation matrix")
     if not np.isfinite(R).all():
         raise ValueError(f"{name}={R.tolist()} is not finite")

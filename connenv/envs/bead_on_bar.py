@@ -9,7 +9,14 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.segments import check_drift
-from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number, check_stepper_options
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_angle,
+    check_keys,
+    check_number,
+    check_scale,
+    check_stepper_options,
+)
 from connenv.envs.active_constraint import (  # noqa: F401  (DT_MAX: the builder's, this env's too)
     DT_MAX,
     ActiveConstraintEnv,
@@ -120,15 +127,18 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | half_length | 1.0 | (0, ∞) m: L |
-    | g | 9.81 | [0, ∞) m/s² |
-    | mass | 1.0 | (0, ∞) kg |
-    | omega_max | 2π | (0, 500] rad/s |
+    | half_length | 1.0 | [1e-6, 1e6] m: L |
+    | g | 9.81 | [0, 9.81e6] m/s² |
+    | mass | 1.0 | [1e-6, 1e6] kg |
+    | omega_max | 2π | [2π·1e-6, 500] rad/s |
     | dt | 0.02 | [1e-12, 1] s |
-    | hold_time | 0.5 | [0, ∞) s |
-    | exit_penalty | 40.0 | [0, ∞) |
+    | hold_time | 0.5 | [0, 5e5] s |
+    | exit_penalty | 40.0 | [0, 4e7] |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps / rtol, atol | | see `connenv.core.steppers` |
+
+    A physical scale lies within a factor 1e6 of its default either way, or down to 0 where 0 has a meaning
+    (`connenv.core.validation.check_scale`): beyond, the energies overflow.
 
     The default stepper is the closed form of the flow at constant θ̇ (`connenv.systems.bead_on_bar`), exact to
     rounding, including at θ̇ → 0; the builder's steppers stay available through `integrator`
@@ -155,12 +165,12 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         **stepper_options,
     ):
         check_stepper_options("BeadOnBar-v0", stepper_options, type(self))
-        self.half_length = check_number("half_length", half_length, 0.0, open_low=True)
-        g = check_number("g", g, 0.0)
-        mass = check_number("mass", mass, 0.0, open_low=True)
-        self.omega_max = check_number("omega_max", omega_max, 0.0, OMEGA_MAX, open_low=True)
-        self.hold_time = check_number("hold_time", hold_time, 0.0)
-        self.exit_penalty = check_number("exit_penalty", exit_penalty, 0.0)
+        self.half_length = check_scale("half_length", half_length, 1.0)
+        g = check_scale("g", g, 9.81, zero=True)
+        mass = check_scale("mass", mass, 1.0)
+        self.omega_max = check_scale("omega_max", omega_max, 2.0 * math.pi, OMEGA_MAX)
+        self.hold_time = check_scale("hold_time", hold_time, 0.5, zero=True)
+        self.exit_penalty = check_scale("exit_penalty", exit_penalty, 40.0, zero=True)
         super().__init__(
             bead_on_bar(mass, g), -math.inf, math.inf, dt=dt, max_control_speed=self.omega_max,
             integrator=integrator, render_mode=render_mode, **stepper_options,

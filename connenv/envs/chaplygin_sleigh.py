@@ -18,6 +18,7 @@ from connenv.core.validation import (
     check_dt,
     check_keys,
     check_number,
+    check_scale,
     check_stepper_options,
     check_vector,
 )
@@ -27,6 +28,7 @@ from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
+TRAVEL_MAX = 2.0  # m: the longest travel of the mass in one step, max_mass_speed · dt (the default speed at DT_MAX)
 DEFAULT_INTEGRATOR = "rk4"
 DEFAULT_SUBSTEPS = 2  # RK4 × 2: cheaper than DOP853 for the accuracy the task needs (docs/physics/ChaplyginSleigh.md)
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + E) past which it has diverged: StepperError
@@ -125,18 +127,23 @@ class ChaplyginSleighEnv(TaskEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | sled_mass | 1.0 | (0, ∞) kg |
-    | sled_inertia | 0.1 | (0, ∞) kg m², about C |
-    | offset | 0.5 | [0, ∞) m, C ahead of P |
-    | mass | 0.5 | (0, ∞) kg |
+    | sled_mass | 1.0 | [1e-6, 1e6] kg |
+    | sled_inertia | 0.1 | [1e-7, 1e5] kg m², about C |
+    | offset | 0.5 | [0, 5e5] m, C ahead of P |
+    | mass | 0.5 | [5e-7, 5e5] kg |
     | rail | 0.3 | (0, ∞) m, \|u₂\| ≤ rail |
     | box | 0.3 | [0, ∞) m, \|u₁\| ≤ box; 0: the rail alone |
-    | max_mass_speed | 2.0 | (0, ∞) m/s; None (fit class only): u jumps to the command |
-    | tolerance | 0.1 | (0, 1) m |
+    | max_mass_speed | 2.0 | [2e-6, 2e6] m/s with max_mass_speed · dt ≤ 2 m; None (fit class only): u jumps to the command |
+    | tolerance | 0.1 | [1e-7, 1) m |
     | dt | 0.05 | [1e-12, 1] s |
     | integrator | "rk4" (2 substeps) | "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps / rtol, atol | | see `connenv.core.steppers` |
     | render_mode | None | "human", "rgb_array" |
+
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
+    beyond, the energies and momenta overflow. The mass's travel in one step, max_mass_speed · dt, is at most 2 m
+    (at the longest dt, the default speed's): the sled answers a faster shake faster, and past it the default
+    stepper's two RK4 substeps fall behind (StepperError).
 
     The default stepper, RK4 with 2 substeps, was measured against DOP853 (docs/physics/ChaplyginSleigh.md). A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or an energy
     error past 1e-2 (1 + T) (T is conserved where the mass is held). Every `info` has `"state"` (`x`, `y`, `phi`,
@@ -161,15 +168,15 @@ class ChaplyginSleighEnv(TaskEnv):
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
         self.system = ChaplyginSleigh(
-            check_number("sled_mass", sled_mass, 0.0, open_low=True),
-            check_number("sled_inertia", sled_inertia, 0.0, open_low=True),
-            check_number("offset", offset, 0.0),
-            check_number("mass", mass, 0.0, open_low=True),
+            check_scale("sled_mass", sled_mass, 1.0),
+            check_scale("sled_inertia", sled_inertia, 0.1),
+            check_scale("offset", offset, 0.5, zero=True),
+            check_scale("mass", mass, 0.5),
         )
         self.rail = check_number("rail", rail, 0.0, MAGNITUDE_BOUND, open_low=True)
         self.box = check_number("box", box, 0.0, MAGNITUDE_BOUND)
         self.u_high = np.array([self.box, self.rail])
-        self.tolerance = check_number("tolerance", tolerance, 0.0, 1.0, open_low=True, open_high=True)
+        self.tolerance = check_scale("tolerance", tolerance, 0.1, 1.0, open_high=True)
         grid = np.meshgrid(np.linspace(-self.box, self.box, 5), np.linspace(-self.rail, self.rail, 7))
         directions = ((1.0, 0.0), (0.0, 1.0), (1.0, 1.0)) if self.box > 0.0 else ((0.0, 1.0),)  # admissible u̇
         self.jump_class = self.system.jump_class(np.stack(grid, -1).reshape(-1, 2), directions)
@@ -180,9 +187,7 @@ class ChaplyginSleighEnv(TaskEnv):
                 f", class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not admit; give a "
                 "speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
             )
-        self.max_mass_speed = (
-            None if max_mass_speed is None else check_number("max_mass_speed", max_mass_speed, 0.0, open_low=True)
-        )
+        self.max_mass_speed = None if max_mass_speed is None else self._check_speed(max_mass_speed)
         check_stepper_options("ChaplyginSleigh-v0", stepper_options, type(self))
         if integrator == DEFAULT_INTEGRATOR:
             stepper_options = {"substeps": DEFAULT_SUBSTEPS, **stepper_options}
@@ -192,6 +197,16 @@ class ChaplyginSleighEnv(TaskEnv):
         high = np.array(OBSERVED, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = SleighState(np.zeros(5), np.zeros(2), np.zeros(2), np.array([1.0, 0.0]), 0.0, 0.0)
+
+    def _check_speed(self, max_mass_speed):
+        """max_mass_speed, a scale within SCALE_SPAN of its default whose travel in a step is at most TRAVEL_MAX."""
+        speed = check_scale("max_mass_speed", max_mass_speed, 2.0)
+        if speed * self.dt > TRAVEL_MAX:
+            raise ValueError(
+                f"max_mass_speed={max_mass_speed!r} is out of range with dt={self.dt!r}: the mass's travel in a step, "
+                f"max_mass_speed · dt = {speed * self.dt:.6g} m, must be at most {TRAVEL_MAX} m"
+            )
+        return speed
 
     def parameters(self):
         s = self.system

@@ -9,7 +9,14 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys, check_number, check_stepper_options
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_angle,
+    check_keys,
+    check_number,
+    check_scale,
+    check_stepper_options,
+)
 from connenv.envs.base import BATCH, SCALAR
 from connenv.envs.connection import DT_MAX  # noqa: F401  (ConnectionEnv's dt range, this env's)
 from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
@@ -89,14 +96,16 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | body_inertia | 1.0 | (0, 1e3] kg m² |
-    | beanie_inertia | 0.25 | (0, 1e3] kg m² |
+    | body_inertia | 1.0 | [1e-6, 1e3] kg m² |
+    | beanie_inertia | 0.25 | [2.5e-7, 1e3] kg m² |
     | max_beanie_speed | 4π | (0, 1e3] rad/s, at least 1.2 · 1/I₂ (the largest drawn μ can be held) |
     | dt | 0.05 | [1e-12, 100] s |
-    | tolerance | 0.01 | (0, π) rad |
-    | hold_time | 1.0 | (0, 100] s |
+    | tolerance | 0.01 | [1e-8, π) rad |
+    | hold_time | 1.0 | [1e-6, 100] s |
     | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
 
     Every `info` has `"state"` (`theta`, `psi` (both unwrapped), `momentum`, `t`), `"target"` (θ*), `"error"`
     (θ* − θ wrapped, rad), `"held"` (s) and `"is_success"`.
@@ -119,14 +128,14 @@ class ElroysBeanieEnv(ConnectionEnv):
         **stepper_options,
     ):
         check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        self.body_inertia = check_number("body_inertia", body_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)
-        self.beanie_inertia = check_number("beanie_inertia", beanie_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.body_inertia = check_scale("body_inertia", body_inertia, 1.0, MAGNITUDE_BOUND)
+        self.beanie_inertia = check_scale("beanie_inertia", beanie_inertia, 0.25, MAGNITUDE_BOUND)
         least = 1.2 * MOMENTUM_RANGE[1] / self.beanie_inertia
         self.max_beanie_speed = check_number(
             "max_beanie_speed", max_beanie_speed, least, MAGNITUDE_BOUND, low_name="1.2 · 1/beanie_inertia"
         )
-        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
-        self.hold_time = check_number("hold_time", hold_time, 0.0, 100.0, open_low=True)
+        self.tolerance = check_scale("tolerance", tolerance, 0.01, math.pi, open_high=True)
+        self.hold_time = check_scale("hold_time", hold_time, 1.0, 100.0)
         inertias = {"body_inertia": self.body_inertia, "beanie_inertia": self.beanie_inertia}
         super().__init__(
             "SO2",

@@ -16,8 +16,10 @@ from connenv.core.validation import (
     check_keys,
     check_number,
     check_rotation,
+    check_scale,
     check_stepper_options,
     check_vector,
+    decimal,
 )
 from connenv.envs.base import BATCH, SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
@@ -28,6 +30,7 @@ __all__ = ["DT_MAX", "FallingCatEnv", "FallingCatVectorEnv"]  # DT_MAX: Connecti
 ROLL_OFFSET = 0.2  # rad: the start's roll is π + δ, δ uniform in [−ROLL_OFFSET, ROLL_OFFSET]
 SUCCESS_BONUS = 1.0  # reward on the step the cat is in its landing pose
 LANDING_SLACK = 1e-9  # s: t ≥ fall_time − LANDING_SLACK is the landing (the sum of dt's rounds)
+AXIAL_RATIO_MIN = 1e-6  # the least J/I: the exact step's pieces grow as 1/√(J/I) (see FallingCatEnv)
 VERTICAL = 1e-6  # a given spine within this of vertical (1 − |spine · Z|) has no roll about it: ValueError
 
 
@@ -104,17 +107,21 @@ class FallingCatEnv(ConnectionEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | transverse_inertia | 0.01 | (0, 1e3] kg m², I: a half's inertia across its axis about its centre of mass |
-    | axial_inertia | 0.0003 | (0, transverse_inertia) kg m², J: about its own axis |
-    | mass | 1.5 | (0, 1e3] kg, m: each half |
-    | cm_distance | 0.12 | (0, 1e3] m, ℓ: joint to a half's centre of mass |
-    | max_bend | 1.2 | (0, 3] rad |
-    | max_bend_speed | 6.0 | (0, 1e3] rad/s |
-    | fall_time | 0.6 | (0, 100] s |
+    | transverse_inertia | 0.01 | [1e-8, 1e3] kg m², I: a half's inertia across its axis about its centre of mass |
+    | axial_inertia | 0.0003 | [1e-6 I, I) kg m², J: about its own axis |
+    | mass | 1.5 | [1.5e-6, 1e3] kg, m: each half |
+    | cm_distance | 0.12 | [1.2e-7, 1e3] m, ℓ: joint to a half's centre of mass |
+    | max_bend | 1.2 | [1.2e-6, 3] rad |
+    | max_bend_speed | 6.0 | [6e-6, 1e3] rad/s |
+    | fall_time | 0.6 | [6e-7, 100] s |
     | dt | 0.01 | [1e-12, 100] s |
-    | tolerance | 0.05 | (0, π) rad |
+    | tolerance | 0.05 | [5e-8, π) rad |
     | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | `connenv.core.steppers` |
+
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`),
+    and J/I is at least 1e-6: the roll's integrand has a complex singularity a bend of 2 artanh √(J/I) from the
+    real axis, and the exact step's Gauss–Legendre pieces grow as its inverse.
 
     m and ℓ enter only the locked inertia across the spine, never the roll: they show in the angular momentum and
     the rendering. The defaults are a slender cat (J/I = 0.03) whose half turn needs β₀ ≈ 0.35 rad, so that
@@ -146,15 +153,15 @@ class FallingCatEnv(ConnectionEnv):
         **stepper_options,
     ):
         check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        I = check_number("transverse_inertia", transverse_inertia, 0.0, MAGNITUDE_BOUND, open_low=True)  # noqa: E741
-        J = check_number("axial_inertia", axial_inertia, 0.0, I, open_low=True, open_high=True,
+        I = check_scale("transverse_inertia", transverse_inertia, 0.01, MAGNITUDE_BOUND)  # noqa: E741
+        J = check_number("axial_inertia", axial_inertia, decimal(AXIAL_RATIO_MIN * I), I, open_high=True,
                          high_name="transverse_inertia")  # fmt: skip
-        self.mass = check_number("mass", mass, 0.0, MAGNITUDE_BOUND, open_low=True)
-        self.cm_distance = check_number("cm_distance", cm_distance, 0.0, MAGNITUDE_BOUND, open_low=True)
-        self.max_bend = check_number("max_bend", max_bend, 0.0, 3.0, open_low=True)
-        speed = check_number("max_bend_speed", max_bend_speed, 0.0, MAGNITUDE_BOUND, open_low=True)
-        self.fall_time = check_number("fall_time", fall_time, 0.0, 100.0, open_low=True)
-        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
+        self.mass = check_scale("mass", mass, 1.5, MAGNITUDE_BOUND)
+        self.cm_distance = check_scale("cm_distance", cm_distance, 0.12, MAGNITUDE_BOUND)
+        self.max_bend = check_scale("max_bend", max_bend, 1.2, 3.0)
+        speed = check_scale("max_bend_speed", max_bend_speed, 6.0, MAGNITUDE_BOUND)
+        self.fall_time = check_scale("fall_time", fall_time, 0.6, 100.0)
+        self.tolerance = check_scale("tolerance", tolerance, 0.05, math.pi, open_high=True)
         self.inertias = {"transverse_inertia": I, "axial_inertia": J}
         longest = min(math.sqrt(2) * speed * check_dt(dt, DT_MAX), 2 * self.max_bend)  # a segment's longest bend
         pieces = falling_cat.pieces_for(longest, I, J)

@@ -11,7 +11,15 @@ from gymnasium import spaces
 
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import (
+    check_angle,
+    check_dt,
+    check_keys,
+    check_number,
+    check_scale,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kapitza import KapitzaPendulum
@@ -23,6 +31,7 @@ HOLD_START = 0.2  # rad: KapitzaPendulum-v0 starts within this of inverted, at r
 HANG_START = (0.05, 0.1)  # rad: KapitzaSwingUp-v0 starts this far from hanging, either side, at rest
 STATE_KEYS = ("theta", "theta_dot", "p", "u", "u_dot")
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g l) past which it has diverged: StepperError
+DAMPING_MAX = 1e3  # the largest damping, in units of m l² √(g/l) (about one period's decay)
 LIFT_FLOOR = 1e-4  # floor of the swing-up's lift in the reward's logarithm: amplitude ≈ 0.02 rad
 TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
 
@@ -131,16 +140,21 @@ class KapitzaPendulumEnv(TaskEnv):
     | kwarg | default | range |
     |---|---|---|
     | pivot | "vertical" | "vertical", "horizontal", "planar" |
-    | length | 1.0 | (0, ∞), l |
-    | mass | 1.0 | (0, ∞) |
-    | g | 9.81 | (0, ∞) |
-    | v_max | 10.0 | (0, ∞) m/s |
-    | a_max | 0.1 | (0, length) m |
+    | length | 1.0 | [1e-6, 1e6] m, l |
+    | mass | 1.0 | [1e-6, 1e6] kg |
+    | g | 9.81 | [9.81e-6, 9.81e6] m/s² |
+    | v_max | 10.0 | [1e-5, 1e7] m/s |
+    | a_max | 0.1 | [1e-7, 1e5] m, below length |
     | dt | 0.005 | [1e-12, 10] s |
-    | tolerance | 0.3 | (0, π) rad |
-    | damping | 0.0 | [0, ∞) N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
+    | tolerance | 0.3 | [3e-7, π) rad |
+    | damping | 0.0 | [0, 1e3 m l² √(g/l)] N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, and exact's fallback) | | see `connenv.core.steppers` |
+
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
+    beyond, the energies and the reward's floor, 1 − (π/tolerance)², overflow. The damping's scale is
+    m l² √(g/l), at which it damps the swing in about one period; a thousand times that overdamps it a
+    thousandfold, and the step (DOP853, explicit) would spend its work on the decay.
 
     The default integrator is exact: while u̇ is constant the pivot moves uniformly, so in its frame the rod
     swings as a plain pendulum, whose flow is closed-form (Jacobi elliptic functions). Within 1e-6 of the
@@ -186,16 +200,13 @@ class KapitzaPendulumEnv(TaskEnv):
             raise ValueError(f"pivot={pivot!r} is not one of {list(PIVOTS)}")
         self.pivot, self.axes = pivot, list(PIVOTS[pivot])
         self.actuated = slice(self.axes[0], self.axes[-1] + 1)  # the axes as a slice of u (they are contiguous)
-        length = check_number("length", length, 0.0, open_low=True)
-        self.system = KapitzaPendulum(
-            length=length,
-            mass=check_number("mass", mass, 0.0, open_low=True),
-            g=check_number("g", g, 0.0, open_low=True),
-            damping=check_number("damping", damping, 0.0),
-        )
-        self.v_max = check_number("v_max", v_max, 0.0, open_low=True)
-        self.a_max = check_number("a_max", a_max, 0.0, length, open_low=True, open_high=True, high_name="length")
-        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
+        length, mass, g = check_scale("length", length, 1.0), check_scale("mass", mass, 1.0), check_scale("g", g, 9.81)
+        damping_max = DAMPING_MAX * mass * length**2 * math.sqrt(g / length)
+        damping = check_number("damping", damping, 0.0, damping_max)
+        self.system = KapitzaPendulum(length=length, mass=mass, g=g, damping=damping)
+        self.v_max = check_scale("v_max", v_max, 10.0)
+        self.a_max = check_scale("a_max", a_max, 0.1, length, open_high=True, high_name="length")
+        self.tolerance = check_scale("tolerance", tolerance, 0.3, math.pi, open_high=True)
         check_stepper_options(type(self).__name__, stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
 
@@ -348,7 +359,7 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     ## Action Space, Observation Space, Arguments
 
-    As KapitzaPendulum-v0, with one more argument, `hold_time` (default 2.0 s, range (0, ∞)).
+    As KapitzaPendulum-v0, with one more argument, `hold_time` (default 2.0 s, range [2e-6, 2e6] s).
 
     ## Rewards
 
@@ -378,7 +389,7 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ()}
 
     def __init__(self, render_mode: str | None = None, *, hold_time: float = 2.0, **kwargs):
-        self.hold_time = check_number("hold_time", hold_time, 0.0, open_low=True)
+        self.hold_time = check_scale("hold_time", hold_time, 2.0)
         super().__init__(render_mode, **kwargs)
         self.hold_steps = math.ceil(self.hold_time / self.dt - 1e-9)  # hold_time in whole steps
 

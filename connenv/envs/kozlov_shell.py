@@ -14,7 +14,15 @@ from gymnasium import spaces
 from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.segments import run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options, check_vector
+from connenv.core.validation import (
+    check_angle,
+    check_dt,
+    check_keys,
+    check_number,
+    check_scale,
+    check_stepper_options,
+    check_vector,
+)
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.swimmer import PlanarSwimmer, components
 from connenv.envs.vector import TaskVectorEnv
@@ -129,18 +137,21 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | a | 1.0 | (0, ∞), semi-axis along body x, a ≥ b |
-    | b | 0.5 | (0, a] |
-    | shell_mass | 1.0 | (0, ∞) |
-    | shell_inertia | None: shell_mass (a² + b²)/4 | (0, ∞) |
-    | rho | 1.0 | [0, ∞), fluid density |
-    | mass | 1.0 | (0, ∞), the inner mass |
-    | u1_max | 0.5 | (0, ∞), with the box's corners inside the ellipse |
-    | u2_max | 0.25 | (0, ∞), likewise |
+    | a | 1.0 | [1e-6, 1e6] m, semi-axis along body x, a ≥ b |
+    | b | 0.5 | [5e-7, 5e5] m, at most a |
+    | shell_mass | 1.0 | [1e-6, 1e6] kg |
+    | shell_inertia | None: shell_mass (a² + b²)/4 | within 1e6 of shell_mass (a² + b²)/4, kg m² |
+    | rho | 1.0 | [0, 1e6] kg/m², fluid density |
+    | mass | 1.0 | [1e-6, 1e6] kg, the inner mass |
+    | u1_max | 0.5 | [5e-7, 5e5] m, with the box's corners inside the ellipse |
+    | u2_max | 0.25 | [2.5e-7, 2.5e5] m, likewise |
     | dt | 0.1 | [1e-12, 1] s |
-    | success_radius | 0.05 | (0, 0.5) |
+    | success_radius | 0.05 | [5e-8, 0.5) m |
     | integrator | "magnus" (atol 1e-10) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-8, atol 1e-10 | see `connenv.core.steppers` |
+
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
+    beyond, the fluid's added masses (ρπa², ρπ(a² − b²)²/8) and the reward (per success_radius) overflow.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters
     (among them the mass ratio m/(M + λ₁)): a non-finite state, or, in the full model, a spatial momentum that
@@ -182,21 +193,20 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
-        a = check_number("a", a, 0.0, open_low=True)
+        a = check_scale("a", a, 1.0)
         b = _check_b(b, a)
         self.u_max = np.array(_check_box(u1_max, u2_max, a, b))
         params = {
             "a": a,
             "b": b,
-            "shell_mass": check_number("shell_mass", shell_mass, 0.0, open_low=True),
-            "shell_inertia": None
-            if shell_inertia is None
-            else check_number("shell_inertia", shell_inertia, 0.0, open_low=True),
-            "rho": check_number("rho", rho, 0.0),
-            "mass": check_number("mass", mass, 0.0, open_low=True),
+            "shell_mass": check_scale("shell_mass", shell_mass, 1.0),
+            "rho": check_scale("rho", rho, 1.0, zero=True),
+            "mass": check_scale("mass", mass, 1.0),
         }
+        disc = params["shell_mass"] * (a**2 + b**2) / 4  # the default J: a uniform elliptic disc
+        params["shell_inertia"] = None if shell_inertia is None else check_scale("shell_inertia", shell_inertia, disc)
         self.full_system, self.reduced_system = KozlovShell(**params), ReducedKozlovShell(**params)
-        self.success_radius = check_number("success_radius", success_radius, 0.0, 0.5, open_low=True, open_high=True)
+        self.success_radius = check_scale("success_radius", success_radius, 0.05, 0.5, open_high=True)
         check_stepper_options("KozlovShell-v0", stepper_options, type(self))
         if integrator in ("magnus", "dop853"):
             stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
@@ -351,8 +361,8 @@ def shell_rule(system, u_max, dt, atol):
 
 
 def _check_b(b, a):
-    """b in (0, a]: the axes are ordered so that a lies along body x."""
-    b = check_number("b", b, 0.0, open_low=True)
+    """b within SCALE_SPAN of its default and at most a: the axes are ordered so that a lies along body x."""
+    b = check_scale("b", b, 0.5)
     if b > a:
         raise ValueError(
             f"b={b!r} is out of range: must be in (0, a={a!r}]; the axes are ordered so that a, the larger "
@@ -362,9 +372,10 @@ def _check_b(b, a):
 
 
 def _check_box(u1_max, u2_max, a, b):
-    """(u1_max, u2_max), positive, with the corners of the mass's box strictly inside the ellipse."""
-    u1_max = check_number("u1_max", u1_max, 0.0, open_low=True)
-    u2_max = check_number("u2_max", u2_max, 0.0, open_low=True)
+    """(u1_max, u2_max), scales within SCALE_SPAN of their defaults, with the corners of the mass's box strictly
+    inside the ellipse."""
+    u1_max = check_scale("u1_max", u1_max, 0.5)
+    u2_max = check_scale("u2_max", u2_max, 0.25)
     if (u1_max / a) ** 2 + (u2_max / b) ** 2 >= 1.0:
         raise ValueError(
             f"u1_max={u1_max!r}, u2_max={u2_max!r}: the box of the mass reaches outside the shell; its corners "

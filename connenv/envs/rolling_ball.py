@@ -17,6 +17,7 @@ from connenv.core.validation import (
     check_keys,
     check_number,
     check_rotation,
+    check_scale,
     check_stepper_options,
     finite_action,
     ndim,
@@ -145,13 +146,14 @@ class RollingBallEnv(TaskEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | radius | 1.0 | (0, ∞) m |
-    | v_max | 1.0 | (0, ∞) m/s |
+    | radius | 1.0 | [1e-6, 1e6] m |
+    | v_max | 1.0 | [1e-6, 1e6] m/s |
     | dt | 0.1 | [1e-12, 100] s |
-    | tolerance | 0.05 | (0, π) rad |
+    | tolerance | 0.05 | [5e-8, π) rad |
     | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
     | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
 
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
     The default exact step is the closed form for any radius and dt: R stays on SO(3) to rounding, 1e-14 over
     200 random steps (`python -m connenv.bench precision`), and straight rolls match Ry(vt/ρ) to 1e-12.
 
@@ -179,9 +181,9 @@ class RollingBallEnv(TaskEnv):
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.v_max = check_number("v_max", v_max, 0.0, open_low=True)
-        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
-        self.system = RollingBall(check_number("radius", radius, 0.0, open_low=True))
+        self.v_max = check_scale("v_max", v_max, 1.0)
+        self.tolerance = check_scale("tolerance", tolerance, 0.05, math.pi, open_high=True)
+        self.system = RollingBall(check_scale("radius", radius, 1.0))
         check_stepper_options(type(self).__name__, stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
@@ -259,9 +261,21 @@ class RollingBallEnv(TaskEnv):
     # -- task: one state (Python floats and one R), or a batch with ops=BATCH (the vector env) ----------------
 
     def command(self, a):
-        """v = v_max a, with a projected radially onto the unit disk; a is one action (2,) or a batch (N, 2)."""
-        ops = SCALAR if a.ndim == 1 else BATCH
-        return self.v_max * a / ops.column(ops.maximum(1.0, ops.hypot(a[..., 0], a[..., 1])))
+        """v = v_max a, with a projected radially onto the unit disk; a is one action (2,) or a batch (N, 2). An action
+        whose length overflows (entries near the largest float) is first scaled down along its direction."""
+        if a.ndim == 1:
+            length = math.hypot(a[0], a[1])
+            if length == math.inf:
+                a = a / np.max(np.abs(a))
+                length = math.hypot(a[0], a[1])
+            return self.v_max * a / max(1.0, length)
+        with np.errstate(over="ignore"):
+            length = np.hypot(a[:, 0], a[:, 1])
+        huge = length == math.inf
+        if huge.any():
+            a = np.where(huge[:, None], a / np.max(np.abs(a), axis=1, keepdims=True), a)
+            length = np.hypot(a[:, 0], a[:, 1])
+        return self.v_max * a / np.maximum(1.0, length)[:, None]
 
     def observe(self, s, ops=SCALAR):
         return six_d(s.error).astype(np.float32)
@@ -321,14 +335,14 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     ## Arguments
 
-    Those of RollingBall-v0, and `position_tolerance` = 0.05, in (0, ∞) m. Everything else, the starting state,
+    Those of RollingBall-v0, and `position_tolerance` = 0.05, in [5e-8, 5e4] m. Everything else, the starting state,
     the action and `info` (plus `"position_error"`, d), is RollingBall-v0's.
     """
 
     metadata = {**RollingBallEnv.metadata, "measures": ("angle_error", "position_error", "path_length")}
 
     def __init__(self, render_mode: str | None = None, *, position_tolerance: float = 0.05, **kwargs):
-        self.position_tolerance = check_number("position_tolerance", position_tolerance, 0.0, open_low=True)
+        self.position_tolerance = check_scale("position_tolerance", position_tolerance, 0.05)
         super().__init__(render_mode, **kwargs)
 
     def _observation_space(self):

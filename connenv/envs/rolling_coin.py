@@ -14,6 +14,7 @@ from connenv.core.validation import (
     check_angle,
     check_keys,
     check_number,
+    check_scale,
     check_stepper_options,
     check_vector,
 )
@@ -91,14 +92,16 @@ class RollingCoinEnv(ConnectionEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | radius | 0.5 | (0, 1e3] m |
-    | max_steer_rate | 1.0 | (0, 1e3] rad/s |
-    | max_roll_rate | 2.0 | (0, 1e3] rad/s |
+    | radius | 0.5 | [5e-7, 1e3] m |
+    | max_steer_rate | 1.0 | [1e-6, 1e3] rad/s |
+    | max_roll_rate | 2.0 | [2e-6, 1e3] rad/s |
     | dt | 0.1 | [1e-12, 100] s |
-    | position_tolerance | 0.05 | (0, ∞) m |
-    | heading_tolerance | 0.05 | (0, π) rad |
+    | position_tolerance | 0.05 | [5e-8, 5e4] m |
+    | heading_tolerance | 0.05 | [5e-8, π) rad |
     | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `t`), `"target"` (x*, y*, θ*), `"distance"` (|d|, m),
     `"heading_error"` (θ* − θ wrapped into [−π, π], rad) and `"is_success"`.
@@ -121,14 +124,12 @@ class RollingCoinEnv(ConnectionEnv):
         **stepper_options,
     ):
         check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        self.radius = check_number("radius", radius, 0.0, MAGNITUDE_BOUND, open_low=True)
-        steer = check_number("max_steer_rate", max_steer_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
-        roll = check_number("max_roll_rate", max_roll_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.radius = check_scale("radius", radius, 0.5, MAGNITUDE_BOUND)
+        steer = check_scale("max_steer_rate", max_steer_rate, 1.0, MAGNITUDE_BOUND)
+        roll = check_scale("max_roll_rate", max_roll_rate, 2.0, MAGNITUDE_BOUND)
         self.rates = np.array([steer, roll])
-        self.position_tolerance = check_number("position_tolerance", position_tolerance, 0.0, open_low=True)
-        self.heading_tolerance = check_number(
-            "heading_tolerance", heading_tolerance, 0.0, math.pi, open_low=True, open_high=True
-        )
+        self.position_tolerance = check_scale("position_tolerance", position_tolerance, 0.05)
+        self.heading_tolerance = check_scale("heading_tolerance", heading_tolerance, 0.05, math.pi, open_high=True)
         super().__init__(
             "R2",
             functools.partial(rolling_coin.connection, radius=self.radius),

@@ -10,7 +10,7 @@ from gymnasium import spaces
 
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_dt, check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_dt, check_keys, check_number, check_scale, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.skier import Skier, check_curvature
@@ -23,9 +23,11 @@ ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g Δz) past which 
 SPEED_BOUND = 3.0  # |observed speed| is clipped here
 START_OFFSETS = (0.5, 2.0)  # m from the trail's lowest point, either side
 RK8_MIN_LEVER = 0.5  # the default is the projected RK8 where min(1 − κ h_max) ≥ this, else DOP853 (see SkierEnv)
-MAX_SUBSTEP = 0.05  # s: the projected RK8's substeps are ceil(dt / MAX_SUBSTEP)
+MAX_SUBSTEP = 0.05  # s: the projected RK8's substeps are ceil(dt / MAX_SUBSTEP), dt in the time of G_REFERENCE
+G_REFERENCE = 9.81  # m/s²: the g at which DT_MAX and MAX_SUBSTEP were measured (and the default)
 ENERGY_TOLERANCE = 1e-8  # its energy error per step, in m g Δz, past which it doubles its substeps
 DOP853_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}
+CLIMB_MIN = 1e-9  # the least Δz, relative to |z|: the energy check's bound, 0.1 m g Δz, stays far above E's rounding
 
 
 @dataclass
@@ -125,17 +127,22 @@ class SkierEnv(TaskEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | h_min | 0.5 | (0, h_max) |
-    | h_max | 1.0 | (h_min, ∞), with 1 − κ h_max > 0 on the whole trail |
-    | mass | 70.0 | (0, ∞) |
-    | g | 9.81 | (0, ∞) |
+    | h_min | 0.5 | [5e-7, 5e5] m, below h_max |
+    | h_max | 1.0 | [1e-6, 1e6] m, above h_min, with 1 − κ h_max > 0 on the whole trail |
+    | mass | 70.0 | [7e-5, 7e7] kg |
+    | g | 9.81 | [9.81e-6, 9.81e6] m/s², with dt √(g/9.81) ≤ 10 s |
     | dt | 0.05 | [1e-12, 10] s |
     | trail | "valley" | "valley", "halfpipe", a sympy expression in x (or its text), or four callables (f, f′, f″, f‴) |
     | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; user trails: domain=(lo, hi) and the expression's other symbols |
-    | target_x | None | required for a trail without rims: a point of the domain above the bottom |
-    | max_height_speed | None | None or (0, ∞) m/s |
-    | integrator | "rk8_energy" (⌈dt / 0.05 s⌉ substeps) where 1 − κ h_max ≥ 0.5 on the whole trail, else "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "gauss6", "dop853", "rk45", "lsoda", "radau" |
+    | target_x | None | required for a trail without rims: a point of the domain above the bottom, Δz ≥ 1e-9 \|z\| |
+    | max_height_speed | None | None or [1e-6, 1e6] m/s |
+    | integrator | "rk8_energy" (⌈dt √(g/9.81) / 0.05 s⌉ substeps) where 1 − κ h_max ≥ 0.5 on the whole trail, else "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "gauss6", "dop853", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4, rk8, rk8_energy, gauss6) / rtol, atol (scipy) / atol (rk8_energy) | | see `connenv.core.steppers` |
+
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
+    Under g the skier moves as under 9.81 m/s² with time scaled by √(g/9.81) (E, p and the speeds scale with it),
+    so the default stepper's substeps follow the scaled step dt √(g/9.81), and that scaled step keeps within the
+    longest dt measured at 9.81 m/s², 10 s.
 
     The default stepper depends on how close the barycentre can come to the trail's centre of curvature. Where
     1 − κ h_max ≥ 0.5 on the whole trail (the default valley and halfpipe), it is "rk8_energy": DOP853's
@@ -178,18 +185,24 @@ class SkierEnv(TaskEnv):
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.h_min = check_number("h_min", h_min, 0.0, open_low=True)
-        self.h_max = check_number("h_max", h_max, self.h_min, open_low=True, low_name="h_min")
+        self.h_min = check_scale("h_min", h_min, 0.5)
+        self.h_max = check_scale("h_max", h_max, 1.0)
+        if self.h_max <= self.h_min:
+            raise ValueError(f"h_max={h_max!r} is out of range: must be above h_min={self.h_min!r}")
         self.max_height_speed = (
-            None if max_height_speed is None else check_number("max_height_speed", max_height_speed, 0.0, open_low=True)
+            None if max_height_speed is None else check_scale("max_height_speed", max_height_speed, 1.0)
         )
         if trail_params is not None and not isinstance(trail_params, dict):
             raise ValueError(f"trail_params={trail_params!r} must be a dict or None")
         self.trail = make_trail(trail, trail_params)
         check_curvature(self.trail, self.h_max)
-        self.system = Skier(
-            self.trail, mass=check_number("mass", mass, 0.0, open_low=True), g=check_number("g", g, 0.0, open_low=True)
-        )
+        self.system = Skier(self.trail, mass=check_scale("mass", mass, 70.0), g=check_scale("g", g, G_REFERENCE))
+        self.scaled_dt = self.dt * math.sqrt(self.system.g / G_REFERENCE)  # the step in the time of g = 9.81 m/s²
+        if self.scaled_dt > DT_MAX:
+            raise ValueError(
+                f"g={g!r} with dt={dt!r} is out of range: the step in the time of 9.81 m/s², dt √(g/9.81) = "
+                f"{self.scaled_dt:.6g} s, must be at most {DT_MAX} s"
+            )
         check_stepper_options("Skier-v0", stepper_options, type(self))
 
         xs = self.trail.grid()
@@ -199,8 +212,13 @@ class SkierEnv(TaskEnv):
         self.goals = self._goals(target_x)
         self.z_floor = float(np.min(f + self.h_min / sigma))
         self.z_goal = min(self._crouched_height(x) for x in self.goals)
-        if self.z_goal <= self.z_floor:
-            raise ValueError(f"target_x={target_x!r} is at the bottom of the trail; nothing to climb")
+        least = CLIMB_MIN * max(abs(self.z_floor), abs(self.z_goal))
+        if not self.z_goal - self.z_floor >= least:
+            raise ValueError(
+                f"target_x={target_x!r} is at the bottom of the trail: the height to climb to it, Δz = "
+                f"{self.z_goal - self.z_floor:.3g} m, must be at least {CLIMB_MIN:g} of the barycentre's height, "
+                f"{least:.3g} m (the energy check is relative to Δz)"
+            )
         self.speed_scale = math.sqrt(2.0 * self.system.g * (self.z_goal - self.z_floor))
         self.kappa_bound = float(np.max(np.abs(f2 / sigma**3))) * self.h_max
         self.min_lever = float(np.min(1.0 - f2 / sigma**3 * self.h_max))  # min of 1 − κ h_max on the trail
@@ -219,7 +237,7 @@ class SkierEnv(TaskEnv):
             integrator = "rk8_energy" if self.min_lever >= RK8_MIN_LEVER else "dop853"
         if integrator == "rk8_energy":
             energy_scale = self.system.mass * self.system.g * (self.z_goal - self.z_floor)  # m g Δz
-            options = {"substeps": math.ceil(self.dt / MAX_SUBSTEP), "atol": ENERGY_TOLERANCE * energy_scale, **options}
+            options = {"substeps": math.ceil(self.scaled_dt / MAX_SUBSTEP), "atol": ENERGY_TOLERANCE * energy_scale, **options}
         elif integrator == "dop853":
             options = {**DOP853_TOLERANCES, **options}
         return integrator, options

@@ -20,8 +20,10 @@ from connenv.core.validation import (
     check_dt,
     check_keys,
     check_number,
+    check_scale,
     check_stepper_options,
     check_vector,
+    decimal,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.swimmer import PlanarSwimmer, components
@@ -36,7 +38,8 @@ POSITION_BOUND = 100.0  # m: |x|, |y| of the middle link and of the target given
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full model; atol is the Lie-group step's too
-SIZE_MIN = 1e-6  # the least a, b (m) and link_density: the link mass link_density · πab stays positive, so rho may be 0
+ASPECT_MAX = 100.0  # the largest aspect ratio a/b of a link (see SnakeSwimmerEnv)
+SIZE_MIN = 1e-6  # the least a (m) and link_density: the link mass link_density · πab stays positive, so rho may be 0
 STATE_KEYS = ("x", "y", "theta", "alpha", "beta", "momentum")
 
 
@@ -59,15 +62,19 @@ def joint_path(s, s_cmd, dt: float, max_speed: float):
     """The joints' motion over one step toward the command: along the straight segment from s to s_cmd, the faster
     joint at max_speed, then held at s_cmd for the rest of the step if it got there. Returns (ṡ, the duration of
     the motion, the joints at the end of the step); over a batch (rows on the first axis) the duration is one per
-    row, and a row that does not move has ṡ = 0 and duration 0."""
+    row, and a row that does not move has ṡ = 0 and duration 0. A move so small that max_speed / (its length)
+    overflows (a subnormal command from rest) is none: the joints take the command, ṡ = 0, duration 0; the body
+    would move by less than any float resolves."""
     if np.ndim(s) == 1:  # one state on floats, the same arithmetic: several times faster than numpy on two numbers
         return _joint_path_floats(s.tolist(), s_cmd.tolist(), dt, max_speed)
     delta = s_cmd - s
     largest = np.max(np.abs(delta), axis=-1)
     reach = largest / max_speed
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s_dot = np.where(largest[..., None] > 0.0, delta * (max_speed / largest[..., None]), 0.0)
-    ramp = np.minimum(reach, dt)
+    with np.errstate(divide="ignore", over="ignore"):
+        scale = max_speed / largest
+    moves = scale < math.inf  # a move, resolved: largest > 0 and max_speed / largest finite
+    s_dot = np.where(moves[..., None], delta * np.where(moves, scale, 0.0)[..., None], 0.0)
+    ramp = np.where(moves, np.minimum(reach, dt), 0.0)
     end = np.where((reach <= dt)[..., None], s_cmd, s + s_dot * dt)
     return s_dot, ramp, end
 
@@ -77,7 +84,10 @@ def _joint_path_floats(s, s_cmd, dt, max_speed):
     delta = [b - a for a, b in zip(s, s_cmd)]
     largest = max(abs(d) for d in delta)
     reach = largest / max_speed
-    s_dot = [d * (max_speed / largest) for d in delta] if largest > 0.0 else [0.0, 0.0]
+    scale = max_speed / largest if largest > 0.0 else math.inf
+    if scale == math.inf:  # no move, or one below what floats resolve (see joint_path)
+        return np.zeros(2), 0.0, np.array(s_cmd)
+    s_dot = [d * scale for d in delta]
     end = s_cmd if reach <= dt else [a + d * dt for a, d in zip(s, s_dot)]
     return np.array(s_dot), min(reach, dt), np.array(end)
 
@@ -170,14 +180,17 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     | kwarg | default | range |
     |---|---|---|
     | a | 0.5 | [1e-6, 1e3] m, the links' semi-axis along the link |
-    | b | 0.05 | [1e-6, a) m, across the link |
+    | b | 0.05 | [a/100, a) m, across the link |
     | link_density | 1.0 | [1e-6, 1e3], mass per area: a link's mass is link_density · πab |
     | rho | 1.0 | [0, 1e3], fluid density |
-    | max_joint_speed | 3.0 | (0, 1e3] rad/s |
+    | max_joint_speed | 3.0 | [3e-6, 1e3] rad/s |
     | dt | 0.05 | [1e-12, 0.25] s |
-    | success_radius | None: 0.1 body length, 0.6a | (0, 6a) m |
+    | success_radius | None: 0.1 body length, 0.6a | [6e-7 a, 6a) m |
     | integrator | "magnus" (atol 1e-12) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-10, atol 1e-12 | see `connenv.core.steppers` |
+
+    The links' aspect ratio a/b is at most 100: the connection of thinner links varies so fast with the shape that
+    the Lie-group rule chosen at construction (below) needs tens of pieces, and choosing it takes minutes.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or, in the full model, a spatial momentum that has moved by more than 0.1 of its norm since
@@ -217,17 +230,17 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         a = check_number("a", a, SIZE_MIN, MAGNITUDE_BOUND)
         params = {
             "a": a,
-            "b": check_number("b", b, SIZE_MIN, a, open_high=True, high_name="a"),
+            "b": check_number("b", b, decimal(a / ASPECT_MAX), a, open_high=True, high_name="a"),
             "link_density": check_number("link_density", link_density, SIZE_MIN, MAGNITUDE_BOUND),
             "rho": check_number("rho", rho, 0.0, MAGNITUDE_BOUND),
         }
         self.full_system, self.reduced_system = SnakeSwimmer(**params), ReducedSnakeSwimmer(**params)
         self.body_length = 6.0 * a
-        self.max_joint_speed = check_number("max_joint_speed", max_joint_speed, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.max_joint_speed = check_scale("max_joint_speed", max_joint_speed, 3.0, MAGNITUDE_BOUND)
         if success_radius is None:
             success_radius = 0.1 * self.body_length
-        self.success_radius = check_number(
-            "success_radius", success_radius, 0.0, self.body_length, open_low=True, open_high=True
+        self.success_radius = check_scale(
+            "success_radius", success_radius, 0.1 * self.body_length, self.body_length, open_high=True
         )
         check_stepper_options("SnakeSwimmer-v0", stepper_options, type(self))
         if integrator in ("magnus", "dop853"):

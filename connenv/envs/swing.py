@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
 from connenv.core.steppers import make_stepper
-from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_stepper_options
+from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_scale, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.swing import Swing
@@ -109,15 +109,18 @@ class SwingEnv(TaskEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | r_min | 1.6 | (0, r_max) |
-    | r_max | 2.0 | (r_min, ∞) |
-    | g | 9.81 | (0, ∞) |
-    | mass | 1.0 | (0, ∞) |
+    | r_min | 1.6 | [1.6e-6, 1.6e6] m, below r_max |
+    | r_max | 2.0 | [2e-6, 2e6] m, above r_min |
+    | g | 9.81 | [9.81e-6, 9.81e6] m/s² |
+    | mass | 1.0 | [1e-6, 1e6] kg |
     | dt | 0.05 | [1e-12, 100] s |
     | target_amplitude | π/2 | (0, π]; π means going over the top |
-    | max_radial_speed | None | None or (0, ∞) m/s |
+    | max_radial_speed | None | None or [1e-6, 1e6] m/s |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, and exact where r moves) | | see `connenv.core.steppers` |
+
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
+    beyond, the energies and the observation's bound (r_max/r_min)² leave float64 and float32.
 
     The default integrator, the closed-form pendulum flow, is the fastest and the
     most accurate stepper (`python -m connenv.bench precision`, docs/precision/):
@@ -150,14 +153,16 @@ class SwingEnv(TaskEnv):
         **stepper_options,
     ):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.r_min = check_number("r_min", r_min, 0.0, open_low=True)
-        self.r_max = check_number("r_max", r_max, self.r_min, open_low=True, low_name="r_min")
+        self.r_min = check_scale("r_min", r_min, 1.6)
+        self.r_max = check_scale("r_max", r_max, 2.0)
+        if self.r_max <= self.r_min:
+            raise ValueError(f"r_max={r_max!r} is out of range: must be above r_min={self.r_min!r}")
         self.target_amplitude = check_number("target_amplitude", target_amplitude, 0.0, math.pi, open_low=True)
         self.max_radial_speed = (
-            None if max_radial_speed is None else check_number("max_radial_speed", max_radial_speed, 0.0, open_low=True)
+            None if max_radial_speed is None else check_scale("max_radial_speed", max_radial_speed, 1.0)
         )
         self.system = Swing(
-            mass=check_number("mass", mass, 0.0, open_low=True), g=check_number("g", g, 0.0, open_low=True)
+            mass=check_scale("mass", mass, 1.0), g=check_scale("g", g, 9.81)
         )
         check_stepper_options("Swing-v0", stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)

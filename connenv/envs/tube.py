@@ -9,7 +9,14 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.segments import run_segments
-from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number, check_rotation, check_stepper_options
+from connenv.core.validation import (
+    MAGNITUDE_BOUND,
+    check_keys,
+    check_number,
+    check_rotation,
+    check_scale,
+    check_stepper_options,
+)
 from connenv.envs.base import BATCH, SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
@@ -104,12 +111,13 @@ class TubeTwistEnv(ConnectionEnv):
 
     | kwarg | default | range |
     |---|---|---|
-    | max_bend_rate | 1.0 | (0, 1e3] rad/s |
+    | max_bend_rate | 1.0 | [1e-6, 1e3] rad/s |
     | dt | 0.05 | [1e-12, 100] s |
-    | tolerance | 0.02 | (0, π) rad |
+    | tolerance | 0.02 | [2e-8, π) rad |
     | integrator | "exact" | "exact" (Rodrigues), "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps (euler, rk4) / rtol, atol (scipy, magnus) | | `connenv.core.steppers` |
 
+    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
     R stays on SO(3) to rounding under the exact step; a stepper that leaves it by more than 1e-9 (‖RᵀR − I‖)
     raises `connenv.core.StepperError` (the generic steppers integrate Ṙ = R ω̂ in coordinates and drift off).
 
@@ -133,8 +141,8 @@ class TubeTwistEnv(ConnectionEnv):
         **stepper_options,
     ):
         check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        self.tolerance = check_number("tolerance", tolerance, 0.0, math.pi, open_low=True, open_high=True)
-        max_bend_rate = check_number("max_bend_rate", max_bend_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
+        self.tolerance = check_scale("tolerance", tolerance, 0.02, math.pi, open_high=True)
+        max_bend_rate = check_scale("max_bend_rate", max_bend_rate, 1.0, MAGNITUDE_BOUND)
         infinite = [math.inf, math.inf]
         super().__init__("SO3", BEND_CONNECTION, np.negative(infinite), infinite, dt=dt, frame="body",
                          max_shape_speed=max_bend_rate, render_mode=render_mode, integrator=integrator,

@@ -66,7 +66,7 @@ import numpy as np
 from scipy.special import ellipj, ellipkinc, ellipkm1
 
 from connenv.core.lie import GAUSS6, GROUPS, _omega
-from connenv.core.steppers import Exact, Scipy, StepperError, _finite
+from connenv.core.steppers import SUBSTEPS_MAX, Exact, Scipy, StepperError, _finite
 from connenv.core.steppers import make_stepper as make_core_stepper
 from connenv.core.validation import check_number, check_rotation, check_vector
 
@@ -301,8 +301,9 @@ def make_stepper(integrator: str = "exact", **options):
         substeps = options.pop("substeps", 1)
         if options:
             raise ValueError(f"unknown option(s) {sorted(options)} for integrator='splitting'; it takes ['substeps']")
-        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
-            raise ValueError(f"substeps={substeps!r} must be an integer ≥ 1")
+        integer = isinstance(substeps, (int, np.integer)) and not isinstance(substeps, bool)
+        if not (integer and 1 <= substeps <= SUBSTEPS_MAX):
+            raise ValueError(f"substeps={substeps!r} must be an integer in [1, {SUBSTEPS_MAX}]")
         return Splitting(int(substeps))
     return make_core_stepper(integrator, RigidBody(), **options)
 

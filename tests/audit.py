@@ -1,0 +1,481 @@
+"""Bad-input audit over every registered connenv id: make kwargs from the float64 edges to zero, stepper options,
+reset states and options, and actions (subnormal, huge, non-finite, complex, of the wrong shape or type), by the
+single env and the vector env.
+
+Run it from the repository's root::
+
+    python tests/audit.py [--quick] [--ids connenv/Swing-v0 ...] [--cases make_kwarg_cases ...] [--show N]
+
+It prints every open case as it meets it (and every accepted case slower than SLOW s), then the totals by subject
+and overall; it exits 1 if a case is open. The full sweep takes the powers of ten one by one (``--quick``: every
+tenth). pytest does not collect it (its name does not start with ``test_``); tests/test_fuzz.py runs a sample of
+its cases with few steps each.
+
+Every case ends one of three ways:
+
+- **error**: a ValueError or TypeError (or StepperError, the project's documented exception, where a case says
+  so) whose message names the argument (``names``), with no warning before it; a refused step must leave the state
+  as it was;
+- **ran**: accepted, and every number that left the env (observations, rewards, infos) was finite, with no
+  warning, within TIMEOUT s;
+- **open**: anything else (another exception, an error that names nothing, a non-finite number, a warning, a
+  refused step that had moved the state, a hang), listed by case.
+
+The sweep is the list of case generators ``GENERATORS``: each is a function ``generator(ids, quick)`` that yields
+``Case``s. Cases of another kind (the builders' hostile systems, the command lines) come from a generator appended
+there: a ``Case`` is a subject, a description, the names its error must give, and a callable that raises or
+returns the results whose numbers must be finite (a command line's: run it in a subprocess, raise on a traceback
+or a zero exit, return nothing).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import copy
+import inspect
+import math
+import re
+import signal
+import sys
+import time
+import warnings
+from collections import Counter
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run as a script from anywhere: this checkout's connenv
+
+import connenv  # noqa: F401  (registers the envs)
+from connenv import examples
+from connenv.core.steppers import SUBSTEPS_MAX, StepperError
+from connenv.core.validation import init_parameters
+
+IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+TIMEOUT = 10.0  # s a case may take before it counts as a hang
+STEPS = 50  # random steps of a single env made with an edge kwarg (then a reset)
+VECTOR_STEPS = 10  # of its vector env of VECTOR_ROWS rows
+VECTOR_ROWS = 2
+SLOW = 2.0  # s: an accepted case slower than this is listed (a step's work should stay well within TIMEOUT)
+
+# -- the values ---------------------------------------------------------------------------------------------------
+
+SUBNORMALS = (5e-324, 1e-310)
+
+
+def edge_numbers(quick=False):
+    """0, the subnormals and the powers of ten from 1e-308 to 1e308 (every tenth with quick, and both ends), each
+    of both signs."""
+    exponents = range(-308, 309, 10 if quick else 1)
+    magnitudes = sorted({*SUBNORMALS, *(10.0**k for k in exponents), 1e-308, 1e308})
+    return [0.0, *magnitudes, *(-m for m in magnitudes)]
+
+
+MAGNITUDES = (*SUBNORMALS, 1e-300, 1e-30, 1e-3, 1.0, 1e3, 1e30, 1e300, 1.7e308)
+STATE_NUMBERS = (0.0, *MAGNITUDES, *(-x for x in MAGNITUDES))  # in reset states and actions
+NON_FINITE = (math.nan, math.inf, -math.inf)
+NOT_NUMBERS = ("1.0", True, False, 1 + 0j, np.complex128(2 + 3j), [1.0], np.array([1.0]), b"1", object())
+"""Values no numeric argument takes: a string, bools, complex numbers (of zero imaginary part too), a list, an
+array, bytes, an object."""
+INTEGERS = (0, 1, SUBSTEPS_MAX, SUBSTEPS_MAX + 1, 10**6, 10**9, 10**18, 2**63, -1, -(10**9), 2.0, 1.5)  # substeps
+
+# -- the envs' arguments ----------------------------------------------------------------------------------------
+
+STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
+    "connenv/Swing-v0": {"theta": 0, "theta_dot": 0, "p": 0, "r": 0},
+    "connenv/Skier-v0": {"x": 0, "x_dot": 0, "p": 0, "h": 0},
+    "connenv/RollingBall-v0": {"x": 0, "y": 0},
+    "connenv/RollingBallPose-v0": {"x": 0, "y": 0},
+    "connenv/RollingBallGoal-v0": {"x": 0, "y": 0},
+    "connenv/KozlovShell-v0": {"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3},
+    "connenv/ChaplyginSleigh-v0": {
+        key: 0 for key in ("x", "y", "phi", "v", "omega", "u", "u_dot", "u_along", "u_along_dot")
+    },
+    "connenv/SnakeSwimmer-v0": {"x": 0, "y": 0, "theta": 0, "alpha": 0, "beta": 0, "momentum": 3},
+    "connenv/KapitzaPendulum-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
+    "connenv/KapitzaSwingUp-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
+    "connenv/RollingCoinSurface-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0, "phi_dot": 0},
+    "connenv/ActiveConstraint-v0": {"q": 1, "p": 1, "u": 1},  # examples.swing(): n = m = 1
+    "connenv/Connection-v0": {"s": 1},  # examples.beanie(): k = 1
+    "connenv/RollingCoin-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0},
+    "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
+    "connenv/BeadOnBar-v0": {"r": 0, "r_dot": 0, "theta": 0},
+    "connenv/TubeTwist-v0": {},
+    "connenv/FallingCat-v0": {"bend": 2},
+}
+OPTION_KEYS = {  # reset options beside "state"
+    "connenv/KozlovShell-v0": {"target": 2},
+    "connenv/RollingCoin-v0": {"target": 3},
+    "connenv/ElroysBeanie-v0": {"target": 0},
+    "connenv/RollingCoinSurface-v0": {"target": 2},
+    "connenv/BeadOnBar-v0": {"target": 0},
+    "connenv/TubeTwist-v0": {"target": 0},
+    "connenv/SnakeSwimmer-v0": {"target": 2},
+    "connenv/ChaplyginSleigh-v0": {"target": 2},
+}
+ROTATIONS = {  # reset arguments that take a rotation matrix: (path in the options, name in the message)
+    "connenv/RollingBall-v0": [(("state", "R"), "state R"), (("target",), "target")],
+    "connenv/RollingBallPose-v0": [(("state", "R"), "state R"), (("target",), "target")],
+    "connenv/RollingBallGoal-v0": [(("state", "R"), "state R"), (("target",), "target")],
+    "connenv/TubeTwist-v0": [(("state", "R"), "state R")],
+    "connenv/FallingCat-v0": [(("state", "R"), "state R")],
+}
+NOT_NUMERIC = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
+               "control", "integrator", "pivot", "vectorized", "surface", "surface_params", "measure_distance"}
+
+
+def make_kwargs(env_id):
+    """The kwargs env_id is made with: the builders' examples (examples.MAKE_KWARGS), none for the others."""
+    return examples.MAKE_KWARGS[env_id]() if env_id in examples.MAKE_KWARGS else {}
+
+
+def env_class(env_id):
+    module, name = gym.spec(env_id).entry_point.split(":")
+    return getattr(__import__(module, fromlist=[name]), name)
+
+
+def numeric_parameters(env_id):
+    """The make kwargs of env_id that take a number (or None for a number): name -> default. The builders' bounds
+    (u_low, shape_low, ...) take a number or a sequence and count as numbers."""
+    cls = env_class(env_id)
+    defaults = {}
+    for klass in cls.__mro__:
+        if "__init__" in vars(klass):
+            for p in inspect.signature(klass.__init__).parameters.values():
+                defaults.setdefault(p.name, p.default)
+    given = make_kwargs(env_id)
+    names = [n for n in init_parameters(cls) if n not in NOT_NUMERIC]
+    return {n: given.get(n, defaults.get(n)) for n in names
+            if isinstance(given.get(n, defaults.get(n)), (int, float, list, type(None)))}
+
+
+def stepper_options(env_id):
+    """{option: the integrator it is swept with}: each of substeps, rtol, atol under the env's default integrator
+    if it takes it, else substeps under rk4 (and rtol, atol under dop853) where the env offers them."""
+    found = {}
+    for option, probe in (("substeps", 2), ("rtol", 1e-6), ("atol", 1e-8)):
+        for integrator in (None, "rk4" if option == "substeps" else "dop853"):
+            extra = {} if integrator is None else {"integrator": integrator}
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    gym.make(env_id, disable_env_checker=True, **make_kwargs(env_id), **extra, **{option: probe})
+            except ValueError:
+                continue
+            found[option] = integrator
+            break
+    return found
+
+
+# -- cases and their verdicts -----------------------------------------------------------------------------------
+
+
+@dataclass
+class Case:
+    """One bad input: ``run()`` raises, or returns the results (observations, rewards, infos) whose numbers must
+    be finite. A clear error names one of ``names``; ``documented`` lists further exceptions that count as
+    clear errors here (StepperError, where a case expects it)."""
+
+    where: str  # the env id, or another subject (a builder, a command line)
+    what: str
+    names: tuple[str, ...]
+    run: Callable[[], object]
+    documented: tuple[type, ...] = ()
+
+
+@dataclass
+class Verdict:
+    kind: str  # "error", "ran" or "open"
+    detail: str = ""
+
+
+class Hang(Exception):
+    """A case ran past TIMEOUT."""
+
+
+class MovedState(Exception):
+    """A refused step had changed the env's state."""
+
+
+def numbers(tree):
+    """Every number in an observation, reward, info or a tuple of them (strings left out)."""
+    if isinstance(tree, dict):
+        return [x for value in tree.values() for x in numbers(value)]
+    if isinstance(tree, (tuple, list)) and any(isinstance(v, (dict, tuple, list, np.ndarray)) for v in tree):
+        return [x for value in tree for x in numbers(value)]
+    if tree is None or isinstance(tree, str):
+        return []
+    array = np.asarray(tree)
+    if array.dtype.kind in "USO":  # strings (a vector env's info over rows): kept only where they are numbers
+        return [float(x) for x in array.ravel() if isinstance(x, (int, float, np.number))]
+    return list(np.ravel(array.astype(float)))
+
+
+@contextlib.contextmanager
+def time_limit(seconds):
+    """Raise Hang in the main thread after `seconds` (None: no limit); a solver's Python loop is interrupted."""
+    if seconds is None:
+        yield
+        return
+
+    def alarm(signum, frame):
+        raise Hang(f"still running after {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def names(name: str, message: str) -> bool:
+    """Whether an error message names the argument: as ``name=`` or ``name[`` (its value, or an entry's), or, for a
+    name longer than a letter, as a word (a one-letter name, a or b, would match the article)."""
+    pattern = rf"(?<![\w.]){re.escape(name)}(=|\[)" if len(name) == 1 else rf"(?<![\w.]){re.escape(name)}(?!\w)"
+    return re.search(pattern, message) is not None
+
+
+def judge(case: Case, timeout: float | None = TIMEOUT) -> Verdict:
+    """Run the case and say how it ended (see the module)."""
+    start = time.perf_counter()
+    try:
+        with warnings.catch_warnings(record=True) as caught, time_limit(timeout):
+            warnings.simplefilter("always")
+            results = case.run()
+    except (ValueError, TypeError, *case.documented) as error:
+        message = str(error)
+        if not any(names(name, message) for name in case.names):
+            return Verdict("open", f"{type(error).__name__} naming none of {case.names}: {message[:300]}")
+        if caught:
+            return Verdict("open", f"refused, but warned first: {caught[0].category.__name__}: {caught[0].message}")
+        return Verdict("error", f"{type(error).__name__}: {message[:300]}")
+    except Hang as error:
+        return Verdict("open", f"hang: {error}")
+    except Exception as error:  # noqa: BLE001  (every other outcome is what the audit reports)
+        return Verdict("open", f"{type(error).__name__}: {str(error)[:300]}")
+    values = np.array(numbers(results), float)
+    if caught:
+        return Verdict("open", f"warning: {caught[0].category.__name__}: {str(caught[0].message)[:200]}")
+    if not np.all(np.isfinite(values)):
+        return Verdict("open", f"a non-finite number left the env ({np.count_nonzero(~np.isfinite(values))} of them)")
+    return Verdict("ran", f"{time.perf_counter() - start:.2f} s")
+
+
+# -- running an env ---------------------------------------------------------------------------------------------
+
+
+def make(env_id, **changed):
+    return gym.make(env_id, disable_env_checker=True, **{**make_kwargs(env_id), **changed})
+
+
+def make_vector(env_id, **changed):
+    kwargs = {**make_kwargs(env_id), **changed}
+    return gym.make_vec(env_id, VECTOR_ROWS, vectorization_mode="vector_entry_point", **kwargs)
+
+
+def rollout(env, steps, seed=0, options=None):
+    """reset(seed, options), `steps` random steps (resetting where an episode ends), a reset: every result."""
+    results = [env.reset(seed=seed, options=options)]
+    env.action_space.seed(seed)
+    for _ in range(steps):
+        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        results.append((obs, reward, info))
+        if np.ndim(terminated) == 0 and (terminated or truncated):  # a vector env resets its rows itself
+            results.append(env.reset())
+    results.append(env.reset())
+    return results
+
+
+def state_snapshot(env):
+    """A copy of the env's state (single: the unwrapped env's; vector: its batch)."""
+    return copy.deepcopy(env.unwrapped.state if hasattr(env, "unwrapped") else env.state)
+
+
+def same_state(a, b):
+    return all(np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True) for x, y in zip(
+        a.fields().values(), b.fields().values()))
+
+
+def step_from(env, action, steps=3, seed=0):
+    """From reset(seed): step `action` `steps` times; a refused step must leave the state as it was."""
+    results = [env.reset(seed=seed)]
+    for _ in range(steps):
+        before = state_snapshot(env)
+        try:
+            obs, reward, terminated, truncated, info = env.step(action)
+        except (ValueError, TypeError):
+            if not same_state(before, state_snapshot(env)):
+                raise MovedState("a refused step changed the state") from None
+            raise
+        results.append((obs, reward, info))
+        if np.any(terminated) or np.any(truncated):
+            break
+    return results
+
+
+# -- the generators ---------------------------------------------------------------------------------------------
+
+
+def make_kwarg_cases(ids, quick=False, values=None, steps=STEPS, vector_steps=VECTOR_STEPS):
+    """Every numeric make kwarg at every value (default: the edge numbers, the non-finite ones, those that are no
+    number, and None where the default is a number): single env (`steps` random steps and a reset) and vector env
+    (`vector_steps`)."""
+    for env_id in ids:
+        for key, default in numeric_parameters(env_id).items():
+            chosen = values
+            if chosen is None:
+                chosen = [*edge_numbers(quick), *NON_FINITE, *NOT_NUMBERS, *([None] if default is not None else [])]
+            for value in chosen:
+                yield Case(env_id, f"make {key}={value!r}", (key,),
+                           lambda e=env_id, k=key, v=value: rollout(make(e, **{k: v}), steps))
+                yield Case(env_id, f"make_vec {key}={value!r}", (key,),
+                           lambda e=env_id, k=key, v=value: rollout(make_vector(e, **{k: v}), vector_steps))
+
+
+def stepper_cases(ids, quick=False, values=None):
+    """substeps (integers, huge ones too; or `values`), rtol and atol at the edge numbers (or `values`), each also
+    non-finite or no number, under the integrator that takes them. Under an integrator other than the env's
+    default a StepperError (its documented divergence: RK4 drifts off SO(3), say) is a clear error."""
+    for env_id in ids:
+        for option, integrator in stepper_options(env_id).items():
+            extra = {} if integrator is None else {"integrator": integrator}
+            documented = () if integrator is None else (StepperError,)  # another integrator may diverge
+            chosen = values.get(option) if values else (INTEGERS if option == "substeps" else edge_numbers(True))
+            for value in (*chosen, *NOT_NUMBERS, *NON_FINITE):
+                kwargs = {**extra, option: value}
+                label = ", ".join(f"{k}={v!r}" for k, v in kwargs.items())
+                yield Case(env_id, f"make {label}", (option,),
+                           lambda e=env_id, kw=kwargs: rollout(make(e, **kw), 5), documented)
+
+
+def entries(size, number):
+    """Values of a reset argument of `size` entries (0: a number) with `number` in it: the number alone, or in the
+    first entry of a sequence and of an array."""
+    if size == 0:
+        return [number]
+    vector = [number] + [0.0] * (size - 1)
+    try:
+        return [vector, np.array(vector)]
+    except ValueError:  # a ragged sequence: no array of it
+        return [vector]
+
+
+def reset_values(size):
+    values = [v for x in (*STATE_NUMBERS, *NON_FINITE) for v in entries(size, x)]
+    values += [v for x in NOT_NUMBERS for v in entries(size, x)]
+    if size == 0:
+        return [*values, np.array(0.5 + 0j), np.array([0.5]), None]
+    return [*values, np.zeros(size, complex), np.full(size, 2 + 3j), np.zeros(size + 1), np.zeros((size, 1)), None]
+
+
+def reset_cases(ids, quick=False):
+    """Every reset state key and option at the edge numbers, non-finite, complex, of the wrong shape or type;
+    rotations given complex, subnormally off, or not rotations. Accepted: five random steps."""
+    for env_id in ids:
+        keys = {**{("state", k): n for k, n in STATE_KEYS.get(env_id, {}).items()},
+                **{(k,): n for k, n in OPTION_KEYS.get(env_id, {}).items()}}
+        for path, size in keys.items():
+            name = " ".join(path)
+            for value in reset_values(size):
+                options = {path[0]: value} if len(path) == 1 else {path[0]: {path[1]: value}}
+                yield Case(env_id, f"reset {options!r}", (name, path[-1]),
+                           lambda e=env_id, o=options: rollout(make(e), 5, options=o))
+        for path, name in ROTATIONS.get(env_id, []):
+            tiny = np.eye(3)
+            tiny[0, 1] = 1e-310
+            for value in (np.eye(3) + 0j, np.eye(3) * (1 + 1e-3j), tiny, np.eye(3)[:2], np.full((3, 3), np.nan),
+                          np.eye(3).astype(object), "I", np.eye(3).tolist()):
+                options = {path[0]: value} if len(path) == 1 else {path[0]: {path[1]: value}}
+                yield Case(env_id, f"reset {name}={value!r}", (name,),
+                           lambda e=env_id, o=options: rollout(make(e), 5, options=o))
+
+
+def action_values(shape):
+    """Actions of the space's shape with one entry (or all) at an edge number, non-finite or complex; arrays of the
+    wrong shape; values that are no number."""
+    size = shape[0]
+    values = []
+    for x in (*STATE_NUMBERS, *NON_FINITE):
+        one = np.zeros(size)
+        one[0] = x
+        values += [one, np.full(size, x)]
+    values += [np.full(size, 0.5 + 1j), np.zeros(size, complex), np.zeros(size + 1), np.zeros((size, 1)),
+               np.zeros(0), [0.0] * size, ["0.5"] * size, np.zeros(size, bool), "0.5", None, 0.5]
+    return values
+
+
+def action_cases(ids, quick=False):
+    """Every action value (action_values) from reset(seed=0), stepped three times, by the single env and by the
+    vector env (the same action on every row)."""
+    for env_id in ids:
+        single, vector = make(env_id), make_vector(env_id)
+        for action in action_values(single.action_space.shape):
+            yield Case(env_id, f"step {action!r}", ("action",), lambda e=single, a=action: step_from(e, a))
+            rows = np.broadcast_to(action, (VECTOR_ROWS, *np.shape(action))) if isinstance(action, np.ndarray) else action
+            yield Case(env_id, f"vector step {action!r}", ("action",), lambda e=vector, a=rows: step_from(e, a))
+
+
+GENERATORS: list[Callable[[Iterable[str], bool], Iterable[Case]]] = [
+    make_kwarg_cases,
+    stepper_cases,
+    reset_cases,
+    action_cases,
+]
+"""The case generators the audit runs, in order: append one to add cases."""
+
+
+# -- the command line -------------------------------------------------------------------------------------------
+
+
+def audit(ids, quick=False, timeout=TIMEOUT, report=None, generators=None):
+    """Judge every case of every generator (or of those named): [(case, verdict)]; report(case, verdict, count)
+    after each."""
+    verdicts = []
+    for generator in GENERATORS if generators is None else [g for g in GENERATORS if g.__name__ in generators]:
+        for case in generator(ids, quick):
+            verdicts.append((case, judge(case, timeout)))
+            if report is not None:
+                report(*verdicts[-1], len(verdicts))
+    return verdicts
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], prog="python tests/audit.py")
+    parser.add_argument("--ids", nargs="+", default=IDS, help="the ids to audit (default: every registered one)")
+    parser.add_argument("--quick", action="store_true", help="every tenth power of ten only")
+    parser.add_argument("--cases", nargs="+", choices=[g.__name__ for g in GENERATORS],
+                        help="the generators to run (default: all)")
+    parser.add_argument("--show", type=int, default=200, help="open cases listed at most (default 200)")
+    args = parser.parse_args(argv)
+    unknown = set(args.ids) - set(IDS)
+    if unknown:
+        parser.error(f"unknown id(s) {sorted(unknown)}; registered: {IDS}")
+    start, shown = time.perf_counter(), []
+
+    def report(case, verdict, count):
+        if verdict.kind == "ran" and float(verdict.detail.split()[0]) > SLOW:
+            print(f"SLOW {case.where}: {case.what[:160]}\n     {verdict.detail}", flush=True)
+        if verdict.kind == "open" and len(shown) < args.show:
+            shown.append(case)
+            print(f"OPEN {case.where}: {case.what[:160]}\n     {verdict.detail}", flush=True)
+        if count % 1000 == 0:
+            print(f"{count} cases, {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
+
+    verdicts = audit(args.ids, args.quick, report=report, generators=args.cases)
+    totals = Counter(verdict.kind for _, verdict in verdicts)
+    by_where = Counter(case.where for case, verdict in verdicts if verdict.kind == "open")
+    for where, count in sorted(by_where.items()):
+        print(f"open in {where}: {count}")
+    print(f"cases: {len(verdicts)}, clear errors: {totals['error']}, accepted and ran finite: {totals['ran']}, "
+          f"open: {totals['open']} ({time.perf_counter() - start:.0f} s)")
+    return 1 if totals["open"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
