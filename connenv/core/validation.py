@@ -161,13 +161,16 @@ def real_array(name: str, value, expected: str) -> np.ndarray:
     nested in sequences), else ValueError naming it and what is ``expected``. numpy's own cast would take a complex
     number's real part (with only a ComplexWarning), a bool as 0 or 1 and a numeric string as its number."""
     if isinstance(value, np.ndarray):
-        real = value.dtype.kind in "iuf"
+        real, complex_ = value.dtype.kind in "iuf", value.dtype.kind == "c"
     else:
         try:
             entries = np.array(value, dtype=object).ravel().tolist()
         except (TypeError, ValueError):  # a ragged sequence
             entries = [None]
         real = all(isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) for x in entries)
+        complex_ = any(isinstance(x, (complex, np.complexfloating)) for x in entries)
+    if complex_:
+        raise ValueError(f"{name}={value!r} is complex; expected {expected}")
     if not real:
         raise ValueError(f"{name}={value!r} must be {expected}")
     return np.array(value, dtype=np.float64)
@@ -230,23 +233,6 @@ def check_rotation(name: str, value) -> np.ndarray:
             f"both must be within {ORTHONORMAL_TOL} of 0 and 1"
         )
     return R
-
-
-def is_complex(value) -> bool:
-    """Whether value is complex numbers (a complex scalar, array or sequence), which numpy would make real with only
-    a ComplexWarning."""
-    try:
-        return np.asarray(value).dtype.kind == "c"
-    except (TypeError, ValueError):  # a ragged sequence: not numbers at all, for the caller's own check
-        return False
-
-
-def check_not_complex(name: str, value):
-    """value, unless it is complex (ValueError naming it): before a cast to float, which would drop the imaginary
-    part."""
-    if is_complex(value):
-        raise ValueError(f"{name}={value!r} is complex; expected real numbers")
-    return value
 
 
 def check_returned(name: str, value, shape: tuple | None = None, expected: str = "") -> np.ndarray:

@@ -16,7 +16,6 @@ from connenv.core.validation import (
     check_bounds,
     check_dt,
     check_keys,
-    check_not_complex,
     check_number,
     check_returned,
     check_stepper_options,
@@ -245,8 +244,7 @@ class ActiveConstraintEnv(TaskEnv):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
         check_system(system)
         self.system, self.n, self.m = system, int(system.n), int(system.m)
-        self.u_low, self.u_high = check_bounds("u_low", check_not_complex("u_low", u_low), "u_high",
-                                               check_not_complex("u_high", u_high), self.m)  # fmt: skip
+        self.u_low, self.u_high = check_bounds("u_low", u_low, "u_high", u_high, self.m)
         self.max_control_speed = (
             None
             if max_control_speed is None
@@ -331,7 +329,6 @@ class ActiveConstraintEnv(TaskEnv):
         check_keys(name, state, {"q", "p", "u"})
         values = dict(defaults)
         for key, value in state.items():
-            check_not_complex(f"state {key}", value)
             value = np.ravel(value) if np.ndim(value) == 0 else value  # a number for a single coordinate
             bounds = (self.u_low, self.u_high) if key == "u" else (-np.inf, np.inf)
             bounds = np.maximum(bounds[0], -MAGNITUDE_BOUND), np.minimum(bounds[1], MAGNITUDE_BOUND)

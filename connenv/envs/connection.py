@@ -17,12 +17,12 @@ from connenv.core.validation import (
     check_bounds,
     check_dt,
     check_keys,
-    check_not_complex,
     check_number,
     check_returned,
     check_stepper_options,
     check_vector,
     probe,
+    real_array,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.user_task import UserTask
@@ -176,8 +176,7 @@ class ConnectionEnv(TaskEnv):
         if frame not in FRAMES:
             raise ValueError(f"frame={frame!r} is not one of {list(FRAMES)}")
         self.group = GROUPS[group]
-        self.low, self.high = check_bounds("shape_low", check_not_complex("shape_low", shape_low), "shape_high",
-                                           check_not_complex("shape_high", shape_high))  # fmt: skip
+        self.low, self.high = check_bounds("shape_low", shape_low, "shape_high", shape_high)
         self.max_shape_speed = check_number("max_shape_speed", max_shape_speed, 0.0, MAGNITUDE_BOUND, open_low=True)
         if draw is not None and not callable(draw):
             raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
@@ -271,13 +270,10 @@ class ConnectionEnv(TaskEnv):
 
     def _check_g(self, value):
         shape = (2,) if self.group.name == "R2" else (2, 2) if self.group.name == "SO2" else (3, 3)
-        check_not_complex("state g", value)
-        try:
-            g = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            g = None
-        if g is None or g.shape != shape or not np.all(np.isfinite(g)):
-            raise ValueError(f"state g={value!r} must be a finite array of shape {shape} for group {self.group.name}")
+        expected = f"finite real numbers of shape {shape} for group {self.group.name}"
+        g = real_array("state g", value, expected)
+        if g.shape != shape or not np.all(np.isfinite(g)):
+            raise ValueError(f"state g={value!r} must be {expected}")
         if np.any(np.abs(g) > MAGNITUDE_BOUND):
             raise ValueError(f"state g={value!r} has an entry beyond ±{MAGNITUDE_BOUND}")
         off = float(self.group.off_group(g))
@@ -287,7 +283,7 @@ class ConnectionEnv(TaskEnv):
 
     def _check_s(self, value):
         low, high = np.maximum(self.low, -MAGNITUDE_BOUND), np.minimum(self.high, MAGNITUDE_BOUND)
-        return check_vector("state s", check_not_complex("state s", value), self.low.size, low, high)
+        return check_vector("state s", value, self.low.size, low, high)
 
     # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
@@ -383,16 +379,13 @@ def draw_plain(canvas, group: str, state: dict, low, high):
 
 def _check_constant(connection, group, k):
     """A constant connection as a float array, if it is real, finite, of shape (dim 𝔤, k)."""
-    check_not_complex("connection", connection)
-    try:
-        A = np.array(connection, dtype=float)
-    except (TypeError, ValueError):
-        A = None
-    if A is None or A.shape != (group.dim, k) or not np.all(np.isfinite(A)):
-        raise ValueError(
-            f"connection={connection!r} must be a callable s -> A(s) or a constant A: finite, of shape {(group.dim, k)} "
-            f"(dim 𝔤, k) for group {group.name} and a shape of {k} coordinates"
-        )
+    expected = (
+        f"a callable s -> A(s) or a constant A: finite, of shape {(group.dim, k)} (dim 𝔤, k) for group {group.name} "
+        f"and a shape of {k} coordinates"
+    )
+    A = real_array("connection", connection, expected)
+    if A.shape != (group.dim, k) or not np.all(np.isfinite(A)):
+        raise ValueError(f"connection={connection!r} must be {expected}")
     return A
 
 
