@@ -2,7 +2,7 @@
 
 from gymnasium.envs.registration import register
 
-__version__ = "0.2.1"
+__version__ = "0.3.0"
 __all__ = ["ActiveConstraintEnv", "ConnectionEnv"]
 
 
