@@ -11,7 +11,7 @@ import pytest
 import sympy as sp
 from gymnasium.utils.env_checker import check_env
 
-from connenv import ActiveConstraintEnv
+from connenv import ActiveConstraintEnv, examples
 from connenv.core import JumpClass, classify
 from connenv.core.lagrangian import LagrangianSystem
 from connenv.core.segments import bounded_segments, bounded_segments_batch
@@ -142,6 +142,15 @@ class TwoByTwo:
 def test_bad_systems_are_refused_at_construction(make, message):
     with pytest.raises(ValueError, match=message):
         make()
+
+
+def test_a_swing_whose_radius_may_reach_zero_is_refused_without_a_numpy_warning():
+    """At r = 0 the swing's G11 = r² vanishes, the zero matrix: θ̇ costs no kinetic energy, and the metric check
+    names the point (a zero matrix has no scale to compare its lowest eigenvalue with)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"G11 = \[\[0\.0\]\] .* u = \[0\.\] is not positive definite"):
+            gym.make("connenv/ActiveConstraint-v0", **{**examples.swing(), "u_low": 0.0})
 
 
 def test_reset_state_is_set_exactly_and_checked():

@@ -491,7 +491,8 @@ def check_metric(system, q, u):
         eigenvalues = np.linalg.eigvalsh(matrix)
         scale = np.max(np.abs(eigenvalues), axis=-1)
         if not np.all(eigenvalues[..., 0] > floor * scale):
-            i = np.argmin(eigenvalues[..., 0] / scale)
+            lowest = eigenvalues[..., 0]  # relative to the scale; a zero matrix (scale 0) is the worst
+            i = np.argmin(np.divide(lowest, scale, out=np.full_like(lowest, -np.inf), where=scale > 0))
             kind = "positive definite (q̇ must cost kinetic energy)" if block_name == "G11" else "positive semidefinite"
             raise ValueError(
                 f"the metric {'block G11' if block_name == 'G11' else 'G'} = {matrix[i].tolist()} at q = {q[i]}, "
