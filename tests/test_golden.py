@@ -17,9 +17,9 @@ RECORDED = json.loads(PATH.read_text())
 RTOL = 1e-12
 """Tolerance on a projection, relative to the array's Σ|x|. Another kernel rounds an operation's last bit (1.1e-16)
 differently; along an episode of a few hundred steps, and through an adaptive stepper's step choices, such
-roundings grow by a few hundred times (OpenBLAS's Haswell kernel against its SkylakeX one, and numpy's baseline
-kernels against its AVX-512 ones, move no projection by more than a few 1e-13). Any change of model, stepper,
-tolerance or task moves them by orders of magnitude more."""
+roundings grow by up to a few hundred times, which stays within 1e-12 (test_other_kernels_replay_the_recorded_
+trajectories checks it on two other kernels). Any change of model, stepper, tolerance or task moves a projection by
+orders of magnitude more."""
 FLOOR = 1.0
 """Σ|x| below which an array is compared absolutely, to RTOL · FLOOR: a quantity that is all roundoff (the drift of
 a conserved quantity under an exact step) has no relative precision, and states and rewards are of order one in SI."""
