@@ -99,8 +99,7 @@ class UserTask:
 
 def _real(name, value) -> float:
     """value as a finite float: a real number or a 0-d array of one, else TypeError or ValueError naming it."""
-    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "biuf":
-        value = value.item()
+    value = _unwrapped(value)
     if not isinstance(value, numbers.Real):
         raise TypeError(f"{name} returned {value!r}; expected a real number")
     value = float(value)
@@ -111,8 +110,14 @@ def _real(name, value) -> float:
 
 def _flag(name, value) -> bool:
     """value as a bool: a bool, a number or a 0-d array of one, else TypeError naming it."""
-    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "biuf":
-        value = value.item()
+    value = _unwrapped(value)
     if not isinstance(value, (bool, np.bool_, numbers.Real)):
         raise TypeError(f"{name} returned {value!r}; expected a bool")
     return bool(value)
+
+
+def _unwrapped(value):
+    """A 0-d numeric array as its number (what numpy returns for a reduction of one row); anything else as it is."""
+    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "biuf":
+        return value.item()
+    return value
