@@ -3,6 +3,8 @@
     python -m agents.baselines train     # 3 seeds per (env, algo) with train.py into runs/baselines/, on Ray
     python -m agents.baselines collect   # best model per (env, algo) into agents/pretrained/, curves into docs/
     python -m agents.baselines table     # the reference table, from agents/pretrained/ alone (offline, minutes)
+    python -m agents.baselines unseen    # every seed's model on unseen episodes into docs/baselines/unseen.json
+    python -m agents.baselines score     # normalized scores and their aggregates (agents.score), offline, seconds
 
 ``train`` trains once per (env, algo, seed) with train.py's ``train.main`` and the hyperparameters of
 agents/hyperparams/, each run a Ray task of one CPU (``agents.cluster``): on a local Ray of ``--jobs`` CPUs by default,
@@ -18,6 +20,10 @@ of all seeds to docs/baselines/curves.csv. ``table`` evaluates random, each anal
 model on the same 100 episodes (seeds 0..99) with agents.evaluate, writes docs/baselines/results.{json,md} and
 draws docs/baselines/{env}.png: the learning curves (mean and range over seeds) with the analytic controller's mean
 return as a horizontal line.
+``unseen`` evaluates random, the analytic controller and the best model of every seed in `--runs` (with
+``--pretrained``, the shipped models instead) on EPISODES episodes reset with seeds UNSEEN_SEED + i, which no
+training, periodic evaluation, tuning, seed selection, table or diagnosis uses, and writes their returns and
+successes into docs/baselines/unseen.json. ``score`` reads that file alone: agents.score.
 """
 
 from __future__ import annotations
@@ -27,18 +33,21 @@ import csv
 import hashlib
 import json
 import os
+import re
 import shutil
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import redirect_stderr, redirect_stdout
+from functools import partial
 from operator import attrgetter
 from pathlib import Path
 
 import numpy as np
 import yaml
 
-from agents import cluster
+import connenv
+from agents import cluster, score
 from agents.controllers import CONTROLLERS
-from agents.evaluate import PRETRAINED, compare, load_model, pretrained_models
+from agents.evaluate import PRETRAINED, compare, evaluate, load_model, make_policy, pretrained_models
 from connenv import cli
 from connenv.cli import positive_int
 
@@ -73,14 +82,25 @@ ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperpa
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
 FINAL_EPISODES = 10  # train.py's own table at the end of a run; the results table is evaluated on EPISODES
 EPISODES = 100
+UNSEEN_SEED = 100_000
+"""The score's episode i is reset with seed UNSEEN_SEED + i. Training resets with its seed plus the env's rank
+(below 100), the periodic evaluation likewise, the table with 0..99, agents.imitate's diagnosis with 10 000..10 099
+(evaluation) and 20 000 and up (demonstrations)."""
+UNSEEN = DOCS / "unseen.json"
+LONG = "_long"  # the book of the budget curves: agents/hyperparams/ppo_long.yml
 
 
 def short(env_id: str) -> str:
     return env_id.split("/")[-1]
 
 
-def hyperparams(algo: str, env_id: str) -> dict:
-    return yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())[env_id]
+def hyperparams_file(algo: str, book: str = "") -> Path:
+    """agents/hyperparams/{algo}{book}.yml: the baselines' hyperparameters, or another book of them ("_long")."""
+    return HYPERPARAMS / f"{algo}{book}.yml"
+
+
+def hyperparams(algo: str, env_id: str, book: str = "") -> dict:
+    return yaml.safe_load(hyperparams_file(algo, book).read_text())[env_id]
 
 
 def run_config(folder: Path, env_id: str) -> dict | None:
@@ -101,12 +121,19 @@ def finished(folder: Path) -> bool:
 
 
 def train_argv(
-    env_id: str, algo: str, seed: int, runs: Path, timesteps: int | None = None, evaluations: int = EVALUATIONS
+    env_id: str,
+    algo: str,
+    seed: int,
+    runs: Path,
+    timesteps: int | None = None,
+    evaluations: int = EVALUATIONS,
+    book: str = "",
 ) -> list[str]:
     """train.py's arguments for a run: a periodic evaluation and a checkpoint `evaluations` times, resumed from its
-    last checkpoint if it has one."""
-    timesteps = timesteps or int(float(hyperparams(algo, env_id)["n_timesteps"]))
+    last checkpoint if it has one; the hyperparameters of `book`."""
+    timesteps = timesteps or int(float(hyperparams(algo, env_id, book)["n_timesteps"]))
     argv = ["--env", env_id, "--algo", algo, "--seed", str(seed), "--runs", str(runs), "--timesteps", str(timesteps)]
+    argv += ["--hyperparams", str(hyperparams_file(algo, book))] if book else []
     frequency = str(max(timesteps // evaluations, 1))
     argv += ["--eval-freq", frequency, "--checkpoint-freq", frequency, "--eval-episodes", str(FINAL_EPISODES)]
     return argv + ["--resume"] + (["--vector-env"] if algo == "ppo" else [])
@@ -117,13 +144,13 @@ def train_one(env_id: str, algo: str, seed: int, runs: Path = RUNS, **options) -
     unfinished run with them resumes from its last checkpoint; a folder with none, or with other hyperparameters, is
     moved aside (train.py's --overwrite, done here so that the logs below start in the new folder) and the run
     trained anew. Each attempt adds a line to the run's attempts.log: the process, the step it starts from and the
-    Ray node. options: train_argv's timesteps and evaluations."""
+    Ray node. options: train_argv's timesteps, evaluations and book."""
     import ray
 
     import train
 
     folder = run_folder(env_id, algo, seed, runs)
-    same = run_config(folder, env_id) == hyperparams(algo, env_id)
+    same = run_config(folder, env_id) == hyperparams(algo, env_id, options.get("book", ""))
     if same and finished(folder):
         return f"{folder.name}: done before"
     if folder.exists() and (not same or train.latest_checkpoint(folder) is None):
@@ -141,7 +168,7 @@ def train_all(
     envs: list[str], algos: list[str], jobs: int, address: str | None = None, seeds=SEEDS, **options
 ) -> list[str]:
     """Every (env, algo, seed) run as a Ray task of one CPU, retried from its checkpoint if its worker dies; print
-    each run's outcome as it ends. options: train_one's runs, timesteps and evaluations."""
+    each run's outcome as it ends. options: train_one's runs, timesteps, evaluations and book."""
     ray = cluster.connect(address, jobs)
     task = ray.remote(num_cpus=1, max_retries=cluster.MAX_RETRIES)(train_one)
     pending = {task.remote(env_id, algo, seed, **options): (env_id, algo, seed)
@@ -244,6 +271,39 @@ def collect(envs: list[str], algos: list[str], runs: Path = RUNS, seeds=SEEDS):
         writer = csv.DictWriter(file, ["env", "algo", "seed", "timesteps", "return", "success"])
         writer.writeheader()
         writer.writerows(sorted(rows, key=lambda r: (r["env"], r["algo"], int(r["seed"]), int(r["timesteps"]))))
+
+
+def collect_long(envs: list[str], runs: Path):
+    """The budget curves' periodic evaluations (one seed of PPO at 10x each) into docs/baselines/long.csv, and
+    docs/baselines/long.png: success against training steps, the budget of ppo.yml marked on each."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = []
+    fig, axes = plt.subplots(1, len(envs), figsize=(3 * len(envs), 2.8), sharey=True, squeeze=False)
+    for ax, env_id in zip(axes[0], envs, strict=True):
+        seeds = run_seeds(env_id, "ppo", runs)
+        for seed in seeds:
+            folder = run_folder(env_id, "ppo", seed, runs)
+            if run_config(folder, env_id) != hyperparams("ppo", env_id, LONG):
+                raise FileNotFoundError(f"{folder}: not trained with {hyperparams_file('ppo', LONG).name}")
+            curve = evaluations(folder)
+            rows += [{"env": env_id, "seed": seed, "timesteps": int(t), "return": f"{r:.6g}", "success": f"{s:.2f}"}
+                     for t, r, s in zip(curve["timesteps"], curve["return"], curve["success"], strict=True)]  # fmt: skip
+            ax.plot(curve["timesteps"], 100 * curve["success"], marker=".", label=f"seed {seed}")
+        ax.axvline(float(hyperparams("ppo", env_id)["n_timesteps"]), ls="--", color="k", lw=1, label="ppo.yml budget")
+        ax.set(title=short(env_id), xlabel="training steps", xscale="log")
+    axes[0][0].set(ylabel="success, periodic evaluation (%)")
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(DOCS / "long.png", dpi=100)
+    plt.close(fig)
+    with (DOCS / "long.csv").open("w", newline="") as file:
+        writer = csv.DictWriter(file, ["env", "seed", "timesteps", "return", "success"])
+        writer.writeheader()
+        writer.writerows(rows)
 
 
 def steps_to_target(row: dict) -> float | None:
@@ -381,9 +441,63 @@ def table(jobs: int, envs: list[str]) -> str:
     return text
 
 
+def run_seeds(env_id: str, algo: str, runs: Path) -> list[int]:
+    """The seeds of an (env, algo)'s run folders in runs, in order (folders moved aside left out)."""
+    pattern = re.compile(rf"{re.escape(short(env_id))}_{algo}_s(\d+)")
+    return sorted(int(match[1]) for folder in runs.glob("*") if (match := pattern.fullmatch(folder.name)))
+
+
+def unseen_record(env_id: str, spec: str, algo: str | None = None) -> dict:
+    """The returns and successes of a policy (agents.evaluate's spec) on the score's unseen episodes."""
+    _, policy = make_policy(spec, env_id, UNSEEN_SEED, algo)
+    episodes = evaluate(env_id, policy, EPISODES, UNSEEN_SEED)
+    return {"returns": [episode.ret for episode in episodes], "successes": [episode.success for episode in episodes]}
+
+
+def unseen_env(env_id: str, algos: list[str], runs: Path, pretrained: bool) -> dict:
+    """unseen.json's entry of an env: random's and the analytic controller's episodes, and those of the best model
+    of every run in `runs` that finished with the current hyperparameters (as "runs"), or of the shipped pretrained
+    models (as "pretrained {version}", the release that shipped them)."""
+    import torch
+
+    torch.set_num_threads(1)
+    analytic = next(iter(CONTROLLERS[env_id]))
+    entry = {"random": unseen_record(env_id, "random"), "analytic": {"name": analytic, **unseen_record(env_id, analytic)}}
+    if pretrained:
+        record = json.loads((PRETRAINED / "runs.json").read_text())[env_id]
+        entry[f"pretrained {connenv.__version__}"] = [
+            {"algo": algo, "seed": record[algo]["pretrained_seed"], "of_seeds": len(record[algo]["seeds"]),
+             **unseen_record(env_id, str(PRETRAINED / f"{short(env_id)}_{algo}" / "best_model.zip"), algo)}
+            for algo in algos if algo in record
+        ]  # fmt: skip
+        return entry
+    entry["runs"] = []
+    for algo in algos:
+        for seed in run_seeds(env_id, algo, runs):
+            folder = run_folder(env_id, algo, seed, runs)
+            if finished(folder) and run_config(folder, env_id) == hyperparams(algo, env_id):
+                timesteps = json.loads((folder / "results.json").read_text())["timesteps"]
+                model = str(folder / "best_model.zip")
+                entry["runs"].append({"algo": algo, "seed": seed, "timesteps": timesteps,
+                                      **unseen_record(env_id, model, algo)})  # fmt: skip
+    return entry
+
+
+def unseen(envs: list[str], algos: list[str], jobs: int, runs: Path, pretrained: bool):
+    """Evaluate the envs on the unseen episodes (one env per process) and merge them into docs/baselines/unseen.json:
+    an env's "runs" (or "pretrained") are replaced, the other envs' and keys kept."""
+    with ProcessPoolExecutor(jobs) as pool:
+        fresh = dict(zip(envs, pool.map(partial(unseen_env, algos=algos, runs=runs, pretrained=pretrained), envs)))
+    data = json.loads(UNSEEN.read_text()) if UNSEEN.is_file() else {"first_seed": UNSEEN_SEED, "envs": {}}
+    for env_id, entry in fresh.items():
+        data["envs"].setdefault(env_id, {}).update(entry)
+        print(f"{short(env_id)}: {len(entry['runs']) if 'runs' in entry else 'the shipped'} models", flush=True)
+    UNSEEN.write_text(json.dumps(data, indent=1))
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("command", choices=("train", "collect", "table"))
+    parser.add_argument("command", choices=("train", "collect", "table", "unseen", "score"))
     parser.add_argument(
         "--jobs", type=positive_int, default=os.cpu_count(), help="CPUs of a local Ray / table's processes"
     )
@@ -397,7 +511,22 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument(
         "--seeds", nargs="+", type=cli.seed_int, default=list(SEEDS), help="train, collect: the seeds of each pair"
     )
-    return parser.parse_args(argv)
+    parser.add_argument("--pretrained", action="store_true", help="unseen: the shipped models, not the runs'")
+    parser.add_argument(
+        "--long",
+        action="store_true",
+        help="train, collect: the budget curves (PPO at 10x, agents/hyperparams/ppo_long.yml; default envs: its, "
+        "seeds: 0, runs: runs/long), collected into docs/baselines/long.{csv,png}",
+    )
+    args = parser.parse_args(argv)
+    if args.long:
+        defaults = parser.parse_args([args.command])
+        long_envs = list(yaml.safe_load(hyperparams_file("ppo", LONG).read_text()))
+        args.env = long_envs if args.env == defaults.env else args.env
+        args.seeds = [0] if args.seeds == defaults.seeds else args.seeds
+        args.runs = RUNS.parent / "long" if args.runs == defaults.runs else args.runs
+        args.algo = ["ppo"]
+    return args
 
 
 def main(argv: list[str] | None = None):
@@ -405,12 +534,18 @@ def main(argv: list[str] | None = None):
     if not (REPO / "train.py").is_file():
         raise SystemExit(f"python -m agents.baselines works in a clone of the repository; {REPO} is not one")
     if args.command == "train":
-        options = {"runs": Path(args.runs), "timesteps": args.timesteps}
+        options = {"runs": Path(args.runs), "timesteps": args.timesteps, "book": LONG if args.long else ""}
         outcomes = train_all(args.env, args.algo, args.jobs, args.address, args.seeds, **options)
         if any("FAILED" in outcome for outcome in outcomes):
             raise SystemExit("some runs failed; their train.log says why")
+    elif args.command == "collect" and args.long:
+        collect_long(args.env, Path(args.runs))
     elif args.command == "collect":
         collect(args.env, args.algo, Path(args.runs), args.seeds)
+    elif args.command == "unseen":
+        unseen(args.env, args.algo, args.jobs, Path(args.runs), args.pretrained)
+    elif args.command == "score":
+        print(score.write(json.loads(UNSEEN.read_text()), DOCS, ENVS, ALGOS))
     else:
         print(table(args.jobs, args.env))
 

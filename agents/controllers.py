@@ -74,6 +74,7 @@ CONTROLLERS = {
         "damped": lambda env: KapitzaVibration(env, modulation=DAMPING_MODULATION),
     },
     "connenv/KapitzaSwingUp-v0": {"swingup": KapitzaSwingUp},
+    "connenv/KapitzaSwingUp-v1": {"swingup": KapitzaSwingUp},  # it reads v0's entries, which v1 keeps first
     "connenv/RollingCoin-v0": {"turn_roll_turn": CoinPlanner},
     "connenv/ElroysBeanie-v0": {"dead_beat": BeanieDeadBeat},
     "connenv/RollingCoinSurface-v0": {"steer": SteerToTarget},

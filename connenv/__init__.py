@@ -75,6 +75,12 @@ register(
     max_episode_steps=6000,
 )
 register(
+    id="connenv/KapitzaSwingUp-v1",
+    entry_point="connenv.envs.kapitza:KapitzaSwingUpV1Env",
+    vector_entry_point="connenv.envs.kapitza:KapitzaSwingUpV1VectorEnv",
+    max_episode_steps=6000,
+)
+register(
     id="connenv/RollingCoinSurface-v0",
     entry_point="connenv.envs.rolling_coin_surface:RollingCoinSurfaceEnv",
     vector_entry_point="connenv.envs.rolling_coin_surface:RollingCoinSurfaceVectorEnv",

@@ -40,6 +40,7 @@ PHYSICS = {
     "FallingCat-v0": "FallingCat.md",
     "KapitzaPendulum-v0": "kapitza.md",
     "KapitzaSwingUp-v0": "kapitza.md",
+    "KapitzaSwingUp-v1": "kapitza.md",
     "KozlovShell-v0": "kozlov-shell.md",
     "RollingBall-v0": "rolling-ball.md",
     "RollingBallGoal-v0": "rolling-ball.md",
@@ -184,7 +185,8 @@ def page(env_id: str) -> str:
     lines += [header, "|---|---|", *rest, ""]
     for title, body in merged_sections(cls).items():
         lines += [f"## {title}", "", body, ""]
-    lines += ["## Version History", "", VERSION_HISTORY, ""]
+    if "Version History" not in merged_sections(cls):  # a later version's docstring has its own
+        lines += ["## Version History", "", VERSION_HISTORY, ""]
     return "\n".join(lines)
 
 
