@@ -75,7 +75,7 @@ ENVS = (
     "connenv/SnakeSwimmer-v0",
     "connenv/FallingCat-v0",
 )
-UNTRAINED = ()
+UNTRAINED = ("connenv/KapitzaSwingUp-v1",)
 """Envs with hyperparameters and analytic controllers whose reference runs are still to be trained: ``train`` and
 ``collect`` take them; the table holds ENVS."""
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
@@ -316,6 +316,7 @@ MEASURES = {
     "connenv/Swing-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/Skier-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/KapitzaSwingUp-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
+    "connenv/KapitzaSwingUp-v1": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/BeadOnBar-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/RollingBall-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
@@ -454,44 +455,60 @@ def unseen_record(env_id: str, spec: str, algo: str | None = None) -> dict:
     return {"returns": [episode.ret for episode in episodes], "successes": [episode.success for episode in episodes]}
 
 
+def shipped_records(env_id: str, algos: list[str]) -> list[dict]:
+    """The unseen episodes of the shipped pretrained models, each with the seed it is the best of."""
+    record = json.loads((PRETRAINED / "runs.json").read_text())[env_id]
+    return [
+        {"algo": algo, "seed": record[algo]["pretrained_seed"], "of_seeds": len(record[algo]["seeds"]),
+         **unseen_record(env_id, str(PRETRAINED / f"{short(env_id)}_{algo}" / "best_model.zip"), algo)}
+        for algo in algos if algo in record
+    ]  # fmt: skip
+
+
+def run_records(env_id: str, algos: list[str], runs: Path) -> list[dict]:
+    """The unseen episodes of the best model of every run in `runs` that finished with the current hyperparameters,
+    "shipped" if it is the pretrained model."""
+    record, records = json.loads((PRETRAINED / "runs.json").read_text()).get(env_id, {}), []
+    for algo in algos:
+        for seed in run_seeds(env_id, algo, runs):
+            folder = run_folder(env_id, algo, seed, runs)
+            if finished(folder) and run_config(folder, env_id) == hyperparams(algo, env_id):
+                timesteps = json.loads((folder / "results.json").read_text())["timesteps"]
+                model = folder / "best_model.zip"
+                shipped = hashlib.sha256(model.read_bytes()).hexdigest() == record.get(algo, {}).get("source_sha256")
+                records.append({"algo": algo, "seed": seed, "timesteps": timesteps, "shipped": shipped,
+                                **unseen_record(env_id, str(model), algo)})  # fmt: skip
+    return records
+
+
 def unseen_env(env_id: str, algos: list[str], runs: Path, pretrained: bool) -> dict:
-    """unseen.json's entry of an env: random's and the analytic controller's episodes, and those of the best model
-    of every run in `runs` that finished with the current hyperparameters (as "runs"), or of the shipped pretrained
-    models (as "pretrained {version}", the release that shipped them)."""
+    """unseen.json's entry of an env: random's and the analytic controller's episodes, and the algorithms' runs
+    (under "runs") or shipped models (under "pretrained {version}", the release that shipped them)."""
     import torch
 
     torch.set_num_threads(1)
     analytic = next(iter(CONTROLLERS[env_id]))
     entry = {"random": unseen_record(env_id, "random"), "analytic": {"name": analytic, **unseen_record(env_id, analytic)}}
     if pretrained:
-        record = json.loads((PRETRAINED / "runs.json").read_text())[env_id]
-        entry[f"pretrained {connenv.__version__}"] = [
-            {"algo": algo, "seed": record[algo]["pretrained_seed"], "of_seeds": len(record[algo]["seeds"]),
-             **unseen_record(env_id, str(PRETRAINED / f"{short(env_id)}_{algo}" / "best_model.zip"), algo)}
-            for algo in algos if algo in record
-        ]  # fmt: skip
-        return entry
-    entry["runs"] = []
-    for algo in algos:
-        for seed in run_seeds(env_id, algo, runs):
-            folder = run_folder(env_id, algo, seed, runs)
-            if finished(folder) and run_config(folder, env_id) == hyperparams(algo, env_id):
-                timesteps = json.loads((folder / "results.json").read_text())["timesteps"]
-                model = str(folder / "best_model.zip")
-                entry["runs"].append({"algo": algo, "seed": seed, "timesteps": timesteps,
-                                      **unseen_record(env_id, model, algo)})  # fmt: skip
+        entry[f"pretrained {connenv.__version__}"] = shipped_records(env_id, algos)
+    else:
+        entry["runs"] = run_records(env_id, algos, runs)
     return entry
 
 
 def unseen(envs: list[str], algos: list[str], jobs: int, runs: Path, pretrained: bool):
     """Evaluate the envs on the unseen episodes (one env per process) and merge them into docs/baselines/unseen.json:
-    an env's "runs" (or "pretrained") are replaced, the other envs' and keys kept."""
+    the records of the algorithms evaluated replace theirs, the others' stay."""
     with ProcessPoolExecutor(jobs) as pool:
         fresh = dict(zip(envs, pool.map(partial(unseen_env, algos=algos, runs=runs, pretrained=pretrained), envs)))
     data = json.loads(UNSEEN.read_text()) if UNSEEN.is_file() else {"first_seed": UNSEEN_SEED, "envs": {}}
     for env_id, entry in fresh.items():
-        data["envs"].setdefault(env_id, {}).update(entry)
-        print(f"{short(env_id)}: {len(entry['runs']) if 'runs' in entry else 'the shipped'} models", flush=True)
+        old = data["envs"].setdefault(env_id, {})
+        for key, records in entry.items():
+            if isinstance(records, list):
+                records = [r for r in old.get(key, []) if r["algo"] not in algos] + records
+            old[key] = records
+        print(f"{short(env_id)}: {sum(len(v) for v in entry.values() if isinstance(v, list))} models", flush=True)
     UNSEEN.write_text(json.dumps(data, indent=1))
 
 

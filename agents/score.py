@@ -127,32 +127,43 @@ def env_table(data: dict) -> list[str]:
     """Per env and algorithm, over all seeds: success, return and normalized score with their intervals, and the
     references'."""
     lines = [
-        "| env | policy | seeds | success | return | normalized score |",
-        "|---|---|---|---|---|---|",
+        "| env | policy | seeds | success | return | normalized score | shipped model (seed): success, score |",
+        "|---|---|---|---|---|---|---|",
     ]
     for env_id, entry in data["envs"].items():
         name = env_id.split("/")[-1]
         for label, ref in (("random", entry["random"]), (f"{entry['analytic']['name']} (analytic)", entry["analytic"])):
             success, ret = np.mean(ref["successes"]), np.mean(ref["returns"])
             score = 0 if label == "random" else 1
-            lines.append(f"| {name} | {label} | – | {100 * success:.0f}% | {ret:.3g} | {score} |")
+            lines.append(f"| {name} | {label} | – | {100 * success:.0f}% | {ret:.3g} | {score} | |")
             name = ""
         for algo, runs in env_scores(entry).items():
             cells = [mean_interval([run[key] for run in runs]) for key in ("success", "return", "score")]
+            shipped = [f"{run['seed']}: {100 * run['success']:.0f}%, {run['score']:.3g}" for run in runs if run["shipped"]]
             lines.append(
                 f"| | {algo.upper()} | {', '.join(str(run['seed']) for run in runs)} | {cell(*cells[0], percent=True)} "
-                f"| {cell(*cells[1])} | {cell(*cells[2])} |"
+                f"| {cell(*cells[1])} | {cell(*cells[2])} | {shipped[0] if shipped else 'another round'} |"
             )
     return lines
 
 
+def latest(env_ids) -> list[str]:
+    """The env ids without those of which a later version is among them (a task counts once in an aggregate)."""
+    newest = {}
+    for env_id in env_ids:
+        name = env_id.rpartition("-v")[0]
+        newest[name] = max(newest.get(name, env_id), env_id, key=lambda e: int(e.rpartition("-v")[2]))
+    return [env_id for env_id in env_ids if newest[env_id.rpartition("-v")[0]] == env_id]
+
+
 def pooled_scores(data: dict, key: str = "runs") -> dict[str, dict[str, list[float]]]:
-    """{algo: {env: [normalized score per run]}} over the envs that have runs of the algorithm."""
+    """{algo: {env: [normalized score per run]}} over the envs that have runs of the algorithm, each task in its
+    latest version that has them."""
     scores = {}
     for env_id, entry in data["envs"].items():
         for algo, runs in env_scores(entry, key).items():
             scores.setdefault(algo, {})[env_id] = [run["score"] for run in runs]
-    return scores
+    return {algo: {env_id: by_env[env_id] for env_id in latest(by_env)} for algo, by_env in scores.items()}
 
 
 def sets(data: dict) -> dict[str, dict]:

@@ -227,3 +227,25 @@ def test_a_cluster_joined_with_the_token_runs_a_run_on_each_node(two_node_ray, t
     attempts = [(folder / "attempts.log").read_text().splitlines() for folder in folders]
     assert [len(lines) for lines in attempts] == [1, 1]
     assert len({lines[0].split(" on node ")[1] for lines in attempts}) == 2
+
+
+def test_unseen_scores_every_finished_seed_on_the_unseen_episodes_and_skips_runs_moved_aside(tmp_path, monkeypatch):
+    """`unseen` evaluates the best model of each finished run (a run moved aside is not one) on episodes reset with
+    UNSEEN_SEED + i, beside random and the analytic controller on the same episodes; agents.score then gives each
+    run a normalized score, 0 for random and 1 for the controller."""
+    import train
+    from agents import score
+
+    runs = tmp_path / "runs"
+    for seed in (0, 1):
+        train.main(baselines.train_argv("connenv/Swing-v0", "ppo", seed, runs, **TINY))
+    aside = baselines.run_folder("connenv/Swing-v0", "ppo", 1, runs)
+    aside.rename(aside.with_name(aside.name + ".20261125-120000"))
+    monkeypatch.setattr(baselines, "EPISODES", 3)
+    entry = baselines.unseen_env("connenv/Swing-v0", ["ppo"], runs, pretrained=False)
+    assert [(run["algo"], run["seed"], len(run["returns"])) for run in entry["runs"]] == [("ppo", 0, 3)]
+    analytic = baselines.evaluate("connenv/Swing-v0", baselines.make_policy("pumping", "connenv/Swing-v0", 0)[1], 3,
+                                  baselines.UNSEEN_SEED)  # fmt: skip
+    assert entry["analytic"]["returns"] == [episode.ret for episode in analytic]
+    by_algo = score.env_scores({**entry, "runs": entry["runs"] + [{**entry["analytic"], "algo": "copy", "seed": 0}]})
+    assert by_algo["copy"][0]["score"] == 1.0

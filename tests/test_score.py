@@ -67,3 +67,8 @@ def test_score_page_is_what_the_command_writes_from_the_shipped_evaluations(tmp_
     written = score.write(data, tmp_path, baselines.ENVS, baselines.ALGOS)
     assert written == (DOCS / "score.md").read_text()
     assert (tmp_path / "score_aggregates.png").stat().st_size > 0
+
+
+def test_a_task_counts_once_in_its_latest_version():
+    ids = ["connenv/A-v0", "connenv/B-v0", "connenv/A-v1", "connenv/A-v10"]
+    assert score.latest(ids) == ["connenv/B-v0", "connenv/A-v10"]

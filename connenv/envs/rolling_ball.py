@@ -337,6 +337,15 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     Those of RollingBall-v0, and `position_tolerance` = 0.05, in [5e-8, 5e4] m. Everything else, the starting state,
     the action and `info` (plus `"position_error"`, d), is RollingBall-v0's.
+
+    ## Open Challenge
+
+    No agent of the reference results learns this task. The reward is a trap for local improvement: a roll of
+    length ℓ turns the ball by at most ℓ/ρ and moves it ℓ away, so from the origin no action pays more than standing
+    still, and the target is reached only through a loop whose first half loses reward. The holonomy planner keeps
+    a plan, which a memoryless network has not been shown to reproduce. The evidence (the planner, behaviour clones,
+    a one-step greedy policy and the longest training curves) is in the reference-results guide, "Why it did not
+    learn, and what did".
     """
 
     metadata = {**RollingBallEnv.metadata, "measures": ("angle_error", "position_error", "path_length")}
