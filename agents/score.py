@@ -139,7 +139,7 @@ def env_table(data: dict) -> list[str]:
             name = ""
         for algo, runs in env_scores(entry).items():
             cells = [mean_interval([run[key] for run in runs]) for key in ("success", "return", "score")]
-            shipped = [f"{run['seed']}: {100 * run['success']:.0f}%, {run['score']:.3g}" for run in runs if run["shipped"]]
+            shipped = [f"{run['seed']}: {100 * run['success']:.0f}%, {run['score']:.3g}" for run in runs if run.get("shipped")]
             lines.append(
                 f"| | {algo.upper()} | {', '.join(str(run['seed']) for run in runs)} | {cell(*cells[0], percent=True)} "
                 f"| {cell(*cells[1])} | {cell(*cells[2])} | {shipped[0] if shipped else 'another round'} |"
@@ -189,10 +189,11 @@ def aggregate_table(run_sets: dict[str, dict]) -> tuple[list[str], dict]:
             result = aggregates(by_env)
             numbers[(key, algo)] = result
             n_runs = sum(map(len, by_env.values()))
-            lines.append(
-                f"| {set_label(key)} | {algo.upper()} | {len(by_env)} | {n_runs} | {cell(*result['iqm'])} "
-                f"| {cell(*result['optimality_gap'])} |"
-            )
+            if n_runs == len(by_env):  # one run per env: a stratified resample is the sample itself
+                iqm_cell, gap_cell = (f"{result[m][0]:.3g} (one run per env: no interval)" for m in result)
+            else:
+                iqm_cell, gap_cell = cell(*result["iqm"]), cell(*result["optimality_gap"])
+            lines.append(f"| {set_label(key)} | {algo.upper()} | {len(by_env)} | {n_runs} | {iqm_cell} | {gap_cell} |")
     ppo, sac = run_sets["runs"].get("ppo", {}), run_sets["runs"].get("sac", {})
     both = sorted(set(ppo) & set(sac))
     if both:

@@ -93,6 +93,12 @@ register(
     max_episode_steps=500,
 )
 register(
+    id="connenv/BeadOnBar-v1",
+    entry_point="connenv.envs.bead_on_bar:BeadOnBarV1Env",
+    vector_entry_point="connenv.envs.bead_on_bar:BeadOnBarV1VectorEnv",
+    max_episode_steps=500,
+)
+register(
     id="connenv/ChaplyginSleigh-v0",
     entry_point="connenv.envs.chaplygin_sleigh:ChaplyginSleighEnv",
     vector_entry_point="connenv.envs.chaplygin_sleigh:ChaplyginSleighVectorEnv",

@@ -34,6 +34,7 @@ ANIMATION_WIDTH, ANIMATION_FPS, MAX_FRAMES, MIN_FRAMES, MIN_SECONDS = 200, 12, 9
 PHYSICS = {
     "ActiveConstraint-v0": "framework.md",
     "BeadOnBar-v0": "BeadOnBar.md",
+    "BeadOnBar-v1": "BeadOnBar.md",
     "ChaplyginSleigh-v0": "ChaplyginSleigh.md",
     "Connection-v0": "connections.md",
     "ElroysBeanie-v0": "ElroysBeanie.md",

@@ -105,6 +105,7 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/RollingCoin-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0},
     "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
     "connenv/BeadOnBar-v0": {"r": 0, "r_dot": 0, "theta": 0},
+    "connenv/BeadOnBar-v1": {"r": 0, "r_dot": 0, "theta": 0},
     "connenv/TubeTwist-v0": {},
     "connenv/FallingCat-v0": {"bend": 2},
 }
@@ -114,6 +115,7 @@ OPTION_KEYS = {  # reset options beside "state"
     "connenv/ElroysBeanie-v0": {"target": 0},
     "connenv/RollingCoinSurface-v0": {"target": 2},
     "connenv/BeadOnBar-v0": {"target": 0},
+    "connenv/BeadOnBar-v1": {"target": 0},
     "connenv/TubeTwist-v0": {"target": 0},
     "connenv/SnakeSwimmer-v0": {"target": 2},
     "connenv/ChaplyginSleigh-v0": {"target": 2},

@@ -39,6 +39,7 @@ CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where an
     "connenv/ElroysBeanie-v0": [{}],
     "connenv/RollingCoinSurface-v0": [{}, {"surface": "plane"}],
     "connenv/BeadOnBar-v0": [{}, {"g": 0.0}],
+    "connenv/BeadOnBar-v1": [{}, {"g": 0.0}],
     "connenv/TubeTwist-v0": [{}, {"integrator": "magnus"}],
     "connenv/FallingCat-v0": [{}],
     "connenv/ChaplyginSleigh-v0": [{}, {"offset": 0.0, "box": 0.0}],  # general: u̇ commanded; fit: u commanded
