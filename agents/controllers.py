@@ -74,12 +74,10 @@ CONTROLLERS = {
         "damped": lambda env: KapitzaVibration(env, modulation=DAMPING_MODULATION),
     },
     "connenv/KapitzaSwingUp-v0": {"swingup": KapitzaSwingUp},
-    "connenv/KapitzaSwingUp-v1": {"swingup": KapitzaSwingUp},  # it reads v0's entries, which v1 keeps first
     "connenv/RollingCoin-v0": {"turn_roll_turn": CoinPlanner},
     "connenv/ElroysBeanie-v0": {"dead_beat": BeanieDeadBeat},
     "connenv/RollingCoinSurface-v0": {"steer": SteerToTarget},
     "connenv/BeadOnBar-v0": {"tilt": BeadTilt},
-    "connenv/BeadOnBar-v1": {"tilt": BeadTilt},
     "connenv/TubeTwist-v0": {"cap": tube.for_env, "square": lambda env: tube.for_env(env, sides=4)},
     "connenv/ChaplyginSleigh-v0": {"planner": ShakePlanner, "tail_first": TailFirst},
     "connenv/FallingCat-v0": {"kane_scher": KaneScher},

@@ -75,12 +75,6 @@ register(
     max_episode_steps=6000,
 )
 register(
-    id="connenv/KapitzaSwingUp-v1",
-    entry_point="connenv.envs.kapitza:KapitzaSwingUpV1Env",
-    vector_entry_point="connenv.envs.kapitza:KapitzaSwingUpV1VectorEnv",
-    max_episode_steps=6000,
-)
-register(
     id="connenv/RollingCoinSurface-v0",
     entry_point="connenv.envs.rolling_coin_surface:RollingCoinSurfaceEnv",
     vector_entry_point="connenv.envs.rolling_coin_surface:RollingCoinSurfaceVectorEnv",
@@ -90,12 +84,6 @@ register(
     id="connenv/BeadOnBar-v0",
     entry_point="connenv.envs.bead_on_bar:BeadOnBarEnv",
     vector_entry_point="connenv.envs.bead_on_bar:BeadOnBarVectorEnv",
-    max_episode_steps=500,
-)
-register(
-    id="connenv/BeadOnBar-v1",
-    entry_point="connenv.envs.bead_on_bar:BeadOnBarV1Env",
-    vector_entry_point="connenv.envs.bead_on_bar:BeadOnBarV1VectorEnv",
     max_episode_steps=500,
 )
 register(

@@ -34,14 +34,12 @@ ANIMATION_WIDTH, ANIMATION_FPS, MAX_FRAMES, MIN_FRAMES, MIN_SECONDS = 200, 12, 9
 PHYSICS = {
     "ActiveConstraint-v0": "framework.md",
     "BeadOnBar-v0": "BeadOnBar.md",
-    "BeadOnBar-v1": "BeadOnBar.md",
     "ChaplyginSleigh-v0": "ChaplyginSleigh.md",
     "Connection-v0": "connections.md",
     "ElroysBeanie-v0": "ElroysBeanie.md",
     "FallingCat-v0": "FallingCat.md",
     "KapitzaPendulum-v0": "kapitza.md",
     "KapitzaSwingUp-v0": "kapitza.md",
-    "KapitzaSwingUp-v1": "kapitza.md",
     "KozlovShell-v0": "kozlov-shell.md",
     "RollingBall-v0": "rolling-ball.md",
     "RollingBallGoal-v0": "rolling-ball.md",
@@ -186,8 +184,7 @@ def page(env_id: str) -> str:
     lines += [header, "|---|---|", *rest, ""]
     for title, body in merged_sections(cls).items():
         lines += [f"## {title}", "", body, ""]
-    if "Version History" not in merged_sections(cls):  # a later version's docstring has its own
-        lines += ["## Version History", "", VERSION_HISTORY, ""]
+    lines += ["## Version History", "", VERSION_HISTORY, ""]
     return "\n".join(lines)
 
 

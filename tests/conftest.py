@@ -150,7 +150,6 @@ SHORT_EPISODES = {  # kwargs that make episodes short, so that a run holds termi
     "connenv/KozlovShell-v0": {"max_episode_steps": 30, "success_radius": 0.45},
     "connenv/KapitzaPendulum-v0": {"max_episode_steps": 60, "tolerance": 0.21, "pivot": "horizontal"},  # it falls
     "connenv/KapitzaSwingUp-v0": {"max_episode_steps": 40, "hold_time": 0.05, "tolerance": 3.07},
-    "connenv/KapitzaSwingUp-v1": {"max_episode_steps": 40, "hold_time": 0.05, "tolerance": 3.07},
     "connenv/RollingCoinSurface-v0": {"max_episode_steps": 30, "tolerance": 3.0},
 }
 BALLS = ("connenv/RollingBall-v0", "connenv/RollingBallPose-v0", "connenv/RollingBallGoal-v0")

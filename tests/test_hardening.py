@@ -86,7 +86,6 @@ def test_string_and_complex_actions_are_refused_naming_the_action(env_id):
     [
         ("connenv/RollingBallPose-v0", ["position_tolerance", "radius", "v_max", "dt", "tolerance", "integrator"]),
         ("connenv/KapitzaSwingUp-v0", ["hold_time", "pivot", "v_max", "a_max", "dt", "tolerance", "integrator"]),
-        ("connenv/KapitzaSwingUp-v1", ["hold_time", "pivot", "v_max", "a_max", "dt", "tolerance", "integrator"]),
         ("connenv/Swing-v0", ["r_min", "r_max", "dt", "integrator", "substeps"]),
     ],
 )
@@ -287,11 +286,9 @@ FAST_STARTS = {  # the fastest reset states allowed (item 1), where a long step 
     "connenv/KozlovShell-v0": {"state": {"momentum": (27.0, 20.0, 5.0)}},
     "connenv/KapitzaPendulum-v0": {"state": {"theta": np.pi}},  # on the separatrix: the exact step's RK4 branch
     "connenv/KapitzaSwingUp-v0": {"state": {"theta": np.pi}},
-    "connenv/KapitzaSwingUp-v1": {"state": {"theta": np.pi}},
     "connenv/ActiveConstraint-v0": {"state": {"p": [1000.0]}},
     "connenv/Connection-v0": {"state": {"s": [1000.0]}},
     "connenv/BeadOnBar-v0": {"state": {"r_dot": 1000.0}},
-    "connenv/BeadOnBar-v1": {"state": {"r_dot": 1000.0}},
 }
 
 

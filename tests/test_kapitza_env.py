@@ -1,4 +1,4 @@
-"""KapitzaPendulum-v0 and KapitzaSwingUp-v0/-v1 as Gymnasium envs: checkers, determinism, pickling, the pivot's
+"""KapitzaPendulum-v0 and KapitzaSwingUp-v0 as Gymnasium envs: checkers, determinism, pickling, the pivot's
 travel, the tasks, the reference controllers and every bad input."""
 
 import math
@@ -12,7 +12,7 @@ from agents import evaluate
 from agents.controllers import controller
 from agents.kapitza import KapitzaVibration
 
-HOLD, SWING_UP, SWING_UP_V1 = "connenv/KapitzaPendulum-v0", "connenv/KapitzaSwingUp-v0", "connenv/KapitzaSwingUp-v1"
+HOLD, SWING_UP = "connenv/KapitzaPendulum-v0", "connenv/KapitzaSwingUp-v0"
 
 
 def test_starts_near_inverted_or_hanging_at_rest():
@@ -83,40 +83,6 @@ def test_swing_up_reward_is_the_log_lift_gain_less_time():
     along = 10.0 * float(np.float32(0.4))
     lift_after = 0.5 * ((0.5 * 1.0 + along + 0.5 * along**2) / 9.81 + 1.0)
     assert reward == pytest.approx(math.log(min(lift_after, 1.0) / lift_before) - 0.001, rel=1e-9)
-
-
-def test_swing_up_v1_moves_as_v0_and_observes_the_hold_last():
-    """v1 changes the observation and the reward only: the same actions give the same states and flags, and the
-    observation is v0's with the hold h = upright steps / hold steps appended."""
-    v0, v1 = gym.make(SWING_UP, hold_time=0.05), gym.make(SWING_UP_V1, hold_time=0.05)  # 10 steps
-    for env in (v0, v1):
-        env.reset(seed=4, options={"state": {"theta": math.pi - 0.1}})
-    rng = np.random.default_rng(0)
-    for _ in range(12):
-        action = rng.uniform(-0.05, 0.05, 1).astype(np.float32)
-        obs0, _, terminated0, _, info0 = v0.step(action)
-        obs1, _, terminated1, _, info1 = v1.step(action)
-        assert info1["state"] == info0["state"] and terminated1 == terminated0
-        np.testing.assert_array_equal(obs1[:-1], obs0)
-        assert obs1[-1] == pytest.approx(min(info1["upright_time"] / 0.05, 1.0), rel=1e-6)
-        if terminated1:
-            break
-    assert terminated1 and obs1[-1] == 1.0
-
-
-def test_swing_up_v1_return_telescopes_to_the_lift_gain_and_the_hold():
-    """A potential-based reward: an episode's return is ln(ℓ_T/ℓ₀) + 5 (h_T − h₀) − 0.2 t, whatever the path, here
-    the analytic controller's swing-up and hold."""
-    env = gym.make(SWING_UP_V1)
-    obs, _ = env.reset(seed=2)
-    lift0, policy, total = env.unwrapped.state.lift, controller(SWING_UP_V1, "analytic", env), 0.0
-    terminated = truncated = False
-    while not (terminated or truncated):
-        obs, reward, terminated, truncated, info = env.step(policy.predict(obs)[0])
-        total += reward
-    state = env.unwrapped.state
-    assert terminated and info["is_success"] and obs[-1] == 1.0
-    assert total == pytest.approx(math.log(state.lift / lift0) + 5.0 - 0.2 * state.t, rel=1e-9)
 
 
 def test_kapitza_controller_holds_every_start_and_the_exact_stepper_matches_dop853():

@@ -36,7 +36,6 @@ SPEED_TOLERANCE = 0.05  # |ṙ| ≤ 0.05 L/s
 SPEED_WEIGHT = 0.1  # s: the potential's weight of |ṙ| against |r − r*|
 SHAPING = 10.0  # the reward's factor of the potential's change
 TIME_COST = 0.01  # reward paid per step while the bead is outside the success tolerances
-LOG_SHAPING = 2.0  # BeadOnBar-v1's factor of its logarithmic potential's change
 SPEED_CAP = 10.0  # L/s: |ṙ| beyond it costs no more, and is observed as this
 OBSERVATION_HIGH = np.array([2.0, 3.0, SPEED_CAP, 1.0, 1.0, 1.0])  # past the bar's end only at the final step
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
@@ -277,10 +276,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         L = self.half_length
         return -(abs(r - s.target) / L + SPEED_WEIGHT * ops.clip(abs(p / self.mass) / L, 0.0, SPEED_CAP))
 
-    shaping = SHAPING
-
     def reward(self, before, after, info, ops=SCALAR):
-        shaping = self.shaping * (self.potential(after, ops) - self.potential(before, ops))
+        shaping = SHAPING * (self.potential(after, ops) - self.potential(before, ops))
         return ops.real(
             ops.where(info["left_bar"], -self.exit_penalty, shaping - ops.where(after.inside, 0.0, TIME_COST))
         )
@@ -300,40 +297,6 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         return renderer.draw(float(s.y[0]), float(s.u[0]), float(s.target), s.t, bool(s.inside))
 
 
-class BeadOnBarV1Env(BeadOnBarEnv):
-    r"""
-    ## Description
-
-    BeadOnBar-v0's bead, bar and task, with a reward that pays as much for each halving of the distance to rest at
-    the target near it as far from it.
-
-    ## Rewards
-
-    With v0's D = (|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L and the potential Φ = −ln(1 + D/0.02), per step
-
-        reward = 2 (Φ′ − Φ) − 0.01 · [outside the tolerances]
-
-    still potential-based (Ng, Harada & Russell 1999), summed to 2 (Φ_end − Φ₀) whatever the path. v0's Φ = −D pays
-    the same for each centimetre at any distance, so the last few centimetres, which take the finest control, paid
-    least beside the risk of leaving the bar; a policy learned to stop short. The logarithm pays the step from
-    D = 0.04 to 0.02 as much as that from 0.4 to 0.2 (for D ≫ 0.02), and 0.02 is the position tolerance. The time
-    cost and the exit penalty are v0's: from any state the rest of an episode inside the bar costs less than 15
-    (Φ ≥ −ln 151), and leaving it pays −exit_penalty (default 40).
-
-    ## Version History
-
-    - v1 (connenv 0.4.0): a logarithmic potential; the dynamics, observation, start, success and episode end are
-      v0's.
-    - v0: the first version, in connenv 0.1.0.
-    """
-
-    shaping = LOG_SHAPING
-
-    def potential(self, s, ops=SCALAR):
-        """Φ = −ln(1 + D/0.02), with v0's D = −Φ_v0."""
-        return -ops.log(1.0 - super().potential(s, ops) / POSITION_TOLERANCE)
-
-
 class BeadOnBarVectorEnv(ActiveConstraintVectorEnv):
     """BeadOnBar-v0 over a batch (``gym.make_vec("connenv/BeadOnBar-v0", num_envs=N)``; see
     ``connenv.envs.vector``): ActiveConstraint-v0's batched step, and the task's state row by row."""
@@ -342,9 +305,3 @@ class BeadOnBarVectorEnv(ActiveConstraintVectorEnv):
 
     def advance(self, s, command):
         return self.env.track(super().advance(s, command), s.target, s, BATCH)
-
-
-class BeadOnBarV1VectorEnv(BeadOnBarVectorEnv):
-    """BeadOnBar-v1 over a batch; as BeadOnBarVectorEnv."""
-
-    single_env = BeadOnBarV1Env

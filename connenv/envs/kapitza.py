@@ -1,4 +1,4 @@
-"""KapitzaPendulum-v0 and KapitzaSwingUp-v0/-v1: hold a pendulum inverted, or swing it up, by moving its pivot."""
+"""KapitzaPendulum-v0 and KapitzaSwingUp-v0: hold a pendulum inverted, or swing it up, by moving its pivot."""
 
 from __future__ import annotations
 
@@ -34,7 +34,6 @@ ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g l) past which it
 DAMPING_MAX = 1e3  # the largest damping, in units of m l² √(g/l) (about one period's decay)
 LIFT_FLOOR = 1e-4  # floor of the swing-up's lift in the reward's logarithm: amplitude ≈ 0.02 rad
 TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
-HOLD_BONUS = 5.0  # KapitzaSwingUp-v1's weight of the hold in the potential: about the swing-up's ln(1/ℓ₀)
 
 
 @dataclass
@@ -317,14 +316,10 @@ class KapitzaPendulumEnv(TaskEnv):
         return ops.real(self.system.theta_dot(s.y, s.u_dot))
 
     def observe(self, s, ops=SCALAR):
-        return ops.pack(self.observed(s, ops))
-
-    def observed(self, s, ops=SCALAR) -> list:
-        """The observation's entries."""
         theta, u, u_dot = ops.components(s.y)[0], ops.components(s.u), ops.components(s.u_dot)
         speed = ops.clip(self.theta_dot(s, ops) / self.theta_dot_scale, -SPEED_BOUND, SPEED_BOUND)
         pivot = [u[i] / self.a_max for i in self.axes] + [u_dot[i] / self.v_max for i in self.axes]
-        return [ops.cos(theta), ops.sin(theta), speed, *pivot]
+        return ops.pack([ops.cos(theta), ops.sin(theta), speed, *pivot])
 
     def describe_pendulum(self, s, ops=SCALAR):
         """The info both tasks give: the state, the energy and the deviation from inverted."""
@@ -429,58 +424,6 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
         return info["is_success"]
 
 
-class KapitzaSwingUpV1Env(KapitzaSwingUpEnv):
-    r"""
-    ## Description
-
-    KapitzaSwingUp-v0's pendulum, pivot and task (swing up, then hold inverted for `hold_time`), with the hold
-    observed and paid for.
-
-    ## Action Space
-
-    KapitzaPendulum-v0's.
-
-    ## Observation Space
-
-    `Box(4 + 2k,) float32`: KapitzaSwingUp-v0's, and last the part of the hold done, h = min(upright_time /
-    hold_time, 1), in [0, 1].
-
-    ## Rewards
-
-    With v0's lift ℓ and the hold h, per step
-
-        reward = ln(ℓ′/ℓ) + 5 (h′ − h) − 0.2 dt
-
-    a potential-based shaping in (ℓ, h) (Ng et al. 1999), summed to success: ln(1/ℓ₀) + 5 − 0.2 t. A pendulum that
-    leaves the tolerance gives back the hold's reward. v0 paid nothing past the cap ℓ = 1, so a pendulum swinging
-    over the top scored as one caught: only the time cost paid for catching it.
-
-    ## Version History
-
-    - v1 (connenv 0.4.0): the hold is observed (h) and paid (5 h in the potential); the dynamics, start, success
-      and episode end are v0's.
-    - v0: the first version, in connenv 0.1.0.
-    """
-
-    def __init__(self, render_mode: str | None = None, **kwargs):
-        super().__init__(render_mode, **kwargs)
-        low, high = self.observation_space.low, self.observation_space.high
-        low, high = np.append(low, 0.0).astype(np.float32), np.append(high, 1.0).astype(np.float32)
-        self.observation_space = spaces.Box(low, high, dtype=np.float32)
-
-    def hold(self, s, ops=SCALAR):
-        """h = min(upright_time / hold_time, 1), in whole steps."""
-        return ops.clip(s.upright_steps / self.hold_steps, 0.0, 1.0)
-
-    def observed(self, s, ops=SCALAR) -> list:
-        return [*super().observed(s, ops), self.hold(s, ops)]
-
-    def reward(self, before, after, info, ops=SCALAR):
-        """ln(ℓ′/ℓ) + 5 (h′ − h) − 0.2 dt."""
-        hold = HOLD_BONUS * (self.hold(after, ops) - self.hold(before, ops))
-        return ops.log(after.lift / before.lift) + hold - TIME_COST * self.dt
-
-
 class KapitzaPendulumVectorEnv(TaskVectorEnv):
     """KapitzaPendulum-v0 over a batch (``gym.make_vec("connenv/KapitzaPendulum-v0", num_envs=N)``; see
     ``connenv.envs.vector``). Each row's step is cut at its own end stops (``bounded_segments_batch``), so the
@@ -505,9 +448,3 @@ class KapitzaSwingUpVectorEnv(KapitzaPendulumVectorEnv):
     """KapitzaSwingUp-v0 over a batch; as KapitzaPendulumVectorEnv."""
 
     single_env = KapitzaSwingUpEnv
-
-
-class KapitzaSwingUpV1VectorEnv(KapitzaPendulumVectorEnv):
-    """KapitzaSwingUp-v1 over a batch; as KapitzaPendulumVectorEnv."""
-
-    single_env = KapitzaSwingUpV1Env
