@@ -69,7 +69,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 from tqdm import TqdmExperimentalWarning
 
 import agents
-from agents import evaluate
+from agents import curriculum, evaluate
 from agents.controllers import CONTROLLERS
 from agents.vec_env import make_native_vec_env
 from connenv import cli
@@ -236,12 +236,29 @@ class BestStatsExperimentManager(ExperimentManager):
     after_eval: BaseCallback | None = None
     interrupted = False
 
+    curriculum = None  # the training env's wrapper of agents.curriculum, from the hyperparameter "curriculum"
+
     def read_hyperparameters(self):
-        """rl-zoo3's, noting the rollout length n_steps of an on-policy algorithm (1 for an off-policy one)."""
+        """rl-zoo3's, noting the rollout length n_steps of an on-policy algorithm (1 for an off-policy one), with
+        the hyperparameter "curriculum" taken out for train.py (it stays in the saved config.yml)."""
         hyperparams, saved_hyperparams = super().read_hyperparameters()
+        if "curriculum" in hyperparams:
+            self.curriculum = curriculum.wrapper(hyperparams.pop("curriculum"))
         n_steps = inspect.signature(ALGOS[self.algo]).parameters.get("n_steps")
         self.n_steps = hyperparams.get("n_steps", n_steps.default) if n_steps else 1
         return hyperparams, saved_hyperparams
+
+    def create_envs(self, n_envs: int, eval_env: bool = False, no_log: bool = False):
+        """rl-zoo3's envs, the training env's wrapped in the curriculum if there is one (never the evaluation's)."""
+        if eval_env or self.curriculum is None:
+            return super().create_envs(n_envs, eval_env, no_log)
+        if self.env_wrapper is not None:
+            raise ValueError("a curriculum and an env_wrapper hyperparameter cannot be combined")
+        self.env_wrapper = self.curriculum
+        try:
+            return super().create_envs(n_envs, eval_env, no_log)
+        finally:
+            self.env_wrapper = None
 
     def create_callbacks(self):
         if self.eval_freq is None:  # a tenth of the budget, within [one rollout, EVAL_FREQ_MAX] where it can
@@ -303,8 +320,10 @@ class VectorExperimentManager(BestStatsExperimentManager):
     the VecNormalize statistics from one to the other."""
 
     def create_envs(self, n_envs: int, eval_env: bool = False, no_log: bool = False):
-        if self.env_wrapper is not None or self.frame_stack is not None:
-            raise ValueError("--vector-env takes no env_wrapper or frame_stack hyperparameters; they wrap single envs")
+        if self.env_wrapper is not None or self.frame_stack is not None or self.curriculum is not None:
+            raise ValueError(
+                "--vector-env takes no env_wrapper, frame_stack or curriculum hyperparameters; they wrap single envs"
+            )
         env = make_native_vec_env(
             self.env_name.gym_id,
             n_envs,
