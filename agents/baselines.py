@@ -75,7 +75,7 @@ ENVS = (
     "connenv/SnakeSwimmer-v0",
     "connenv/FallingCat-v0",
 )
-UNTRAINED = ()
+UNTRAINED = ("connenv/BeadOnBar-v1",)
 """Envs with hyperparameters and analytic controllers whose reference runs are still to be trained: ``train`` and
 ``collect`` take them; the table holds ENVS."""
 ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
@@ -317,6 +317,7 @@ MEASURES = {
     "connenv/Skier-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/KapitzaSwingUp-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/BeadOnBar-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
+    "connenv/BeadOnBar-v1": ("time to target", "s", lambda row: row["time_to_success_mean"]),
     "connenv/RollingBall-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
     "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),

@@ -78,6 +78,7 @@ CONTROLLERS = {
     "connenv/ElroysBeanie-v0": {"dead_beat": BeanieDeadBeat},
     "connenv/RollingCoinSurface-v0": {"steer": SteerToTarget},
     "connenv/BeadOnBar-v0": {"tilt": BeadTilt},
+    "connenv/BeadOnBar-v1": {"tilt": BeadTilt},
     "connenv/TubeTwist-v0": {"cap": tube.for_env, "square": lambda env: tube.for_env(env, sides=4)},
     "connenv/ChaplyginSleigh-v0": {"planner": ShakePlanner, "tail_first": TailFirst},
     "connenv/FallingCat-v0": {"kane_scher": KaneScher},

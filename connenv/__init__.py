@@ -86,6 +86,13 @@ register(
     vector_entry_point="connenv.envs.bead_on_bar:BeadOnBarVectorEnv",
     max_episode_steps=500,
 )
+register(  # v1: the bar turns at most 1 rad/s (BeadOnBarEnv's Version History)
+    id="connenv/BeadOnBar-v1",
+    entry_point="connenv.envs.bead_on_bar:BeadOnBarEnv",
+    vector_entry_point="connenv.envs.bead_on_bar:BeadOnBarVectorEnv",
+    max_episode_steps=500,
+    kwargs={"omega_max": 1.0},
+)
 register(
     id="connenv/ChaplyginSleigh-v0",
     entry_point="connenv.envs.chaplygin_sleigh:ChaplyginSleighEnv",

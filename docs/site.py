@@ -34,6 +34,7 @@ ANIMATION_WIDTH, ANIMATION_FPS, MAX_FRAMES, MIN_FRAMES, MIN_SECONDS = 200, 12, 9
 PHYSICS = {
     "ActiveConstraint-v0": "framework.md",
     "BeadOnBar-v0": "BeadOnBar.md",
+    "BeadOnBar-v1": "BeadOnBar.md",
     "ChaplyginSleigh-v0": "ChaplyginSleigh.md",
     "Connection-v0": "connections.md",
     "ElroysBeanie-v0": "ElroysBeanie.md",
@@ -175,6 +176,7 @@ def page(env_id: str) -> str:
         ("action space", f"`{env.action_space}`"),
         ("observation space", f"`{env.observation_space}`".replace("\n", " ")),
         ("time limit", f"{gym.spec(env_id).max_episode_steps} steps"),
+        *([("registered with", f"`{gym.spec(env_id).kwargs}`")] if gym.spec(env_id).kwargs else []),
         ("analytic controller", controller_name(env_id)),
         ("physics", f"[{PHYSICS[name(env_id)].removesuffix('.md')}](../physics/{PHYSICS[name(env_id)]})"),
     ]
@@ -184,7 +186,8 @@ def page(env_id: str) -> str:
     lines += [header, "|---|---|", *rest, ""]
     for title, body in merged_sections(cls).items():
         lines += [f"## {title}", "", body, ""]
-    lines += ["## Version History", "", VERSION_HISTORY, ""]
+    if "Version History" not in merged_sections(cls):  # a class with later versions has its own
+        lines += ["## Version History", "", VERSION_HISTORY, ""]
     return "\n".join(lines)
 
 

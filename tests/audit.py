@@ -104,6 +104,7 @@ STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
     "connenv/RollingCoin-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0},
     "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
     "connenv/BeadOnBar-v0": {"r": 0, "r_dot": 0, "theta": 0},
+    "connenv/BeadOnBar-v1": {"r": 0, "r_dot": 0, "theta": 0},
     "connenv/TubeTwist-v0": {},
     "connenv/FallingCat-v0": {"bend": 2},
 }
@@ -113,6 +114,7 @@ OPTION_KEYS = {  # reset options beside "state"
     "connenv/ElroysBeanie-v0": {"target": 0},
     "connenv/RollingCoinSurface-v0": {"target": 2},
     "connenv/BeadOnBar-v0": {"target": 0},
+    "connenv/BeadOnBar-v1": {"target": 0},
     "connenv/TubeTwist-v0": {"target": 0},
     "connenv/SnakeSwimmer-v0": {"target": 2},
     "connenv/ChaplyginSleigh-v0": {"target": 2},
@@ -241,12 +243,18 @@ def names(name: str, message: str) -> bool:
     return re.search(pattern, message) is not None
 
 
+OUT_OF_DATE = r".*is out of date\. You should consider upgrading"
+"""Gymnasium's notice on making an id of which a newer version is registered; the older versions are kept on purpose,
+so it is no warning of the audit's (nor of the tests', pyproject.toml's filterwarnings)."""
+
+
 def judge(case: Case, timeout: float | None = TIMEOUT) -> Verdict:
     """Run the case and say how it ended (see the module)."""
     start = time.perf_counter()
     try:
         with warnings.catch_warnings(record=True) as caught, time_limit(timeout):
             warnings.simplefilter("always")
+            warnings.filterwarnings("ignore", OUT_OF_DATE, DeprecationWarning)
             results = case.run()
     except (ValueError, TypeError, *case.documented) as error:
         message = str(error)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import connenv  # noqa: F401  (registers the envs)
+from agents import evaluate
 from agents.controllers import controller
 
 ID = "connenv/BeadOnBar-v0"
@@ -71,6 +72,37 @@ def test_reward_is_the_potentials_change_less_the_time_outside():
         _, reward, _, _, info = env.step(STILL)
         total += reward
     assert total == pytest.approx(10 * (potential(info) - potential(before)) - 0.1, rel=1e-12)  # it telescopes
+
+
+def test_v1_is_v0_with_the_bar_turning_at_most_one_radian_a_second():
+    v1, v0 = gym.make("connenv/BeadOnBar-v1"), gym.make(ID, omega_max=1.0)
+    assert v1.unwrapped.omega_max == 1.0
+    rng = np.random.default_rng(0)
+    for env in (v0, v1):
+        env.reset(seed=5)
+    for _ in range(50):
+        action = rng.uniform(-1, 1, 1).astype(np.float32)
+        step0, step1 = v0.step(action), v1.step(action)
+        np.testing.assert_array_equal(step1[0], step0[0])
+        assert step1[1:4] == step0[1:4] and step1[4]["state"] == step0[4]["state"]
+        if step0[2] or step0[3]:
+            break
+
+
+def test_v1_keeps_random_exploration_on_the_bar_and_costs_the_tilt_law_nothing():
+    """At 2π rad/s the centrifugal m r θ̇² reaches 4 m g at the bar's end: random actions fling the bead off in a
+    fraction of the time they take at 1 rad/s. The tilt law is clipped to omega_max and parks as fast under both."""
+    v0, v1 = gym.make(ID), gym.make("connenv/BeadOnBar-v1")
+    lengths = {}
+    for name, env in (("v0", v0), ("v1", v1)):
+        random = evaluate.RandomPolicy(env.action_space, 0)
+        lengths[name] = np.mean([evaluate.run_episode(env, random, seed).length for seed in range(20)])
+        law = controller(env.spec.id, "tilt", env)
+        episodes = [evaluate.run_episode(env, law, seed) for seed in range(10)]
+        assert all(episode.success for episode in episodes)
+        lengths[name + " tilt"] = [episode.length for episode in episodes]
+    assert lengths["v1"] > 3 * lengths["v0"]
+    assert np.abs(np.subtract(lengths["v1 tilt"], lengths["v0 tilt"])).max() <= 5  # steps: 0.1 s
 
 
 def test_leaving_the_bar_terminates_with_the_penalty():

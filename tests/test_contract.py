@@ -12,6 +12,7 @@ from typing import NamedTuple
 import gymnasium as gym
 import numpy as np
 import pytest
+from audit import OUT_OF_DATE
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
@@ -37,6 +38,7 @@ CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where an
     "connenv/ElroysBeanie-v0": [{}],
     "connenv/RollingCoinSurface-v0": [{}, {"surface": "plane"}],
     "connenv/BeadOnBar-v0": [{}, {"g": 0.0}],
+    "connenv/BeadOnBar-v1": [{}, {"g": 0.0}],
     "connenv/TubeTwist-v0": [{}, {"integrator": "magnus"}],
     "connenv/FallingCat-v0": [{}],
     "connenv/ChaplyginSleigh-v0": [{}, {"offset": 0.0, "box": 0.0}],  # general: u̇ commanded; fit: u commanded
@@ -115,6 +117,7 @@ UNBOUNDED = ("connenv/ActiveConstraint-v0", "connenv/Connection-v0")  # default 
 def test_gymnasium_and_sb3_checkers_pass_with_warnings_as_errors(case):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
+        warnings.filterwarnings("ignore", OUT_OF_DATE, DeprecationWarning)
         if case.env_id in UNBOUNDED:  # the checkers warn of an infinite Box bound, which a user's system may need
             warnings.filterwarnings("ignore", message=".*Box observation space (minimum|maximum) value is")
         gym_check_env(case.make().unwrapped)

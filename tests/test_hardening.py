@@ -289,6 +289,7 @@ FAST_STARTS = {  # the fastest reset states allowed (item 1), where a long step 
     "connenv/ActiveConstraint-v0": {"state": {"p": [1000.0]}},
     "connenv/Connection-v0": {"state": {"s": [1000.0]}},
     "connenv/BeadOnBar-v0": {"state": {"r_dot": 1000.0}},
+    "connenv/BeadOnBar-v1": {"state": {"r_dot": 1000.0}},
 }
 
 

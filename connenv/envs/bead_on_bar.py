@@ -1,4 +1,4 @@
-"""BeadOnBar-v0: bring a bead on a turning bar to rest at a target, by tilting and spinning the bar."""
+"""BeadOnBar-v0 and -v1: bring a bead on a turning bar to rest at a target, by tilting and spinning the bar."""
 
 from __future__ import annotations
 
@@ -130,7 +130,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     | half_length | 1.0 | [1e-6, 1e6] m: L |
     | g | 9.81 | [0, 9.81e6] m/s² |
     | mass | 1.0 | [1e-6, 1e6] kg |
-    | omega_max | 2π | [2π·1e-6, 500] rad/s |
+    | omega_max | 2π (v1: 1) | [2π·1e-6, 500] rad/s |
     | dt | 0.02 | [1e-12, 1] s |
     | hold_time | 0.5 | [0, 5e5] s |
     | exit_penalty | 40.0 | [0, 4e7] |
@@ -148,6 +148,16 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     Every `info` has `"state"` (`r`, `r_dot`, `p`, `theta`, `t` in SI), `"target"` (r*, m), `"hold"` (s within
     the tolerances so far), `"left_bar"` and `"is_success"`.
+
+    ## Version History
+
+    - v1 (connenv 0.4.0): registered with omega_max = 1 rad/s instead of 2π. The dynamics, observation, reward,
+      start and episode end are v0's, and the analytic tilt law (its rate clipped to omega_max) loses no time by it.
+      At 2π rad/s a random action spins the bar so fast that the centrifugal force m r θ̇² (up to
+      4 m g at the bar's end) flings the bead off within a second: exploration meets the exit penalty, and agents
+      learned to hold the bar still before reaching the target. At 1 rad/s it is at most m L (1/s)², a tenth of
+      m g on the default bar.
+    - v0: the first version, in connenv 0.1.0.
     """
 
     def __init__(
