@@ -440,7 +440,7 @@ def table(jobs: int, envs: list[str]) -> str:
     results_path.write_text(json.dumps(reports, indent=1))
     (DOCS / "results.md").write_text(text + "\n")
     guide = REPO / "docs" / "guides" / "reference-results.md"  # holds the same table
-    table_lines = re.compile(r"^\| env \| policy \|.*?\n(?!\|)", re.M | re.S)
+    table_lines = re.compile(r"^\| env \| policy \|.*?\n(?!\|)", re.MULTILINE | re.DOTALL)
     guide.write_text(table_lines.sub(lambda _: text + "\n", guide.read_text(), count=1))
     for report in reports:
         plot_curves(report, DOCS / f"{short(report['env'])}.png")
