@@ -156,6 +156,19 @@ def latest(env_ids) -> list[str]:
     return [env_id for env_id in env_ids if newest[env_id.rpartition("-v")[0]] == env_id]
 
 
+def release_table(data: dict) -> list[str]:
+    """Per env, the earlier releases' shipped models (each the best of its seeds) on the same unseen episodes."""
+    lines = ["| env | release | algorithm | seed (of) | success | normalized score |", "|---|---|---|---|---|---|"]
+    for env_id, entry in data["envs"].items():
+        for key in sorted(k for k in entry if k.startswith("pretrained")):
+            for algo, (run,) in env_scores(entry, key).items():
+                lines.append(
+                    f"| {env_id.split('/')[-1]} | {key.removeprefix('pretrained ')} | {algo.upper()} "
+                    f"| {run['seed']} ({run['of_seeds']}) | {100 * run['success']:.0f}% | {run['score']:.3g} |"
+                )
+    return lines
+
+
 def pooled_scores(data: dict, key: str = "runs") -> dict[str, dict[str, list[float]]]:
     """{algo: {env: [normalized score per run]}} over the envs that have runs of the algorithm, each task in its
     latest version that has them."""
@@ -275,6 +288,7 @@ def write(data: dict, docs, envs, algos) -> str:
         "",
         *env_table(data),
     ]
+    text += ["", "## Earlier releases' shipped models", "", *release_table(data)]
     gaps = missing(data, envs, algos)
     if gaps:
         text += ["", f"Not yet trained with the current hyperparameters: {', '.join(gaps)}."]
