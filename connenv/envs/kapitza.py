@@ -384,6 +384,15 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     Every `info` has KapitzaPendulum-v0's keys, with `"upright_time"`, the time it has been held within
     `tolerance` of inverted without a break (s), in place of `"max_deviation"`.
+
+    ## Open Challenge
+
+    No agent of the reference results learns this task: PPO and SAC pump the pendulum up but do not catch and hold
+    it. A behaviour clone of the analytic controller into the same network does (trained with DAgger), so the
+    observation and the action suffice; what is missing is learning the catch, which the reward pays only through
+    the time it saves once the lift reaches its cap. The evidence (the clones, the longest training curve, and the
+    attempts that did not help: a reward that pays the hold, a curriculum of starts released from every angle) is
+    in the reference-results guide, "What changed, and what is still open".
     """
 
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ()}
