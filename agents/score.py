@@ -120,7 +120,7 @@ def cell(point, low, high, percent: bool = False) -> str:
     """'point [low, high]', as percentages with `percent`."""
     if percent:
         return f"{100 * point:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
-    return f"{point:.3g} [{low:.3g}, {high:.3g}]"
+    return f"{point:.4g} [{low:.4g}, {high:.4g}]"
 
 
 def env_table(data: dict) -> list[str]:
@@ -135,14 +135,14 @@ def env_table(data: dict) -> list[str]:
         for label, ref in (("random", entry["random"]), (f"{entry['analytic']['name']} (analytic)", entry["analytic"])):
             success, ret = np.mean(ref["successes"]), np.mean(ref["returns"])
             score = 0 if label == "random" else 1
-            lines.append(f"| {name} | {label} | – | {100 * success:.0f}% | {ret:.3g} | {score} | |")
+            lines.append(f"| {name} | {label} | – | {100 * success:.0f}% | {ret:.4g} | {score} | |")
             name = ""
         for algo, runs in env_scores(entry).items():
             cells = [mean_interval([run[key] for run in runs]) for key in ("success", "return", "score")]
             shipped = [f"{run['seed']}: {100 * run['success']:.0f}%, {run['score']:.3g}" for run in runs if run.get("shipped")]
             lines.append(
                 f"| | {algo.upper()} | {', '.join(str(run['seed']) for run in runs)} | {cell(*cells[0], percent=True)} "
-                f"| {cell(*cells[1])} | {cell(*cells[2])} | {shipped[0] if shipped else 'another round'} |"
+                f"| {cell(*cells[1])} | {cell(*cells[2])} | {shipped[0] if shipped else 'an earlier round (below)'} |"
             )
     return lines
 
