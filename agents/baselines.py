@@ -274,14 +274,15 @@ def collect(envs: list[str], algos: list[str], runs: Path = RUNS, seeds=SEEDS):
 
 
 def collect_long(envs: list[str], runs: Path):
-    """The budget curves' periodic evaluations (one seed of PPO at 10x each) into docs/baselines/long.csv, and
-    docs/baselines/long.png: success against training steps, the budget of ppo.yml marked on each."""
+    """The budget curves' periodic evaluations (one seed of PPO at 10x each, as far as they have run) into
+    docs/baselines/long.csv, and docs/baselines/long.png: success against training steps, the budget of the
+    0.3.0 ppo.yml marked on each."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = []
+    rows, envs = [], [env_id for env_id in envs if run_seeds(env_id, "ppo", runs)]  # the curves trained so far
     fig, axes = plt.subplots(1, len(envs), figsize=(3 * len(envs), 2.8), sharey=True, squeeze=False)
     for ax, env_id in zip(axes[0], envs, strict=True):
         seeds = run_seeds(env_id, "ppo", runs)
@@ -293,8 +294,9 @@ def collect_long(envs: list[str], runs: Path):
             rows += [{"env": env_id, "seed": seed, "timesteps": int(t), "return": f"{r:.6g}", "success": f"{s:.2f}"}
                      for t, r, s in zip(curve["timesteps"], curve["return"], curve["success"], strict=True)]  # fmt: skip
             ax.plot(curve["timesteps"], 100 * curve["success"], marker=".", label=f"seed {seed}")
-        ax.axvline(float(hyperparams("ppo", env_id)["n_timesteps"]), ls="--", color="k", lw=1, label="ppo.yml budget")
-        ax.set(title=short(env_id), xlabel="training steps", xscale="log")
+        budget = float(hyperparams("ppo", env_id, LONG)["n_timesteps"]) / 10
+        ax.axvline(budget, ls="--", color="k", lw=1, label="0.3.0 budget (a tenth)")
+        ax.set(title=short(env_id), xlabel="training steps", xlim=(0, None))
     axes[0][0].set(ylabel="success, periodic evaluation (%)")
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
