@@ -59,7 +59,7 @@ import scipy
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli
-from connenv.core.steppers import INTEGRATORS
+from connenv.core.integrators import INTEGRATORS
 from connenv.examples import MAKE_KWARGS
 
 PROG = "python -m connenv.throughput"
@@ -233,7 +233,7 @@ def shell_steppers(integrators, n: int, steps: int, seconds: float, seed: int = 
     rows by the batched stepper against Gymnasium's native CartPole-v1 vector env, each pair alternated in one loop
     (issue 15's targets: ≤ 5× and ≥ 0.1×). The system is stepped directly, without the env's task code."""
     from connenv.core.batched import batched
-    from connenv.core.steppers import make_stepper
+    from connenv.core.integrators import make_stepper
     from connenv.systems.kozlov_shell import ReducedKozlovShell
 
     system, dt, u_max = ReducedKozlovShell(), 0.1, np.array([0.5, 0.25])
@@ -449,7 +449,8 @@ def bounds_table(report: Report, n: int, seed: int = 0):
     elliptic functions, with its largest error per step against them."""
     from scipy.special import ellipj
 
-    from connenv.core.steppers import RK8, make_stepper
+    from connenv.core.integrators import make_stepper
+    from connenv.core.steppers import RK8
     from connenv.systems.swing import Swing, ellipj_one
 
     rng = np.random.default_rng(seed)

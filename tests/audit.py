@@ -52,7 +52,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run as a script 
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import examples
-from connenv.core.steppers import SUBSTEPS_MAX, StepperError
+from connenv.core.integrators import SUBSTEPS_MAX
+from connenv.core.steppers import StepperError
 from connenv.core.validation import init_parameters
 
 IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))

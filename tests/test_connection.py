@@ -11,8 +11,9 @@ from scipy.linalg import expm
 from scipy.spatial.transform import Rotation
 
 import connenv
+from connenv.core.integrators import make_stepper
 from connenv.core.lie import GROUPS, Connection, magnus_flow
-from connenv.core.steppers import StepperError, make_stepper
+from connenv.core.steppers import StepperError
 from connenv.systems.kozlov_shell import ReducedKozlovShell
 
 ID = "connenv/Connection-v0"
@@ -327,7 +328,7 @@ def test_bad_reset_state_is_refused(state, words):
 def test_a_stepper_that_cannot_meet_its_tolerance_raises(monkeypatch):
     """A tolerance the step cannot meet within MAX_SUBSTEPS substeps (here 2): StepperError, not a silent step. (A
     tolerance below what floats resolve is refused at make: make_stepper's MAGNUS_ATOL_MIN.)"""
-    monkeypatch.setattr(connenv.core.lie, "MAX_SUBSTEPS", 2)
+    monkeypatch.setattr(connenv.core.lie.magnus, "MAX_SUBSTEPS", 2)
     env = make(group="SO3", connection=twisted, atol=1e-15)
     env.reset(seed=0)
     with pytest.raises(StepperError, match="substeps"):

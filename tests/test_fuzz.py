@@ -27,7 +27,7 @@ import pytest
 from audit import OPTION_KEYS, STATE_KEYS, make_kwargs
 
 import connenv  # noqa: F401  (registers the envs)
-from connenv.core.steppers import SUBSTEPS_MAX
+from connenv.core.integrators import SUBSTEPS_MAX
 
 IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
 BUILDERS = ("connenv/ActiveConstraint-v0", "connenv/Connection-v0")

@@ -8,7 +8,7 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 import connenv.systems.rolling_ball as rolling_ball
-from connenv.core.steppers import make_stepper
+from connenv.core.integrators import make_stepper
 from connenv.systems.rolling_ball import Arc, RollingBall, split_legs
 
 BALL = RollingBall(1.0)

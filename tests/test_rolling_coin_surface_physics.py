@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import connenv  # noqa: F401
-from connenv.core.steppers import make_stepper
+from connenv.core.integrators import make_stepper
 from connenv.systems.rolling_coin_surface import SERIES_BELOW, RollingCoinPlane, RollingCoinSurface, phi_functions
 from connenv.systems.surfaces import Hill, Plane, Symbolic
 

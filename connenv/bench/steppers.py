@@ -49,7 +49,7 @@ from scipy.spatial.transform import Rotation
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli
-from connenv.core.steppers import INTEGRATORS
+from connenv.core.integrators import INTEGRATORS
 from connenv.systems.rolling_ball import rotation_angle
 
 STEPS = 1000

@@ -8,15 +8,14 @@ system's ``vector_field(y, u, u_dot)``; the exact stepper uses its
 or else its ``exact_flow(y, u, tau)`` where u̇ = 0. All of them broadcast over
 leading batch axes of y.
 
-Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form
-flow), ``"magnus"`` (the fourth-order Lie-group step of a system with a
-connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"``, ``"rk4"``, ``"rk8"``
-(DOP853's formula at a fixed step), ``"rk8_energy"`` (the same, projected onto the energy level where u is
-held) or ``"gauss6"`` (Gauss–Legendre, order 6) with ``substeps`` (1 to SUBSTEPS_MAX = 1000), or
-one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol``
-(RTOL_MIN = 100 ε to 1) and ``atol`` (1e-100 to 1e100); ``make_stepper`` refuses an option outside its
-range, at make rather than at a step that stalls or diverges. The two Euler methods are Gymnasium classic
-control's integrators (its ``kinematics_integrator``), there to compare against: they are first order, and
+Which one an env uses is a make kwarg: ``integrator="exact"`` (closed-form flow), ``"magnus"`` (the Lie-group
+step of a system with a connection, ``connenv.core.lie.Magnus``), ``"euler"``, ``"semi_implicit_euler"``,
+``"rk4"``, ``"rk8"`` (DOP853's formula at a fixed step), ``"rk8_energy"`` (the same, projected onto the energy
+level where u is held) or ``"gauss6"`` (Gauss–Legendre, order 6) with ``substeps`` (1 to SUBSTEPS_MAX = 1000), or
+one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol`` (RTOL_MIN = 100 ε to 1) and
+``atol`` (1e-100 to 1e100); ``connenv.core.integrators.make_stepper`` builds one by name and refuses an option
+outside its range, at make rather than at a step that stalls or diverges. The two Euler methods are Gymnasium
+classic control's integrators (its ``kinematics_integrator``), there to compare against: they are first order, and
 written here because scipy has no fixed-step methods; so is RK8, which takes scipy's tableau.
 """
 
@@ -82,6 +81,9 @@ class ConnectionSystem(Protocol):
     def connection(self, s): ...
 
 
+STEPPER_OPTIONS = ("substeps", "rtol", "atol")  # the make kwargs of a stepper (connenv.core.integrators)
+
+
 class StepperError(ArithmeticError):
     """A stepper produced a non-finite state or could not meet its tolerance (or an env's invariant left its
     documented bound)."""
@@ -104,7 +106,7 @@ class RK4:
             k3 = system.vector_field(y + 0.5 * h * k2, u_half, u_dot)
             k4 = system.vector_field(y + h * k3, u1, u_dot)
             y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        return _finite(y, self)
+        return check_finite(y, self)
 
 
 @dataclass(frozen=True)
@@ -117,7 +119,7 @@ class Euler:
         h = tau / self.substeps
         for i in range(self.substeps):
             y = y + h * system.vector_field(y, u + i * h * u_dot, u_dot)
-        return _finite(y, self)
+        return check_finite(y, self)
 
 
 @dataclass(frozen=True)
@@ -142,7 +144,7 @@ class SemiImplicitEuler:
             p = y[..., n:] + h * system.vector_field(y, u_i, u_dot)[..., n:]
             y = np.concatenate([y[..., :n], p], axis=-1)
             y = np.concatenate([y[..., :n] + h * system.vector_field(y, u_i, u_dot)[..., :n], p], axis=-1)
-        return _finite(y, self)
+        return check_finite(y, self)
 
 
 @dataclass(frozen=True)
@@ -158,7 +160,7 @@ class RK8:
     def __call__(self, system, y, u, u_dot, tau):
         held = not _moving(u_dot)
         if type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
-            return _finite(np.array(self._one(system, y.tolist(), u, u_dot, tau, held)), self)
+            return check_finite(np.array(self._one(system, y.tolist(), u, u_dot, tau, held)), self)
         h = tau / self.substeps
         for i in range(self.substeps):
             K = []
@@ -166,7 +168,7 @@ class RK8:
                 u_s = u if held else u + (i * h + c * h) * u_dot
                 K.append(system.vector_field(y if not row else y + h * _weighted(row, K), u_s, u_dot))
             y = y + h * _weighted(_DOP853_B, K)
-        return _finite(y, self)
+        return check_finite(y, self)
 
     def _one(self, system, y, u, u_dot, tau, held):
         """The step of one state y (a list of floats), in the batch's order of operations."""
@@ -211,7 +213,7 @@ class Gauss6:
             else:
                 raise StepperError(f"{self}: the stages did not converge in {self.MAX_ITERATIONS} sweeps (step {h} s)")
             y = y + h * _weighted(_GAUSS6_B, K)
-        return _finite(y, self)
+        return check_finite(y, self)
 
 
 _ROOT15 = math.sqrt(15.0)
@@ -256,7 +258,7 @@ class EnergyProjected:
             gradient = [-v for v in f[system.n :]] + f[: system.n]
             norm = sum(v * v for v in gradient)
             shift = float(excess) / norm if norm > 0.0 else 0.0
-            return _finite(np.array([y_k - shift * g_k for y_k, g_k in zip(y_new.tolist(), gradient)]), self)
+            return check_finite(np.array([y_k - shift * g_k for y_k, g_k in zip(y_new.tolist(), gradient)]), self)
         redo = ~(np.abs(excess) <= self.atol) & (substeps < self.substeps << MAX_DOUBLINGS)
         if redo.any():
             rows = lambda a: a[redo] if np.ndim(a) else a  # noqa: E731
@@ -267,7 +269,7 @@ class EnergyProjected:
         gradient = np.concatenate([-f[..., system.n :], f[..., : system.n]], axis=-1)
         norm = np.sum(gradient * gradient, axis=-1)
         shift = np.divide(excess, norm, out=np.zeros_like(norm), where=norm > 0.0)
-        return _finite(y_new - shift[..., None] * gradient, self)
+        return check_finite(y_new - shift[..., None] * gradient, self)
 
 
 MAX_DOUBLINGS = 6  # of EnergyProjected's substeps on one segment
@@ -341,12 +343,12 @@ class Scipy:
                     f"{self} cannot meet its tolerance: {budget} evaluations of {type(system).__name__}'s vector "
                     f"field brought it to s = {s:.9g} of a segment of {tau} s"
                 )
-            return _finite(system.vector_field(flat.reshape(shape), u + s * u_dot, u_dot).ravel(), self)
+            return check_finite(system.vector_field(flat.reshape(shape), u + s * u_dot, u_dot).ravel(), self)
 
         sol = solve_ivp(rhs, (0.0, tau), np.ravel(y), method=self.method, rtol=self.rtol, atol=self.atol)
         if not sol.success:
             raise StepperError(f"{self}: {sol.message} over a segment of {tau} s")
-        return _finite(sol.y[:, -1].reshape(shape), self)
+        return check_finite(sol.y[:, -1].reshape(shape), self)
 
 
 @dataclass(frozen=True)
@@ -375,7 +377,7 @@ class Exact:
             flow = np.array(flow)
             tau = tau if np.ndim(tau) == 0 else np.broadcast_to(tau, outside.shape)[outside]  # one per row
             flow[outside] = self.fallback(system, y[outside], u[outside], u_dot[outside], tau)
-        return _finite(flow, self)
+        return check_finite(flow, self)
 
 
 def _wrong_flow(system, flow, y):
@@ -387,83 +389,6 @@ def _wrong_flow(system, flow, y):
         f"{type(system).__name__}.{method} returned {shape} {_shown(flow)}; it must return the state after the "
         f"segment, a real array of the state's shape {np.shape(y)}"
     )
-
-
-SCIPY_METHODS = {"dop853": "DOP853", "rk45": "RK45", "lsoda": "LSODA", "radau": "Radau"}
-FIXED_STEP = {
-    "euler": Euler,
-    "semi_implicit_euler": SemiImplicitEuler,
-    "rk4": RK4,
-    "rk8": RK8,
-    "gauss6": Gauss6,
-    "rk8_energy": EnergyProjected,
-}
-INTEGRATORS = ("exact", "magnus", *FIXED_STEP, *SCIPY_METHODS)
-STEPPER_OPTIONS = ("substeps", "rtol", "atol")
-
-
-SUBSTEPS_MAX = 1000  # a fixed-step segment's substeps: with RK8's 12 stages a segment's evaluations stay within
-# MAX_EVALUATIONS, the adaptive steppers' budget, so that a step ends as theirs do instead of stalling
-RTOL_MIN = 100 * np.finfo(float).eps  # scipy's floor: below it solve_ivp raises rtol to it itself, with a warning
-ATOL_RANGE = (1e-100, 1e100)  # an absolute tolerance, in the state's units: scipy's error norm squares y/atol and
-# err/atol, which past these leave float64 (a first step of NaN, or none at all)
-MAGNUS_ATOL_MIN = 1e-15  # the Lie-group step's error estimate on coordinates of g of order 1 is rounding below it
-
-
-def make_stepper(integrator: str, system: SteppedSystem | None = None, **options):
-    """Build a stepper by name, validating its options (and, for "exact", that the system has a flow).
-
-    euler, semi_implicit_euler, rk4, rk8, rk8_energy and gauss6 take ``substeps`` (an integer in [1, SUBSTEPS_MAX]),
-    rk8_energy also ``atol``, its energy error per segment past which it doubles the substeps (default 1e-8, in H's
-    units); the scipy methods take ``rtol`` (in [RTOL_MIN, 1]: 100 times the spacing of floats at 1, up to an error
-    the size of the state) and ``atol`` (in ATOL_RANGE); exact takes the scipy options for the segments where u
-    moves; magnus takes ``atol``, its error bound per segment on the coordinates of g (default 1e-10, at least
-    MAGNUS_ATOL_MIN), and hands ``rtol`` and ``atol`` to DOP853 for systems without a connection (the shell's full
-    model). Each option out of its range is a ValueError naming it, its value and the range.
-    """
-    from connenv.core.validation import check_number  # validation builds on this module
-
-    if integrator not in INTEGRATORS:
-        raise ValueError(f"integrator={integrator!r} is not one of {INTEGRATORS}")
-    allowed = {"substeps"} if integrator in FIXED_STEP else {"rtol", "atol"}
-    allowed |= {"atol"} if integrator == "rk8_energy" else set()
-    unknown = set(options) - allowed
-    if unknown:
-        raise ValueError(
-            f"unknown option(s) {sorted(unknown)} for integrator={integrator!r}; it takes {sorted(allowed)}"
-        )
-    if integrator in FIXED_STEP:
-        substeps = options.get("substeps", 1)
-        integer = isinstance(substeps, (int, np.integer)) and not isinstance(substeps, bool)
-        if not (integer and 1 <= substeps <= SUBSTEPS_MAX):
-            raise ValueError(f"substeps={substeps!r} must be an integer in [1, {SUBSTEPS_MAX}]")
-        if integrator == "semi_implicit_euler" and system is not None and not isinstance(system, CanonicalSystem):
-            raise ValueError(
-                f"integrator='semi_implicit_euler' needs a state (q, p) split by the system's n, which "
-                f"{type(system).__name__} has not (a kinematic model); 'euler' is what the method reduces to there"
-            )
-        if integrator == "rk8_energy" and system is not None and not isinstance(system, HamiltonianSystem):
-            raise ValueError(
-                f"integrator='rk8_energy' projects onto the level of the system's hamiltonian(y, u), which "
-                f"{type(system).__name__} has not; 'rk8' is the step without the projection"
-            )
-        if integrator == "rk8_energy":
-            atol = check_number("atol", options.get("atol", EnergyProjected.atol), *ATOL_RANGE)
-            return EnergyProjected(int(substeps), atol)
-        return FIXED_STEP[integrator](int(substeps))
-    for name, low, high in (("rtol", RTOL_MIN, 1.0), ("atol", *ATOL_RANGE)):
-        if name in options:
-            check_number(name, options[name], low, high)
-    if integrator == "magnus":
-        from connenv.core.lie import Magnus  # lie builds on this module
-
-        check_number("atol", options.get("atol", Magnus.atol), MAGNUS_ATOL_MIN, ATOL_RANGE[1])
-        return Magnus(options.get("atol", Magnus.atol), Scipy(**options))
-    if integrator == "exact":
-        if system is not None and not isinstance(system, (ExactFlow, ExactSegment)):
-            raise ValueError(f"integrator='exact' needs a closed-form flow, which {type(system).__name__} has not")
-        return Exact(Scipy(**options))
-    return Scipy(SCIPY_METHODS[integrator], **options)
 
 
 _CONFORMS: dict = {}
@@ -494,7 +419,7 @@ def _all_finite(y) -> bool:
     return all(map(math.isfinite, y.ravel().tolist())) if y.size <= SMALL else math.isfinite(y.sum())
 
 
-def _finite(y, stepper):
+def check_finite(y, stepper):
     """y, unless it holds a non-finite number (state or derivative), which raises StepperError."""
     if not (all(map(math.isfinite, y.ravel().tolist())) if y.size <= SMALL else np.isfinite(y).all()):
         raise StepperError(f"{stepper} produced a non-finite value {y}")

@@ -8,9 +8,10 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.batched import batched
+from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.steppers import MAX_EVALUATIONS, ExactFlow, ExactSegment, Scipy, check_observable, make_stepper
+from connenv.core.steppers import MAX_EVALUATIONS, ExactFlow, ExactSegment, Scipy, check_observable
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,

@@ -9,9 +9,9 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.batched import batched
+from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JumpClass
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.steppers import make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,

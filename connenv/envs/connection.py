@@ -9,9 +9,10 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.integrators import make_stepper
 from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, Connection, ExactConnection, constant_connection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
-from connenv.core.steppers import StepperError, check_observable, make_stepper
+from connenv.core.steppers import StepperError, check_observable
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,

@@ -9,8 +9,8 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.integrators import make_stepper
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.steppers import make_stepper
 from connenv.core.validation import (
     check_angle,
     check_dt,

@@ -10,8 +10,9 @@ import numpy as np
 from gymnasium import spaces
 from scipy.spatial.transform import Rotation
 
+from connenv.core.integrators import make_stepper
 from connenv.core.segments import run_segments
-from connenv.core.steppers import StepperError, make_stepper
+from connenv.core.steppers import StepperError
 from connenv.core.validation import (
     check_dt,
     check_keys,

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, run_segments
-from connenv.core.steppers import make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,

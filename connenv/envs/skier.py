@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
-from connenv.core.steppers import make_stepper
 from connenv.core.validation import check_dt, check_keys, check_number, check_scale, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv

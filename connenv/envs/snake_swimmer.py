@@ -11,9 +11,9 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.segments import run_segments
-from connenv.core.steppers import make_stepper
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,

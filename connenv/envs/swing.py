@@ -9,8 +9,8 @@ from gymnasium import spaces
 
 from dataclasses import dataclass
 
+from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
-from connenv.core.steppers import make_stepper
 from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_scale, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv

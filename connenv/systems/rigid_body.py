@@ -65,9 +65,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipj, ellipkinc, ellipkm1
 
-from connenv.core.lie import GAUSS6, GROUPS, _omega
-from connenv.core.steppers import SUBSTEPS_MAX, Exact, Scipy, StepperError, _finite
-from connenv.core.steppers import make_stepper as make_core_stepper
+from connenv.core.integrators import SUBSTEPS_MAX
+from connenv.core.integrators import make_stepper as make_core_stepper
+from connenv.core.lie import GAUSS6, GROUPS, magnus_omega
+from connenv.core.steppers import Exact, Scipy, StepperError, check_finite
 from connenv.core.validation import check_number, check_rotation, check_vector
 
 SO3 = GROUPS["SO3"]
@@ -207,7 +208,7 @@ def attitude(R, velocity, tau, pieces: int):
         g = tuple(np.moveaxis(R.reshape(*R.shape[:-2], 9), -1, 0))
         nodes = np.moveaxis(omega.reshape(pieces, 3, *omega.shape[1:]), -1, 2)  # (pieces, node, component, …)
     for xi in nodes:
-        g = SO3.product(g, SO3.exp(_omega(SO3, "body", h, list(map(tuple, xi)))))
+        g = SO3.product(g, SO3.exp(magnus_omega(SO3, "body", h, list(map(tuple, xi)))))
     return np.array(g).reshape(3, 3) if R.ndim == 2 else np.stack(g, -1).reshape(R.shape)
 
 
@@ -289,7 +290,7 @@ class Splitting:
         for _ in range(self.substeps):
             for axis, fraction in STRANG:
                 _rotate(M, R, axis, fraction * h * M[..., axis] / system.inertia[axis])
-        return _finite(np.concatenate([M, R.reshape(*R.shape[:-2], 9)], -1), self)
+        return check_finite(np.concatenate([M, R.reshape(*R.shape[:-2], 9)], -1), self)
 
 
 def make_stepper(integrator: str = "exact", **options):

@@ -1,275 +1,31 @@
-"""Lie groups of motions and the integrator of a mechanical connection on them.
+"""The Lie-group step of a mechanical connection: Magnus on SO(3), nested quadrature on the solvable groups.
 
-A mechanical connection A(s) (Lawton) turns shape changes ṡ into a group velocity ξ = −A(s) ṡ, which moves the
-group element g by ġ = g ξ^ (body frame: ξ in the moving body's coordinates) or ġ = ξ^ g (space frame). Groups:
-
-| group | g as a matrix | coordinates of g (the state) | algebra coordinates ξ | bracket |
-|---|---|---|---|---|
-| "SO2" | 2×2 rotation | θ | ω | 0 |
-| "SE2" | 3×3 homogeneous | (x, y, θ) | (v₁, v₂, ω) | (ω' v₂ − ω v₂', ω v₁' − ω' v₁, 0) |
-| "SO3" | 3×3 rotation | its 9 entries, row by row | (ω₁, ω₂, ω₃), ω̂ v = ω × v | ω × ω' |
-| "R2" | the vector itself | (x, y) | (v₁, v₂) | 0 |
-
-Everything here works on *components*: tuples of Python floats for one state (the fast path: no numpy call per
-operation) or of arrays over the rows of a batch, with the same arithmetic, so that row i of a batch follows the
-single state's path (to the last bits of sin and cos, numpy's and libm's).
-
-`Magnus` is the stepper (``integrator="magnus"``). On SO(3) it is the Magnus method with Gauss points (Blanes,
-Casas & Ros 2000; Iserles et al. 2000), each substep of length h one exponential. Of order 4, with two Gauss points,
-
-    Ω = h/2 (ξ₁ + ξ₂) ± (√3/12) h² [ξ₁, ξ₂],    ξ_i = ξ(t + c_i h),  c_i = 1/2 ∓ √3/6,
-
-with + in the body frame (g ← g exp Ω) and − in the space frame (g ← exp(Ω) g); of order 6 (the default: fewer
-substeps for the same error), with three Gauss points and nested brackets (`_omega`). SO(2), ℝ² and SE(2) are
-solvable, and there the flow is nested quadratures (`quadrature_flow`): θ = ∫ω, and on SE(2) the translation
-∫R(θ(t)) v(t) dt, by 8-point Gauss–Legendre rules, of spectral accuracy on smooth connections (on the abelian
-groups this is the integral of ξ itself). Exponentials are closed forms (Rodrigues for SO(3)), so g stays on its
-group to rounding. Where ξ is the same at every node (A constant along the path, or ṡ = 0) the step is one
-exponential, the exact flow.
-
-By default each segment's substeps come from a Richardson estimate (two extra flows per segment), which serves any
-connection; where it asks for more substeps, their result is checked against twice as many. A caller that knows
-every segment it can ask for (a box of shapes and a step dt) fixes the rule once instead, with `fixed_rule`: the
-fewest nodes, pieces × Gauss points, that meet the tolerance on its worst segments; on SE(2) in the body frame
-`se2_body_flow` then takes one state on Python floats and a batch in blocks of rows.
+`Magnus` is the stepper (``integrator="magnus"``) of a system moved by a connection (see ``connenv.core.lie``),
+with `fixed_rule`, the cheapest fixed rule for a caller that knows its segments, and the flows it is made of:
+`magnus_flow` (SO(3)), `quadrature_flow` (SO(2), ℝ², SE(2)) and `se2_body_flow` (SE(2) in the body frame with a
+fixed rule). They work on components (``connenv.core.lie.groups``): tuples of Python floats for one state or of
+arrays over the rows of a batch, with the same arithmetic.
 """
 
 from __future__ import annotations
 
-import math
-import operator
 import dataclasses
 import functools
+import math
+import operator
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from connenv.core.steppers import ConnectionSystem, Scipy, StepperError, conforms
+from connenv.core.lie.connections import group_velocity
+from connenv.core.lie.groups import GROUPS, Group, ops_of
+from connenv.core.steppers import ConnectionSystem, Scipy, StepperError, check_finite, conforms
 
 GAUSS = (0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0)  # the Gauss–Legendre nodes on [0, 1]
 BRACKET_WEIGHT = math.sqrt(3.0) / 12.0
 GAUSS6 = (0.5 - math.sqrt(15.0) / 10.0, 0.5, 0.5 + math.sqrt(15.0) / 10.0)  # three nodes, for order 6
 SQRT15_3 = math.sqrt(15.0) / 3.0
 MAX_SUBSTEPS = 4096  # per segment: past it the shape path is too rough for the tolerance (StepperError)
-
-
-class _Floats:
-    sin, cos, sqrt, atan2 = math.sin, math.cos, math.sqrt, math.atan2
-
-    @staticmethod
-    def sinc(x):
-        """sin x / x, 1 at 0."""
-        return math.sin(x) / x if x != 0.0 else 1.0
-
-    @staticmethod
-    def sinc_half_squared(x):
-        """(1 − cos x)/x² = ½ (sin(x/2)/(x/2))², ½ at 0; without the cancellation of 1 − cos x."""
-        return 0.5 * _Floats.sinc(0.5 * x) ** 2
-
-
-class _Arrays:
-    sin, cos, sqrt, atan2 = np.sin, np.cos, np.sqrt, np.arctan2
-
-    @staticmethod
-    def sinc(x):
-        safe = np.where(x == 0.0, 1.0, x)
-        return np.where(x == 0.0, 1.0, np.sin(safe) / safe)
-
-    @staticmethod
-    def sinc_half_squared(x):
-        half = np.where(x == 0.0, 1.0, 0.5 * x)
-        return np.where(x == 0.0, 0.5, 0.5 * (np.sin(half) / half) ** 2)
-
-
-def _ops(component):
-    return _Floats if isinstance(component, float) else _Arrays
-
-
-@dataclass(frozen=True)
-class Group:
-    """A matrix Lie group in coordinates (see the module): ``size`` coordinates of g, ``dim`` of its algebra."""
-
-    name: str
-    size: int
-    dim: int
-    abelian: bool
-
-    def identity(self):
-        return {"SO2": (0.0,), "SE2": (0.0, 0.0, 0.0), "R2": (0.0, 0.0)}.get(self.name, tuple(np.eye(3).ravel()))
-
-    def exp(self, xi):
-        """The coordinates of exp(ξ^), closed form."""
-        if self.name in ("SO2", "R2"):
-            return tuple(xi)
-        if self.name == "SE2":
-            v1, v2, w = xi
-            ops = _ops(w)
-            a, b = ops.sinc(w), w * ops.sinc_half_squared(w)  # sin ω/ω and (1 − cos ω)/ω
-            return a * v1 - b * v2, b * v1 + a * v2, w
-        w1, w2, w3 = xi  # SO3: Rodrigues, R = I + a ω̂ + b ω̂²
-        ops = _ops(w1)
-        angle = ops.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
-        a, b = ops.sinc(angle), ops.sinc_half_squared(angle)
-        return (
-            1.0 - b * (w2 * w2 + w3 * w3), b * w1 * w2 - a * w3, b * w1 * w3 + a * w2,
-            b * w1 * w2 + a * w3, 1.0 - b * (w1 * w1 + w3 * w3), b * w2 * w3 - a * w1,
-            b * w1 * w3 - a * w2, b * w2 * w3 + a * w1, 1.0 - b * (w1 * w1 + w2 * w2),
-        )  # fmt: skip
-
-    def product(self, g, h):
-        """The coordinates of g h."""
-        if self.name in ("SO2", "R2"):
-            return tuple(a + b for a, b in zip(g, h))
-        if self.name == "SE2":
-            x, y, theta = g
-            ops = _ops(theta)
-            c, s = ops.cos(theta), ops.sin(theta)
-            return x + c * h[0] - s * h[1], y + s * h[0] + c * h[1], theta + h[2]
-        return tuple(sum(g[3 * i + k] * h[3 * k + j] for k in range(3)) for i in range(3) for j in range(3))
-
-    def bracket(self, xi, eta):
-        """[ξ, η] in algebra coordinates: the commutator [ξ^, η^] of the matrices."""
-        if self.name == "SE2":
-            (v1, v2, w), (u1, u2, z) = xi, eta
-            return z * v2 - w * u2, w * u1 - z * v1, 0.0
-        (a1, a2, a3), (b1, b2, b3) = xi, eta  # SO3: the cross product
-        return a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1
-
-    def matrix(self, g):
-        """g as a matrix (a vector for R2), from its coordinates (..., size)."""
-        g = np.asarray(g, float)
-        if self.name == "R2":
-            return g.copy()
-        if self.name == "SO3":
-            return g.reshape(*g.shape[:-1], 3, 3)
-        c, s = np.cos(g[..., -1]), np.sin(g[..., -1])
-        if self.name == "SO2":
-            return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-        one, zero = np.ones_like(c), np.zeros_like(c)
-        rows = [[c, -s, g[..., 0]], [s, c, g[..., 1]], [zero, zero, one]]
-        return np.stack([np.stack(row, -1) for row in rows], -2)
-
-    def coordinates(self, matrix):
-        """The coordinates of g given as a matrix (a vector for R2); the inverse of ``matrix`` on the group."""
-        m = np.asarray(matrix, float)
-        if self.name == "R2":
-            return m.copy()
-        if self.name == "SO3":
-            return m.reshape(*m.shape[:-2], 9)
-        angle = np.arctan2(m[..., 1, 0], m[..., 0, 0])[..., None]
-        return angle if self.name == "SO2" else np.concatenate([m[..., :2, 2], angle], -1)
-
-    def off_group(self, matrix):
-        """How far a matrix is from the group (0 on it): max of ‖RᵀR − I‖ (Frobenius), |det R − 1| and, for SE2,
-        the last row's distance from (0, 0, 1). Coordinates of SO2, SE2 and R2 are on their group by construction."""
-        m = np.asarray(matrix, float)
-        if self.name == "R2":
-            return np.zeros(m.shape[:-1])
-        k = 3 if self.name == "SO3" else 2
-        R = m[..., :k, :k]
-        off = np.maximum(
-            np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(k), axis=(-2, -1)), np.abs(np.linalg.det(R) - 1.0)
-        )
-        if self.name == "SE2":
-            off = np.maximum(off, np.max(np.abs(m[..., 2, :] - [0.0, 0.0, 1.0]), axis=-1))
-        return off
-
-
-GROUPS = {
-    "SO2": Group("SO2", 1, 1, True),
-    "SE2": Group("SE2", 3, 3, False),
-    "SO3": Group("SO3", 9, 3, False),
-    "R2": Group("R2", 2, 2, True),
-}
-FRAMES = ("body", "space")
-
-
-@dataclass(frozen=True)
-class Connection:
-    """A system moved by a mechanical connection: ``connection(s)`` is A(s) of shape (dim 𝔤, dim S), the state
-    y the coordinates of g (see the module), the assigned coordinates u = s the shape. With ``vectorized`` the
-    connection takes a batch of shapes (N, dim S) to (N, dim 𝔤, dim S) (as solve_ivp's vectorized); without it,
-    a batch is evaluated one shape at a time."""
-
-    group: str
-    frame: str
-    connection: object = field(compare=False)
-    vectorized: bool = False
-
-    def group_velocity(self, s, s_dot):
-        """ξ = −A(s) ṡ, as components (floats for one shape, arrays over the rows of a batch)."""
-        s = np.asarray(s, float)
-        if s.ndim == 1 or self.vectorized:
-            A = self.connection(s)
-        else:
-            rows = s.reshape(-1, s.shape[-1])
-            A = np.stack([self.connection(r) for r in rows]).reshape(*s.shape[:-1], -1, s.shape[-1])
-        xi = -np.sum(np.asarray(A, float) * np.asarray(s_dot)[..., None, :], axis=-1)
-        return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
-
-    def vector_field(self, y, s, s_dot):
-        """ẏ of the coordinates of g (for the generic steppers: RK4, scipy's): θ̇ = ω on SO2; on SE2 (ẋ, ẏ) = R(θ) v
-        (body) or v + ω (−y, x) (space), θ̇ = ω; Ṙ = R ω̂ (body) or ω̂ R (space) on SO3; ẋ = v on R2."""
-        y = np.asarray(y, float)
-        xi = np.stack(np.broadcast_arrays(*self.group_velocity(s, s_dot)), -1)
-        if self.group in ("SO2", "R2"):
-            return np.broadcast_to(xi, y.shape).copy()
-        if self.group == "SE2":
-            x, y_, theta = y[..., 0], y[..., 1], y[..., 2]
-            v1, v2, w = xi[..., 0], xi[..., 1], xi[..., 2]
-            if self.frame == "body":
-                c, s_ = np.cos(theta), np.sin(theta)
-                return np.stack([c * v1 - s_ * v2, s_ * v1 + c * v2, w + 0 * theta], -1)
-            return np.stack([v1 - w * y_, v2 + w * x, w + 0 * theta], -1)
-        R, W = y.reshape(*y.shape[:-1], 3, 3), np.zeros((*xi.shape[:-1], 3, 3))
-        W[..., 0, 1], W[..., 0, 2], W[..., 1, 2] = -xi[..., 2], xi[..., 1], -xi[..., 0]
-        W = W - np.swapaxes(W, -1, -2)
-        return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
-
-
-@dataclass(frozen=True)
-class ExactConnection(Connection):
-    """A Connection that knows its flow in closed form: ``exact_segment(g, s, ṡ, τ)`` is the coordinates of g after
-    a segment of length τ at constant ṡ from shape s, for one state (arrays (size,), (k,), (k,), a float τ) or a
-    batch of rows (leading axes, τ a float or one per row). The Exact stepper (``integrator="exact"``) takes it."""
-
-    exact_segment: object = field(default=None, compare=False)
-
-
-def constant_connection(s, A):
-    """A at every shape s (…, k): the array A (dim 𝔤, k) broadcast over the leading axes of s."""
-    return np.broadcast_to(A, (*np.shape(s)[:-1], *np.shape(A)))
-
-
-@dataclass(frozen=True)
-class ConstantConnection(Connection):
-    """A connection the same at every shape (``connection`` = functools.partial(constant_connection, A=A)): ξ is
-    constant over a segment of constant ṡ, and the flow over it is one exponential, g exp(τ ξ^) (body frame) or
-    exp(τ ξ^) g (space frame), exact: the ``exact_segment`` of ``connenv.core.steppers.Exact``."""
-
-    def group_velocity(self, s, s_dot):
-        """ξ = −A ṡ as components: floats for one shape, arrays over the rows of a batch."""
-        xi = np.asarray(s_dot, float) @ -self.connection.keywords["A"].T
-        return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
-
-    def exact_segment(self, y, s, s_dot, tau):
-        group, single = GROUPS[self.group], np.ndim(y) == 1
-        xi = self.group_velocity(s, s_dot)
-        if single:
-            g, tau = tuple(np.asarray(y, float).tolist()), float(tau)
-        else:
-            g, tau = tuple(np.moveaxis(np.asarray(y, float), -1, 0)), np.asarray(tau, float)
-        step = group.exp([tau * c for c in xi])
-        g = group.product(g, step) if self.frame == "body" else group.product(step, g)
-        return np.array(g) if single else np.stack(np.broadcast_arrays(*g), -1)
-
-
-def group_velocity(system, s, s_dot):
-    """ξ = −A(s) ṡ as components: the system's own ``group_velocity`` if it has one (a closed form), else from its
-    ``connection``."""
-    if hasattr(system, "group_velocity"):
-        return system.group_velocity(s, s_dot)
-    return Connection(system.group, system.frame, system.connection).group_velocity(s, s_dot)
 
 
 def magnus_flow(group: Group, frame: str, velocity, g, s, s_dot, tau, substeps, order: int = 6):
@@ -288,7 +44,7 @@ def magnus_flow(group: Group, frame: str, velocity, g, s, s_dot, tau, substeps, 
         first = xi[0] if first is None else first
         for x in xi:
             constant = constant & _same(x, first)
-        step = group.exp(_omega(group, frame, h, xi))
+        step = group.exp(magnus_omega(group, frame, h, xi))
         g = group.product(g, step) if frame == "body" else group.product(step, g)
     return g, first, constant
 
@@ -306,14 +62,14 @@ def _magnus_rows(group, frame, velocity, g, s, s_dot, tau, substeps, order):
             rows, g, s, s_dot = rows[going], tuple(c[going] for c in g), s[going], s_dot[going]
             h, substeps = h[going], substeps[going]
         xi = [velocity(_shape_at(s, s_dot, (k + c) * h), s_dot) for c in nodes]
-        step = group.exp(_omega(group, frame, h, xi))
+        step = group.exp(magnus_omega(group, frame, h, xi))
         g = group.product(g, step) if frame == "body" else group.product(step, g)
     for o, c in zip(out, g):
         o[rows] = c
     return tuple(out)
 
 
-def _omega(group, frame, h, xi):
+def magnus_omega(group, frame, h, xi):
     """Ω of one Magnus step from ξ at the Gauss nodes (2: order 4, 3: order 6), for ġ = ξ^ g (space frame); the
     body frame's is the same with the bracket's sign reversed (g⁻¹ obeys the space frame's equation in −ξ)."""
     if len(xi) == 2:
@@ -396,7 +152,7 @@ def _piece(group, frame, g, xi, h):
         return group.product(g, increment)
     c, s_ = np.cos(W), np.sin(W)
     a1, a2 = h * _weighted(c * v1 + s_ * v2), h * _weighted(c * v2 - s_ * v1)  # ∫ R(−W) v
-    ops = _ops(turn)
+    ops = ops_of(turn)
     ct, st = ops.cos(turn), ops.sin(turn)
     return group.product((ct * a1 - st * a2, st * a1 + ct * a2, turn), g)
 
@@ -571,10 +327,11 @@ class Magnus:
         if single:
             error = max(abs(a - b) for a, b in zip(one, two)) / (2**order - 1)
             if constant:
-                return _finite(np.array(exact), self)
+                return check_finite(np.array(exact), self)
             if error <= self.atol:
-                return _finite(np.array(two), self)
-            return _finite(np.array(self._checked(flow, g, u, u_dot, tau, self._substeps(error, order), order)), self)
+                return check_finite(np.array(two), self)
+            checked = self._checked(flow, g, u, u_dot, tau, self._substeps(error, order), order)
+            return check_finite(np.array(checked), self)
         error = np.max(np.abs(np.subtract(one, two)), axis=0) / (2**order - 1)
         out = np.stack(two, -1)
         if np.any(constant):
@@ -584,7 +341,7 @@ class Magnus:
             g_rows, tau_rows = tuple(c[rough] for c in g), tau[rough] if np.ndim(tau) else tau
             counts = self._substeps(error[rough], order)
             out[rough] = np.stack(self._checked(flow, g_rows, u[rough], u_dot[rough], tau_rows, counts, order), -1)
-        return _finite(out, self)
+        return check_finite(out, self)
 
     def _checked(self, flow, g, s, s_dot, tau, n, order):
         """flow's g after n substeps, checked against 2n: while |g(2n) − g(n)| 2^order/(2^order − 1), the
@@ -650,7 +407,7 @@ class Magnus:
             if not all(map(math.isfinite, g)):
                 raise StepperError(f"{self} produced a non-finite value {g}")
             return np.array(g)
-        return _finite(np.stack(g, -1), self)
+        return check_finite(np.stack(g, -1), self)
 
     def _substeps(self, error, order):
         """The substeps for an estimated two-step error (a float, or an array over rows) of a method of that order."""
@@ -718,9 +475,3 @@ def _same(a, b):
     for x, y in zip(a, b):
         same = same & (x == y)
     return same
-
-
-def _finite(y, stepper):
-    if not np.all(np.isfinite(y)):
-        raise StepperError(f"{stepper} produced a non-finite value {y}")
-    return y
