@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
@@ -10,7 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
-from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, Connection, ExactConnection, constant_connection
+from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, Connection, ExactConnection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
 from connenv.core.steppers import StepperError, check_observable
 from connenv.core.validation import (
@@ -189,7 +188,7 @@ class ConnectionEnv(TaskEnv):
                 raise ValueError(f"exact_segment={exact_segment!r} is for a callable connection; a constant A "
                                  "has its own exact step (one exponential)")
             A = _check_constant(connection, self.group, self.low.size)
-            self.system = ConstantConnection(group, frame, functools.partial(constant_connection, A=A), True)
+            self.system = ConstantConnection(group, frame, A=A)
         elif exact_segment is None:
             connection = _check_connection(connection, self.group, self.sample_shapes(), bool(vectorized))
             self.system = Connection(group, frame, connection, bool(vectorized))

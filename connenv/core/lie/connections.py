@@ -9,6 +9,7 @@ coordinates of g, its assigned coordinates u = s the shape.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -75,13 +76,21 @@ def constant_connection(s, A):
 
 @dataclass(frozen=True)
 class ConstantConnection(Connection):
-    """A connection the same at every shape (``connection`` = functools.partial(constant_connection, A=A)): ξ is
-    constant over a segment of constant ṡ, and the flow over it is one exponential, g exp(τ ξ^) (body frame) or
-    exp(τ ξ^) g (space frame), exact: the ``exact_segment`` of ``connenv.core.steppers.Exact``."""
+    """A connection the same at every shape, the array ``A`` (dim 𝔤, k) (``connection`` is constant_connection at
+    A, vectorized): ξ = −A ṡ is constant over a segment of constant ṡ, and the flow over it is one exponential,
+    g exp(τ ξ^) (body frame) or exp(τ ξ^) g (space frame), exact: the ``exact_segment`` of
+    ``connenv.core.steppers.Exact``."""
+
+    connection: object = field(init=False, repr=False, compare=False)
+    vectorized: bool = field(init=False, default=True)
+    A: np.ndarray = field(kw_only=True, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "connection", functools.partial(constant_connection, A=self.A))
 
     def group_velocity(self, s, s_dot):
         """ξ = −A ṡ as components: floats for one shape, arrays over the rows of a batch."""
-        xi = np.asarray(s_dot, float) @ -self.connection.keywords["A"].T
+        xi = np.asarray(s_dot, float) @ -self.A.T
         return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
 
     def exact_segment(self, y, s, s_dot, tau):
