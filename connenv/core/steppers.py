@@ -17,13 +17,17 @@ one of scipy's ``"dop853"``, ``"rk45"``, ``"lsoda"``, ``"radau"`` with ``rtol`` 
 outside its range, at make rather than at a step that stalls or diverges. The two Euler methods are Gymnasium
 classic control's integrators (its ``kinematics_integrator``), there to compare against: they are first order, and
 written here because scipy has no fixed-step methods; so is RK8, which takes scipy's tableau.
+
+As in scipy's ``RungeKutta``, an explicit Runge–Kutta method is its Butcher tableau (`Tableau`, data) on one generic
+step (`ExplicitRungeKutta`): Euler, RK4 and RK8 differ in their tableaus alone. Gauss6 keeps its tableau as data too,
+but its implicit stages take a step of their own.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 from scipy.integrate import DOP853, solve_ivp
@@ -90,36 +94,110 @@ class StepperError(ArithmeticError):
 
 
 @dataclass(frozen=True)
-class RK4:
-    """Classic fourth-order Runge–Kutta with ``substeps`` equal steps per segment."""
+class Tableau:
+    """A Runge–Kutta method's Butcher tableau as data, sparse: ``stages``, each (c, ((j, a), …)), its node c and
+    the nonzero entries a = A[i, j] of its row, and ``weights``, ((j, b), …), the nonzero b over a common
+    ``divisor``. A step of length h then adds h/divisor · Σ b_j k_j, summed in the order of the weights (RK4's
+    h/6 (k₁ + 2 k₂ + 2 k₃ + k₄) as it is written by hand)."""
 
-    substeps: int = 1
+    stages: tuple
+    weights: tuple
+    divisor: float = 1.0
 
-    def __call__(self, system, y, u, u_dot, tau):
-        h = tau / self.substeps
-        held = not np.any(u_dot)  # then u(s) = u throughout: skip the control's array arithmetic
-        for i in range(self.substeps):
-            s = i * h
-            u0, u_half, u1 = (u, u, u) if held else (u + s * u_dot, u + (s + 0.5 * h) * u_dot, u + (s + h) * u_dot)
-            k1 = system.vector_field(y, u0, u_dot)
-            k2 = system.vector_field(y + 0.5 * h * k1, u_half, u_dot)
-            k3 = system.vector_field(y + 0.5 * h * k2, u_half, u_dot)
-            k4 = system.vector_field(y + h * k3, u1, u_dot)
-            y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        return check_finite(y, self)
+    @classmethod
+    def of_scipy(cls, method) -> Tableau:
+        """The tableau of one of scipy's explicit Runge–Kutta classes (its A, B, C; no error estimator)."""
+        A, C = method.A[: method.n_stages, : method.n_stages], method.C[: method.n_stages]
+        stages = tuple((float(C[i]), tuple((j, float(a)) for j, a in enumerate(A[i, :i]) if a != 0.0)) for i in
+                       range(len(C)))  # fmt: skip
+        return cls(stages, tuple((j, float(b)) for j, b in enumerate(method.B) if b != 0.0))
+
+
+EULER_TABLEAU = Tableau(((0.0, ()),), ((0, 1.0),))
+RK4_TABLEAU = Tableau(
+    ((0.0, ()), (0.5, ((0, 0.5),)), (0.5, ((1, 0.5),)), (1.0, ((2, 1.0),))),
+    ((0, 1.0), (1, 2.0), (2, 2.0), (3, 1.0)),
+    6.0,
+)
+DOP853_TABLEAU = Tableau.of_scipy(DOP853)
+_ROOT15 = math.sqrt(15.0)
+GAUSS6_TABLEAU = Tableau(
+    (
+        (0.5 - _ROOT15 / 10, ((0, 5 / 36), (1, 2 / 9 - _ROOT15 / 15), (2, 5 / 36 - _ROOT15 / 30))),
+        (0.5, ((0, 5 / 36 + _ROOT15 / 24), (1, 2 / 9), (2, 5 / 36 - _ROOT15 / 24))),
+        (0.5 + _ROOT15 / 10, ((0, 5 / 36 + _ROOT15 / 30), (1, 2 / 9 + _ROOT15 / 15), (2, 5 / 36))),
+    ),
+    ((0, 5 / 18), (1, 4 / 9), (2, 5 / 18)),
+)
 
 
 @dataclass(frozen=True)
-class Euler:
-    """Explicit Euler with ``substeps`` equal steps per segment: y ← y + h f(y)."""
+class ExplicitRungeKutta:
+    """An explicit Runge–Kutta method at ``substeps`` equal steps per segment, its ``tableau`` the subclass's (as
+    scipy's ``RungeKutta`` takes C, A and B from its subclasses): stage i evaluates the vector field at
+    y + h Σ_j a_ij k_j and u + (t + c_i h) u̇, the step adds h/divisor · Σ_j b_j k_j, each sum in the tableau's
+    order, with the control held (u itself) where u̇ = 0. With ``floats_for_one_state``, a single state runs on
+    Python floats, where a stage sum of a few numbers costs less than numpy's per-call overhead (RK8's twelve
+    stages); a row of a batch gets the same arithmetic either way."""
 
     substeps: int = 1
+    tableau: ClassVar[Tableau]
+    floats_for_one_state: ClassVar[bool] = False
 
     def __call__(self, system, y, u, u_dot, tau):
+        held = not _moving(u_dot)
+        if self.floats_for_one_state and type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
+            return check_finite(np.array(self._one(system, y.tolist(), u, u_dot, tau, held)), self)
+        stages, weights, divisor = self.tableau.stages, self.tableau.weights, self.tableau.divisor
         h = tau / self.substeps
+        h_b = h / divisor  # the weights' factor
         for i in range(self.substeps):
-            y = y + h * system.vector_field(y, u + i * h * u_dot, u_dot)
+            K = []
+            for c, row in stages:
+                u_s = u if held else u + (i * h + c * h) * u_dot
+                K.append(system.vector_field(y if not row else y + h * _weighted(row, K), u_s, u_dot))
+            y = y + h_b * _weighted(weights, K)
         return check_finite(y, self)
+
+    def _one(self, system, y, u, u_dot, tau, held):
+        """The step of one state y (a list of floats), in the batch's order of operations."""
+        field = _one_state_field(system)
+        stages, weights, divisor = self.tableau.stages, self.tableau.weights, self.tableau.divisor
+        h = tau / self.substeps
+        h_b = h / divisor
+        for i in range(self.substeps):
+            K = [[] for _ in y]  # K[k][j]: component k of stage j
+            for c, row in stages:
+                u_s = u if held else u + (i * h + c * h) * u_dot
+                stage = [y_k + h * _weighted(row, K_k) for y_k, K_k in zip(y, K)] if row else y
+                for K_k, f_k in zip(K, field(stage, u_s, u_dot)):
+                    K_k.append(f_k)
+            y = [y_k + h_b * _weighted(weights, K_k) for y_k, K_k in zip(y, K)]
+        return y
+
+
+@dataclass(frozen=True)
+class Euler(ExplicitRungeKutta):
+    """Explicit Euler with ``substeps`` equal steps per segment: y ← y + h f(y)."""
+
+    tableau = EULER_TABLEAU
+
+
+@dataclass(frozen=True)
+class RK4(ExplicitRungeKutta):
+    """Classic fourth-order Runge–Kutta with ``substeps`` equal steps per segment."""
+
+    tableau = RK4_TABLEAU
+
+
+@dataclass(frozen=True)
+class RK8(ExplicitRungeKutta):
+    """DOP853's eighth-order formula (Dormand & Prince; scipy's 12-stage tableau) at ``substeps`` equal steps per
+    segment, without its step-size control: the adaptive method's work with none of its decisions, and with no
+    solve_ivp around one state, which runs on Python floats (scipy's own fixed-step methods are none)."""
+
+    tableau = DOP853_TABLEAU
+    floats_for_one_state = True
 
 
 @dataclass(frozen=True)
@@ -148,63 +226,28 @@ class SemiImplicitEuler:
 
 
 @dataclass(frozen=True)
-class RK8:
-    """DOP853's eighth-order formula (Dormand & Prince; scipy's 12-stage tableau) at ``substeps`` equal steps per
-    segment, without its step-size control: the adaptive method's work with none of its decisions, and with no
-    solve_ivp around one state. A single state runs on Python floats, where a stage sum of a few numbers costs
-    less than numpy's per-call overhead; a batch runs on arrays. Both sum each stage's terms in the tableau's
-    order, so a row of a batch gets the single state's arithmetic (scipy's own fixed-step methods are none)."""
-
-    substeps: int = 1
-
-    def __call__(self, system, y, u, u_dot, tau):
-        held = not _moving(u_dot)
-        if type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
-            return check_finite(np.array(self._one(system, y.tolist(), u, u_dot, tau, held)), self)
-        h = tau / self.substeps
-        for i in range(self.substeps):
-            K = []
-            for c, row in _DOP853_ROWS:
-                u_s = u if held else u + (i * h + c * h) * u_dot
-                K.append(system.vector_field(y if not row else y + h * _weighted(row, K), u_s, u_dot))
-            y = y + h * _weighted(_DOP853_B, K)
-        return check_finite(y, self)
-
-    def _one(self, system, y, u, u_dot, tau, held):
-        """The step of one state y (a list of floats), in the batch's order of operations."""
-        field = _one_state_field(system)
-        h = tau / self.substeps
-        for i in range(self.substeps):
-            K = [[] for _ in y]  # K[k][j]: component k of stage j
-            for c, row in _DOP853_ROWS:
-                u_s = u if held else u + (i * h + c * h) * u_dot
-                stage = [y_k + h * _weighted(row, K_k) for y_k, K_k in zip(y, K)] if row else y
-                for K_k, f_k in zip(K, field(stage, u_s, u_dot)):
-                    K_k.append(f_k)
-            y = [y_k + h * _weighted(_DOP853_B, K_k) for y_k, K_k in zip(y, K)]
-        return y
-
-
-@dataclass(frozen=True)
 class Gauss6:
     """The three-stage Gauss–Legendre collocation method (order 6, symplectic and symmetric) at ``substeps`` equal
-    steps per segment. Its stages are implicit; they are solved by fixed-point iteration from K = f(y), to
-    rounding (an increment below 1e-15 of the state) or StepperError after MAX_ITERATIONS sweeps, which a step
-    too long for the system's fastest motion reaches. Written here because scipy has no implicit fixed-step
-    collocation method."""
+    steps per segment. Its tableau (GAUSS6_TABLEAU) is data as the explicit methods' are, but its A is full: each
+    stage depends on all three, itself included, so the stages are not evaluated one after the other as
+    ExplicitRungeKutta's are but solved together, by fixed-point iteration from K = f(y), to rounding (an
+    increment below 1e-15 of the state) or StepperError after MAX_ITERATIONS sweeps, which a step too long for the
+    system's fastest motion reaches. Written here because scipy has no implicit fixed-step collocation method."""
 
     substeps: int = 1
+    tableau: ClassVar[Tableau] = GAUSS6_TABLEAU
     MAX_ITERATIONS = 100
 
     def __call__(self, system, y, u, u_dot, tau):
+        stages, weights, divisor = self.tableau.stages, self.tableau.weights, self.tableau.divisor
         h = tau / self.substeps
         for i in range(self.substeps):
-            controls = [u + (i * h + c * h) * u_dot for c in _GAUSS6_C]
-            K = [system.vector_field(y, controls[0], u_dot)] * 3
+            controls = [u + (i * h + c * h) * u_dot for c, _ in stages]
+            K = [system.vector_field(y, controls[0], u_dot)] * len(stages)
             for _ in range(self.MAX_ITERATIONS):
                 new = [
                     system.vector_field(y + h * _weighted(row, K), control, u_dot)
-                    for row, control in zip(_GAUSS6_A, controls)
+                    for (_, row), control in zip(stages, controls)
                 ]
                 change = max(float(np.max(np.abs(h * (a - b)))) for a, b in zip(new, K))
                 K = new
@@ -212,18 +255,8 @@ class Gauss6:
                     break
             else:
                 raise StepperError(f"{self}: the stages did not converge in {self.MAX_ITERATIONS} sweeps (step {h} s)")
-            y = y + h * _weighted(_GAUSS6_B, K)
+            y = y + h / divisor * _weighted(weights, K)
         return check_finite(y, self)
-
-
-_ROOT15 = math.sqrt(15.0)
-_GAUSS6_C = (0.5 - _ROOT15 / 10, 0.5, 0.5 + _ROOT15 / 10)
-_GAUSS6_A = (
-    ((0, 5 / 36), (1, 2 / 9 - _ROOT15 / 15), (2, 5 / 36 - _ROOT15 / 30)),
-    ((0, 5 / 36 + _ROOT15 / 24), (1, 2 / 9), (2, 5 / 36 - _ROOT15 / 24)),
-    ((0, 5 / 36 + _ROOT15 / 30), (1, 2 / 9 + _ROOT15 / 15), (2, 5 / 36)),
-)
-_GAUSS6_B = ((0, 5 / 18), (1, 4 / 9), (2, 5 / 18))
 
 
 @dataclass(frozen=True)
@@ -299,16 +332,6 @@ def _weighted(row, K):
     for j, a in rest:
         total = total + a * K[j]
     return total
-
-
-def _tableau_rows():
-    """DOP853's stages as (c, [(j, a) for the nonzero a of A's row]), and the nonzero weights of B."""
-    A, C = DOP853.A[: DOP853.n_stages, : DOP853.n_stages], DOP853.C[: DOP853.n_stages]
-    rows = tuple((float(C[s]), tuple((j, float(a)) for j, a in enumerate(A[s, :s]) if a != 0.0)) for s in range(len(C)))
-    return rows, tuple((j, float(b)) for j, b in enumerate(DOP853.B) if b != 0.0)
-
-
-_DOP853_ROWS, _DOP853_B = _tableau_rows()
 
 
 MAX_EVALUATIONS = 100_000  # of a closed-form vector field per segment: past it an adaptive stepper has failed
