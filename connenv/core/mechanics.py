@@ -18,16 +18,26 @@ How u̇ enters classifies the system (`JumpClass`).
 Any object with integer attributes ``n``, ``m`` and methods
 ``metric(q, u) -> (G11, G12, G22)`` and ``potential(q, u) -> V`` is a system
 here. Arrays carry the coordinate on the last axis (matrices on the last two)
-and broadcast over any leading batch axes.
+and broadcast over any leading batch axes. `check_metric` tries a system's metric
+and potential at sample points; `MetricField` steps a system given by them alone,
+on the numerical vector field; `JumpFlow` is a fit system's jump as a flow.
 """
 
 from __future__ import annotations
 
 import enum
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 from scipy.differentiate import derivative
+
+from connenv.core.steppers import MAX_EVALUATIONS
+from connenv.core.validation import check_returned, probe
+
+NUMERICAL_EVALUATIONS = 1_000  # per segment, of a vector field that is a numerical gradient (MetricField, JumpFlow
+# without jump_field): each evaluation is a scipy.differentiate gradient, dozens of calls of the metric, so that a
+# step that cannot succeed fails within seconds, as one on a closed-form field does within MAX_EVALUATIONS
 
 
 class ActiveConstraintSystem(Protocol):
@@ -104,6 +114,92 @@ def classify(system: ActiveConstraintSystem, q_samples, u_samples, rtol: float =
     if not b_flat:
         return JumpClass.GENERAL
     return JumpClass.STRONGLY_FIT if k_zero else JumpClass.FIT
+
+
+@dataclass(frozen=True)
+class MetricField:
+    """A system given by its metric and potential alone, with the numerical vector field `vector_field`, and
+    the adaptive stepper's budget of evaluations per segment for it (connenv.core.steppers.evaluation_budget)."""
+
+    system: object
+    max_evaluations = NUMERICAL_EVALUATIONS
+
+    @property
+    def n(self):
+        return self.system.n
+
+    def vector_field(self, y, u, u_dot):
+        return vector_field(self.system, y, u, u_dot)
+
+
+@dataclass(frozen=True)
+class JumpFlow:
+    """The jump equations of a fit system as a vector field in s: along u(s) = u + s Δu, dq/ds = −K Δu,
+    dp/ds = ∂/∂q [pᵀ K] Δu; the system's own ``jump_field`` if it has one (exact), else K from the metric and
+    ∂/∂q by scipy.differentiate. A stepper over the segment (u, Δu, 1) is then the jump."""
+
+    system: object
+
+    @property
+    def max_evaluations(self):
+        """The stepper's budget per jump: a numerical field's, unless the system gives its jump_field."""
+        return MAX_EVALUATIONS if hasattr(self.system, "jump_field") else NUMERICAL_EVALUATIONS
+
+    def vector_field(self, y, u, delta_u):
+        if hasattr(self.system, "jump_field"):
+            return self.system.jump_field(y, u, delta_u)
+        n, delta_u = self.system.n, np.asarray(delta_u, float)
+        q, p = y[..., :n], y[..., n:]
+        K_delta = _matvec(bressan_matrices(self.system, q, u)[1], delta_u)
+        flux = _gradient(self._momentum_flux, q, p, u, delta_u)
+        return np.concatenate([-K_delta, flux], axis=-1)
+
+    def _momentum_flux(self, q, p, u, delta_u):
+        """pᵀ K(q, u) Δu."""
+        return np.sum(p * _matvec(bressan_matrices(self.system, q, u)[1], delta_u), axis=-1)
+
+
+def check_metric(system, q, u):
+    """ValueError (TypeError for what is no real numbers) unless the metric at every sample (each q with each u)
+    has blocks of shapes (n, n), (n, m), (m, m) that make a finite, symmetric G, positive semidefinite with G11
+    positive definite (the bead at the pivot of its bar has G22 = 0), and the potential is finite; a metric or
+    potential that raises is a ValueError naming it."""
+    n, m = system.n, system.m
+    q, u = np.repeat(q, len(u), axis=0), np.tile(u, (len(q), 1))
+    name = f"system.metric(q, u) at a batch of {len(q)} points"
+    expected = f"(G11, G12, G22), real arrays of shapes (n, n), (n, m), (m, m) (n = {n}, m = {m}) over the batch"
+    blocks = probe(name, system.metric, q, u)
+    if not isinstance(blocks, (tuple, list)) or len(blocks) != 3:
+        raise TypeError(f"{name} returned {blocks!r}; expected {expected}")
+    blocks = [check_returned(f"{name}, block {b},", block, expected=expected) for b, block in zip(("G11", "G12", "G22"),
+                                                                                                  blocks)]  # fmt: skip
+    for block_name, block, shape in zip(("G11", "G12", "G22"), blocks, ((n, n), (n, m), (m, m))):
+        if block.shape != (len(q), *shape):
+            raise ValueError(
+                f"metric block {block_name} has shape {block.shape[1:]} at a batch of {len(q)} points; expected "
+                f"{shape} (n = {n}, m = {m}), broadcast over leading axes"
+            )
+    G11, G12, G22 = blocks
+    G = np.block([[G11, G12], [np.swapaxes(G12, -1, -2), G22]])
+    for block_name, block in (("G11", G11), ("G22", G22)):
+        if not np.allclose(block, np.swapaxes(block, -1, -2), rtol=1e-12, atol=0):
+            i = np.argmax(np.abs(block - np.swapaxes(block, -1, -2)).reshape(len(q), -1).max(-1))
+            raise ValueError(
+                f"metric block {block_name} = {block[i].tolist()} at q = {q[i]}, u = {u[i]} is not symmetric"
+            )
+    for block_name, matrix, floor in (("G11", G11, 0.0), ("G", G, -1e-12)):
+        eigenvalues = np.linalg.eigvalsh(matrix)
+        scale = np.max(np.abs(eigenvalues), axis=-1)
+        if not np.all(eigenvalues[..., 0] > floor * scale):
+            lowest = eigenvalues[..., 0]  # relative to the scale; a zero matrix (scale 0) is the worst
+            i = np.argmin(np.divide(lowest, scale, out=np.full_like(lowest, -np.inf), where=scale > 0))
+            kind = "positive definite (q̇ must cost kinetic energy)" if block_name == "G11" else "positive semidefinite"
+            raise ValueError(
+                f"the metric {'block G11' if block_name == 'G11' else 'G'} = {matrix[i].tolist()} at q = {q[i]}, "
+                f"u = {u[i]} is not {kind}: eigenvalues {eigenvalues[i].tolist()}"
+            )
+    name = f"system.potential(q, u) at a batch of {len(q)} points"
+    check_returned(name, probe(name, system.potential, q, u), (len(q),), f"V, {len(q)} finite real numbers")
 
 
 def _matvec(M, v):

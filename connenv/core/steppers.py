@@ -340,7 +340,7 @@ MAX_EVALUATIONS = 100_000  # of a closed-form vector field per segment: past it 
 def evaluation_budget(system) -> int:
     """The evaluations of the system's vector field an adaptive stepper may spend on one segment: the system's own
     ``max_evaluations`` if it sets one, else MAX_EVALUATIONS. A system whose vector field is dear (a numerical
-    gradient: connenv.envs.active_constraint's MetricField) sets a smaller budget, so that a step that cannot
+    gradient: connenv.core.mechanics' MetricField) sets a smaller budget, so that a step that cannot
     succeed ends as soon as on a closed-form field, and a stall is an error rather than minutes of work."""
     return getattr(system, "max_evaluations", MAX_EVALUATIONS)
 

@@ -9,9 +9,9 @@ from gymnasium import spaces
 
 from connenv.core.batched import batched
 from connenv.core.integrators import make_stepper
-from connenv.core.mechanics import JumpClass, _gradient, _matvec, bressan_matrices, classify, hamiltonian, vector_field
+from connenv.core.mechanics import JumpClass, JumpFlow, MetricField, check_metric, classify, hamiltonian
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.steppers import MAX_EVALUATIONS, ExactFlow, ExactSegment, Scipy, check_observable
+from connenv.core.steppers import ExactFlow, ExactSegment, Scipy, check_observable
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
@@ -30,9 +30,6 @@ from connenv.envs.vector import TaskVectorEnv
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
 JUMP_STEPPER = Scipy("DOP853", rtol=1e-13, atol=1e-13)  # the jump flow over s ∈ [0, 1]
-NUMERICAL_EVALUATIONS = 1_000  # per segment, of a vector field that is a numerical gradient (MetricField, JumpFlow
-# without jump_field): each evaluation is a scipy.differentiate gradient, dozens of calls of the metric, so that a
-# step that cannot succeed fails within seconds, as one on a closed-form field does within MAX_EVALUATIONS
 
 CONTROLS = ("position", "velocity")
 
@@ -46,49 +43,6 @@ class ActiveConstraintState(State):
     u: np.ndarray
     t: float
     energy_error: float
-
-
-@dataclass(frozen=True)
-class MetricField:
-    """A system given by its metric and potential alone, with connenv.core.mechanics' numerical vector field, and
-    the adaptive stepper's budget of evaluations per segment for it (connenv.core.steppers.evaluation_budget)."""
-
-    system: object
-    max_evaluations = NUMERICAL_EVALUATIONS
-
-    @property
-    def n(self):
-        return self.system.n
-
-    def vector_field(self, y, u, u_dot):
-        return vector_field(self.system, y, u, u_dot)
-
-
-@dataclass(frozen=True)
-class JumpFlow:
-    """The jump equations of a fit system as a vector field in s: along u(s) = u + s Δu, dq/ds = −K Δu,
-    dp/ds = ∂/∂q [pᵀ K] Δu; the system's own ``jump_field`` if it has one (exact), else K from the metric and
-    ∂/∂q by scipy.differentiate. A stepper over the segment (u, Δu, 1) is then the jump."""
-
-    system: object
-
-    @property
-    def max_evaluations(self):
-        """The stepper's budget per jump: a numerical field's, unless the system gives its jump_field."""
-        return MAX_EVALUATIONS if hasattr(self.system, "jump_field") else NUMERICAL_EVALUATIONS
-
-    def vector_field(self, y, u, delta_u):
-        if hasattr(self.system, "jump_field"):
-            return self.system.jump_field(y, u, delta_u)
-        n, delta_u = self.system.n, np.asarray(delta_u, float)
-        q, p = y[..., :n], y[..., n:]
-        K_delta = _matvec(bressan_matrices(self.system, q, u)[1], delta_u)
-        flux = _gradient(self._momentum_flux, q, p, u, delta_u)
-        return np.concatenate([-K_delta, flux], axis=-1)
-
-    def _momentum_flux(self, q, p, u, delta_u):
-        """pᵀ K(q, u) Δu."""
-        return np.sum(p * _matvec(bressan_matrices(self.system, q, u)[1], delta_u), axis=-1)
 
 
 class ActiveConstraintEnv(TaskEnv):
@@ -458,49 +412,6 @@ def check_system(system):
                 f"system.{name}={getattr(system, name)!r} is not callable; system must have {SYSTEM} (and may have "
                 "methods vector_field(y, u, u_dot) and jump_field(y, u, delta_u))"
             )
-
-
-def check_metric(system, q, u):
-    """ValueError (TypeError for what is no real numbers) unless the metric at every sample (each q with each u)
-    has blocks of shapes (n, n), (n, m), (m, m) that make a finite, symmetric G, positive semidefinite with G11
-    positive definite (the bead at the pivot of its bar has G22 = 0), and the potential is finite; a metric or
-    potential that raises is a ValueError naming it."""
-    n, m = system.n, system.m
-    q, u = np.repeat(q, len(u), axis=0), np.tile(u, (len(q), 1))
-    name = f"system.metric(q, u) at a batch of {len(q)} points"
-    expected = f"(G11, G12, G22), real arrays of shapes (n, n), (n, m), (m, m) (n = {n}, m = {m}) over the batch"
-    blocks = probe(name, system.metric, q, u)
-    if not isinstance(blocks, (tuple, list)) or len(blocks) != 3:
-        raise TypeError(f"{name} returned {blocks!r}; expected {expected}")
-    blocks = [check_returned(f"{name}, block {b},", block, expected=expected) for b, block in zip(("G11", "G12", "G22"),
-                                                                                                  blocks)]  # fmt: skip
-    for block_name, block, shape in zip(("G11", "G12", "G22"), blocks, ((n, n), (n, m), (m, m))):
-        if block.shape != (len(q), *shape):
-            raise ValueError(
-                f"metric block {block_name} has shape {block.shape[1:]} at a batch of {len(q)} points; expected "
-                f"{shape} (n = {n}, m = {m}), broadcast over leading axes"
-            )
-    G11, G12, G22 = blocks
-    G = np.block([[G11, G12], [np.swapaxes(G12, -1, -2), G22]])
-    for block_name, block in (("G11", G11), ("G22", G22)):
-        if not np.allclose(block, np.swapaxes(block, -1, -2), rtol=1e-12, atol=0):
-            i = np.argmax(np.abs(block - np.swapaxes(block, -1, -2)).reshape(len(q), -1).max(-1))
-            raise ValueError(
-                f"metric block {block_name} = {block[i].tolist()} at q = {q[i]}, u = {u[i]} is not symmetric"
-            )
-    for block_name, matrix, floor in (("G11", G11, 0.0), ("G", G, -1e-12)):
-        eigenvalues = np.linalg.eigvalsh(matrix)
-        scale = np.max(np.abs(eigenvalues), axis=-1)
-        if not np.all(eigenvalues[..., 0] > floor * scale):
-            lowest = eigenvalues[..., 0]  # relative to the scale; a zero matrix (scale 0) is the worst
-            i = np.argmin(np.divide(lowest, scale, out=np.full_like(lowest, -np.inf), where=scale > 0))
-            kind = "positive definite (q̇ must cost kinetic energy)" if block_name == "G11" else "positive semidefinite"
-            raise ValueError(
-                f"the metric {'block G11' if block_name == 'G11' else 'G'} = {matrix[i].tolist()} at q = {q[i]}, "
-                f"u = {u[i]} is not {kind}: eigenvalues {eigenvalues[i].tolist()}"
-            )
-    name = f"system.potential(q, u) at a batch of {len(q)} points"
-    check_returned(name, probe(name, system.potential, q, u), (len(q),), f"V, {len(q)} finite real numbers")
 
 
 def check_fields(system, q, u):
