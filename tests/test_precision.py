@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import connenv  # noqa: F401  (registers the envs)
-from connenv.bench import precision, stability
+from connenv.bench import charts, precision, stability
 from connenv.core import StepperError
 
 VALLEY_KAPPA_MAX = stability.VALLEY_KAPPA_MAX
@@ -165,5 +165,5 @@ def test_the_front_counts_times_within_the_timings_noise_as_equal():
         {"ratio": 0.50, "error": 1e-3, "diverged": ""},
         {"ratio": 0.10, "error": 0.0, "diverged": "x"},
     ]
-    precision.pareto(rows)
+    charts.pareto(rows)
     assert [row["pareto"] for row in rows] == [True, True, False, True, False]

@@ -99,3 +99,11 @@ def run(env, reset_options, actions, reference=None, measure=None, clock_against
         if measure is not None:
             measure(env, info)
     return np.array(times), np.array(reference_times), failure
+
+
+def beanie_balance(env, info, start):
+    """|(I₁ + I₂)(θ − θ₀) + I₂ (ψ − ψ₀) − μ t| / (I₁ + I₂): the momentum balance integrated, rad."""
+    s, s0 = info["state"], start["state"]
+    total = env.body_inertia + env.beanie_inertia
+    balance = total * (s["theta"] - s0["theta"]) + env.beanie_inertia * (s["psi"] - s0["psi"]) - s["momentum"] * s["t"]
+    return abs(balance) / total

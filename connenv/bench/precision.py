@@ -70,8 +70,6 @@ episode.
 
 from __future__ import annotations
 
-import csv
-import dataclasses
 import functools
 import math
 import time
@@ -79,33 +77,13 @@ import time
 import numpy as np
 
 from connenv import cli
-from connenv.bench.common import OUTPUT, candidates, describe, header, make_env, pendulum, run
+from connenv.bench import rigid_body
+from connenv.bench.charts import DIVERGED, Case, Episode, pareto, plot_precision, write_precision_csv
+from connenv.bench.common import OUTPUT, beanie_balance, candidates, describe, header, make_env, pendulum, run
 from connenv.systems.rolling_ball import rotation_angle
 
 TIGHT = ("dop853", {"rtol": 1e-13, "atol": 1e-15})
 EXACT = ("exact", {})
-DIVERGED = math.inf
-
-
-@dataclasses.dataclass(frozen=True)
-class Episode:
-    label: str
-    reset: dict  # reset options
-    actions: object  # (steps, rng) -> array of actions
-    steps: int
-
-
-@dataclasses.dataclass(frozen=True)
-class Case:
-    env_id: str
-    reference: tuple  # (integrator, options) of the reference stepper
-    episodes: tuple  # the first one is timed
-    error: object  # (env, reference env) -> state error at the end
-    invariant: str  # what the drift measures, as printed
-    drift: object  # (env, info, start) -> the invariant's drift at this step; start: the env's state at reset
-    error_unit: str
-    kwargs: dict = dataclasses.field(default_factory=dict)  # make kwargs of every env of the case
-    steppers: tuple = ()  # (integrator, options) charted besides the common candidates
 
 
 MAGNUS = tuple(("magnus", {"atol": atol}) for atol in (1e-6, 1e-8, 1e-10, 1e-12))
@@ -170,14 +148,6 @@ def _coin_track(dt, steps):
         track = [env.step(a)[4]["state"] for a in uniform(2)(max(steps, 200), np.random.default_rng(0))]
         _TRACKS[key] = np.array([(s["x"], s["y"]) for s in track])
     return _TRACKS[key]
-
-
-def beanie_balance(env, info, start):
-    """|(I₁ + I₂)(θ − θ₀) + I₂ (ψ − ψ₀) − μ t| / (I₁ + I₂): the momentum balance integrated, rad."""
-    s, s0 = info["state"], start["state"]
-    total = env.body_inertia + env.beanie_inertia
-    balance = total * (s["theta"] - s0["theta"]) + env.beanie_inertia * (s["psi"] - s0["psi"]) - s["momentum"] * s["t"]
-    return abs(balance) / total
 
 
 BEAD_START, BEAD_TARGET, BEAD_STEPS = -0.5, 0.5, 300  # m, m, steps
@@ -437,24 +407,6 @@ def measure_stepper(case, integrator, options, steps_of, clock, reference_envs):
     return row
 
 
-TIME_NOISE = 0.05  # relative differences of the median step time below this are within the timing's noise
-
-
-def pareto(rows):
-    """Mark each row on the front of (ratio, error): it did not diverge, and no other row is at least as fast and
-    at least as accurate, and strictly better in one. Times within TIME_NOISE of each other count as equal, so
-    that two steppers doing the same work (a rule that meets several tolerances) do not oust each other by noise."""
-    for row in rows:
-        row["pareto"] = not row["diverged"] and not any(
-            o is not row
-            and not o["diverged"]
-            and o["ratio"] <= row["ratio"] * (1 + TIME_NOISE)
-            and o["error"] <= row["error"]
-            and (o["ratio"] < row["ratio"] * (1 - TIME_NOISE) or o["error"] < row["error"])
-            for o in rows
-        )
-
-
 def default_row(case, rows):
     """The row whose stepper is the env's default (the stepper of the env made without kwargs)."""
     default = make_env(case.env_id, None, {}, **case.kwargs).stepper
@@ -463,85 +415,6 @@ def default_row(case, rows):
         if env is not None and env.stepper == default:
             return row
     return None
-
-
-def write_csv(name, case, rows, folder):
-    path = folder / f"{name}_precision.csv"
-    labels = [e.label for e in case.episodes]
-    with open(path, "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(
-            ["integrator", "options", "us_per_step", "ratio_to_pendulum"]
-            + [f"state_error_{label} ({case.error_unit})" for label in labels]
-            + [f"drift ({case.invariant})", "pareto", "default", "diverged"]
-        )
-        for row in rows:
-            writer.writerow(
-                [row["integrator"], row["options"], f"{row['us_per_step']:.1f}", f"{row['ratio']:.2f}"]
-                + [f"{row['errors'][label]:.3e}" for label in labels]
-                + [f"{row['drift']:.3e}", row["pareto"], row["default"], row["diverged"]]
-            )
-    return path
-
-
-STYLE = {
-    "exact": ("k", "*"),
-    "euler": ("tab:red", "v"),
-    "semi_implicit_euler": ("tab:orange", "^"),
-    "rk4": ("tab:blue", "o"),
-    "dop853": ("tab:green", "s"),
-    "lsoda": ("tab:purple", "D"),
-    "radau": ("tab:brown", "P"),
-    "magnus": ("tab:cyan", "X"),
-    "splitting": ("tab:olive", "h"),
-    "rk8": ("tab:pink", "p"),
-    "rk8_energy": ("tab:gray", "H"),
-    "gauss6": ("gold", "d"),
-}
-
-
-def plot(name, case, rows, folder, fraction=1.0):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    finite = [r[key] for r in rows for key in ("error", "drift") if 0 < r[key] < math.inf]
-    top = 10 ** math.ceil(math.log10(max(finite))) * 10 if finite else 1.0
-    floor = 1e-17
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
-    panels = [("error", f"state error at the end of the episode ({case.error_unit})"), ("drift", case.invariant)]
-    for ax, (key, label) in zip(axes, panels):
-        for integrator, (color, marker) in STYLE.items():
-            family = [r for r in rows if r["integrator"] == integrator]
-            if not family:
-                continue
-            xs = [r["ratio"] for r in family]
-            ys = [min(max(r[key], floor), top) for r in family]
-            ax.plot(xs, ys, color=color, marker=marker, ls="-", lw=0.8, label=integrator)
-            for r, x, y in zip(family, xs, ys):
-                if r["diverged"]:
-                    ax.plot(x, y, color="red", marker="x", ms=12, mew=2, ls="")
-        default = next(r for r in rows if r["default"])
-        ax.plot(default["ratio"], max(default[key], floor), "o", ms=16, mfc="none", mec="k", mew=1.5)
-        ax.annotate("default", (default["ratio"], max(default[key], floor)), textcoords="offset points", xytext=(8, 8))
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("time per env step / Pendulum-v1's (same run)")
-        ax.set_ylabel(label)
-        ax.grid(True, which="major", alpha=0.3)
-    axes[0].axhline(top, color="red", lw=0.5, ls=":")
-    axes[0].text(
-        axes[0].get_xlim()[1], top, "diverged (StepperError) × ", color="red", va="bottom", ha="right", fontsize=8
-    )
-    axes[0].legend(fontsize=8, loc="lower left")
-    episodes = "; ".join(f"{e.label}, {max(round(e.steps * fraction), 1)} steps" for e in case.episodes)
-    fig.suptitle(f"{case.env_id}: work–precision ({episodes}); python -m connenv.bench precision", fontsize=10)
-    fig.tight_layout()
-    path = folder / f"{name}_precision.png"
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
 
 
 def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
@@ -581,7 +454,7 @@ def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
         f"default: {default['options']}: error {default['error']:.2e} {case.error_unit}, drift {default['drift']:.2e}, "
         f"{default['us_per_step']:.0f} µs/step, {default['ratio']:.1f}× Pendulum-v1: {verdict}"
     )
-    return rows, write_csv(name, case, rows, folder), plot(name, case, rows, folder, fraction)
+    return rows, write_precision_csv(name, case, rows, folder), plot_precision(name, case, rows, folder, fraction)
 
 
 def parse_args(argv=None):
@@ -599,9 +472,7 @@ def main(argv=None):
     for name in args.env:
         fraction = 0.2 if args.quick else 1.0
         if name == "rigid_body":  # a system without an env: connenv.bench.rigid_body
-            from connenv.bench.rigid_body import precision_chart
-
-            _, csv_path, png_path = precision_chart(OUTPUT, fraction)
+            _, csv_path, png_path = rigid_body.precision_chart(OUTPUT, fraction)
         else:
             _, csv_path, png_path = chart(name, fraction=fraction)
         print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")

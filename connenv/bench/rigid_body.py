@@ -21,6 +21,20 @@ import time
 
 import numpy as np
 
+from connenv.bench.charts import (
+    DIVERGED,
+    Case,
+    Episode,
+    StabilityMap,
+    cell,
+    pareto,
+    plot_precision,
+    plot_stability,
+    top_of,
+    write_precision_csv,
+    write_stability_csv,
+)
+from connenv.bench.common import describe as common_describe
 from connenv.bench.common import pendulum
 from connenv.core import StepperError
 from connenv.systems.rigid_body import RigidBody, advance, make_stepper, state
@@ -54,9 +68,7 @@ EPISODES = {
 def describe(integrator, options):
     if integrator == "exact":
         return f"exact max_turn {options['max_turn']:g}"
-    from connenv.bench.common import describe as common
-
-    return common(integrator, options)
+    return common_describe(integrator, options)
 
 
 def body_and_stepper(integrator, options, inertia=INERTIA):
@@ -101,8 +113,6 @@ def state_error(y, reference):
 
 def precision_chart(folder, fraction=1.0, steppers=None):
     """Measure, print, and write rigid_body_precision.csv and .png into folder (the env charts' format)."""
-    from connenv.bench.precision import DIVERGED, Case, Episode, pareto, plot, write_csv
-
     steps = max(round(STEPS * fraction), 1)
     case = Case(
         "free rigid body (connenv.systems.rigid_body)",
@@ -148,7 +158,8 @@ def precision_chart(folder, fraction=1.0, steppers=None):
         f"default: {default['options']}: error {default['error']:.2e} rad, drift {default['drift']:.2e}, "
         f"{default['us_per_step']:.0f} µs/step, {default['ratio']:.1f}× Pendulum-v1: {verdict}"
     )
-    return rows, write_csv("rigid_body", case, rows, folder), plot("rigid_body", case, rows, folder, fraction)
+    csv_path = write_precision_csv("rigid_body", case, rows, folder)
+    return rows, csv_path, plot_precision("rigid_body", case, rows, folder, fraction)
 
 
 STABILITY_DURATION = 10.0  # s
@@ -185,10 +196,6 @@ STABILITY_METHODS = (
 
 def stability_chart(folder, smallest=1e-4, values=None, methods=None):
     """Measure, print, and write rigid_body_stability.csv and .png into folder (the env maps' format)."""
-    import csv
-
-    from connenv.bench.stability import StabilityMap, cell, plot, top_of
-
     values = values or STABILITY_RATIOS
     grid = [10 ** (-k / 4) for k in range(0, 1 + round(-4 * math.log10(smallest)))]
     stability_map = StabilityMap(
@@ -205,12 +212,5 @@ def stability_chart(folder, smallest=1e-4, values=None, methods=None):
         }
         cells = [cell(dt, top_of(stability_map, value, grid), grid) for value, dt in rows[method].items()]
         print(f"| {method} | " + " | ".join(cells) + " |", flush=True)
-    path = folder / "rigid_body_stability.csv"
-    with open(path, "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(["method", stability_map.parameter, "largest_stable_dt_s (0: none on the grid)",
-                         "top_of_grid_s", "smallest_s"])  # fmt: skip
-        for method, by_value in rows.items():
-            for value, dt in by_value.items():
-                writer.writerow([method, value, f"{dt:.4g}", f"{grid[0]:.4g}", f"{grid[-1]:.0e}"])
-    return rows, path, plot("rigid_body", stability_map, rows, grid, folder)
+    path = write_stability_csv("rigid_body", stability_map, rows, grid, folder)
+    return rows, path, plot_stability("rigid_body", stability_map, rows, grid, folder)

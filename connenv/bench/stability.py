@@ -67,32 +67,18 @@ grid held.
 
 from __future__ import annotations
 
-import csv
-import dataclasses
 import math
 import time
 
 import numpy as np
 
 from connenv import cli
-from connenv.bench.common import OUTPUT, describe, header, make_env
+from connenv.bench import rigid_body
+from connenv.bench.charts import StabilityMap, cell, plot_stability, top_of, write_stability_csv
+from connenv.bench.common import OUTPUT, beanie_balance, describe, header, make_env
 from connenv.core import StepperError
 
 BOUND = 0.1  # relative invariant error that counts as bounded (the ball: the env's 1e-6 off SO(3))
-
-
-@dataclasses.dataclass(frozen=True)
-class StabilityMap:
-    env_id: str
-    parameter: str  # as labelled
-    values: tuple
-    make: object  # value -> make kwargs
-    reset: object  # value -> reset options
-    action: object  # (value, t, dt, rng) -> action
-    steps: object  # (value, dt) -> number of steps
-    unbounded: object  # (env, info, start) -> True once the invariant has left its bound
-    methods: tuple  # (integrator, options)
-    largest: object = lambda value: 1.0  # the top of the dt grid, s
 
 
 def held(action):
@@ -189,8 +175,6 @@ def off_circle(env, info, start):
 
 def balance_broken(env, info, start):
     """Whether the beanie's integrated momentum balance has moved by more than 1e-9 rad."""
-    from connenv.bench.precision import beanie_balance
-
     return beanie_balance(env, info, start) > 1e-9
 
 
@@ -384,49 +368,6 @@ def largest_stable_dt(stability_map, value, integrator, options, grid):
     return 0.0
 
 
-def top_of(stability_map, value, grid):
-    """The largest dt tried at this parameter value."""
-    return next(dt for dt in grid if dt <= stability_map.largest(value))
-
-
-def cell(dt, top, grid):
-    if dt == top:
-        return f"≥ {dt:.2g}"
-    return f"{dt:.2g}" if dt > 0 else f"< {grid[-1]:.0e}"
-
-
-def plot(name, stability_map, rows, grid, folder):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4.8))
-    markers = "vo^sDP*"
-    for k, ((method, by_value), marker) in enumerate(zip(rows.items(), markers)):
-        xs = list(by_value)
-        ys = [dt if dt > 0 else grid[-1] / 2 for dt in by_value.values()]
-        ax.plot(xs, ys, marker=marker, ms=13 - 2 * k, mfc="none", mew=1.5, lw=1.5, label=method)  # overlaps show
-    values = list(next(iter(rows.values())))
-    tops = [top_of(stability_map, v, grid) for v in values]
-    ax.plot(values, tops, color="grey", lw=3, alpha=0.3, label="top of the dt grid")
-    ax.axhline(grid[-1] / 2, color="red", lw=0.5, ls=":")
-    ax.text(0.01, grid[-1] / 2, f"none stable ≥ {grid[-1]:.0e} s", color="red", va="bottom", fontsize=8,
-            transform=ax.get_yaxis_transform())
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel(stability_map.parameter)
-    ax.set_ylabel("largest stable dt (s)")
-    ax.grid(True, which="major", alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title(f"{stability_map.env_id}: stability map\npython -m connenv.bench stability", fontsize=10)
-    fig.tight_layout()
-    path = folder / f"{name}_stability.png"
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
-
-
 def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
     """Measure, print, and write <name>_stability.csv and .png into folder; dt down to `smallest`, only `values`
     of the parameter and `methods` (integrator, options) if given."""
@@ -450,16 +391,8 @@ def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
         rows[method] = by_value
         cells = [cell(dt, top_of(stability_map, value, grid), grid) for value, dt in by_value.items()]
         print(f"| {method} | " + " | ".join(cells) + " |", flush=True)
-    path = folder / f"{name}_stability.csv"
-    with open(path, "w", newline="") as f:
-        writer = csv.writer(f)
-        header_row = ["method", stability_map.parameter, "largest_stable_dt_s (0: none on the grid)", "top_of_grid_s"]
-        writer.writerow([*header_row, "smallest_s"])
-        for method, by_value in rows.items():
-            for value, dt in by_value.items():
-                top = top_of(stability_map, value, grid)
-                writer.writerow([method, value, f"{dt:.4g}", f"{top:.4g}", f"{grid[-1]:.0e}"])
-    return rows, path, plot(name, stability_map, rows, grid, folder)
+    path = write_stability_csv(name, stability_map, rows, grid, folder)
+    return rows, path, plot_stability(name, stability_map, rows, grid, folder)
 
 
 def parse_args(argv=None):
@@ -477,9 +410,7 @@ def main(argv=None):
     for name in args.env:
         smallest = 1e-3 if args.quick else 1e-4
         if name == "rigid_body":  # a system without an env: connenv.bench.rigid_body
-            from connenv.bench.rigid_body import stability_chart
-
-            _, csv_path, png_path = stability_chart(OUTPUT, smallest)
+            _, csv_path, png_path = rigid_body.stability_chart(OUTPUT, smallest)
         else:
             _, csv_path, png_path = chart(name, smallest=smallest)
         print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")
