@@ -148,7 +148,7 @@ def train_one(env_id: str, algo: str, seed: int, runs: Path = RUNS, **options) -
     Ray node. options: train_argv's timesteps, evaluations and book."""
     import ray
 
-    import train
+    from agents import train
 
     folder = run_folder(env_id, algo, seed, runs)
     same = run_config(folder, env_id) == hyperparams(algo, env_id, options.get("book", ""))

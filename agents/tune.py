@@ -99,7 +99,7 @@ def run_trial(config: dict, env_id: str, algo: str, timesteps: int, evaluations:
     finds its checkpoint), its output in train.log there."""
     from ray import tune
 
-    import train
+    from agents import train
 
     folder = Path(sweep_path) / "trials" / tune.get_context().get_trial_id()
     folder.mkdir(parents=True, exist_ok=True)

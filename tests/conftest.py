@@ -3,7 +3,6 @@ steppers made to diverge, and the native vector env stepped beside a SyncVectorE
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
@@ -48,11 +47,10 @@ def seeded_rollout():
 
 @pytest.fixture(scope="session")
 def train():
-    """train.py, which lives at the top of the repo, outside the packages."""
-    spec = importlib.util.spec_from_file_location("train", ROOT / "train.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    """agents.train, the logic of the top-level train.py (imported when a test asks for it: it brings rl-zoo3)."""
+    from agents import train
+
+    return train
 
 
 def check_run_folder(results: dict, algo: str):

@@ -48,7 +48,7 @@ def test_an_unknown_curriculum_is_named():
 
 def test_train_wraps_the_training_env_in_the_curriculum_and_evaluates_on_the_tasks_start(tmp_path, monkeypatch):
     """The periodic and final evaluations must see the task as registered: only the training env is wrapped."""
-    import train
+    from agents import train
 
     made = []
     monkeypatch.setattr(curriculum, "StartCurriculum", lambda env, *a, **k: made.append(env) or env)

@@ -50,7 +50,7 @@ def policy_parameters(folder):
 
 def test_a_run_on_ray_gives_the_model_of_a_direct_run(ray_local, tmp_path):
     """Single-thread torch on CPU, the same seed: the final model is the same to the bit on either scheduler."""
-    import train
+    from agents import train
 
     baselines.train_all(["connenv/Swing-v0"], ["ppo"], 2, seeds=[1], runs=tmp_path / "ray", **TINY)
     train.main(baselines.train_argv("connenv/Swing-v0", "ppo", 1, tmp_path / "direct", **TINY))
@@ -141,8 +141,7 @@ def test_a_sweep_writes_its_best_hyperparameters_for_train_py_and_resumes(ray_lo
     sweep instead of running it anew."""
     import yaml
 
-    import train
-    from agents import tune
+    from agents import train, tune
 
     argv = ["--env", "connenv/Swing-v0", "--algo", "sac", "--samples", "3", "--timesteps", "300"]
     argv += ["--evaluations", "2", "--runs", str(tmp_path)]
@@ -233,8 +232,7 @@ def test_unseen_scores_every_finished_seed_on_the_unseen_episodes_and_skips_runs
     """`unseen` evaluates the best model of each finished run (a run moved aside is not one) on episodes reset with
     UNSEEN_SEED + i, beside random and the analytic controller on the same episodes; agents.score then gives each
     run a normalized score, 0 for random and 1 for the controller."""
-    import train
-    from agents import score
+    from agents import score, train
 
     runs = tmp_path / "runs"
     for seed in (0, 1):
