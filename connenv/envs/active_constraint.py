@@ -23,7 +23,7 @@ from connenv.core.validation import (
     check_vector,
     probe,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import TaskVectorEnv
 
@@ -309,8 +309,9 @@ class ActiveConstraintEnv(TaskEnv):
             return a * self.max_control_speed
         return self.u_low + 0.5 * (a + 1.0) * (self.u_high - self.u_low)
 
-    def segments(self, u, command, batch=False):
-        """(y's jump or None, control segments, u at the end) of a step from u under the command."""
+    def segments(self, u, command, ops=SCALAR):
+        """(y's jump or None, control segments, u at the end) of a step from u under the command: one state
+        (ops=SCALAR), or rows, each with its own segments where its u stops at a bound."""
         if self.control == "position" and self.max_control_speed is None:
             return command - u, [(command, np.zeros_like(command), self.dt)], command
         if self.control == "position":
@@ -318,18 +319,21 @@ class ActiveConstraintEnv(TaskEnv):
             low, high = np.minimum(u, command), np.maximum(u, command)
         else:
             u_dot, low, high = command, self.u_low, self.u_high
-        if batch:
-            segments, u_end, _ = bounded_segments_batch(u, u_dot, low, high, self.dt)
-        else:
-            segments, u_end, _ = bounded_segments(u, u_dot, low, high, self.dt)
+        cut = bounded_segments if ops is SCALAR else bounded_segments_batch
+        segments, u_end, _ = cut(u, u_dot, low, high, self.dt)
         return None, segments, u_end
 
     def advance(self, s, command):
-        delta, segments, u_end = self.segments(s.u, command)
+        return self.stepped(s, command, self.stepper, JUMP_STEPPER)
+
+    def stepped(self, s, command, stepper, jump_stepper, ops=SCALAR):
+        """The state after a step under the command, by these steppers of the segments and of a fit system's jump:
+        the single env's step (ops=SCALAR), and the vector env's over its rows (its batched steppers, ops=BATCH)."""
+        delta, segments, u_end = self.segments(s.u, command, ops)
         y = s.y
         if delta is not None and self.jump_class is JumpClass.FIT and np.any(delta != 0.0):
-            y = JUMP_STEPPER(self.jump, y, s.u, delta, 1.0)
-        y, change = run_segments(self.stepper, self.field, y, segments, self.held_energy)
+            y = jump_stepper(self.jump, y, s.u, delta, 1.0)
+        y, change = run_segments(stepper, self.field, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
         if self.observes_state:
             self.check_observable(y, u_end)
@@ -441,13 +445,4 @@ class ActiveConstraintVectorEnv(TaskVectorEnv):
         self.jump_stepper = batched(JUMP_STEPPER)
 
     def advance(self, s, command):
-        env = self.env
-        delta, segments, u_end = env.segments(s.u, command, batch=True)
-        y = s.y
-        if delta is not None and env.jump_class is JumpClass.FIT and np.any(delta != 0.0):
-            y = self.jump_stepper(env.jump, y, s.u, delta, np.ones(len(y)))
-        y, change = run_segments(self.stepper, env.field, y, segments, env.held_energy)
-        env.check_energy_error(s.energy_error + change, y, u_end)
-        if env.observes_state:
-            env.check_observable(y, u_end)
-        return env.at(y, u_end, s.t + env.dt, s.energy_error + change)
+        return self.env.stepped(s, command, self.stepper, self.jump_stepper, BATCH)

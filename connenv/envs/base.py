@@ -6,8 +6,9 @@ Its task code is functions of that state, written once for both with the operati
 Python floats, ``BATCH`` on numpy arrays):
 
 - ``command(action)``: what the action asks of the assigned coordinates;
-- ``advance(state, command)``: the next state, physics through ``connenv.core.segments.run_segments`` (the single
-  env's; the vector env has its batched twin, which steps every row as this one steps one state);
+- ``advance(state, command)``: the next state, physics through ``connenv.core.segments.run_segments``. Written
+  once as a function of (state, command, stepper, ops), it serves the vector env too, which calls it with its
+  batched stepper and ``ops=BATCH`` (FallingCat's ``bent``, ActiveConstraint's and Connection's ``stepped``);
 - ``observe(state, ops)``, ``describe(state, ops)`` (the info), ``reward(before, after, info, ops)`` and
   ``terminated(state, info, ops)`` (default: ``info["is_success"]``).
 

@@ -235,7 +235,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         hold = 0.0 if before is None else ops.where(before.inside & inside, before.hold + self.dt, 0.0)
         return BeadState(s.y, s.u, s.t, s.energy_error, target, inside, hold)
 
-    def segments(self, u, command, batch=False):
+    def segments(self, u, command, ops=SCALAR):
         """One segment at the commanded rate: θ has no bounds to stop at (the builder's cut, without the search)."""
         return None, [(u, command, self.dt)], u + command * self.dt
 

@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
-from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, Connection, ExactConnection
+from connenv.core.lie import FRAMES, GROUPS, Connection, ConstantConnection, ExactConnection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
 from connenv.core.steppers import StepperError, check_observable
 from connenv.core.validation import (
@@ -24,7 +24,7 @@ from connenv.core.validation import (
     probe,
     real_array,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import TaskVectorEnv
 
@@ -244,8 +244,15 @@ class ConnectionEnv(TaskEnv):
         return a * self.max_shape_speed
 
     def advance(self, state, s_dot):
-        segments, s, _ = bounded_segments(state.s, s_dot, self.low, self.high, self.dt)
-        g, _ = run_segments(self.stepper, self.system, state.g, segments)
+        return self.stepped(state, s_dot, self.stepper)
+
+    def stepped(self, state, s_dot, stepper, ops=SCALAR):
+        """The state after a step at the shape velocity ṡ, stopped where s meets a bound, by this stepper: the
+        single env's step (ops=SCALAR), and the vector env's over its rows, each with its own segments (its batched
+        stepper, ops=BATCH)."""
+        cut = bounded_segments if ops is SCALAR else bounded_segments_batch
+        segments, s, _ = cut(state.s, s_dot, self.low, self.high, self.dt)
+        g, _ = run_segments(stepper, self.system, state.g, segments)
         self.check_group(g)
         if self.observes_state:
             self.check_observable(g, s)
@@ -338,13 +345,7 @@ class ConnectionVectorEnv(TaskVectorEnv):
     single_env = ConnectionEnv
 
     def advance(self, state, s_dot):
-        env = self.env
-        segments, s, _ = bounded_segments_batch(state.s, s_dot, env.low, env.high, env.dt)
-        g, _ = run_segments(self.stepper, env.system, state.g, segments)
-        env.check_group(g)
-        if env.observes_state:
-            env.check_observable(g, s)
-        return state.replace(g=g, s=s, t=state.t + env.dt)
+        return self.env.stepped(state, s_dot, self.stepper, BATCH)
 
 
 def draw_plain(canvas, group: str, state: dict, low, high):

@@ -4,7 +4,8 @@ Each vector env keeps one single env, its *prototype*: it checks the make kwargs
 and the constants, and its task functions (``connenv.envs.base``: command, observe, describe, reward,
 terminated) are the ones the vector env calls, on its state of arrays over the rows, with the array operations of
 ``BATCH`` in place of the scalar ones of ``SCALAR``. A subclass gives only ``advance(state, command)``, the
-single env's physics over the batch, through the same ``run_segments``.
+single env's physics over the batch: where the single env writes it as a function of the stepper and ops, the
+prototype's function with the batched stepper and ``BATCH``.
 
 Seeding, resets and autoreset are Gymnasium's SyncVectorEnv's, so that row i of a vector env and env i of a
 SyncVectorEnv made from the same id and kwargs follow the same episodes (to rounding; tests):
