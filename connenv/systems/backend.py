@@ -52,4 +52,6 @@ def namespace(x):
 def components(a):
     """The components along the last axis: Python floats of one state (a 1-D array), arrays over the rows of a
     batch."""
+    if not isinstance(a, np.ndarray):
+        a = np.asarray(a, float)
     return a.tolist() if a.ndim == 1 else [a[..., i] for i in range(a.shape[-1])]
