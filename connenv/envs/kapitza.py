@@ -157,17 +157,17 @@ class KapitzaPendulumEnv(TaskEnv):
     The default integrator is exact: while u̇ is constant the pivot moves uniformly, so in its frame the rod
     swings as a plain pendulum, whose flow is closed-form (Jacobi elliptic functions). Within 1e-6 of the
     separatrix in k², where scipy's elliptic functions lose their accuracy and where the held-inverted pendulum
-    lives, that pendulum is stepped by RK4 at ω₀h ≤ 0.01 (within 1e-12 of DOP853 at rtol 1e-13); with damping,
-    which has no closed form, the exact stepper hands the step to DOP853.
+    lives, that pendulum is stepped by RK4 at ω₀h ≤ 0.01, a local error of order (ω₀h)⁵; with damping, which has
+    no closed form, the exact stepper hands the step to DOP853.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or, without damping, an energy error past 0.1 m g l. The energy error is the change of E
     (in the pivot's frame) over each segment of constant u̇, where E is conserved, summed since reset; the jumps
     of u̇ between segments do exact work and are not counted.
 
-    Across v_max up to 100 m/s and dt from 1 ms to 50 ms the exact step keeps that energy error within
-    1e-9 m g l over 200 random steps (tests/test_precision.py); it is on the Pareto front of
-    `python -m connenv.bench precision`.
+    The exact step's errors and cost against the other steppers are on docs/speed-accuracy.md, which
+    `python -m connenv.bench precision --env kapitza` measures; tests/test_precision.py checks its energy error
+    across v_max up to 100 m/s and dt from 1 ms to 50 ms.
 
     Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"`
     (E = ½ m l² θ̇² − m g l cos θ, J, the pendulum's energy in the frame of the pivot's velocity, conserved

@@ -123,10 +123,12 @@ class SwingEnv(TaskEnv):
     A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
     beyond, the energies and the observation's bound (r_max/r_min)² leave float64 and float32.
 
-    The default integrator, the closed-form pendulum flow, is the fastest and the
-    most accurate stepper (`python -m connenv.bench precision`, docs/precision/):
-    across r_min from 0.05 m and dt from 0.01 to 0.5 s its energy error stays
-    within 1e-9 m g r_max over 100 random steps (tests/test_precision.py).
+    The default integrator is the closed-form pendulum flow: at constant r the
+    swing is a pendulum, whose flow is Jacobi's elliptic functions, so the step
+    makes no truncation error. Its errors and cost against the other steppers are
+    on docs/speed-accuracy.md, which `python -m connenv.bench precision --env swing`
+    measures; tests/test_precision.py checks its energy across r_min from 0.05 m
+    and dt from 0.01 to 0.5 s.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper,
     dt and the parameters: a non-finite state, or an energy error past
