@@ -6,8 +6,9 @@ Its task code is functions of that state, written once for both with the operati
 Python floats, ``BATCH`` on numpy arrays):
 
 - ``command(action)``: what the action asks of the assigned coordinates;
-- ``advance(state, command)``: the next state, physics through ``connenv.core.segments.run_segments`` (the single
-  env's; the vector env has its batched twin, which steps every row as this one steps one state);
+- ``advance(state, command)``: the next state, physics through ``connenv.core.segments.run_segments``. Written
+  once as ``advance(state, command, stepper, ops)``, it serves the vector env too, which calls its prototype's with
+  its batched stepper (row i stepped as the single state) and ops=BATCH;
 - ``observe(state, ops)``, ``describe(state, ops)`` (the info), ``reward(before, after, info, ops)`` and
   ``terminated(state, info, ops)`` (default: ``info["is_success"]``).
 

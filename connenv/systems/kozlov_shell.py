@@ -186,4 +186,3 @@ class ReducedKozlovShell(KozlovShell):
         """Reduced model: ẏ for y = (x, y, θ), the connection ξ = −I⁻¹ C u̇ reconstructed on SE(2)."""
         xi = self._body_velocity((0.0, 0.0, 0.0), components(u), components(u_dot))
         return np.stack(np.broadcast_arrays(*reconstruct(components(y)[2], *xi, np)), axis=-1)
-
