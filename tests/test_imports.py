@@ -10,8 +10,6 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("connenv", "agents")
-PRIVATE_PENDING = {("connenv.systems.snake_swimmer", "connenv.systems.kozlov_shell")}  # _frame and _split, which
-# the work on the env layer of those two systems makes public
 
 
 def modules():
@@ -65,7 +63,7 @@ def dotted(node):
 def test_no_module_takes_another_modules_private_names():
     found, known = graph()
     taken = [f"{name} takes {module}.{private}" for name in found for module, private, _ in found[name]
-             if module in known and (private or "").startswith("_") and (name, module) not in PRIVATE_PENDING]  # fmt: skip
+             if module in known and (private or "").startswith("_")]  # fmt: skip
     for name, tree in known.items():  # module._name, on a module imported whole
         bound = {as_name: module for *_, binding in found[name] for as_name, module in binding.items()}
         for node in ast.walk(tree):

@@ -7,8 +7,9 @@ Python floats, ``BATCH`` on numpy arrays):
 
 - ``command(action)``: what the action asks of the assigned coordinates;
 - ``advance(state, command)``: the next state, physics through ``connenv.core.segments.run_segments``. Written
-  once as a function of (state, command, stepper, ops), it serves the vector env too, which calls it with its
-  batched stepper and ``ops=BATCH`` (FallingCat's ``bent``, ActiveConstraint's and Connection's ``stepped``);
+  once as ``advance(state, command, stepper, ops)``, it serves the vector env too, which calls its prototype's with
+  its batched stepper (row i stepped as the single state) and ops=BATCH (FallingCat's ``bent``, ActiveConstraint's
+  and Connection's ``stepped`` likewise);
 - ``observe(state, ops)``, ``describe(state, ops)`` (the info), ``reward(before, after, info, ops)`` and
   ``terminated(state, info, ops)`` (default: ``info["is_success"]``).
 
@@ -19,55 +20,41 @@ the action, advances, and reports. Nothing in a task sets attributes on the side
 from __future__ import annotations
 
 import dataclasses
-import math
 from types import SimpleNamespace
 
 import gymnasium as gym
 import numpy as np
 
+from connenv.core.segments import control_segments, control_segments_batch
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
+from connenv.systems.backend import FLOATS, NAMES
 
 SCALAR = SimpleNamespace(
-    sin=math.sin,
-    cos=math.cos,
-    atan2=math.atan2,
-    sqrt=math.sqrt,
-    log=math.log,
-    acos=math.acos,
-    hypot=math.hypot,
-    maximum=max,
+    **vars(FLOATS),
     clip=lambda x, low, high: min(max(x, low), high),
     column=lambda x: x,
-    where=lambda condition, a, b: a if condition else b,
     pack=lambda parts: np.array(parts, np.float32),
     real=float,
     flag=bool,
     vector=lambda a: tuple(np.asarray(a, float).tolist()),
     components=lambda a: a.tolist(),
 )
-"""Operations on one state, as Python floats (the single env's): several times faster than numpy on one state."""
+"""Operations on one state, as Python floats (the single env's): the physics' (``connenv.systems.backend.FLOATS``)
+and the task's. Several times faster than numpy on one state."""
 
 BATCH = SimpleNamespace(
-    sin=np.sin,
-    cos=np.cos,
-    atan2=np.arctan2,
-    sqrt=np.sqrt,
-    log=np.log,
-    acos=np.arccos,
-    hypot=np.hypot,
-    maximum=np.maximum,
+    **{name: getattr(np, name) for name in NAMES},
     clip=lambda x, low, high: np.minimum(np.maximum(x, low), high),
     column=lambda x: x[..., None],
-    where=np.where,
     pack=lambda parts: np.stack(np.broadcast_arrays(*parts), axis=-1).astype(np.float32),
     real=lambda x: np.asarray(x, float),
     flag=lambda x: np.asarray(x, bool),
     vector=lambda a: np.array(a, float),
     components=lambda a: [a[..., i] for i in range(a.shape[-1])],
 )
-"""The same operations on arrays over a batch (the vector env's). ``components`` splits the last axis: Python floats of
-one state, arrays over the rows of a batch."""
+"""The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names, and the
+task's. ``components`` splits the last axis: Python floats of one state, arrays over the rows of a batch."""
 
 
 @dataclasses.dataclass
@@ -193,3 +180,15 @@ class TaskEnv(RenderedEnv):
 
     def reward(self, before, after, info, ops=SCALAR):
         raise NotImplementedError
+
+
+def control_path(u, u_cmd, dt: float, max_speed: float | None, ops=SCALAR):
+    """One assigned coordinate's control segments over a step toward the command u_cmd (``connenv.core.segments``:
+    a jump to it, or with max_speed a ramp and a hold), with u and u̇ as columns (…, 1), as a system takes them; and
+    u at the end of the step. One state (floats) or rows (arrays over them, ops=BATCH)."""
+    if ops is SCALAR:
+        cuts = control_segments(u, u_cmd, dt, max_speed)
+        u, u_dot, tau = cuts[-1]
+        return [(np.array([a]), np.array([v]), duration) for a, v, duration in cuts], u + u_dot * tau
+    cuts, u_end = control_segments_batch(u, u_cmd, dt, max_speed)
+    return [(a[:, None], v[:, None], duration) for a, v, duration in cuts], u_end

@@ -23,7 +23,7 @@ from connenv.core.validation import (
     check_vector,
 )
 from connenv.envs.active_constraint import JUMP_STEPPER, JumpFlow
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
@@ -145,8 +145,11 @@ class ChaplyginSleighEnv(TaskEnv):
     (at the longest dt, the default speed's): the sled answers a faster shake faster, and past it the default
     stepper's two RK4 substeps fall behind (StepperError).
 
-    The default stepper, RK4 with 2 substeps, was measured against DOP853 (docs/physics/ChaplyginSleigh.md). A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or an energy
-    error past 1e-2 (1 + T) (T is conserved where the mass is held). Every `info` has `"state"` (`x`, `y`, `phi`,
+    The default stepper, RK4 with 2 substeps, is cheaper than DOP853 for the accuracy the task needs
+    (docs/physics/ChaplyginSleigh.md); its errors and cost against the other steppers are on docs/speed-accuracy.md,
+    which `python -m connenv.bench precision --env sleigh` measures. A stepper that diverges raises
+    `connenv.core.StepperError`: a non-finite state, or an energy error past 1e-2 (1 + T) (T is conserved where the
+    mass is held). Every `info` has `"state"` (`x`, `y`, `phi`,
     `v`, `omega`, `u`, `u_dot`, `u_along`, `u_along_dot`, `t`), `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
     """
 
@@ -240,26 +243,30 @@ class ChaplyginSleighEnv(TaskEnv):
         """u̇ (velocity control) or the commanded u (position control) of action a (one or a batch)."""
         return a * (self.max_mass_speed if self.control == "velocity" else self.u_high)
 
-    def segments(self, u, command, batch=False):
-        """(Δu of a jump or None, control segments, u and u̇ at the end) of a step from u under the command."""
+    def segments(self, u, command, ops=SCALAR):
+        """(Δu of a jump or None, control segments, u and u̇ at the end) of a step from u under the command: one
+        state, or rows (each stopped at its own bounds) with ops=BATCH."""
         if self.control == "position" and self.max_mass_speed is None:
             zero = np.zeros_like(command)
-            return command - u, [(command, zero, self.dt if not batch else np.full(len(u), self.dt))], command, zero
+            return command - u, [(command, zero, self.dt if ops is SCALAR else np.full(len(u), self.dt))], command, zero
         if self.control == "position":
             u_dot = np.copysign(self.max_mass_speed, command - u)
             low, high = np.minimum(u, command), np.maximum(u, command)
         else:
             u_dot, low, high = command, -self.u_high, self.u_high
-        segments, u_end, u_dot_end = (bounded_segments_batch if batch else bounded_segments)(
-            u, u_dot, low, high, self.dt)
+        bounded = bounded_segments if ops is SCALAR else bounded_segments_batch
+        segments, u_end, u_dot_end = bounded(u, u_dot, low, high, self.dt)
         return None, segments, u_end, u_dot_end
 
-    def advance(self, s, command):
-        delta, segments, u_end, u_dot_end = self.segments(s.u, command)
+    def advance(self, s, command, stepper=None, ops=SCALAR, jump_stepper=JUMP_STEPPER):
+        """The state after a step under the command, a jump of the mass first where the sleigh is fit for jumps and
+        the mass has no speed limit: one state, or rows with the vector env's steppers and ops=BATCH."""
+        delta, segments, u_end, u_dot_end = self.segments(s.u, command, ops)
         y = s.y
         if delta is not None and np.any(delta != 0.0):
-            y = JUMP_STEPPER(self.jump, y, s.u, delta, 1.0)
-        y, change = run_segments(self.stepper, self.system, y, segments, self.held_energy)
+            y = jump_stepper(self.jump, y, s.u, delta, 1.0 if ops is SCALAR else np.ones(len(y)))
+        stepper = self.stepper if stepper is None else stepper
+        y, change = run_segments(stepper, self.system, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
         return SleighState(y, u_end, u_dot_end, s.target, s.t + self.dt, s.energy_error + change)
 
@@ -322,7 +329,8 @@ class ChaplyginSleighEnv(TaskEnv):
 
 class ChaplyginSleighVectorEnv(TaskVectorEnv):
     """ChaplyginSleigh-v0 over a batch (``gym.make_vec("connenv/ChaplyginSleigh-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): each row's mass stops at the rail's ends at its own time."""
+    ``connenv.envs.vector``): the single env's step over the rows, each row's mass stopped at its bounds at its own
+    time."""
 
     single_env = ChaplyginSleighEnv
 
@@ -331,12 +339,4 @@ class ChaplyginSleighVectorEnv(TaskVectorEnv):
         self.jump_stepper = batched(JUMP_STEPPER)
 
     def advance(self, s, command):
-        env = self.env
-        delta, segments, u_end, u_dot_end = env.segments(s.u, command, batch=True)
-        y = s.y
-        if delta is not None and np.any(delta != 0.0):
-            y = self.jump_stepper(env.jump, y, s.u, delta, np.ones(len(y)))
-        y, change = run_segments(self.stepper, env.system, y, segments, env.held_energy)
-        env.check_energy_error(s.energy_error + change, y, u_end)
-        return SleighState(y, u_end, u_dot_end, s.target, s.t + env.dt, s.energy_error + change)
-
+        return self.env.advance(s, command, self.stepper, BATCH, self.jump_stepper)

@@ -39,10 +39,8 @@ TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
 @dataclass
 class KapitzaState(State):
     """The pendulum and its pivot: y = (θ, p); the pivot's position u and velocity u̇ (2 each, u̇ as at the end of
-    the step); the time t; the energy E in the frame of the step's last segment's u̇ (the vector env's: of u̇ at the
-    end of the step, which differs only where an axis meets its stop exactly at the step's end); the stepper's
-    energy error (the change of E on each segment of constant u̇, summed since reset). Each task's state adds its
-    record."""
+    the step); the time t; the energy E in the frame of that u̇; the stepper's energy error (the change of E on each
+    segment of constant u̇, summed since reset). Each task's state adds its record."""
 
     y: np.ndarray
     u: np.ndarray
@@ -159,17 +157,17 @@ class KapitzaPendulumEnv(TaskEnv):
     The default integrator is exact: while u̇ is constant the pivot moves uniformly, so in its frame the rod
     swings as a plain pendulum, whose flow is closed-form (Jacobi elliptic functions). Within 1e-6 of the
     separatrix in k², where scipy's elliptic functions lose their accuracy and where the held-inverted pendulum
-    lives, that pendulum is stepped by RK4 at ω₀h ≤ 0.01 (within 1e-12 of DOP853 at rtol 1e-13); with damping,
-    which has no closed form, the exact stepper hands the step to DOP853.
+    lives, that pendulum is stepped by RK4 at ω₀h ≤ 0.01, a local error of order (ω₀h)⁵; with damping, which has
+    no closed form, the exact stepper hands the step to DOP853.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or, without damping, an energy error past 0.1 m g l. The energy error is the change of E
     (in the pivot's frame) over each segment of constant u̇, where E is conserved, summed since reset; the jumps
     of u̇ between segments do exact work and are not counted.
 
-    Across v_max up to 100 m/s and dt from 1 ms to 50 ms the exact step keeps that energy error within
-    1e-9 m g l over 200 random steps (tests/test_precision.py); it is on the Pareto front of
-    `python -m connenv.bench precision`.
+    The exact step's errors and cost against the other steppers are on docs/speed-accuracy.md, which
+    `python -m connenv.bench precision --env kapitza` measures; tests/test_precision.py checks its energy error
+    across v_max up to 100 m/s and dt from 1 ms to 50 ms.
 
     Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"`
     (E = ½ m l² θ̇² − m g l cos θ, J, the pendulum's energy in the frame of the pivot's velocity, conserved
@@ -216,7 +214,7 @@ class KapitzaPendulumEnv(TaskEnv):
         high = np.array([1.0, 1.0, SPEED_BOUND] + [1.0] * 2 * k, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         y, u, u_dot = np.array([math.pi, 0.0]), np.zeros(2), np.zeros(2)
-        self.state = self.at(y, u, u_dot, 0.0, self._frame_energy(y, u, u_dot), 0.0)
+        self.state = self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
 
     def _make_renderer(self):
         from connenv.envs.rendering import KapitzaRenderer
@@ -246,21 +244,21 @@ class KapitzaPendulumEnv(TaskEnv):
         y, u, u_dot = np.array([self.start_angle(), 0.0]), np.zeros(2), np.zeros(2)
         if "state" in options:
             y, u, u_dot = self._check_state(options["state"], y[0])
-        return self.at(y, u, u_dot, 0.0, self._frame_energy(y, u, u_dot), 0.0)
+        return self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
 
-    def advance(self, s, u_dot_cmd):
-        segments, u, u_dot = bounded_segments(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt)
-        y, change = run_segments(self.stepper, self.system, s.y, segments, self._frame_energy)
+    def advance(self, s, u_dot_cmd, stepper=None, ops=SCALAR):
+        """The state after a step at the commanded pivot velocity, each axis stopped at its end stops: one state, or
+        rows (each cut at its own stops) with the vector env's stepper and ops=BATCH."""
+        bounded = bounded_segments if ops is SCALAR else bounded_segments_batch
+        segments, u, u_dot = bounded(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt)
+        stepper = self.stepper if stepper is None else stepper
+        y, change = run_segments(stepper, self.system, s.y, segments, self.frame_energy)
         self.check_energy_error(s.energy_error + change)
-        energy = self._frame_energy(y, *segments[-1][:2])  # in the frame of the last segment's u̇
-        return self.at(y, u, u_dot, s.t + self.dt, energy, s.energy_error + change, s)
+        return self.at(y, u, u_dot, s.t + self.dt, self.system.energy(y, u_dot), s.energy_error + change, s, ops)
 
-    def _frame_energy(self, y, u, u_dot):
-        """The system's E at y in the frame of u̇, on Python floats (without numpy's overhead)."""
-        (theta, p), (v1, v2) = y.tolist(), u_dot.tolist()
-        m, ell, c, s = self.system.mass, self.system.length, math.cos(theta), math.sin(theta)
-        theta_dot = (p - m * ell * (v1 * c + v2 * s)) / (m * ell * ell)
-        return 0.5 * m * ell * ell * theta_dot * theta_dot - m * self.system.g * ell * c
+    def frame_energy(self, y, u, u_dot):
+        """E in the frame of the pivot's velocity u̇, conserved on each segment (the energy check's quantity)."""
+        return self.system.energy(y, u_dot)
 
     def check_energy_error(self, energy_error):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound, without damping."""
@@ -435,22 +433,13 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
 class KapitzaPendulumVectorEnv(TaskVectorEnv):
     """KapitzaPendulum-v0 over a batch (``gym.make_vec("connenv/KapitzaPendulum-v0", num_envs=N)``; see
-    ``connenv.envs.vector``). Each row's step is cut at its own end stops (``bounded_segments_batch``), so the
-    steppers get one segment length per row."""
+    ``connenv.envs.vector``): the single env's step over the rows. Each row's step is cut at its own end stops, so
+    the steppers get one segment length per row."""
 
     single_env = KapitzaPendulumEnv
 
     def advance(self, s, u_dot_cmd):
-        env = self.env
-        segments, u, u_dot = bounded_segments_batch(s.u, u_dot_cmd, -env.a_max, env.a_max, env.dt)
-        y, change = run_segments(self.stepper, env.system, s.y, segments, self._frame_energy)
-        env.check_energy_error(s.energy_error + change)
-        energy = env.system.energy(y, u_dot)
-        return env.at(y, u, u_dot, s.t + env.dt, energy, s.energy_error + change, s, BATCH)
-
-    def _frame_energy(self, y, u, u_dot):
-        """E in the frame of the pivot's velocity, conserved on each segment (the single env's energy check)."""
-        return self.env.system.energy(y, u_dot)
+        return self.env.advance(s, u_dot_cmd, self.stepper, BATCH)
 
 
 class KapitzaSwingUpVectorEnv(KapitzaPendulumVectorEnv):

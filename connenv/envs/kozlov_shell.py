@@ -13,7 +13,6 @@ from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
-from connenv.core.segments import run_segments
 from connenv.core.validation import (
     check_angle,
     check_dt,
@@ -23,16 +22,14 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv
-from connenv.envs.swimmer import PlanarSwimmer, components
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform direction
-TARGET_BOUND = 3.0  # m: the observed target is clipped here
 POSITION_BOUND = 100.0  # m: |x|, |y| of the shell and of the target given at reset
-MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # DOP853's in the full model; atol is the Lie-group step's too
 STATE_KEYS = ("x", "y", "theta", "u", "momentum")
@@ -162,11 +159,9 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     (`connenv.core.lie`): θ = ∫ω and the translation ∫R(θ) v by Gauss–Legendre quadrature, with a rule
     (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
     on the motions in one dt between the corners, edge midpoints and centre of the box (corner to corner is the
-    worst). The full model has no connection and goes to DOP853 (rtol 1e-8, atol 1e-10). It is on the Pareto
-    front of the work–precision chart (`python -m connenv.bench precision`, docs/precision/shell_precision.csv):
-    over 300 steps of random mass motions it keeps the pose within 1.4e-11 of a reference (DOP853 at rtol 1e-13)
-    in the reduced model and 4.7e-9 in the full one, and the spatial momentum within 2.2e-9 relative in the full
-    one; DOP853 at rtol 1e-8 errs by 1.3e-9 on the reduced model at 13× the time per step.
+    worst). The full model has no connection and goes to DOP853 (rtol 1e-8, atol 1e-10). Their pose and spatial
+    momentum errors, and their place on the work–precision chart: docs/speed-accuracy.md, which
+    `python -m connenv.bench precision --env shell` measures.
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `u` (2), `momentum` (P₁, P₂, Π, body frame), `t`, in SI),
     `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m),
@@ -216,7 +211,8 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
             self.stepper = dataclasses.replace(self.stepper, pieces=pieces, points=points)
 
         self.momentum_scale = np.diag(self.full_system.locked_inertia(np.zeros(2)))  # M + m + λ₁, M + m + λ₂, J + λ₃
-        self.u_bounds, self.momentum_bounds = self.u_max.tolist(), self.momentum_scale.tolist()  # as floats
+        self.shape_bounds, self.momentum_bounds = self.u_max.tolist(), self.momentum_scale.tolist()  # as floats
+        self.target_unit = 1.0  # m
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
@@ -277,15 +273,13 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, np.zeros(3))
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
-    def advance(self, s, u_cmd):
-        """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum."""
+    def advance(self, s, u_cmd, stepper=None, ops=SCALAR):
+        """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum. One
+        state, or rows with the vector env's stepper and ops=BATCH."""
         segments = [(s.u, (u_cmd - s.u) / self.dt, self.dt)]
-        if s.full:
-            y, _ = run_segments(self.stepper, self.full_system, np.concatenate([s.pose, s.momentum]), segments)
-            self.check_momentum(y, s.momentum0)
-            return ShellState(y[:3], y[3:], u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
-        pose, _ = run_segments(self.stepper, self.reduced_system, s.pose, segments)
-        return ShellState(pose, s.momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
+        stepper = self.stepper if stepper is None else stepper
+        pose, momentum = self.swim(s, segments, segments, stepper, ops)
+        return ShellState(pose, momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
 
     def _check_state(self, state):
         """(pose, u, momentum) from options['state'], default at rest at the origin with the mass at the centre."""
@@ -302,52 +296,22 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         """The commanded mass position u* of action a."""
         return a * self.u_max
 
-    def observe(self, s, ops=SCALAR):
-        (x, y, theta), (x_target, y_target) = components(s.pose), components(s.target)
-        c, sin = ops.cos(theta), ops.sin(theta)
-        dx, dy = x_target - x, y_target - y
-        body_target = [ops.clip(c * dx + sin * dy, -TARGET_BOUND, TARGET_BOUND)]
-        body_target.append(ops.clip(-sin * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
-        scaled_u = [u / bound for u, bound in zip(components(s.u), self.u_bounds)]
-        momentum = zip(components(s.momentum), self.momentum_bounds)
-        scaled_momentum = [ops.clip(p / scale, -MOMENTUM_BOUND, MOMENTUM_BOUND) for p, scale in momentum]
-        return ops.pack([*body_target, c, sin, *scaled_u, *scaled_momentum])
+    def shape(self, s):
+        return s.u
 
-    def describe(self, s, ops=SCALAR):
-        x, y, theta = (ops.real(s.pose[..., i]) for i in range(3))
-        distance = self.distance(s, ops)
-        state = {"x": x, "y": y, "theta": theta, "u": ops.vector(s.u), "momentum": ops.vector(s.momentum), "t": s.t}
-        spatial_momentum = self.spatial_momentum(s, ops)
-        return {
-            "state": state,
-            "spatial_momentum": spatial_momentum,
-            "target": ops.vector(s.target),
-            "distance": distance,
-            "model": ops.where(s.full, "full", "reduced"),
-            "is_success": ops.flag(distance <= self.success_radius),
-        }
+    def shape_info(self, s, ops=SCALAR):
+        return {"u": ops.vector(s.u)}
 
 
 class KozlovShellVectorEnv(TaskVectorEnv):
     """KozlovShell-v0 over a batch (``gym.make_vec("connenv/KozlovShell-v0", num_envs=N)``; see
-    ``connenv.envs.vector``). Rows reset at rest step the reduced model, rows reset with a momentum the full one,
-    as the single env does."""
+    ``connenv.envs.vector``): the single env's step over the rows. Rows reset at rest step the reduced model, rows
+    reset with a momentum the full one."""
 
     single_env = KozlovShellEnv
 
     def advance(self, s, u_cmd):
-        env = self.env
-        u_dot = (u_cmd - s.u) / env.dt
-        if not s.full.any():
-            pose, _ = run_segments(self.stepper, env.reduced_system, s.pose, [(s.u, u_dot, env.dt)])
-            return ShellState(pose, s.momentum, u_cmd, s.target, s.t + env.dt, s.full, s.momentum0)
-        y, full, rest = np.concatenate([s.pose, s.momentum], axis=-1), s.full, ~s.full
-        y[full] = run_segments(self.stepper, env.full_system, y[full], [(s.u[full], u_dot[full], env.dt)])[0]
-        env.check_momentum(y[full], s.momentum0[full])
-        if rest.any():
-            segments = [(s.u[rest], u_dot[rest], env.dt)]
-            y[rest, :3] = run_segments(self.stepper, env.reduced_system, s.pose[rest], segments)[0]
-        return ShellState(y[:, :3], y[:, 3:], u_cmd, s.target, s.t + env.dt, s.full, s.momentum0)
+        return self.env.advance(s, u_cmd, self.stepper, BATCH)
 
 
 @functools.cache

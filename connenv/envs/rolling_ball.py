@@ -50,7 +50,7 @@ def check_so3(stepper, R):
         columns = R.T.tolist()
         gram = [dot3(u, v) - (u is v) for u in columns for v in columns]
         drift = math.sqrt(sum(map(operator.mul, gram, gram)))
-    else:  # the six distinct entries of RᵀR − I elementwise over the rows: a stacked matmul costs 5x more
+    else:  # the six distinct entries of RᵀR − I elementwise over the rows: cheaper than a stacked matmul
         c = [R[..., :, k] for k in range(3)]
         dot = [c[i][..., 0] * c[j][..., 0] + c[i][..., 1] * c[j][..., 1] + c[i][..., 2] * c[j][..., 2] for i, j in PAIRS]
         square = sum((d - (i == j)) ** 2 * (1 if i == j else 2) for d, (i, j) in zip(dot, PAIRS))
@@ -155,8 +155,9 @@ class RollingBallEnv(TaskEnv):
     | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
 
     A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
-    The default exact step is the closed form for any radius and dt: R stays on SO(3) to rounding, 1e-14 over
-    200 random steps (`python -m connenv.bench precision`), and straight rolls match Ry(vt/ρ) to 1e-12.
+    The default exact step is the closed form for any radius and dt: R stays on SO(3) to rounding, and straight
+    rolls are Ry(vt/ρ) (tests/test_rolling_ball_*.py). Its drift off SO(3) and its cost against the other
+    steppers are on docs/speed-accuracy.md, which `python -m connenv.bench precision --env ball` measures.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or R more than 1e-6 off SO(3) (‖RᵀR − I‖, the invariant of Ṙ = ω̂R). Semi-implicit Euler
@@ -452,8 +453,8 @@ class RollingBallVectorEnv(TaskVectorEnv):
     ``connenv.envs.vector``), and the base of the Pose and Goal vector envs.
 
     Takes the single env's make kwargs and ``measure_distance`` (default False): the optimal arc from each start
-    (info ``"distance"``, and ``"path_ratio"``) costs a root search of about 5 ms per reset, which would dominate
-    the batch; without it both keys are left out of the infos.
+    (info ``"distance"``, and ``"path_ratio"``) costs a root search per reset, which would dominate the batch's
+    step (`python -m connenv.throughput` times the batch); without it both keys are left out of the infos.
     """
 
     single_env = RollingBallEnv

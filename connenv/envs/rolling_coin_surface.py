@@ -147,11 +147,11 @@ class RollingCoinSurfaceEnv(TaskEnv):
     | integrator | None: "exact" on a plane, else "rk4" with 8 substeps | "exact" (plane only), "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
 
-    Both defaults are on the Pareto front of the work–precision chart (`python -m connenv.bench precision --env
-    coin_surface coin_plane`). RK4 ×8 keeps |E − E₀| within 1e-9 m g Δz over an episode of random steering on
-    the default surfaces (tests). Fixed steps fail on surfaces curved enough for the dt (where: `python -m
-    connenv.bench stability --env coin_surface`, charted on the env's docs page); there take
-    `integrator="dop853"`. Semi-implicit Euler splits the state into q = (x, y, φ) and φ̇, which stands for the
+    The defaults' errors and cost against the other steppers, and where they stand on the work–precision chart,
+    are on docs/speed-accuracy.md, which `python -m connenv.bench precision --env coin_surface coin_plane`
+    measures; the tests check RK4 ×8's energy over an episode of random steering on the default surfaces. Fixed
+    steps fail on surfaces curved enough for the dt (where: `python -m connenv.bench stability --env
+    coin_surface`, charted on the env's docs page); there take `integrator="dop853"`. Semi-implicit Euler splits the state into q = (x, y, φ) and φ̇, which stands for the
     momentum (3/2) m R² φ̇.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a

@@ -9,10 +9,11 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
-from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
+from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import check_dt, check_keys, check_number, check_scale, check_stepper_options
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
 from connenv.envs.vector import TaskVectorEnv
+from connenv.systems.backend import components, namespace
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
 
@@ -149,13 +150,12 @@ class SkierEnv(TaskEnv):
     eighth-order formula at a fixed substep of at most 0.05 s, followed, where h is held, by one Newton step back
     onto the energy level the step started on (the flow conserves E there). Removing the energy error removes
     what drives the phase error near the rims, where the period grows steeply with E. A step whose energy error
-    passes 1e-8 m g Δz is taken again with twice the substeps. It is on the Pareto front of the work–precision
-    chart (`python -m connenv.bench precision`), more accurate there than the adaptive DOP853 at rtol 1e-8 at a
-    fraction of its cost. Nearer the centre of curvature, w = (1 − κh)σ gets small and the motion fast where it
-    is, and a fixed step needs many substeps to follow DOP853's accuracy, so the default stays the adaptive
-    DOP853 at rtol 1e-8 there. Across 1 − κ h_max ≥ 0.01 and dt from 0.01 to 0.2 s the default keeps the energy
-    error within 2e-6 of m g Δz over 100 random steps, and the state within 1e-6 of DOP853 at rtol 1e-13 until
-    the episode ends (tests/test_precision.py).
+    passes 1e-8 m g Δz is taken again with twice the substeps. Nearer the centre of curvature, w = (1 − κh)σ gets
+    small and the motion fast where it is, and a fixed step needs many substeps to follow DOP853's accuracy, so the
+    default stays the adaptive DOP853 at rtol 1e-8 there. The default's errors and cost against the other steppers
+    (its place on the work–precision chart) are on docs/speed-accuracy.md, which `python -m connenv.bench precision
+    --env skier` measures; tests/test_precision.py checks the default across 1 − κ h_max ≥ 0.01 and dt from 0.01
+    to 0.2 s.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
     non-finite state, or an energy error past 0.1 m g Δz (Δz as in the observation). The energy error is the
@@ -291,17 +291,19 @@ class SkierEnv(TaskEnv):
         side = math.copysign(1.0, y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
         return self.at(y, h, 0.0, side, 0.0)
 
-    def advance(self, s, h_cmd):
-        segments = control_segments(s.h, h_cmd, self.dt, self.max_height_speed)
-        h, h_dot, tau = segments[-1]  # the step ends at h + ḣ τ
-        segments = [(np.array([v]), np.array([v_dot]), duration) for v, v_dot, duration in segments]
-        y, change = run_segments(self.stepper, self.system, s.y, segments, self._held_energy)
+    def advance(self, s, h_cmd, stepper=None, ops=SCALAR):
+        """The state after a step toward the commanded height: one state, or rows with the vector env's stepper and
+        ops=BATCH."""
+        segments, h = control_path(s.h, h_cmd, self.dt, self.max_height_speed, ops)
+        stepper = self.stepper if stepper is None else stepper
+        y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
-        return self.at(y, h + h_dot * tau, s.t + self.dt, s.side, s.energy_error + change)
+        return self.at(y, h, s.t + self.dt, s.side, s.energy_error + change, ops)
 
-    def _held_energy(self, y, h, h_dot):
-        """E where the height is held, 0 where it moves."""
-        return float(self.system.energy(y, h[0])) if h_dot[0] == 0.0 else 0.0
+    def held_energy(self, y, h, h_dot):
+        """E where the height is held (where E is conserved), 0 where it moves: one state, or rows."""
+        (h,), (h_dot,) = components(h), components(h_dot)
+        return namespace(h_dot).where(h_dot == 0.0, self.system.energy(y, h), 0.0)
 
     def check_energy_error(self, energy_error):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
@@ -383,22 +385,11 @@ class SkierEnv(TaskEnv):
 
 
 class SkierVectorEnv(TaskVectorEnv):
-    """Skier-v0 over a batch (``gym.make_vec("connenv/Skier-v0", num_envs=N)``; see ``connenv.envs.vector``).
-
-    Takes Skier-v0's make kwargs; with ``max_height_speed`` each row ramps for its own time, so
-    the steppers get one segment length per row.
-    """
+    """Skier-v0 over a batch (``gym.make_vec("connenv/Skier-v0", num_envs=N)``; see ``connenv.envs.vector``): the
+    single env's step over the rows. With ``max_height_speed`` each row ramps for its own time, so the steppers get
+    one segment length per row."""
 
     single_env = SkierEnv
 
     def advance(self, s, h_cmd):
-        env = self.env
-        segments, h_end = control_segments_batch(s.h, h_cmd, env.dt, env.max_height_speed)
-        segments = [(h[:, None], h_dot[:, None], tau) for h, h_dot, tau in segments]
-        y, change = run_segments(self.stepper, env.system, s.y, segments, self._held_energy)
-        env.check_energy_error(s.energy_error + change)
-        return env.at(y, h_end, s.t + env.dt, s.side, s.energy_error + change, BATCH)
-
-    def _held_energy(self, y, h, h_dot):
-        """E on the rows whose height is held (the single env's energy check), 0 on the others."""
-        return np.where(h_dot[:, 0] == 0.0, self.env.system.energy(y, h[:, 0]), 0.0)
+        return self.env.advance(s, h_cmd, self.stepper, BATCH)

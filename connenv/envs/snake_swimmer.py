@@ -13,7 +13,6 @@ from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
-from connenv.core.segments import run_segments
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,
@@ -25,17 +24,15 @@ from connenv.core.validation import (
     check_vector,
     decimal,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv
-from connenv.envs.swimmer import PlanarSwimmer, components
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
 DT_MAX = 0.25  # s: the longest dt; longer steps (joint moves up to the whole range) make the Lie-group rule's choice
 # at construction take seconds
 TARGET_DISTANCES = (1.0, 2.0)  # body lengths from the start, uniform, in a uniform direction
-TARGET_BOUND = 3.0  # body lengths: the observed target is clipped here
 POSITION_BOUND = 100.0  # m: |x|, |y| of the middle link and of the target given at reset
-MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full model; atol is the Lie-group step's too
 ASPECT_MAX = 100.0  # the largest aspect ratio a/b of a link (see SnakeSwimmerEnv)
@@ -253,6 +250,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         self.joint_limit = JOINT_LIMIT
         self.momentum_scale = np.diag(self.full_system.locked_inertia(np.zeros(2)))
         self.momentum_bounds = self.momentum_scale.tolist()
+        self.target_unit, self.shape_bounds = self.body_length, (JOINT_LIMIT, JOINT_LIMIT)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
@@ -310,21 +308,15 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         state = SnakeState(pose, momentum if full else np.zeros(3), s, target, 0.0, full, np.zeros(3))
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
-    def advance(self, s, s_cmd):
+    def advance(self, s, s_cmd, stepper=None, ops=SCALAR):
         """The joints move toward s_cmd (`joint_path`); the full model also drifts with its momentum while they
-        hold, and checks its spatial momentum."""
+        hold, and checks its spatial momentum. One state, or rows with the vector env's stepper and ops=BATCH."""
         s_dot, ramp, s_end = joint_path(s.s, s_cmd, self.dt, self.max_joint_speed)
-        ramp = float(ramp)
-        if s.full:
-            segments = [(s.s, s_dot, ramp), (s_end, np.zeros(2), self.dt - ramp)]
-            segments = [segment for segment in segments if segment[2] > 0.0]
-            y, _ = run_segments(self.stepper, self.full_system, np.concatenate([s.pose, s.momentum]), segments)
-            self.check_momentum(y, s.momentum0)
-            return SnakeState(y[:3], y[3:], s_end, s.target, s.t + self.dt, s.full, s.momentum0)
-        pose = s.pose
-        if ramp > 0.0:  # held joints do not move the chain at zero momentum
-            pose, _ = run_segments(self.stepper, self.reduced_system, s.pose, [(s.s, s_dot, ramp)])
-        return SnakeState(pose, s.momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
+        moving = (s.s, s_dot, ramp)  # held joints do not move the chain at zero momentum
+        full = [moving, (s_end, np.zeros_like(s_dot), self.dt - ramp)]
+        stepper = self.stepper if stepper is None else stepper
+        pose, momentum = self.swim(s, full, [moving], stepper, ops)
+        return SnakeState(pose, momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
 
     def _check_state(self, state):
         """(pose, s, momentum) from options['state'], default at rest, straight, at the origin."""
@@ -342,53 +334,22 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         """The commanded joint angles (α*, β*) of action a."""
         return a * JOINT_LIMIT
 
-    def observe(self, s, ops=SCALAR):
-        (x, y, theta), (x_target, y_target) = components(s.pose), components(s.target)
-        c, sin = ops.cos(theta), ops.sin(theta)
-        dx, dy = (x_target - x) / self.body_length, (y_target - y) / self.body_length
-        body_target = [ops.clip(c * dx + sin * dy, -TARGET_BOUND, TARGET_BOUND)]
-        body_target.append(ops.clip(-sin * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
-        scaled_s = [angle / JOINT_LIMIT for angle in components(s.s)]
-        momentum = zip(components(s.momentum), self.momentum_bounds)
-        scaled_momentum = [ops.clip(p / scale, -MOMENTUM_BOUND, MOMENTUM_BOUND) for p, scale in momentum]
-        return ops.pack([*body_target, c, sin, *scaled_s, *scaled_momentum])
+    def shape(self, s):
+        return s.s
 
-    def describe(self, s, ops=SCALAR):
-        x, y, theta = (ops.real(s.pose[..., i]) for i in range(3))
-        alpha, beta = ops.real(s.s[..., 0]), ops.real(s.s[..., 1])
-        distance = self.distance(s, ops)
-        state = {"x": x, "y": y, "theta": theta, "alpha": alpha, "beta": beta, "momentum": ops.vector(s.momentum),
-                 "t": s.t}  # fmt: skip
-        return {
-            "state": state,
-            "spatial_momentum": self.spatial_momentum(s, ops),
-            "target": ops.vector(s.target),
-            "distance": distance,
-            "model": ops.where(s.full, "full", "reduced"),
-            "is_success": ops.flag(distance <= self.success_radius),
-        }
+    def shape_info(self, s, ops=SCALAR):
+        return {"alpha": ops.real(s.s[..., 0]), "beta": ops.real(s.s[..., 1])}
 
 
 class SnakeSwimmerVectorEnv(TaskVectorEnv):
     """SnakeSwimmer-v0 over a batch (``gym.make_vec("connenv/SnakeSwimmer-v0", num_envs=N)``; see
-    ``connenv.envs.vector``). Rows reset at rest step the reduced model, rows reset with a momentum the full one,
-    as the single env does."""
+    ``connenv.envs.vector``): the single env's step over the rows. Rows reset at rest step the reduced model, rows
+    reset with a momentum the full one."""
 
     single_env = SnakeSwimmerEnv
 
     def advance(self, s, s_cmd):
-        env = self.env
-        s_dot, ramp, s_end = joint_path(s.s, s_cmd, env.dt, env.max_joint_speed)
-        y, full, rest = np.concatenate([s.pose, s.momentum], axis=-1), s.full, ~s.full
-        if full.any():
-            segments = [(s.s[full], s_dot[full], ramp[full]), (s_end[full], np.zeros_like(s_dot[full]),
-                                                               env.dt - ramp[full])]  # fmt: skip
-            y[full] = run_segments(self.stepper, env.full_system, y[full], segments)[0]
-            env.check_momentum(y[full], s.momentum0[full])
-        if rest.any():
-            segments = [(s.s[rest], s_dot[rest], ramp[rest])]
-            y[rest, :3] = run_segments(self.stepper, env.reduced_system, s.pose[rest], segments)[0]
-        return SnakeState(y[:, :3], y[:, 3:], s_end, s.target, s.t + env.dt, s.full, s.momentum0)
+        return self.env.advance(s, s_cmd, self.stepper, BATCH)
 
 
 @functools.cache

@@ -6,29 +6,52 @@ from __future__ import annotations
 
 import numpy as np
 
-from connenv.core.segments import check_drift
+from connenv.core.segments import check_drift, run_segments
 from connenv.envs.base import SCALAR
+from connenv.systems import ideal_fluid
+from connenv.systems.backend import components
 
 TIME_COST = 0.01  # reward paid per step until success
 MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
-
-
-def components(a):
-    """The components along the last axis: floats of one state's array, columns of a batch's."""
-    return a.tolist() if a.ndim == 1 else [a[..., i] for i in range(a.shape[-1])]
+TARGET_BOUND = 3.0  # the observed target, in units of target_unit, is clipped here
+MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 
 
 class PlanarSwimmer:
-    """Task code of a TaskEnv whose states have ``pose``, ``momentum`` and ``target``, and which has
-    ``full_system`` (with ``spatial_momentum``), ``stepper`` and ``success_radius``."""
+    """Task code of a TaskEnv whose states have ``pose``, ``momentum``, ``target``, ``t``, ``full`` and
+    ``momentum0``, and which has ``full_system`` and ``reduced_system``, ``stepper``, ``success_radius``,
+    ``momentum_bounds`` (the observed momentum's scales); ``target_unit`` (the length the observed target is
+    measured in) and ``shape_bounds`` (the observed shape's scales), with ``shape(state)`` (its assigned
+    coordinates) and ``shape_info(state, ops)`` (their entries of ``info["state"]``)."""
+
+    # -- physics: one state, or rows with ops=BATCH ----------------------------
+
+    def swim(self, s, full_segments, reduced_segments, stepper, ops=SCALAR):
+        """(pose, momentum) after a step: the full model across its control segments where s.full, its spatial
+        momentum checked; the reduced model across its segments elsewhere (the momentum stays 0). One state (its
+        segments of zero length left out), or rows (segments of arrays over them; each row skips its zero-length
+        ones)."""
+        if ops is SCALAR:
+            if s.full:
+                y = np.concatenate([s.pose, s.momentum])
+                y = run_segments(stepper, self.full_system, y, [c for c in full_segments if c[2] > 0.0])[0]
+                self.check_momentum(y, s.momentum0)
+                return y[:3], y[3:]
+            pose = run_segments(stepper, self.reduced_system, s.pose, [c for c in reduced_segments if c[2] > 0.0])[0]
+            return pose, s.momentum
+        full, rest = s.full, ~s.full
+        if not full.any():
+            return run_segments(stepper, self.reduced_system, s.pose, reduced_segments)[0], s.momentum
+        y = np.concatenate([s.pose, s.momentum], axis=-1)
+        y[full] = run_segments(stepper, self.full_system, y[full], _rows(full_segments, full))[0]
+        self.check_momentum(y[full], s.momentum0[full])
+        if rest.any():
+            y[rest, :3] = run_segments(stepper, self.reduced_system, s.pose[rest], _rows(reduced_segments, rest))[0]
+        return y[:, :3], y[:, 3:]
 
     def spatial_momentum(self, s, ops=SCALAR):
-        """(R(θ) P, Π + x P_y − y P_x), the arithmetic of the system's spatial_momentum: a tuple of floats for one
-        state, an array (N, 3) for a batch."""
-        (x, y, theta), (p1, p2, pi) = components(s.pose), components(s.momentum)
-        c, sin = ops.cos(theta), ops.sin(theta)
-        px, py = c * p1 - sin * p2, sin * p1 + c * p2
-        momentum = px, py, pi + x * py - y * px
+        """(R(θ) P, Π + x P_y − y P_x): a tuple of floats for one state, an array (N, 3) for a batch."""
+        momentum = ideal_fluid.spatial_momentum(*components(s.pose), *components(s.momentum), ops)
         return momentum if ops is SCALAR else np.stack(momentum, axis=-1)
 
     def check_momentum(self, y, momentum0):
@@ -38,6 +61,8 @@ class PlanarSwimmer:
         norm = np.linalg.norm(momentum0, axis=-1)
         check_drift(self.stepper, "the spatial momentum", drift, MOMENTUM_ERROR_BOUND, norm=norm)
 
+    # -- task: one state on Python floats, or a batch with ops=BATCH -----------
+
     def distance(self, s, ops=SCALAR):
         """From the body's point (x, y) to the target, m."""
         (x, y, _), (x_target, y_target) = components(s.pose), components(s.target)
@@ -45,3 +70,33 @@ class PlanarSwimmer:
 
     def reward(self, before, after, info, ops=SCALAR):
         return (self.distance(before, ops) - info["distance"]) / self.success_radius - TIME_COST
+
+    def observe(self, s, ops=SCALAR):
+        (x, y, theta), (x_target, y_target) = components(s.pose), components(s.target)
+        c, sin = ops.cos(theta), ops.sin(theta)
+        dx, dy = (x_target - x) / self.target_unit, (y_target - y) / self.target_unit
+        body_target = [ops.clip(c * dx + sin * dy, -TARGET_BOUND, TARGET_BOUND)]
+        body_target.append(ops.clip(-sin * dx + c * dy, -TARGET_BOUND, TARGET_BOUND))
+        scaled_shape = [u / bound for u, bound in zip(components(self.shape(s)), self.shape_bounds)]
+        momentum = zip(components(s.momentum), self.momentum_bounds)
+        scaled_momentum = [ops.clip(p / scale, -MOMENTUM_BOUND, MOMENTUM_BOUND) for p, scale in momentum]
+        return ops.pack([*body_target, c, sin, *scaled_shape, *scaled_momentum])
+
+    def describe(self, s, ops=SCALAR):
+        x, y, theta = (ops.real(s.pose[..., i]) for i in range(3))
+        distance = self.distance(s, ops)
+        state = {"x": x, "y": y, "theta": theta, **self.shape_info(s, ops), "momentum": ops.vector(s.momentum),
+                 "t": s.t}  # fmt: skip
+        return {
+            "state": state,
+            "spatial_momentum": self.spatial_momentum(s, ops),
+            "target": ops.vector(s.target),
+            "distance": distance,
+            "model": ops.where(s.full, "full", "reduced"),
+            "is_success": ops.flag(distance <= self.success_radius),
+        }
+
+
+def _rows(segments, rows):
+    """The control segments of the rows selected (a duration that is one float for all rows stays one)."""
+    return [tuple(a if np.ndim(a) == 0 else a[rows] for a in segment) for segment in segments]

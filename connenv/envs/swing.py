@@ -10,10 +10,11 @@ from gymnasium import spaces
 from dataclasses import dataclass
 
 from connenv.core.integrators import make_stepper
-from connenv.core.segments import check_drift, control_segments, control_segments_batch, run_segments
+from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_scale, check_stepper_options
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
 from connenv.envs.vector import TaskVectorEnv
+from connenv.systems.backend import components, namespace
 from connenv.systems.swing import Swing
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -122,10 +123,12 @@ class SwingEnv(TaskEnv):
     A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
     beyond, the energies and the observation's bound (r_max/r_min)² leave float64 and float32.
 
-    The default integrator, the closed-form pendulum flow, is the fastest and the
-    most accurate stepper (`python -m connenv.bench precision`, docs/precision/):
-    across r_min from 0.05 m and dt from 0.01 to 0.5 s its energy error stays
-    within 1e-9 m g r_max over 100 random steps (tests/test_precision.py).
+    The default integrator is the closed-form pendulum flow: at constant r the
+    swing is a pendulum, whose flow is Jacobi's elliptic functions, so the step
+    makes no truncation error. Its errors and cost against the other steppers are
+    on docs/speed-accuracy.md, which `python -m connenv.bench precision --env swing`
+    measures; tests/test_precision.py checks its energy across r_min from 0.05 m
+    and dt from 0.01 to 0.5 s.
 
     A stepper that diverges raises `connenv.core.StepperError` naming the stepper,
     dt and the parameters: a non-finite state, or an energy error past
@@ -201,21 +204,19 @@ class SwingEnv(TaskEnv):
             y, r = self._check_state(options["state"], theta)
         return self.at(y, r, 0.0, 0.0)
 
-    def advance(self, s, r_cmd):
-        cuts = control_segments(s.r, r_cmd, self.dt, self.max_radial_speed)
-        segments = [(np.array([r]), np.array([r_dot]), tau) for r, r_dot, tau in cuts]
-        y, change = run_segments(self.stepper, self.system, s.y, segments, self._held_energy)
+    def advance(self, s, r_cmd, stepper=None, ops=SCALAR):
+        """The state after a step toward the commanded radius: one state, or rows with the vector env's stepper and
+        ops=BATCH."""
+        segments, r = control_path(s.r, r_cmd, self.dt, self.max_radial_speed, ops)
+        stepper = self.stepper if stepper is None else stepper
+        y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
-        r, r_dot, tau = cuts[-1]
-        return self.at(y, r + r_dot * tau, s.t + self.dt, s.energy_error + change)
+        return self.at(y, r, s.t + self.dt, s.energy_error + change, ops)
 
-    def _held_energy(self, y, r, r_dot):
-        """E = p²/(2 m r²) − m g r cos θ where the radius is held, 0 where it moves; on Python floats (the
-        system's, without numpy's overhead)."""
-        (theta, p), (r,), (r_dot,), m = y.tolist(), r.tolist(), r_dot.tolist(), self.system.mass
-        if r_dot != 0.0:
-            return 0.0
-        return p * p / (2 * m * r * r) - m * self.system.g * r * math.cos(theta)
+    def held_energy(self, y, r, r_dot):
+        """E where the radius is held (where E is conserved), 0 where it moves: one state, or rows."""
+        (r,), (r_dot,) = components(r), components(r_dot)
+        return namespace(r_dot).where(r_dot == 0.0, self.system.energy(y, r), 0.0)
 
     def check_energy_error(self, energy_error):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
@@ -266,22 +267,11 @@ class SwingEnv(TaskEnv):
 
 
 class SwingVectorEnv(TaskVectorEnv):
-    """Swing-v0 over a batch (``gym.make_vec("connenv/Swing-v0", num_envs=N)``; see ``connenv.envs.vector``).
-
-    Takes Swing-v0's make kwargs; with ``max_radial_speed`` each row ramps for its own time, so
-    the steppers get one segment length per row.
-    """
+    """Swing-v0 over a batch (``gym.make_vec("connenv/Swing-v0", num_envs=N)``; see ``connenv.envs.vector``): the
+    single env's step over the rows. With ``max_radial_speed`` each row ramps for its own time, so the steppers get
+    one segment length per row."""
 
     single_env = SwingEnv
 
     def advance(self, s, r_cmd):
-        env = self.env
-        segments, r_end = control_segments_batch(s.r, r_cmd, env.dt, env.max_radial_speed)
-        segments = [(r[:, None], r_dot[:, None], tau) for r, r_dot, tau in segments]
-        y, change = run_segments(self.stepper, env.system, s.y, segments, self._held_energy)
-        env.check_energy_error(s.energy_error + change)
-        return env.at(y, r_end, s.t + env.dt, s.energy_error + change, BATCH)
-
-    def _held_energy(self, y, r, r_dot):
-        """E on the rows whose radius is held (the single env's energy check), 0 on the others."""
-        return np.where(r_dot[:, 0] == 0.0, self.env.system.energy(y, r[:, 0]), 0.0)
+        return self.env.advance(s, r_cmd, self.stepper, BATCH)

@@ -33,6 +33,7 @@ from functools import cached_property
 import numpy as np
 
 from connenv.core.validation import ndim
+from connenv.systems.backend import FLOATS
 from connenv.systems.swing import Swing
 
 SEPARATRIX_STEP = 0.01  # ω₀h of the RK4 steps near the separatrix, where the elliptic flow declines
@@ -60,15 +61,20 @@ class KapitzaPendulum:
         return self.mass * self.g * (u[..., 1] - self.length * np.cos(q[..., 0]))
 
     def theta_dot(self, y, u_dot):
-        """θ̇ = (p − m l u̇·n) / (m l²); on Python floats for one state, as exact_segment."""
+        """θ̇ = (p − m l u̇·n) / (m l²): one state on Python floats, or rows."""
+        (theta, p), (v1, v2), ops = self._components(y, u_dot)
+        return self._spin(p, v1, v2, ops.cos(theta), ops.sin(theta)) / (self.mass * self.length * self.length)
+
+    def _spin(self, p, v1, v2, cos, sin):
+        """m l² θ̇ = p − m l u̇·n on components, from cos θ and sin θ."""
+        return p - self.mass * self.length * (v1 * cos + v2 * sin)
+
+    @staticmethod
+    def _components(y, u_dot):
+        """((θ, p), (u̇₁, u̇₂), ops): Python floats and FLOATS for one state, arrays and numpy for rows."""
         if ndim(y) == 1 and ndim(u_dot) == 1:
-            (theta, p), (v1, v2) = y.tolist(), np.asarray(u_dot, float).tolist()
-            return (p - self.mass * self.length * (v1 * math.cos(theta) + v2 * math.sin(theta))) / (
-                self.mass * self.length**2
-            )
-        theta, p = y[..., 0], y[..., 1]
-        along = u_dot[..., 0] * np.cos(theta) + u_dot[..., 1] * np.sin(theta)
-        return (p - self.mass * self.length * along) / (self.mass * self.length**2)
+            return np.asarray(y, float).tolist(), np.asarray(u_dot, float).tolist(), FLOATS
+        return (y[..., 0], y[..., 1]), (u_dot[..., 0], u_dot[..., 1]), np
 
     def momentum(self, theta, theta_dot, u_dot):
         """p = m l² θ̇ + m l u̇·n."""
@@ -86,9 +92,12 @@ class KapitzaPendulum:
 
     def energy(self, y, u_dot):
         """E = ½ m l² θ̇² − m g l cos θ, the pendulum's energy in the frame moving with the pivot's velocity u̇
-        (zero at pivot height); conserved while u̇ is constant and there is no damping."""
-        theta_dot = self.theta_dot(y, u_dot)
-        return 0.5 * self.mass * self.length**2 * theta_dot**2 - self.mass * self.g * self.length * np.cos(y[..., 0])
+        (zero at pivot height); conserved while u̇ is constant and there is no damping. One state on Python floats,
+        or rows."""
+        (theta, p), (v1, v2), ops = self._components(y, u_dot)
+        m, ell, c = self.mass, self.length, ops.cos(theta)
+        theta_dot = self._spin(p, v1, v2, c, ops.sin(theta)) / (m * ell * ell)
+        return 0.5 * m * ell * ell * theta_dot * theta_dot - m * self.g * ell * c
 
     def exact_segment(self, y, u, u_dot, tau):
         """The state after a segment of length tau at constant pivot velocity u̇.
@@ -102,30 +111,26 @@ class KapitzaPendulum:
         """
         if self.damping != 0.0:
             return np.full(np.broadcast_shapes(np.shape(y), np.shape(u_dot)[:-1] + (2,)), math.nan)
-        inertia = self.mass * self.length**2
-        if ndim(y) == 1 and ndim(u_dot) == 1:  # one state (the env's case): Python floats, 3x faster
-            (theta, p), (v1, v2) = np.asarray(y, float).tolist(), np.asarray(u_dot, float).tolist()
-            ml = self.mass * self.length
-            spin = p - ml * (v1 * math.cos(theta) + v2 * math.sin(theta))  # m l² θ̇
-            flowed, flowed_spin = self._pendulum.pendulum_flow(theta, spin, float(self.length), tau)
-            if math.isnan(flowed):
-                flowed, flowed_spin = self._near_separatrix(theta, spin, tau, math.sin)
-            return np.array([flowed, flowed_spin + ml * (v1 * math.cos(flowed) + v2 * math.sin(flowed))])
-        rotation = np.stack([y[..., 0] + 0.0 * u_dot[..., 0], inertia * self.theta_dot(y, u_dot)], axis=-1)
-        radius = np.full(np.shape(rotation)[:-1] + (1,), self.length)
-        flow = self._pendulum.exact_flow(rotation, radius, tau)
-        near = np.isnan(flow[..., 0])
-        if np.any(near):
-            taus = np.broadcast_to(tau, near.shape)[near]
-            flow[near] = np.stack(self._near_separatrix(*rotation[near].T, taus, np.sin), axis=-1)
-        theta, spin = np.moveaxis(flow, -1, 0)
-        return np.stack([theta, self.momentum(theta, spin / inertia, u_dot)], axis=-1)
+        (theta, p), (v1, v2), ops = self._components(y, u_dot)
+        if ops is np:
+            theta, p, v1, v2 = np.broadcast_arrays(theta, p, v1, v2)
+        spin = self._spin(p, v1, v2, ops.cos(theta), ops.sin(theta))
+        flowed, flowed_spin = self._pendulum.pendulum_flow(theta, spin, self.length, tau, ops)
+        near = ops.isnan(flowed)
+        if ops.any(near):  # the state (or those rows) by RK4
+            if ops is np:
+                flowed, flowed_spin = flowed.copy(), flowed_spin.copy()
+                rows = (theta[near], spin[near], np.broadcast_to(tau, near.shape)[near])
+                flowed[near], flowed_spin[near] = self._near_separatrix(*rows, np)
+            else:
+                flowed, flowed_spin = self._near_separatrix(theta, spin, tau, ops)
+        p = flowed_spin + self.mass * self.length * (v1 * ops.cos(flowed) + v2 * ops.sin(flowed))
+        return np.array([flowed, p]) if ops is FLOATS else np.stack([flowed, p], axis=-1)
 
-    def _near_separatrix(self, theta, spin, tau, sin):
+    def _near_separatrix(self, theta, spin, tau, ops):
         """The plain pendulum (θ, m l² θ̇) after tau by RK4 with steps h, ω₀h ≤ SEPARATRIX_STEP, ω₀ = √(g/l): a
-        local error of (ω₀h)⁵/120 ≈ 1e-12 of the state (measured: tests/test_kapitza_physics.py). sin: math's
-        on floats, numpy's on rows."""
-        inertia, weight = self.mass * self.length**2, self.mass * self.g * self.length
+        local error of (ω₀h)⁵/120 ≈ 1e-12 of the state (tests/test_kapitza_physics.py)."""
+        inertia, weight, sin = self.mass * self.length**2, self.mass * self.g * self.length, ops.sin
         substeps = max(1, math.ceil(math.sqrt(self.g / self.length) * float(np.max(tau)) / SEPARATRIX_STEP))
         h = tau / substeps
         for _ in range(substeps):

@@ -31,10 +31,12 @@ States carry their coordinates on the last axis; everything broadcasts over lead
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from connenv.systems.backend import components
+from connenv.systems.ideal_fluid import added_masses, kirchhoff, reconstruct, space_frame, spatial_momentum
 
 
 @dataclass(frozen=True)
@@ -56,8 +58,7 @@ class KozlovShell:
     @property
     def added_masses(self) -> tuple[float, float, float]:
         """(λ₁, λ₂, λ₃) = ρπ (b², a², (a² − b²)²/8)."""
-        a2, b2 = self.a**2, self.b**2
-        return self.rho * math.pi * b2, self.rho * math.pi * a2, self.rho * math.pi * (a2 - b2) ** 2 / 8
+        return added_masses(self.a, self.b, self.rho)
 
     def _diagonal(self, u1, u2):
         """(α, β, γ): the diagonal of I(u)."""
@@ -82,7 +83,7 @@ class KozlovShell:
 
     def body_velocity(self, mu, u, u_dot):
         """ξ = I(u)⁻¹ (μ − C(u) u̇), by eliminating ω (the Schur complement of I's diagonal block)."""
-        return np.stack(self._body_velocity(_split(mu), _split(u), _split(u_dot)), axis=-1)
+        return np.stack(self._body_velocity(components(mu), components(u), components(u_dot)), axis=-1)
 
     def _body_velocity(self, mu, u, u_dot):
         (p1, p2, pi), (u1, u2), (u1_dot, u2_dot), m = mu, u, u_dot, self.mass
@@ -93,16 +94,13 @@ class KozlovShell:
 
     def vector_field(self, y, u, u_dot):
         """Full model: ẏ for y = (x, y, θ, P₁, P₂, Π), Kirchhoff's equations and the reconstruction."""
-        _, _, theta, p1, p2, pi = _split(y)
-        v1, v2, omega = self._body_velocity((p1, p2, pi), _split(u), _split(u_dot))
-        return np.stack([*_reconstruct(theta, v1, v2, omega), omega * p2, -omega * p1, v2 * p1 - v1 * p2], axis=-1)
+        _, _, theta, p1, p2, pi = components(y)
+        v1, v2, omega = self._body_velocity((p1, p2, pi), components(u), components(u_dot))
+        return np.stack([*reconstruct(theta, v1, v2, omega, np), *kirchhoff(p1, p2, pi, v1, v2, omega)], axis=-1)
 
     def spatial_momentum(self, y):
         """(R(θ) P, Π + x P_y − y P_x): the total momentum in the space frame, conserved by the full model."""
-        x, y_, theta, p1, p2, pi = (y[..., i] for i in range(6))
-        c, s = np.cos(theta), np.sin(theta)
-        px, py = c * p1 - s * p2, s * p1 + c * p2
-        return np.stack([px, py, pi + x * py - y_ * px], axis=-1)
+        return np.stack(spatial_momentum(*(y[..., i] for i in range(6)), np), axis=-1)
 
     def energy(self, mu, u, u_dot):
         """T = ½ ξᵀ I ξ + ξᵀ C u̇ + ½ m |u̇|² = ½ ξᵀ (μ + C u̇) + ½ m |u̇|²; conserved while u is held."""
@@ -114,7 +112,7 @@ class KozlovShell:
 
     def metric(self, q, u):
         """(G11, G12, G22) in the coordinates q = (x, y, θ): L I Lᵀ, L C, m 1, with L = R(θ) ⊕ 1."""
-        frame = _frame(q[..., 2])
+        frame = space_frame(q[..., 2])
         G11 = frame @ self.locked_inertia(u) @ np.swapaxes(frame, -1, -2)
         G12 = frame @ self.coupling(u)
         G22 = self.mass * np.broadcast_to(np.eye(2), G12.shape[:-2] + (2, 2))
@@ -144,7 +142,7 @@ class ReducedKozlovShell(KozlovShell):
 
         a′ = m (1 − m/β), b′ = m (1 − m/α), c = J + λ₃, α = M + m + λ₁, β = M + m + λ₂."""
         if isinstance(u, np.ndarray):
-            u, u_dot = (tuple(u.tolist()), tuple(u_dot.tolist())) if u.ndim == 1 else (_split(u), _split(u_dot))
+            u, u_dot = components(u), components(u_dot)
         (u1, u2), (u1_dot, u2_dot) = u, u_dot
         m_alpha, m_beta, a_, b_, c = self._connection_constants
         omega = (b_ * u2 * u1_dot - a_ * u1 * u2_dot) / (c + a_ * u1 * u1 + b_ * u2 * u2)
@@ -186,26 +184,5 @@ class ReducedKozlovShell(KozlovShell):
 
     def vector_field(self, y, u, u_dot):
         """Reduced model: ẏ for y = (x, y, θ), the connection ξ = −I⁻¹ C u̇ reconstructed on SE(2)."""
-        u, u_dot = _split(u), _split(u_dot)
-        xi = self._body_velocity((0.0, 0.0, 0.0), u, u_dot)
-        return np.stack(np.broadcast_arrays(*_reconstruct(_split(y)[2], *xi)), axis=-1)
-
-
-def _reconstruct(theta, v1, v2, omega):
-    """ġ = g ξ on SE(2): (cos θ v₁ − sin θ v₂, sin θ v₁ + cos θ v₂, ω)."""
-    c, s = np.cos(theta), np.sin(theta)
-    return c * v1 - s * v2, s * v1 + c * v2, omega
-
-
-def _split(a):
-    """The components along the last axis; numpy scalars for a single state (faster than 0-d arrays)."""
-    a = np.asarray(a)
-    return tuple(a) if a.ndim == 1 else tuple(a[..., i] for i in range(a.shape[-1]))
-
-
-def _frame(theta):
-    """L(θ) = R(θ) ⊕ 1, shape (..., 3, 3): body components to space components."""
-    c, s = np.cos(theta), np.sin(theta)
-    one, zero = np.ones_like(c), np.zeros_like(c)
-    rows = [[c, -s, zero], [s, c, zero], [zero, zero, one]]
-    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+        xi = self._body_velocity((0.0, 0.0, 0.0), components(u), components(u_dot))
+        return np.stack(np.broadcast_arrays(*reconstruct(components(y)[2], *xi, np)), axis=-1)

@@ -57,28 +57,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.systems.kozlov_shell import _frame, _split
+from connenv.systems.backend import components, namespace
+from connenv.systems.ideal_fluid import added_masses, kirchhoff, reconstruct, space_frame, spatial_momentum
 
 JOINT_LIMIT = 2.0 * math.pi / 3.0  # |α|, |β| ≤ 2π/3: the links' tips stay apart
-
-
-class _Floats:
-    cos, sin = math.cos, math.sin
-
-
-class _Arrays:
-    cos, sin = np.cos, np.sin
-
-
-def _ops(x):
-    return _Floats if isinstance(x, float) else _Arrays
-
-
-def _reconstruct(theta, v1, v2, omega):
-    """ġ = g ξ on SE(2): (cos θ v₁ − sin θ v₂, sin θ v₁ + cos θ v₂, ω)."""
-    ops = _ops(theta)
-    c, s = ops.cos(theta), ops.sin(theta)
-    return c * v1 - s * v2, s * v1 + c * v2, omega
 
 
 @dataclass(frozen=True)
@@ -104,8 +86,7 @@ class SnakeSwimmer:
     @property
     def added_masses(self) -> tuple[float, float, float]:
         """(λ₁, λ₂, λ₃) = ρπ (b², a², (a² − b²)²/8), along the link, across it, and in rotation."""
-        a2, b2 = self.a**2, self.b**2
-        return self.rho * math.pi * b2, self.rho * math.pi * a2, self.rho * math.pi * (a2 - b2) ** 2 / 8
+        return added_masses(self.a, self.b, self.rho)
 
     @functools.cached_property
     def link_inertias(self) -> tuple[float, float, float]:
@@ -119,7 +100,7 @@ class SnakeSwimmer:
         """Entries of one side link's part of 𝕀_loc (I11, I12, I13, I22, I23, I33), of its column of 𝕀_c (c1, c2, c3)
         and of 𝕀_s (its diagonal entry), the link at φ = sign · angle, its centre at
         r = (sign (a + a cos angle), a sin angle). sign −1: the rear link (φ₁ = −α), +1: the front link (φ₃ = β)."""
-        ops, a = _ops(angle), self.a
+        ops, a = namespace(angle), self.a
         m1, m2, j = self.link_inertias
         c, s = ops.cos(angle), ops.sin(angle)
         rx, ry = sign * (a + a * c), a * s  # r₁ = (−a − a cos α, a sin α), r₃ = (a + a cos β, a sin β)
@@ -147,17 +128,17 @@ class SnakeSwimmer:
 
     def locked_inertia(self, s):
         """𝕀_loc(α, β), shape (..., 3, 3)."""
-        I11, I12, I13, I22, I23, I33 = np.broadcast_arrays(*self._metric(_split(np.asarray(s, float)))[0])
+        I11, I12, I13, I22, I23, I33 = np.broadcast_arrays(*self._metric(components(np.asarray(s, float)))[0])
         return np.stack([np.stack(row, -1) for row in [[I11, I12, I13], [I12, I22, I23], [I13, I23, I33]]], -2)
 
     def coupling(self, s):
         """𝕀_c(α, β), shape (..., 3, 2): column k the coupling to the k-th joint's rate."""
-        rear, front = self._metric(_split(np.asarray(s, float)))[1]
+        rear, front = self._metric(components(np.asarray(s, float)))[1]
         return np.stack([np.stack(np.broadcast_arrays(*rear), -1), np.stack(np.broadcast_arrays(*front), -1)], -1)
 
     def shape_inertia(self, s):
         """𝕀_s(α, β), shape (..., 2, 2): diagonal (each joint's rate moves one link)."""
-        s_alpha, s_beta = np.broadcast_arrays(*self._metric(_split(np.asarray(s, float)))[2])
+        s_alpha, s_beta = np.broadcast_arrays(*self._metric(components(np.asarray(s, float)))[2])
         zero = np.zeros_like(s_alpha)
         return np.stack([np.stack([s_alpha, zero], -1), np.stack([zero, s_beta], -1)], -2)
 
@@ -192,23 +173,20 @@ class SnakeSwimmer:
 
     def body_velocity(self, mu, s, s_dot):
         """ξ = 𝕀_loc⁻¹ (μ − 𝕀_c ṡ), shape (..., 3)."""
-        return np.stack(np.broadcast_arrays(*self._body_velocity(_split(mu), _split(s), _split(s_dot))), axis=-1)
+        return np.stack(np.broadcast_arrays(*self._body_velocity(components(mu), components(s), components(s_dot))), axis=-1)
 
     def vector_field(self, y, s, s_dot):
         """Full model: ẏ for y = (x, y, θ, P₁, P₂, Π), Kirchhoff's equations and the reconstruction."""
         single = np.ndim(y) == 1 and np.ndim(s) == 1
-        y, s, s_dot = (np.asarray(a, float).tolist() if single else _split(a) for a in (y, s, s_dot))
+        y, s, s_dot = (np.asarray(a, float).tolist() if single else components(a) for a in (y, s, s_dot))
         _, _, theta, p1, p2, pi = y
         v1, v2, omega = self._body_velocity((p1, p2, pi), s, s_dot)
-        y_dot = (*_reconstruct(theta, v1, v2, omega), omega * p2, -omega * p1, v2 * p1 - v1 * p2)
+        y_dot = (*reconstruct(theta, v1, v2, omega, namespace(theta)), *kirchhoff(p1, p2, pi, v1, v2, omega))
         return np.array(y_dot) if single else np.stack(np.broadcast_arrays(*y_dot), -1)
 
     def spatial_momentum(self, y):
         """(R(θ) P, Π + x P_y − y P_x): the total momentum of chain and fluid in the space frame, conserved."""
-        x, y_, theta, p1, p2, pi = (y[..., i] for i in range(6))
-        c, s = np.cos(theta), np.sin(theta)
-        px, py = c * p1 - s * p2, s * p1 + c * p2
-        return np.stack([px, py, pi + x * py - y_ * px], axis=-1)
+        return np.stack(spatial_momentum(*(y[..., i] for i in range(6)), np), axis=-1)
 
     def energy(self, mu, s, s_dot):
         """T = ½ ξᵀ 𝕀_loc ξ + ξᵀ 𝕀_c ṡ + ½ ṡᵀ 𝕀_s ṡ = ½ ξᵀ (μ + 𝕀_c ṡ) + ½ ṡᵀ 𝕀_s ṡ; conserved while s is held."""
@@ -232,7 +210,7 @@ class SnakeSwimmer:
 
     def metric(self, q, u):
         """(G11, G12, G22) in the coordinates q = (x, y, θ), u = (α, β): L 𝕀_loc Lᵀ, L 𝕀_c, 𝕀_s, L = R(θ) ⊕ 1."""
-        frame = _frame(q[..., 2])
+        frame = space_frame(q[..., 2])
         G11 = frame @ self.locked_inertia(u) @ np.swapaxes(frame, -1, -2)
         G12 = frame @ self.coupling(u)
         shape = np.broadcast_shapes(G11.shape[:-2], np.shape(u)[:-1])
@@ -259,12 +237,12 @@ class ReducedSnakeSwimmer(SnakeSwimmer):
         """ξ = −A(s) ṡ as components (v₁, v₂, ω): floats for one shape (a tuple of floats or a 1-D array), arrays
         over rows for a batch (..., 2)."""
         if isinstance(s, np.ndarray):
-            s, s_dot = (tuple(s.tolist()), tuple(s_dot.tolist())) if s.ndim == 1 else (_split(s), _split(s_dot))
+            s, s_dot = components(s), components(s_dot)
         return self._body_velocity((0.0, 0.0, 0.0), s, s_dot)
 
     def vector_field(self, y, s, s_dot):
         """Reduced model: ẏ for y = (x, y, θ), the connection reconstructed on SE(2)."""
         single = np.ndim(y) == 1 and np.ndim(s) == 1
-        y, s, s_dot = (np.asarray(a, float).tolist() if single else _split(a) for a in (y, s, s_dot))
-        y_dot = _reconstruct(y[2], *self._body_velocity((0.0, 0.0, 0.0), s, s_dot))
+        y, s, s_dot = (np.asarray(a, float).tolist() if single else components(a) for a in (y, s, s_dot))
+        y_dot = reconstruct(y[2], *self._body_velocity((0.0, 0.0, 0.0), s, s_dot), namespace(y[2]))
         return np.array(y_dot) if single else np.stack(np.broadcast_arrays(*y_dot), axis=-1)

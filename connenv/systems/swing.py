@@ -22,6 +22,7 @@ import numpy as np
 from scipy.special import ellipj, ellipk
 
 from connenv.core.validation import ndim
+from connenv.systems.backend import FLOATS
 
 try:  # scipy's ellipj on one float without the ufunc's per-call machinery: the same function, the same bits
     from scipy.special.cython_special import _ellipj_pywrap as ellipj_one
@@ -29,7 +30,8 @@ except ImportError:  # a scipy without it: the ufunc
     ellipj_one = ellipj
 
 SEPARATRIX_BAND = 1e-6
-"""|k² − 1| below which exact_flow declines (measured: 1e-9 error at 1 − k² = 2.5e-7, 25 rad at 2.5e-11)."""
+"""|k² − 1| below which exact_flow declines: nearer the separatrix scipy's ellipj switches to a first-order expansion
+in 1 − m and its error grows without bound (tests/test_swing_physics.py checks the fallback there)."""
 
 
 @dataclass(frozen=True)
@@ -54,12 +56,12 @@ class Swing:
         return np.stack([p / (self.mass * r**2), -self.mass * self.g * r * np.sin(theta)], axis=-1)
 
     def energy(self, y, r):
-        """E = p²/(2 m r²) − m g r cos θ (zero at pivot height)."""
-        if type(y) is np.ndarray and y.ndim == 1 and ndim(r) == 0:  # one state: Python floats
-            (theta, p), cos = y.tolist(), math.cos
+        """E = p²/(2 m r²) − m g r cos θ (zero at pivot height): one state on Python floats, rows as arrays."""
+        if type(y) is np.ndarray and y.ndim == 1 and ndim(r) == 0:  # one state
+            (theta, p), ops = y.tolist(), FLOATS
         else:
-            theta, p, cos = y[..., 0], y[..., 1], np.cos
-        return p**2 / (2 * self.mass * r**2) - self.mass * self.g * r * cos(theta)
+            theta, p, ops = y[..., 0], y[..., 1], np
+        return p**2 / (2 * self.mass * r**2) - self.mass * self.g * r * ops.cos(theta)
 
     def hamiltonian(self, y, u):
         """H(y, u) = E(y, r) (u = (r,)), the level the steppers' energy projection keeps."""
@@ -89,51 +91,44 @@ class Swing:
         """
         if ndim(y) == 1 and ndim(r) == 1:  # one state (the env's case)
             theta, p = y.tolist() if type(y) is np.ndarray else map(float, y)
-            return np.array(self.pendulum_flow(theta, p, float(r[0]), tau))
-        return np.stack(self.pendulum_flow(y[..., 0], y[..., 1], np.asarray(r, float)[..., 0], tau), axis=-1)
+            return np.array(self.pendulum_flow(theta, p, float(r[0]), tau, FLOATS))
+        return np.stack(self.pendulum_flow(y[..., 0], y[..., 1], np.asarray(r, float)[..., 0], tau, np), axis=-1)
 
-    def pendulum_flow(self, theta, p, r, tau):
-        """exact_flow's (θ, p) of the state (θ, p) at radius r: Python floats for one state (θ a float), about 5x
-        faster than numpy with its per-call overhead on 0-d arrays, or arrays over a batch. The formulas are
-        written once for both."""
+    def pendulum_flow(self, theta, p, r, tau, ops):
+        """exact_flow's (θ, p) of the state (θ, p) at radius r, as components: Python floats for one state with
+        ops=FLOATS, or arrays over rows with ops=numpy (`connenv.systems.backend`)."""
         one = isinstance(theta, float)
-        if one:
-            sin, cos, sqrt, atan2, copysign, maximum = math.sin, math.cos, math.sqrt, math.atan2, math.copysign, max
-            where, rint, any_ = (lambda condition, a, b: a if condition else b), round, bool  # noqa: E731
-        else:
-            sin, cos, sqrt, atan2, copysign, maximum = np.sin, np.cos, np.sqrt, np.arctan2, np.copysign, np.maximum
-            where, rint, any_ = np.where, np.rint, np.any
-        omega = sqrt(self.g / r)
+        omega = ops.sqrt(self.g / r)
         v = p / (2 * omega * self.mass * r**2)  # θ̇/(2ω)
-        wrapped = atan2(sin(theta), cos(theta))  # θ in (−π, π]
-        k2 = sin(wrapped / 2) ** 2 + v**2
+        wrapped = ops.atan2(ops.sin(theta), ops.cos(theta))  # θ in (−π, π]
+        k2 = ops.sin(wrapped / 2) ** 2 + v**2
         rotating = k2 > 1.0
-        s = copysign(1.0, v)  # rotation is mirrored so that θ̇ > 0
+        s = ops.copysign(1.0, v)  # rotation is mirrored so that θ̇ > 0
         # amplitude angle φ at t₀: libration sin φ = sin(θ/2)/k, cos φ = θ̇/(2kω); rotation φ = ±θ/2
-        phi = where(rotating, s * wrapped / 2, atan2(sin(wrapped / 2), v))
-        stretch = maximum(k2, 1.0)  # 1 while librating, k² while rotating
+        phi = ops.where(rotating, s * wrapped / 2, ops.atan2(ops.sin(wrapped / 2), v))
+        stretch = ops.maximum(k2, 1.0)  # 1 while librating, k² while rotating
         m = k2 / stretch**2  # the parameter: k² or 1/k²
-        w = sqrt(stretch) * omega * tau
-        sn1, cn1 = sin(phi), cos(phi)
-        dn1 = sqrt(1.0 - m * sn1 * sn1)
-        sn2, cn2, dn2, _ = ellipj_one(w, m) if one else ellipj(w, m)
+        w = ops.sqrt(stretch) * omega * tau
+        sn1, cn1 = ops.sin(phi), ops.cos(phi)
+        dn1 = ops.sqrt(1.0 - m * sn1 * sn1)
+        sn2, cn2, dn2, _ = ellipj_one(w, m) if one else ellipj(w, m)  # outside the Array API: scipy's
         if one:
             sn2, cn2, dn2 = float(sn2), float(cn2), float(dn2)
         outside = abs(k2 - 1.0) < SEPARATRIX_BAND
-        denominator = where(outside, 1.0, 1.0 - m * (sn1 * sn2) ** 2)  # 0 at the separatrix
+        denominator = ops.where(outside, 1.0, 1.0 - m * (sn1 * sn2) ** 2)  # 0 at the separatrix
         sn = (sn1 * cn2 * dn2 + sn2 * cn1 * dn1) / denominator
         cn = (cn1 * cn2 - sn1 * dn1 * sn2 * dn2) / denominator
         dn = (dn1 * dn2 - m * sn1 * cn1 * sn2 * cn2) / denominator
-        k = sqrt(k2)
-        half = atan2(k * sn, dn)  # libration: θ/2
-        if any_(rotating):  # am = atan2(sn, cn) plus the whole turns
-            wrapped_am = atan2(sn, cn)
-            mean_am = phi + math.pi / 2 * w / ellipk(where(rotating, m, 0.0))  # float(ellipk) on one state
-            turns = rint((mean_am - wrapped_am) / (2 * math.pi))
-            half = where(rotating, s * (wrapped_am + 2 * math.pi * turns), half)
-        theta_dot = 2 * k * omega * where(rotating, s * dn, cn)
-        theta = where(outside, math.nan, theta - wrapped + 2 * half)
-        p = where(outside, math.nan, self.mass * r**2 * theta_dot)
+        k = ops.sqrt(k2)
+        half = ops.atan2(k * sn, dn)  # libration: θ/2
+        if ops.any(rotating):  # am = atan2(sn, cn) plus the whole turns
+            wrapped_am = ops.atan2(sn, cn)
+            mean_am = phi + math.pi / 2 * w / ellipk(ops.where(rotating, m, 0.0))  # float(ellipk) on one state
+            turns = ops.round((mean_am - wrapped_am) / (2 * math.pi))
+            half = ops.where(rotating, s * (wrapped_am + 2 * math.pi * turns), half)
+        theta_dot = 2 * k * omega * ops.where(rotating, s * dn, cn)
+        theta = ops.where(outside, math.nan, theta - wrapped + 2 * half)
+        p = ops.where(outside, math.nan, self.mass * r**2 * theta_dot)
         return theta, p
 
     def quarter_period(self, r, amplitude):

@@ -23,6 +23,7 @@ from scipy.interpolate import CubicSpline
 from scipy.special import ellipeinc
 
 from connenv.core.validation import check_keys, check_number
+from connenv.systems.backend import namespace
 
 GRID = 4001  # samples of the domain for the checks and the tabulated arc length
 
@@ -103,8 +104,8 @@ class Valley(Trail):
 
     def profile(self, x):
         k, a = 2.0 * math.pi / self.L, 0.5 * self.H
-        trig = math if isinstance(x, float) else np
-        c, s = trig.cos(k * x), trig.sin(k * x)
+        ops = namespace(x)
+        c, s = ops.cos(k * x), ops.sin(k * x)
         return a * (1.0 - c), a * k * s, a * k * k * c, -a * k**3 * s
 
     def arc_length_on_domain(self, x):

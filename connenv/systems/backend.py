@@ -1,0 +1,57 @@
+"""The operations the physics is written against, so that each formula is written once for one state and for rows.
+
+A system's function that runs on both takes its numbers as components along the last axis (``components``: a
+Python float each for one state, an array over the rows for a batch) and ``ops``, the namespace of the operations
+on them:
+
+- ``FLOATS``: Python's math, for one state. numpy's per-call overhead on one state's few numbers costs several times
+  the arithmetic, and the single env steps one state.
+- ``numpy`` itself, for arrays over rows (the vector env). numpy ≥ 2's main namespace follows the Array API
+  standard, and the names here are the standard's (``atan2``, ``acos``, ``copysign``, ``maximum``, ``where``,
+  ``round``, ``any``, ``isnan``), so an Array API namespace of another library (array_api_compat's torch or
+  jax.numpy) fits the same slot.
+
+``FLOATS`` gives those names their meaning on floats. The env's task namespaces (``connenv.envs.base``: SCALAR,
+BATCH) are these with the task's operations added, and serve the systems' functions as well. Special functions
+outside the standard (scipy.special's Jacobi elliptic functions) are chosen by the system beside ``ops``.
+"""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+
+FLOATS = SimpleNamespace(
+    sin=math.sin,
+    cos=math.cos,
+    atan2=math.atan2,
+    sqrt=math.sqrt,
+    log=math.log,
+    acos=math.acos,
+    hypot=math.hypot,
+    copysign=math.copysign,
+    isnan=math.isnan,
+    maximum=max,
+    minimum=min,
+    where=lambda condition, a, b: a if condition else b,
+    round=round,  # half to even, as the standard's (an int on a float: exact in the arithmetic that follows)
+    any=bool,
+)
+"""The Array API names used by connenv's physics, on Python floats."""
+
+NAMES = tuple(vars(FLOATS))
+
+
+def namespace(x):
+    """The operations for x: FLOATS for a Python float (one state), numpy for an array over rows."""
+    return FLOATS if isinstance(x, float) else np
+
+
+def components(a):
+    """The components along the last axis: Python floats of one state (a 1-D array), arrays over the rows of a
+    batch."""
+    if not isinstance(a, np.ndarray):
+        a = np.asarray(a, float)
+    return a.tolist() if a.ndim == 1 else [a[..., i] for i in range(a.shape[-1])]
