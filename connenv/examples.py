@@ -79,7 +79,3 @@ def rolling_ball(radius: float = 1.0, reach: float = 10.0) -> dict:
     connection = functools.partial(rolling_ball_connection, radius=radius)
     return {"group": "SO3", "frame": "space", "connection": connection, "shape_low": [-reach, -reach],
             "shape_high": [reach, reach], "vectorized": True}
-
-
-MAKE_KWARGS = {"connenv/ActiveConstraint-v0": swing, "connenv/Connection-v0": beanie}
-"""The example each generic id is benchmarked and contract-tested with."""
