@@ -302,7 +302,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     # -- rendering -------------------------------------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering_bead import BeadRenderer
+        from connenv.rendering.bead_on_bar import BeadRenderer
 
         return BeadRenderer(self.half_length, self.render_mode, self.metadata["render_fps"])
 

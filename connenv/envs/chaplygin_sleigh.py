@@ -320,7 +320,7 @@ class ChaplyginSleighEnv(TaskEnv):
     # -- rendering -------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering import SleighRenderer
+        from connenv.rendering.chaplygin_sleigh import SleighRenderer
 
         return SleighRenderer(self.system.offset, self.rail, self.box, self.tolerance, self.render_mode,
                               self.metadata["render_fps"])

@@ -232,7 +232,7 @@ class ElroysBeanieEnv(ConnectionEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering_lawton import BeanieRenderer
+        from connenv.rendering.elroys_beanie import BeanieRenderer
 
         return BeanieRenderer(self.render_mode, self.metadata["render_fps"])
 

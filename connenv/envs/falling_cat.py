@@ -288,7 +288,7 @@ class FallingCatEnv(ConnectionEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering_lawton import CatRenderer
+        from connenv.rendering.falling_cat import CatRenderer
 
         return CatRenderer(self.cm_distance, self.render_mode, self.metadata["render_fps"])
 

@@ -220,7 +220,7 @@ class KapitzaPendulumEnv(TaskEnv):
         self.state = self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
 
     def _make_renderer(self):
-        from connenv.envs.rendering import KapitzaRenderer
+        from connenv.rendering.kapitza import KapitzaRenderer
 
         return KapitzaRenderer(self.system.length, self.a_max, self.render_mode, self.metadata["render_fps"])
 

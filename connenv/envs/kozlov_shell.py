@@ -234,7 +234,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         return super().step(action)
 
     def _make_renderer(self):
-        from connenv.envs.rendering_shell import KozlovShellRenderer
+        from connenv.rendering.kozlov_shell import KozlovShellRenderer
 
         system = self.full_system
         return KozlovShellRenderer(

@@ -209,7 +209,7 @@ class RollingBallEnv(TaskEnv):
         return finite_action(action, self.action_space)
 
     def _make_renderer(self):
-        from connenv.envs.rendering import RollingBallRenderer
+        from connenv.rendering.rolling_ball import RollingBallRenderer
 
         return RollingBallRenderer(self.system.radius, self.render_mode, self.metadata["render_fps"])
 

@@ -233,7 +233,7 @@ class RollingCoinEnv(ConnectionEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering_lawton import CoinRenderer
+        from connenv.rendering.rolling_coin import CoinRenderer
 
         return CoinRenderer(self.radius, self.render_mode, self.metadata["render_fps"])
 

@@ -254,7 +254,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
         return super().step(action)
 
     def _make_renderer(self):
-        from connenv.envs.rendering_coin_surface import CoinSurfaceRenderer
+        from connenv.rendering.rolling_coin_surface import CoinSurfaceRenderer
 
         return CoinSurfaceRenderer(self.surface, self.arena, self.system.radius, self.render_mode,
                                    self.metadata["render_fps"])

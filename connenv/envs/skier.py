@@ -246,7 +246,7 @@ class SkierEnv(TaskEnv):
         return integrator, options
 
     def _make_renderer(self):
-        from connenv.envs.rendering import SkierRenderer
+        from connenv.rendering.skier import SkierRenderer
 
         return SkierRenderer(self.trail, self.h_max, self.render_mode, self.metadata["render_fps"])
 

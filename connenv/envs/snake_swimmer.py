@@ -272,7 +272,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return super().step(action)
 
     def _make_renderer(self):
-        from connenv.envs.rendering_snake import SnakeSwimmerRenderer
+        from connenv.rendering.snake_swimmer import SnakeSwimmerRenderer
 
         system = self.full_system
         return SnakeSwimmerRenderer(

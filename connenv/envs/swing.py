@@ -182,7 +182,7 @@ class SwingEnv(TaskEnv):
         self.state = self.at(np.zeros(2), self.r_max, 0.0, 0.0)
 
     def _make_renderer(self):
-        from connenv.envs.rendering import SwingRenderer
+        from connenv.rendering.swing import SwingRenderer
 
         return SwingRenderer(self.r_max, self.render_mode, self.metadata["render_fps"])
 

@@ -245,7 +245,7 @@ class TubeTwistEnv(ConnectionEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering import TubeRenderer
+        from connenv.rendering.tube import TubeRenderer
 
         return TubeRenderer(self.render_mode, self.metadata["render_fps"])
 
