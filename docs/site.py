@@ -25,7 +25,7 @@ import gymnasium as gym
 import numpy as np
 
 import connenv
-from connenv.envs.spec import spec
+from connenv.envs.spec import registry, spec
 
 DOCS = Path(__file__).resolve().parent
 PAGES = DOCS / "envs"
@@ -97,7 +97,7 @@ the others under docs/physics/ are written by hand."""
 
 
 def env_ids() -> list[str]:
-    return sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+    return sorted(registry)
 
 
 def name(env_id: str) -> str:

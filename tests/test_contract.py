@@ -20,7 +20,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 import connenv  # noqa: F401  (registers the envs)
 from connenv.envs.spec import registry
 
-IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+IDS = sorted({*registry, *(env_id for env_id in gym.registry if env_id.startswith("connenv/"))})
 
 CONTRACT_KWARGS = {spec.id: [v() if callable(v) else v for v in spec.variants] for spec in registry.values()}
 """Make kwargs of each registered id (its spec's variants): more than one where another code path is worth the
