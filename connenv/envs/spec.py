@@ -4,7 +4,7 @@ each spec (`register`); the docs site's map, the baseline tables, the analytic c
 (agents.controllers) and the test tables (contract, fuzz, hardening, golden, audit) are read off `registry`, so that
 adding an env is writing its own files (docs/guides/new-env.md).
 
-Gymnasium's registry stays the source users see: ``gym.make("connenv/Swing-v0")`` and
+Gymnasium's registry stays the source users see: ``gym.make("connenv/Name-v0")`` and
 ``gym.make_vec(..., vectorization_mode="vector_entry_point")`` read the `gymnasium.envs.registration.EnvSpec` that
 `register` makes of a Spec (id, entry points, max_episode_steps, kwargs).
 """
@@ -43,7 +43,7 @@ class Spec:
 
     Registration (Gymnasium's EnvSpec): ``id`` ("connenv/Name-vN"), ``env`` and ``vector_env`` (the single env's
     class and its native vector env's, entry points "module:Class"), ``max_episode_steps``, ``kwargs`` (the id's
-    make kwargs: BeadOnBar-v1 is BeadOnBarEnv with ``omega_max=1.0``).
+    make kwargs: a later version may be the same class with other kwargs).
 
     The env: ``dt_max`` (s, the longest dt its make kwargs take, documented in its Arguments table); ``physics``
     (its physics page under docs/physics/); ``example`` (make kwargs for an id that cannot be made without them: the
@@ -88,7 +88,7 @@ class Spec:
 
     @property
     def name(self) -> str:
-        """The id without its namespace, "Swing-v0": how pages, files and error messages name the env."""
+        """The id without its namespace, "Name-v0": how pages, files and error messages name the env."""
         return self.id.split("/", 1)[1]
 
     def make_kwargs(self) -> dict:
