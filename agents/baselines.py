@@ -50,6 +50,7 @@ from agents.controllers import CONTROLLERS
 from agents.evaluate import PRETRAINED, compare, evaluate, load_model, make_policy, pretrained_models
 from connenv import cli
 from connenv.cli import positive_int
+from connenv.envs.spec import registry
 
 PROG = "python -m agents.baselines"
 REPO = Path(__file__).resolve().parent.parent
@@ -57,25 +58,8 @@ HYPERPARAMS = Path(__file__).resolve().parent / "hyperparams"
 DOCS = REPO / "docs" / "baselines"
 RUNS = REPO / "runs" / "baselines"
 SEEDS = (0, 1, 2)
-ENVS = (
-    "connenv/Swing-v0",
-    "connenv/KapitzaPendulum-v0",
-    "connenv/Skier-v0",
-    "connenv/KozlovShell-v0",
-    "connenv/RollingBall-v0",
-    "connenv/RollingBallPose-v0",
-    "connenv/RollingBallGoal-v0",
-    "connenv/KapitzaSwingUp-v0",
-    "connenv/RollingCoin-v0",
-    "connenv/ElroysBeanie-v0",
-    "connenv/RollingCoinSurface-v0",
-    "connenv/TubeTwist-v0",
-    "connenv/BeadOnBar-v0",
-    "connenv/BeadOnBar-v1",
-    "connenv/ChaplyginSleigh-v0",
-    "connenv/SnakeSwimmer-v0",
-    "connenv/FallingCat-v0",
-)
+ENVS = tuple(spec.id for spec in registry.values() if spec.measure and spec.controllers)
+"""The reference table's envs: every id whose spec names a physical measure and an analytic controller."""
 UNTRAINED = ()
 """Envs with hyperparameters and analytic controllers whose reference runs are still to be trained: ``train`` and
 ``collect`` take them; the table holds ENVS."""
@@ -314,25 +298,20 @@ def steps_to_target(row: dict) -> float | None:
     return float(np.mean(lengths)) if lengths else None
 
 
+def statistic(name: str):
+    """How a Measure's statistic is read off an agents.evaluate summary row (connenv.envs.spec.Measure)."""
+    if name == "time_to_success":
+        return lambda row: row["time_to_success_mean"]
+    if name == "steps_to_target":
+        return steps_to_target
+    return lambda row: row["measures_mean"][name]
+
+
 # The physical measure of each env's row: its name and unit, and how to read it off an agents.evaluate summary.
 MEASURES = {
-    "connenv/Swing-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
-    "connenv/Skier-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
-    "connenv/KapitzaSwingUp-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
-    "connenv/BeadOnBar-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
-    "connenv/BeadOnBar-v1": ("time to target", "s", lambda row: row["time_to_success_mean"]),
-    "connenv/RollingBall-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
-    "connenv/RollingBallGoal-v0": ("path / optimal arc", "", lambda row: row["measures_mean"]["path_ratio"]),
-    "connenv/RollingBallPose-v0": ("path length", "m", lambda row: row["measures_mean"]["path_length"]),
-    "connenv/TubeTwist-v0": ("bend / shortest loop", "", lambda row: row["measures_mean"]["path_ratio"]),
-    "connenv/FallingCat-v0": ("roll error at landing", "rad", lambda row: row["measures_mean"]["roll_error"]),
-    "connenv/KozlovShell-v0": ("steps to target", "", steps_to_target),
-    "connenv/SnakeSwimmer-v0": ("steps to target", "", steps_to_target),
-    "connenv/ChaplyginSleigh-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
-    "connenv/KapitzaPendulum-v0": ("max deviation", "rad", lambda row: row["measures_mean"]["max_deviation"]),
-    "connenv/RollingCoin-v0": ("time to park", "s", lambda row: row["time_to_success_mean"]),
-    "connenv/ElroysBeanie-v0": ("time to hold", "s", lambda row: row["time_to_success_mean"]),
-    "connenv/RollingCoinSurface-v0": ("time to target", "s", lambda row: row["time_to_success_mean"]),
+    spec.id: (spec.measure.label, spec.measure.unit, statistic(spec.measure.statistic))
+    for spec in registry.values()
+    if spec.id in ENVS
 }
 
 

@@ -1,4 +1,5 @@
-"""A geometric gait planner for swimmers moved by a mechanical connection: KozlovShell-v0 and SnakeSwimmer-v0.
+"""A geometric gait planner for swimmers moved by a mechanical connection; agents.controllers.kozlov_shell and
+snake_swimmer give it their gaits.
 
 At zero momentum the body moves by ξ = −A(s) ṡ: the net motion g ∈ SE(2) after a closed loop of shapes s is the
 connection's holonomy, and it does not depend on how fast the loop is run. So a gait is a closed polygon of
@@ -10,20 +11,6 @@ Every gait starts and ends at the shape `base`. There the planner chooses the ne
 further: the gait g minimizing its steps + min over the next gait h of (h's steps + the steps still needed after
 both), estimated from the target's predicted position in the body frame as (turn toward the best translating
 direction) + (distance / its speed). Only g is run; at `base` again it chooses anew.
-
-KozlovShell-v0 (`GaitPlanner(env)`): the mass reaches each vertex in one step; every gait starts at the box corner
-BASE, which a reset (mass at the centre) never gives. A loop turns the shell; a figure-eight, a loop followed by its
-mirror image run the other way, translates it without net turn (the two turns cancel exactly, by the mirror symmetry
-of the ellipse). At the defaults the figure-eight X through the box's corners moves the shell 0.040 m per cycle of 4
-steps, 0.13 rad off body −y (0.010 m per step); the loop O turns it by 1.04 rad in 4 steps, the triangles by 0.52 rad
-in 3.
-
-SnakeSwimmer-v0 (`snake_planner(env)`): the joints take several steps to each vertex at their top speed; every gait
-starts and ends straight, (α, β) = 0, where a reset puts the chain. A loop that is its own image under
-(α, β) ↦ (−α, −β) (the chain mirrored across its middle link's axis, which mirrors the motion and turns it by −θ)
-turns by nothing and translates: the squares and diamonds about the straight shape. Of the loops in one quadrant,
-the S-shaped ones (Q2, Q4: α and β of opposite signs), their own images under (α, β) ↦ (−β, −α) (the chain
-reversed end to end), do not turn either; the C-shaped ones (Q1, Q3: α and β of the same sign) turn.
 """
 
 from __future__ import annotations
@@ -32,8 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BASE = (1.0, -1.0)  # action units: the corner u = (u1_max, −u2_max) where every shell gait starts and ends
-SCALES = (1.0, 0.5, 0.25, 0.125)  # sizes of the gaits, as fractions of the box
 U_TOLERANCE = 1e-4  # action units: the shape is where the planner sent it
 NO_TURN = 1e-6  # rad: a gait turning less per cycle translates only (the figure-eights turn by the stepper error)
 
@@ -54,28 +39,6 @@ class Gait:
         return len(self.waypoints)
 
 
-def loops(scale: float) -> dict:
-    """Polygons through the corners of the box shrunk by `scale` about its centre, from BASE (entered and left
-    along the diagonal when scale < 1): the figure-eight X (right lobe counter-clockwise, left lobe clockwise:
-    the shell moves along body y), the loop O around the box and the triangles T, U, V, which turn it; each also
-    run backwards (suffix r), which inverts its net motion. The other figure-eight, top and bottom lobes, swims
-    along body x at half X's speed; it is left out, since a greedy planner would crawl along it rather than turn."""
-    s = scale
-    shapes = {
-        "X": [(s, s), (-s, -s), (-s, s)],
-        "O": [(s, s), (-s, s), (-s, -s)],
-        "T": [(s, s), (-s, -s)],
-        "U": [(-s, s), (-s, -s)],
-        "V": [(s, s), (-s, s)],
-    }
-    entry = [] if s == 1.0 else [(s, -s)]
-    return {
-        f"{name}{suffix}@{s:g}": (*entry, *points, *entry, BASE)
-        for name, shape in shapes.items()
-        for suffix, points in (("", shape), ("r", shape[::-1]))
-    }
-
-
 def trace(env, name, vertices, start, shape, tolerance=1e-12) -> Gait:
     """The gait of the polygon `vertices` (action units) from the state `start` (at rest at the origin), by the
     env's own step (its reduced model and stepper): each vertex commanded until shape(state), the shape in action
@@ -90,50 +53,6 @@ def trace(env, name, vertices, start, shape, tolerance=1e-12) -> Gait:
     return Gait(name, tuple(actions), tuple(float(v) for v in state.pose), tuple(shapes))
 
 
-def gait_library(env, scales=SCALES) -> list[Gait]:
-    """KozlovShell-v0's loops at every scale, each measured from BASE."""
-    start = env.state.replace(pose=np.zeros(3), momentum=np.zeros(3), u=np.array(BASE) * env.u_max, full=False)
-
-    def shape(state):
-        return state.u / env.u_max
-
-    return [trace(env, name, path, start, shape) for s in scales for name, path in loops(s).items()]
-
-
-SNAKE_BASE = (0.0, 0.0)  # action units: straight, where a reset puts the chain
-SNAKE_SCALES = (1.0, 0.5, 0.25, 0.125)  # the loops' sizes, as fractions of the joints' range 2π/3
-
-
-def snake_loops(scale: float) -> dict:
-    """Polygons of joint angles (action units) from the straight shape and back: the square S through (±s, ±s) and
-    the diamond D through (±s, 0), (0, ±s), each its own mirror image (they translate), and the four quadrant
-    squares Q1–Q4 (Q1 and Q3 turn; Q2 and Q4, their own images under (α, β) ↦ (−β, −α), translate); each also run
-    backwards (suffix r)."""
-    s = scale
-    shapes = {
-        "S": [(s, s), (-s, s), (-s, -s), (s, -s), (s, s)],
-        "D": [(s, 0.0), (0.0, s), (-s, 0.0), (0.0, -s), (s, 0.0)],
-        **{f"Q{k}": [(i * s, 0.0), (i * s, j * s), (0.0, j * s)] for k, (i, j) in
-           enumerate([(1, 1), (-1, 1), (-1, -1), (1, -1)], 1)},
-    }  # fmt: skip
-    return {
-        f"{name}{suffix}@{s:g}": (*points, SNAKE_BASE)
-        for name, shape in shapes.items()
-        for suffix, points in (("", shape), ("r", shape[::-1]))
-    }
-
-
-def snake_planner(env, scales=SNAKE_SCALES):
-    """The gait planner of SnakeSwimmer-v0 (see the module), its loops measured from the straight shape at rest."""
-    start = env.state.replace(pose=np.zeros(3), momentum=np.zeros(3), s=np.zeros(2), full=False)
-
-    def shape(state):
-        return state.s / env.joint_limit
-
-    gaits = [trace(env, name, path, start, shape) for s in scales for name, path in snake_loops(s).items()]
-    return GaitPlanner(env, gaits, SNAKE_BASE, env.body_length)
-
-
 def targets_after(holonomies, target):
     """The body-frame target after one cycle of each gait, R(−θ)(t − p): shape (..., gaits, 2) for target (..., 2)."""
     x, y, theta = holonomies.T
@@ -145,16 +64,16 @@ def targets_after(holonomies, target):
 class GaitPlanner:
     """Swim to the target with gaits from the library, chosen greedily at the base shape (see the module docstring).
 
-    It reads the observation of KozlovShell-v0 or SnakeSwimmer-v0: the target in the body frame (obs[0:2], in
+    It reads a swimmer's observation (KozlovShell's, SnakeSwimmer's): the target in the body frame (obs[0:2], in
     units of target_scale metres) and the shape in action units (obs[4:6]). A new episode, or any other
     interruption, shows as the shape not being where the gait left it: the planner then drops its plan and returns
     to the base first. Observations may be batched; each row keeps its own plan.
 
-    gaits: the library (default: KozlovShell-v0's, `gait_library`); base: the shape every gait starts and ends at.
+    gaits: the library (each measured by `trace`); base: the shape every gait starts and ends at.
     """
 
-    def __init__(self, env, gaits=None, base=BASE, target_scale: float = 1.0):
-        self.gaits = gait_library(env) if gaits is None else gaits
+    def __init__(self, env, gaits, base, target_scale: float = 1.0):
+        self.gaits = gaits
         self.base, self.target_scale = np.array(base), target_scale
         self.holonomies = np.array([g.holonomy for g in self.gaits])
         self.steps = np.array([g.steps for g in self.gaits])

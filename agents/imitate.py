@@ -108,7 +108,7 @@ BUDGETS = {
     "connenv/KapitzaSwingUp-v0": Budget(demonstrations=10, epochs=30, eval_episodes=50),
 }
 """Each env's budget where not Budget()'s. No DAgger where the controller cannot label a state it did not plan for
-(see the module docstring), nor on RollingCoin-v0, whose planner rolls only within `agents.lawton.ALIGNED` of the
+(see the module docstring), nor on RollingCoin-v0, whose planner rolls only within `agents.controllers.rolling_coin.ALIGNED` of the
 line to the target and so labels every state a clone visits near that line "turn, do not roll": the DAgger
 rollouts' own success fell over the rounds there. Fewer demonstrations, epochs and evaluation episodes for the
 swing-up, whose episodes are many times longer than the others'."""

@@ -3,7 +3,7 @@ contract tests check the generic ids with.
 
 - ``rotor()``: ActiveConstraint-v0 on a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², fit for jumps;
 - ``swing()``: ActiveConstraint-v0 on the swing from its Lagrangian, T = ½ m (ṙ² + r² θ̇²), V = −m g r cos θ,
-  strongly fit, with Swing-v0's radii;
+  strongly fit, with the swing env's radii;
 - ``bead()``: ActiveConstraint-v0 on a bead on a rotating bar, T = ½ m (ṙ² + r² θ̇²), V = m g r sin θ, general
   (the bar's angle θ is steered by its rate);
 - ``beanie()``: Connection-v0 on Elroy's beanie, SO(2) with A = I₂/(I₁+I₂), flat;
@@ -75,11 +75,7 @@ def rolling_ball_connection(s, radius: float):
 
 
 def rolling_ball(radius: float = 1.0, reach: float = 10.0) -> dict:
-    """The ball of RollingBall-v0 as a connection: SO3, space frame, shape the contact point within ±reach."""
+    """The rolling-ball env's ball as a connection: SO3, space frame, shape the contact point within ±reach."""
     connection = functools.partial(rolling_ball_connection, radius=radius)
     return {"group": "SO3", "frame": "space", "connection": connection, "shape_low": [-reach, -reach],
             "shape_high": [reach, reach], "vectorized": True}
-
-
-MAKE_KWARGS = {"connenv/ActiveConstraint-v0": swing, "connenv/Connection-v0": beanie}
-"""The example each generic id is benchmarked and contract-tested with."""

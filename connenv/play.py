@@ -25,14 +25,12 @@ import numpy as np
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli
-from connenv.examples import MAKE_KWARGS
+from connenv.envs.spec import spec
 
 PROG = "python -m connenv.play"
-PUMPED = {"connenv/Swing-v0": -1.0, "connenv/Skier-v0": 1.0, "connenv/ActiveConstraint-v0": -1.0}
-"""Envs pumped with the space bar: the action while it is held (the swing's child stands: r_min; the skier rises:
-h_max); released, the opposite end."""
-MOUSE = ("connenv/RollingBall-v0", "connenv/RollingBallPose-v0", "connenv/RollingBallGoal-v0", "connenv/TubeTwist-v0")
-"""Envs steered by the mouse: its motion over a frame, MOUSE_SPEED pixels for a full action, is the action."""
+# How an env's action is set by hand is its spec's `play`: "space" (pumped with the space bar: held, the spec's
+# space_action, the swing's child standing at r_min or the skier rising to h_max; released, the opposite end),
+# "mouse" (its motion over a frame, MOUSE_SPEED pixels for a full action, is the action) or "arrows".
 MOUSE_SPEED = 12.0
 ARROWS = (("K_LEFT", "K_RIGHT"), ("K_DOWN", "K_UP"))
 """The keys for −1 and +1 of each action component."""
@@ -47,7 +45,7 @@ def env_ids() -> list[str]:
 
 def controls(env_id: str) -> str:
     """'space', 'mouse' or 'arrows': how env_id's action is set by hand."""
-    return "space" if env_id in PUMPED else "mouse" if env_id in MOUSE else "arrows"
+    return spec(env_id).play
 
 
 class Player:
@@ -60,7 +58,7 @@ class Player:
         if env_id not in env_ids():
             raise ValueError(f"unknown env {env_id!r}; the connenv ids are {env_ids()}")
         self.pygame, self.env_id, self.controls = pygame, env_id, controls(env_id)
-        kwargs = {**(MAKE_KWARGS[env_id]() if env_id in MAKE_KWARGS else {}), **(env_kwargs or {})}
+        kwargs = {**spec(env_id).make_kwargs(), **(env_kwargs or {})}
         self.env = gym.make(env_id, render_mode="rgb_array", **kwargs)
         self.fps = self.env.metadata["render_fps"]
         self.held: set[int] = set()
@@ -89,7 +87,7 @@ class Player:
         """The action the held keys (or the mouse's motion since the last tick) make."""
         pygame, space = self.pygame, self.env.action_space
         if self.controls == "space":
-            pumped = PUMPED[self.env_id]
+            pumped = spec(self.env_id).space_action
             return np.full(space.shape, pumped if pygame.K_SPACE in self.held else -pumped, np.float32)
         if self.controls == "mouse":
             return np.clip(self.motion[: space.shape[0]] / MOUSE_SPEED, -1.0, 1.0).astype(np.float32)

@@ -60,7 +60,7 @@ import scipy
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli
 from connenv.core.integrators import INTEGRATORS
-from connenv.examples import MAKE_KWARGS
+from connenv.envs.spec import spec
 
 PROG = "python -m connenv.throughput"
 SINGLE_STEPS = 3000
@@ -89,7 +89,7 @@ TRAINING = {"n_envs": 8, "n_steps": 256, "rollouts": 2}  # PPO's settings for --
 def make_kwargs(env_id: str) -> dict:
     """The make kwargs of an id: none for the built envs; the generic ids need a system, for which they take
     connenv.examples' (the swing from its Lagrangian; Elroy's beanie)."""
-    return MAKE_KWARGS[env_id]() if env_id in MAKE_KWARGS else {}
+    return spec(env_id).make_kwargs()
 
 
 def single_step_times(env_id: str, steps: int, seed: int = 0, **kwargs):

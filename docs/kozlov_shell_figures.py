@@ -60,10 +60,10 @@ for label, kw in [("rtol 1e-12", TIGHT), ("default", {})]:
     a = net(gym.make("connenv/KozlovShell-v0", dt=0.37, **kw).unwrapped, LOOP)
     b = net(gym.make("connenv/KozlovShell-v0", dt=0.1, **kw).unwrapped, LOOP)
     print(f"rate independence, loop at dt 0.37 vs 0.1, {label}: max |Δ(x,y,θ)| = {np.abs(a - b).max():.1e}")
-from agents.gaits import GaitPlanner  # noqa: E402
+from agents.controllers.kozlov_shell import gaits  # noqa: E402
 
 env = gym.make("connenv/KozlovShell-v0", max_episode_steps=2000)
-p = GaitPlanner(env.unwrapped)
+p = gaits(env.unwrapped)
 worst = (0, None)
 for ang in np.linspace(-math.pi, math.pi, 90, endpoint=False):
     obs, _ = env.reset(options={"target": (math.cos(ang), math.sin(ang))})

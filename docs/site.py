@@ -25,37 +25,12 @@ import gymnasium as gym
 import numpy as np
 
 import connenv
-from connenv.examples import MAKE_KWARGS
+from connenv.envs.spec import registry, spec
 
 DOCS = Path(__file__).resolve().parent
 PAGES = DOCS / "envs"
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End", "Arguments")
 ANIMATION_WIDTH, ANIMATION_FPS, MAX_FRAMES, MIN_FRAMES, MIN_SECONDS = 200, 12, 90, 30, 3.0
-PHYSICS = {
-    "ActiveConstraint-v0": "framework.md",
-    "BeadOnBar-v0": "BeadOnBar.md",
-    "BeadOnBar-v1": "BeadOnBar.md",
-    "ChaplyginSleigh-v0": "ChaplyginSleigh.md",
-    "Connection-v0": "connections.md",
-    "ElroysBeanie-v0": "ElroysBeanie.md",
-    "FallingCat-v0": "FallingCat.md",
-    "KapitzaPendulum-v0": "kapitza.md",
-    "KapitzaSwingUp-v0": "kapitza.md",
-    "KozlovShell-v0": "kozlov-shell.md",
-    "RollingBall-v0": "rolling-ball.md",
-    "RollingBallGoal-v0": "rolling-ball.md",
-    "RollingBallPose-v0": "rolling-ball.md",
-    "RollingCoin-v0": "RollingCoin.md",
-    "RollingCoinSurface-v0": "RollingCoinSurface.md",
-    "Skier-v0": "skier.md",
-    "SnakeSwimmer-v0": "SnakeSwimmer.md",
-    "Swing-v0": "swing.md",
-    "TubeTwist-v0": "TubeTwist.md",
-}
-"""Each env's physics page, under docs/physics/."""
-ANIMATION_RESET = {"connenv/ActiveConstraint-v0": {"state": {"q": [0.5]}}}
-"""Reset options of an animation whose default start shows nothing: ActiveConstraint-v0's example is the swing, which
-at rest at the bottom stays there whatever its radius does (pumping grows a swing; it cannot start one)."""
 VERSION_HISTORY = "- v0: the first version, in connenv 0.1.0."
 GALLERY_MARKS = ("<!-- gallery: python docs/site.py -->", "<!-- end of gallery -->")
 GENERATED_PHYSICS = {
@@ -122,7 +97,7 @@ the others under docs/physics/ are written by hand."""
 
 
 def env_ids() -> list[str]:
-    return sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+    return sorted(registry)
 
 
 def name(env_id: str) -> str:
@@ -163,7 +138,7 @@ def controller_name(env_id: str) -> str:
 
 
 def make(env_id: str, **kwargs):
-    return gym.make(env_id, **(MAKE_KWARGS[env_id]() if env_id in MAKE_KWARGS else {}), **kwargs)
+    return gym.make(env_id, **spec(env_id).make_kwargs(), **kwargs)
 
 
 def page(env_id: str) -> str:
@@ -178,7 +153,7 @@ def page(env_id: str) -> str:
         ("time limit", f"{gym.spec(env_id).max_episode_steps} steps"),
         *([("registered with", f"`{gym.spec(env_id).kwargs}`")] if gym.spec(env_id).kwargs else []),
         ("analytic controller", controller_name(env_id)),
-        ("physics", f"[{PHYSICS[name(env_id)].removesuffix('.md')}](../physics/{PHYSICS[name(env_id)]})"),
+        ("physics", f"[{spec(env_id).physics.removesuffix('.md')}](../physics/{spec(env_id).physics})"),
     ]
     env.close()
     lines = [f"# {name(env_id)}", "", summary, "", f"![{name(env_id)} under its controller]({name(env_id)}.gif)", ""]
@@ -222,7 +197,7 @@ def physics_page(filename: str) -> str:
     lines += ["## What the tests check", ""]
     for path in tests:
         lines += [f"`{path}`:", "", *tests_of(path), ""]
-    envs = [f"[{name(e)}](../envs/{name(e)}.md)" for e in env_ids() if PHYSICS[name(e)] == filename]
+    envs = [f"[{name(e)}](../envs/{name(e)}.md)" for e in env_ids() if spec(e).physics == filename]
     return "\n".join(lines + ([f"Envs: {', '.join(envs)}.", ""] if envs else []))
 
 
@@ -258,9 +233,27 @@ def readme_with_gallery(readme: str) -> str:
     return before + start + "\n" + gallery() + "\n" + end + rest.split(end, 1)[1]
 
 
+def mkdocs_with_envs(config: str) -> str:
+    """mkdocs.yml with its nav's Environments section listing every env page, as the registry has them now."""
+    lines = config.splitlines(keepends=True)
+    start = lines.index("  - Environments:\n") + 1
+    end = next(i for i in range(start, len(lines)) if not lines[i].startswith("      "))
+    pages = [f"      - envs/{name(env_id)}.md\n" for env_id in env_ids()]
+    return "".join(lines[:start] + pages + lines[end:])
+
+
+def physics_pages_outside_nav(config: str) -> list[str]:
+    """The specs' physics pages that mkdocs.yml's nav leaves out (a new page is added to its Physics section by
+    hand, where it belongs among the others)."""
+    return sorted({spec(env_id).physics for env_id in env_ids()} - set(re.findall(r"physics/([^\s]+\.md)", config)))
+
+
 def expected_pages() -> dict[Path, str]:
-    """Every generated page by path: the env pages and the generated physics pages."""
+    """Every generated page by path: the env pages, the generated physics pages, the README's gallery and the env
+    pages' entries in mkdocs.yml's nav."""
     pages = {PAGES / f"{name(env_id)}.md": page(env_id) for env_id in env_ids()}
+    mkdocs = DOCS.parent / "mkdocs.yml"
+    pages[mkdocs] = mkdocs_with_envs(mkdocs.read_text())
     pages.update((DOCS / "physics" / filename, physics_page(filename)) for filename in GENERATED_PHYSICS)
     readme = DOCS.parent / "README.md"
     pages[readme] = readme_with_gallery(readme.read_text())
@@ -313,7 +306,7 @@ def record(env_id: str, path: Path, seed: int = 0) -> int:
     from PIL import Image
 
     env = make(env_id, render_mode="rgb_array")
-    observation, _ = env.reset(seed=seed, options=ANIMATION_RESET.get(env_id))
+    observation, _ = env.reset(seed=seed, options=spec(env_id).animation_start)
     fps = env.metadata["render_fps"]
     act, stride = policy(env_id, env.unwrapped), max(1, round(fps / ANIMATION_FPS))
     pictures, done = [], False
@@ -342,6 +335,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--check", action="store_true", help="compare the pages with the docstrings' instead")
     parser.add_argument("--animations", action="store_true", help="also record the animations")
     args = parser.parse_args(argv)
+    missing = physics_pages_outside_nav((DOCS.parent / "mkdocs.yml").read_text())
+    if missing:
+        print(f"physics pages of envs missing from mkdocs.yml's nav: {missing}; add them to its Physics section")
+        return 1
     if args.check:
         stale = stale_pages()
         print(f"stale env pages: {stale}; regenerate with python docs/site.py" if stale else "env pages up to date")

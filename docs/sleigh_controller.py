@@ -15,7 +15,7 @@ import matplotlib
 import numpy as np
 
 import connenv  # noqa: F401  (registers the envs)
-from agents.sleigh import ShakePlanner, TailFirst
+from agents.controllers.chaplygin_sleigh import ShakePlanner, TailFirst
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402

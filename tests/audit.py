@@ -51,12 +51,12 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run as a script from anywhere: this checkout's connenv
 
 import connenv  # noqa: F401  (registers the envs)
-from connenv import examples
 from connenv.core.integrators import SUBSTEPS_MAX
 from connenv.core.steppers import StepperError
 from connenv.core.validation import init_parameters
+from connenv.envs.spec import registry, spec
 
-IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+IDS = sorted(registry)  # every id with a spec
 TIMEOUT = 10.0  # s a case may take before it counts as a hang
 STEPS = 50  # random steps of a single env made with an edge kwarg (then a reset)
 VECTOR_STEPS = 10  # of its vector env of VECTOR_ROWS rows
@@ -86,54 +86,19 @@ INTEGERS = (0, 1, SUBSTEPS_MAX, SUBSTEPS_MAX + 1, 10**6, 10**9, 10**18, 2**63, -
 
 # -- the envs' arguments ----------------------------------------------------------------------------------------
 
-STATE_KEYS = {  # reset state keys: the number of entries of each (0: a number)
-    "connenv/Swing-v0": {"theta": 0, "theta_dot": 0, "p": 0, "r": 0},
-    "connenv/Skier-v0": {"x": 0, "x_dot": 0, "p": 0, "h": 0},
-    "connenv/RollingBall-v0": {"x": 0, "y": 0},
-    "connenv/RollingBallPose-v0": {"x": 0, "y": 0},
-    "connenv/RollingBallGoal-v0": {"x": 0, "y": 0},
-    "connenv/KozlovShell-v0": {"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3},
-    "connenv/ChaplyginSleigh-v0": {
-        key: 0 for key in ("x", "y", "phi", "v", "omega", "u", "u_dot", "u_along", "u_along_dot")
-    },
-    "connenv/SnakeSwimmer-v0": {"x": 0, "y": 0, "theta": 0, "alpha": 0, "beta": 0, "momentum": 3},
-    "connenv/KapitzaPendulum-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
-    "connenv/KapitzaSwingUp-v0": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
-    "connenv/RollingCoinSurface-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0, "phi_dot": 0},
-    "connenv/ActiveConstraint-v0": {"q": 1, "p": 1, "u": 1},  # examples.swing(): n = m = 1
-    "connenv/Connection-v0": {"s": 1},  # examples.beanie(): k = 1
-    "connenv/RollingCoin-v0": {"x": 0, "y": 0, "theta": 0, "phi": 0},
-    "connenv/ElroysBeanie-v0": {"theta": 0, "psi": 0, "momentum": 0},
-    "connenv/BeadOnBar-v0": {"r": 0, "r_dot": 0, "theta": 0},
-    "connenv/BeadOnBar-v1": {"r": 0, "r_dot": 0, "theta": 0},
-    "connenv/TubeTwist-v0": {},
-    "connenv/FallingCat-v0": {"bend": 2},
-}
-OPTION_KEYS = {  # reset options beside "state"
-    "connenv/KozlovShell-v0": {"target": 2},
-    "connenv/RollingCoin-v0": {"target": 3},
-    "connenv/ElroysBeanie-v0": {"target": 0},
-    "connenv/RollingCoinSurface-v0": {"target": 2},
-    "connenv/BeadOnBar-v0": {"target": 0},
-    "connenv/BeadOnBar-v1": {"target": 0},
-    "connenv/TubeTwist-v0": {"target": 0},
-    "connenv/SnakeSwimmer-v0": {"target": 2},
-    "connenv/ChaplyginSleigh-v0": {"target": 2},
-}
-ROTATIONS = {  # reset arguments that take a rotation matrix: (path in the options, name in the message)
-    "connenv/RollingBall-v0": [(("state", "R"), "state R"), (("target",), "target")],
-    "connenv/RollingBallPose-v0": [(("state", "R"), "state R"), (("target",), "target")],
-    "connenv/RollingBallGoal-v0": [(("state", "R"), "state R"), (("target",), "target")],
-    "connenv/TubeTwist-v0": [(("state", "R"), "state R")],
-    "connenv/FallingCat-v0": [(("state", "R"), "state R")],
-}
+STATE_KEYS = {spec.id: spec.state_keys for spec in registry.values()}
+"""Reset state keys of each id (its spec's): the number of entries of each (0: a number)."""
+OPTION_KEYS = {spec.id: spec.option_keys for spec in registry.values() if spec.option_keys}
+"""Reset options beside "state"."""
+ROTATIONS = {spec.id: list(spec.rotations) for spec in registry.values() if spec.rotations}
+"""Reset arguments that take a rotation matrix: (path in the options, name in the message)."""
 NOT_NUMERIC = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
                "control", "integrator", "pivot", "vectorized", "surface", "surface_params", "measure_distance"}
 
 
 def make_kwargs(env_id):
-    """The kwargs env_id is made with: the builders' examples (examples.MAKE_KWARGS), none for the others."""
-    return examples.MAKE_KWARGS[env_id]() if env_id in examples.MAKE_KWARGS else {}
+    """The kwargs env_id is made with: the builders' examples (its spec's), none for the others."""
+    return spec(env_id).make_kwargs()
 
 
 def env_class(env_id):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import connenv  # noqa: F401  (registers the envs)
-from agents.sleigh import ShakePlanner, TailFirst
+from agents.controllers.chaplygin_sleigh import ShakePlanner, TailFirst
 
 ID = "connenv/ChaplyginSleigh-v0"
 

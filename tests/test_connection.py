@@ -491,8 +491,8 @@ def test_evaluate_runs_an_episode_of_the_beanie_with_a_random_policy():
 def test_the_builders_docstrings_state_the_registrations_time_limit(env_id):
     """Connection-v0's docstring said its registration had no time limit; the registration has 1000 steps, as
     ActiveConstraint-v0's, and both docstrings say so."""
-    from connenv import examples
+    from connenv.envs.spec import spec
 
-    env = gym.make(env_id, **examples.MAKE_KWARGS[env_id]())
+    env = gym.make(env_id, **spec(env_id).make_kwargs())
     limit = gym.spec(env_id).max_episode_steps
     assert limit == 1000 and f"truncates after {limit} steps" in " ".join(type(env.unwrapped).__doc__.split())

@@ -18,43 +18,20 @@ from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import connenv  # noqa: F401  (registers the envs)
-from connenv import examples
+from connenv.envs.spec import registry
 
-IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+IDS = sorted({*registry, *(env_id for env_id in gym.registry if env_id.startswith("connenv/"))})
 
-SYMBOLIC_TRAIL = {"trail": "0.25*x**2", "trail_params": {"domain": (-5.0, 5.0)}, "target_x": 4.0}
-
-CONTRACT_KWARGS = {  # make kwargs of each registered id; more than one where another code path is worth the contract
-    "connenv/Swing-v0": [{}, {"integrator": "rk4", "substeps": 4}],
-    "connenv/Skier-v0": [{}, {"trail": "halfpipe"}, SYMBOLIC_TRAIL, {"integrator": "rk4", "substeps": 8}],
-    "connenv/RollingBall-v0": [{}],
-    "connenv/RollingBallPose-v0": [{}],
-    "connenv/RollingBallGoal-v0": [{}],
-    "connenv/KozlovShell-v0": [{}],
-    "connenv/SnakeSwimmer-v0": [{}],
-    "connenv/KapitzaPendulum-v0": [{}, {"pivot": "planar"}],
-    "connenv/KapitzaSwingUp-v0": [{}],
-    "connenv/RollingCoin-v0": [{}, {"integrator": "magnus"}],
-    "connenv/ElroysBeanie-v0": [{}],
-    "connenv/RollingCoinSurface-v0": [{}, {"surface": "plane"}],
-    "connenv/BeadOnBar-v0": [{}, {"g": 0.0}],
-    "connenv/BeadOnBar-v1": [{}, {"g": 0.0}],
-    "connenv/TubeTwist-v0": [{}, {"integrator": "magnus"}],
-    "connenv/FallingCat-v0": [{}],
-    "connenv/ChaplyginSleigh-v0": [{}, {"offset": 0.0, "box": 0.0}],  # general: u̇ commanded; fit: u commanded
-    # the generic ids, on connenv.examples' systems: one of each jump class; a flat and a curved connection
-    "connenv/ActiveConstraint-v0": [examples.swing(), examples.rotor(), examples.bead()],
-    "connenv/Connection-v0": [examples.beanie(), examples.rolling_ball()],
-}
-RESET_OPTIONS = {  # starts that take another code path: the shell with a momentum is in the full (Kirchhoff) model
-    "connenv/KozlovShell-v0": [None, {"state": {"momentum": (0.2, 0.0, -0.1)}}],
-    "connenv/SnakeSwimmer-v0": [None, {"state": {"momentum": (0.2, 0.0, -0.1)}}],
-}
+CONTRACT_KWARGS = {spec.id: [v() if callable(v) else v for v in spec.variants] for spec in registry.values()}
+"""Make kwargs of each registered id (its spec's variants): more than one where another code path is worth the
+contract; the generic ids on connenv.examples' systems."""
+RESET_OPTIONS = {spec.id: list(spec.starts) for spec in registry.values()}
+"""Starts that take another code path (its spec's): the shell with a momentum is in the full (Kirchhoff) model."""
 
 
 class Case(NamedTuple):
     env_id: str
-    kwargs: dict | None  # None: the id is registered without an entry in CONTRACT_KWARGS
+    kwargs: dict | None  # None: the id is registered without a spec
     options: dict | None
 
     def make(self, **extra):
@@ -79,8 +56,8 @@ CASES = [
 def case(request):
     if request.param.kwargs is None:
         pytest.fail(
-            f"{request.param.env_id} is registered but has no entry in CONTRACT_KWARGS (tests/test_contract.py): "
-            "add the make kwargs it is checked with"
+            f"{request.param.env_id} is registered but has no spec: declare it in its module's SPECS "
+            "(connenv.envs.spec), with the make kwargs it is checked with"
         )
     return request.param
 

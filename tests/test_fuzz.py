@@ -28,9 +28,10 @@ from audit import OPTION_KEYS, STATE_KEYS, make_kwargs
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv.core.integrators import SUBSTEPS_MAX
+from connenv.envs.spec import registry
 
-IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
-BUILDERS = ("connenv/ActiveConstraint-v0", "connenv/Connection-v0")
+IDS = sorted(registry)  # every id with a spec
+BUILDERS = tuple(spec.id for spec in registry.values() if spec.example)  # made with a worked system
 BUDGET = 3.0  # s of fuzzing per id
 STEPS = 5  # random steps after each accepted make or reset
 

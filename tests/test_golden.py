@@ -59,7 +59,8 @@ def run_with(variables, expression):
     """An expression of golden.record's, evaluated in a fresh interpreter with these environment variables."""
     code = f"import json; from golden.record import fingerprint, runs; print(json.dumps({expression}))"
     tests = Path(__file__).parent
-    env = {**os.environ, **variables, "PYTHONPATH": os.pathsep.join([str(tests), os.environ.get("PYTHONPATH", "")])}
+    path = [str(tests), str(tests.parent), os.environ.get("PYTHONPATH", "")]  # this checkout's connenv, not another's
+    env = {**os.environ, **variables, "PYTHONPATH": os.pathsep.join(path)}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True, cwd=tests)
     return json.loads(out.stdout.splitlines()[-1])
 

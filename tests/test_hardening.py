@@ -22,16 +22,16 @@ from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
 import connenv  # noqa: F401  (registers the envs)
-from connenv import examples
 from connenv.core import StepperError
 from connenv.core.validation import DT_MIN
+from connenv.envs.spec import registry, spec
 
 ROOT = Path(__file__).resolve().parents[1]
-IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+IDS = sorted(registry)  # every id with a spec
 
 
 def make(env_id, **extra):
-    kwargs = examples.MAKE_KWARGS[env_id]() if env_id in examples.MAKE_KWARGS else {}
+    kwargs = spec(env_id).make_kwargs()
     return gym.make(env_id, **{**kwargs, **extra})
 
 
@@ -280,27 +280,14 @@ def test_kapitza_pendulums_reward_is_documented_on_every_step_and_keeps_its_docu
 
 # -- item 6: dt has a documented range, within which the default stepper keeps up ------------------------------
 
-FAST_STARTS = {  # the fastest reset states allowed (item 1), where a long step costs the stepper most
-    "connenv/Swing-v0": {"state": {"theta": 3.0, "theta_dot": 7.7, "r": 1.6}},
-    "connenv/Skier-v0": {"state": {"x": 0.0, "x_dot": 23.0}},
-    "connenv/KozlovShell-v0": {"state": {"momentum": (27.0, 20.0, 5.0)}},
-    "connenv/KapitzaPendulum-v0": {"state": {"theta": np.pi}},  # on the separatrix: the exact step's RK4 branch
-    "connenv/KapitzaSwingUp-v0": {"state": {"theta": np.pi}},
-    "connenv/ActiveConstraint-v0": {"state": {"p": [1000.0]}},
-    "connenv/Connection-v0": {"state": {"s": [1000.0]}},
-    "connenv/BeadOnBar-v0": {"state": {"r_dot": 1000.0}},
-    "connenv/BeadOnBar-v1": {"state": {"r_dot": 1000.0}},
-}
+FAST_STARTS = {spec.id: spec.fast_start for spec in registry.values() if spec.fast_start}
+"""The fastest reset states allowed (item 1), where a long step costs the stepper most (each spec's)."""
 
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_dt_is_checked_against_its_documented_range_and_steps_at_both_ends(env_id):
-    env_cls = gym.spec(env_id).entry_point
-    module = importlib.import_module(env_cls.split(":")[0])
-    high = module.DT_MAX
-    docstring = getattr(module, env_cls.split(":")[1]).__doc__ or ""
-    for base in getattr(module, env_cls.split(":")[1]).__mro__:
-        docstring += base.__doc__ or ""
+    high = spec(env_id).dt_max
+    docstring = "".join(base.__doc__ or "" for base in spec(env_id).env.__mro__)
     assert f"[{DT_MIN:g}, {high:g}] s |" in docstring
     for bad in (high * 1.001, 1e6, 0.99 * DT_MIN, 0.0, -0.05, np.nan):
         with pytest.raises(ValueError, match=rf"dt=.* must be finite and in \[{DT_MIN:g}, "):

@@ -10,7 +10,7 @@ import pytest
 import connenv  # noqa: F401
 from agents import evaluate
 from agents.controllers import controller
-from agents.kapitza import KapitzaVibration
+from agents.controllers.kapitza import KapitzaVibration
 
 HOLD, SWING_UP = "connenv/KapitzaPendulum-v0", "connenv/KapitzaSwingUp-v0"
 

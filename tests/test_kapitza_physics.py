@@ -8,7 +8,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import connenv  # noqa: F401
-from agents.kapitza import KapitzaVibration
+from agents.controllers.kapitza import KapitzaVibration
 from connenv.core import JumpClass, classify, make_stepper, vector_field
 from connenv.systems.kapitza import KapitzaPendulum
 from connenv.core.segments import bounded_segments

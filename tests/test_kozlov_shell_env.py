@@ -10,7 +10,7 @@ import pytest
 
 import connenv  # noqa: F401
 from agents.controllers import controller
-from agents.gaits import BASE, GaitPlanner
+from agents.controllers.kozlov_shell import BASE, gaits
 
 ENV_ID = "connenv/KozlovShell-v0"
 TIME_LIMIT = 300
@@ -102,7 +102,7 @@ def test_gait_planner_reaches_every_target_within_half_the_time_limit():
 def test_gait_planner_measures_its_gaits_on_the_model():
     """Every gait is a closed loop from BASE that never sends the mass to the centre, where a reset puts it; the
     figure-eights do not turn; the loops do."""
-    planner = GaitPlanner(make().unwrapped)
+    planner = gaits(make().unwrapped)
     for gait in planner.gaits:
         assert gait.waypoints[-1] == BASE and (0.0, 0.0) not in gait.waypoints
         assert (abs(gait.holonomy[2]) <= 1e-8) == gait.name.startswith("X")  # the default stepper's accuracy

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import connenv  # noqa: F401
-from agents.controllers import SkierPumping
+from agents.controllers.skier import SkierPumping
 
 ID = "connenv/Skier-v0"
 SYMBOLIC = {"trail": "0.25*x**2", "trail_params": {"domain": (-5.0, 5.0)}, "target_x": 4.0}

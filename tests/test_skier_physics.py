@@ -8,7 +8,7 @@ import pytest
 from scipy.special import ellipk
 
 import connenv  # noqa: F401  (registers the envs)
-from agents.controllers import SkierPumping
+from agents.controllers.skier import SkierPumping
 from connenv.core import JumpClass, classify, make_stepper
 from connenv.core.mechanics import vector_field
 from connenv.systems.skier import Skier

@@ -9,7 +9,7 @@ import pytest
 
 import connenv  # noqa: F401
 from agents.controllers import controller
-from agents.gaits import SNAKE_BASE
+from agents.controllers.snake_swimmer import BASE
 
 ENV_ID = "connenv/SnakeSwimmer-v0"
 TIME_LIMIT = 1000
@@ -100,7 +100,7 @@ def test_gait_planner_measures_its_gaits_on_the_model():
     (their own images under (α, β) ↦ (−α, −β) or (α, β) ↦ (−β, −α)) do not turn; the C-shaped quadrants do."""
     planner = controller(ENV_ID, "gaits", make())
     for gait in planner.gaits:
-        assert gait.waypoints[-1] == SNAKE_BASE == gait.shapes[-1]
+        assert gait.waypoints[-1] == BASE == gait.shapes[-1]
         turns = abs(gait.holonomy[2]) > 1e-9
         assert turns == gait.name.startswith(("Q1", "Q3"))
     square = next(g for g in planner.gaits if g.name == "S@0.5")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import connenv  # noqa: F401
-from agents.controllers import PiccoliKulkarni
+from agents.controllers.swing import PiccoliKulkarni
 
 
 def test_start_is_near_rest_at_r_max():

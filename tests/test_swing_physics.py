@@ -8,7 +8,7 @@ import pytest
 from scipy.special import ellipj, ellipk
 
 import connenv  # noqa: F401  (registers the envs)
-from agents.controllers import PiccoliKulkarni
+from agents.controllers.swing import PiccoliKulkarni
 from connenv.core import make_stepper
 from connenv.systems.swing import Swing, ellipj_one
 

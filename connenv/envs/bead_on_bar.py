@@ -17,14 +17,14 @@ from connenv.core.validation import (
     check_scale,
     check_stepper_options,
 )
-from connenv.envs.active_constraint import (  # noqa: F401  (DT_MAX: the builder's, this env's too)
+from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env's too
     DT_MAX,
     ActiveConstraintEnv,
     ActiveConstraintState,
     ActiveConstraintVectorEnv,
 )
 from connenv.envs.base import BATCH, SCALAR
-from connenv.systems.bead_on_bar import bead_on_bar
+from connenv.envs.spec import Measure, Spec
 
 OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
 START_REACH = 0.8  # |r₀| ≤ 0.8 L, and so |r*| (g > 0)
@@ -160,6 +160,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     - v0: the first version, in connenv 0.1.0.
     """
 
+    name = "BeadOnBar-v0"  # how bad make kwargs name the env
+
     def __init__(
         self,
         render_mode: str | None = None,
@@ -174,13 +176,15 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         integrator: str | None = None,
         **stepper_options,
     ):
-        check_stepper_options("BeadOnBar-v0", stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         self.half_length = check_scale("half_length", half_length, 1.0)
         g = check_scale("g", g, 9.81, zero=True)
         mass = check_scale("mass", mass, 1.0)
         self.omega_max = check_scale("omega_max", omega_max, 2.0 * math.pi, OMEGA_MAX)
         self.hold_time = check_scale("hold_time", hold_time, 0.5, zero=True)
         self.exit_penalty = check_scale("exit_penalty", exit_penalty, 40.0, zero=True)
+        from connenv.systems.bead_on_bar import bead_on_bar  # sympy's: loaded by a make, not by import connenv
+
         super().__init__(
             bead_on_bar(mass, g), -math.inf, math.inf, dt=dt, max_control_speed=self.omega_max,
             integrator=integrator, render_mode=render_mode, **stepper_options,
@@ -298,7 +302,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     # -- rendering -------------------------------------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering_bead import BeadRenderer
+        from connenv.rendering.bead_on_bar import BeadRenderer
 
         return BeadRenderer(self.half_length, self.render_mode, self.metadata["render_fps"])
 
@@ -315,3 +319,14 @@ class BeadOnBarVectorEnv(ActiveConstraintVectorEnv):
 
     def advance(self, s, command):
         return self.env.track(super().advance(s, command), s.target, s, BATCH)
+
+
+BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,
+        "measure": Measure("time to target", "s", "time_to_success"), "controllers": ("tilt",),
+        "variants": ({}, {"g": 0.0}), "state_keys": {"r": 0, "r_dot": 0, "theta": 0}, "option_keys": {"target": 0},
+        "fast_start": {"state": {"r_dot": 1000.0}}}
+SPECS = (
+    Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, BeadOnBarVectorEnv, **BEAD,
+         golden=(("bead", {"max_episode_steps": 60}, None),), bench="bead"),
+    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, BeadOnBarVectorEnv, kwargs={"omega_max": 1.0}, **BEAD),  # see Version History
+)

@@ -24,6 +24,7 @@ from connenv.core.validation import (
 )
 from connenv.envs.active_constraint import JUMP_STEPPER, JumpFlow
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
@@ -153,6 +154,8 @@ class ChaplyginSleighEnv(TaskEnv):
     `v`, `omega`, `u`, `u_dot`, `u_along`, `u_along_dot`, `t`), `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
     """
 
+    name = "ChaplyginSleigh-v0"  # how bad make kwargs name the env
+
     def __init__(
         self,
         render_mode: str | None = None,
@@ -191,7 +194,7 @@ class ChaplyginSleighEnv(TaskEnv):
                 "speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
             )
         self.max_mass_speed = None if max_mass_speed is None else self._check_speed(max_mass_speed)
-        check_stepper_options("ChaplyginSleigh-v0", stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         if integrator == DEFAULT_INTEGRATOR:
             stepper_options = {"substeps": DEFAULT_SUBSTEPS, **stepper_options}
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
@@ -317,7 +320,7 @@ class ChaplyginSleighEnv(TaskEnv):
     # -- rendering -------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering import SleighRenderer
+        from connenv.rendering.chaplygin_sleigh import SleighRenderer
 
         return SleighRenderer(self.system.offset, self.rail, self.box, self.tolerance, self.render_mode,
                               self.metadata["render_fps"])
@@ -340,3 +343,19 @@ class ChaplyginSleighVectorEnv(TaskVectorEnv):
 
     def advance(self, s, command):
         return self.env.advance(s, command, self.stepper, BATCH, self.jump_stepper)
+
+
+SPECS = (
+    Spec(
+        "connenv/ChaplyginSleigh-v0", ChaplyginSleighEnv, ChaplyginSleighVectorEnv, max_episode_steps=1000,
+        dt_max=DT_MAX, physics="ChaplyginSleigh.md", measure=Measure("time to target", "s", "time_to_success"),
+        controllers=("planner", "tail_first"),
+        variants=({}, {"offset": 0.0, "box": 0.0}),  # general: u̇ commanded; fit: u commanded
+        state_keys=dict.fromkeys(STATE_KEYS, 0), option_keys={"target": 2},
+        golden=(
+            ("sleigh", {"max_episode_steps": 60, "tolerance": 0.5}, None),
+            ("sleigh_fit", {"max_episode_steps": 60, "offset": 0.0, "box": 0.0}, None),
+        ),
+        bench="sleigh",
+    ),
+)

@@ -18,8 +18,8 @@ from connenv.core.validation import (
     check_stepper_options,
 )
 from connenv.envs.base import BATCH, SCALAR
-from connenv.envs.connection import DT_MAX  # noqa: F401  (ConnectionEnv's dt range, this env's)
-from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv  # DT_MAX: its dt range
+from connenv.envs.spec import Measure, Spec
 from connenv.systems import elroys_beanie
 
 MOMENTUM_RANGE = (0.25, 1.0)  # |μ| drawn at reset (kg m²/s), with a random sign
@@ -232,7 +232,7 @@ class ElroysBeanieEnv(ConnectionEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering_lawton import BeanieRenderer
+        from connenv.rendering.elroys_beanie import BeanieRenderer
 
         return BeanieRenderer(self.render_mode, self.metadata["render_fps"])
 
@@ -249,3 +249,14 @@ class ElroysBeanieVectorEnv(ConnectionVectorEnv):
 
     def advance(self, state, s_dot):
         return self.env.drifted(state, super().advance(state, s_dot), BATCH)
+
+
+SPECS = (
+    Spec(
+        "connenv/ElroysBeanie-v0", ElroysBeanieEnv, ElroysBeanieVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
+        physics="ElroysBeanie.md", measure=Measure("time to hold", "s", "time_to_success"), controllers=("dead_beat",),
+        state_keys={"theta": 0, "psi": 0, "momentum": 0}, option_keys={"target": 0},
+        golden=(("beanie", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),),
+        bench="beanie",
+    ),
+)

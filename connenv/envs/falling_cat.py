@@ -23,9 +23,8 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import BATCH, SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.spec import Measure, Spec
 from connenv.systems import falling_cat
-
-__all__ = ["DT_MAX", "FallingCatEnv", "FallingCatVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
 
 ROLL_OFFSET = 0.2  # rad: the start's roll is π + δ, δ uniform in [−ROLL_OFFSET, ROLL_OFFSET]
 SUCCESS_BONUS = 1.0  # reward on the step the cat is in its landing pose
@@ -289,7 +288,7 @@ class FallingCatEnv(ConnectionEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering_lawton import CatRenderer
+        from connenv.rendering.falling_cat import CatRenderer
 
         return CatRenderer(self.cm_distance, self.render_mode, self.metadata["render_fps"])
 
@@ -308,3 +307,14 @@ class FallingCatVectorEnv(ConnectionVectorEnv):
 
     def advance(self, state, s_dot):
         return self.env.bent(state, s_dot, self.stepper, BATCH)
+
+
+SPECS = (
+    Spec(
+        "connenv/FallingCat-v0", FallingCatEnv, FallingCatVectorEnv, max_episode_steps=60, dt_max=DT_MAX,
+        physics="FallingCat.md", measure=Measure("roll error at landing", "rad", "roll_error"),
+        controllers=("kane_scher",), state_keys={"bend": 2}, rotations=((("state", "R"), "state R"),),
+        golden=(("cat", {"max_episode_steps": 60, "fall_time": 0.4, "max_bend": 0.5}, None),),
+        bench="cat",
+    ),
+)

@@ -21,6 +21,7 @@ from connenv.core.validation import (
     check_vector,
 )
 from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
+from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kapitza import KapitzaPendulum
 
@@ -109,7 +110,7 @@ class KapitzaPendulumEnv(TaskEnv):
     | 4 (5, 6) | pivot velocity along the actuated axes at the end of the step, u̇ᵢ / v_max | -1 | 1 |
 
     θ̇ is clipped to its bound (reached only when spinning fast). There is no clock: the pivot's own state
-    (u, u̇) is the phase of a vibration, and the reference controllers read it there (`agents.kapitza`).
+    (u, u̇) is the phase of a vibration, and the reference controllers read it there (`agents.controllers.kapitza`).
 
     ## Rewards
 
@@ -175,6 +176,8 @@ class KapitzaPendulumEnv(TaskEnv):
     `"is_success"`.
     """
 
+    name = "KapitzaPendulum-v0"  # how bad make kwargs name the env
+
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ("max_deviation",)}
 
     def __init__(
@@ -205,7 +208,7 @@ class KapitzaPendulumEnv(TaskEnv):
         self.v_max = check_scale("v_max", v_max, 10.0)
         self.a_max = check_scale("a_max", a_max, 0.1, length, open_high=True, high_name="length")
         self.tolerance = check_scale("tolerance", tolerance, 0.3, math.pi, open_high=True)
-        check_stepper_options(type(self).__name__, stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
 
         self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / length)
@@ -217,7 +220,7 @@ class KapitzaPendulumEnv(TaskEnv):
         self.state = self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
 
     def _make_renderer(self):
-        from connenv.envs.rendering import KapitzaRenderer
+        from connenv.rendering.kapitza import KapitzaRenderer
 
         return KapitzaRenderer(self.system.length, self.a_max, self.render_mode, self.metadata["render_fps"])
 
@@ -393,6 +396,8 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     in the reference-results guide, "What changed, and what is still open".
     """
 
+    name = "KapitzaSwingUp-v0"  # how bad make kwargs name the env
+
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ()}
 
     def __init__(self, render_mode: str | None = None, *, hold_time: float = 2.0, **kwargs):
@@ -446,3 +451,25 @@ class KapitzaSwingUpVectorEnv(KapitzaPendulumVectorEnv):
     """KapitzaSwingUp-v0 over a batch; as KapitzaPendulumVectorEnv."""
 
     single_env = KapitzaSwingUpEnv
+
+
+PENDULUM = {"dt_max": DT_MAX, "physics": "kapitza.md",
+            "state_keys": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
+            "fast_start": {"state": {"theta": math.pi}}}  # on the separatrix: the exact step's RK4 branch
+SPECS = (
+    Spec(
+        "connenv/KapitzaPendulum-v0", KapitzaPendulumEnv, KapitzaPendulumVectorEnv, max_episode_steps=2000,
+        **PENDULUM, measure=Measure("max deviation", "rad", "max_deviation"), controllers=("kapitza", "damped"),
+        variants=({}, {"pivot": "planar"}),
+        golden=(
+            ("kapitza", {"max_episode_steps": 100, "pivot": "planar"}, None),
+            ("kapitza_fall", {"max_episode_steps": 100, "pivot": "horizontal"}, None),
+        ),
+        bench="kapitza",
+    ),
+    Spec(
+        "connenv/KapitzaSwingUp-v0", KapitzaSwingUpEnv, KapitzaSwingUpVectorEnv, max_episode_steps=6000, **PENDULUM,
+        measure=Measure("time to target", "s", "time_to_success"), controllers=("swingup",),
+        golden=(("swingup", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),),
+    ),
+)

@@ -23,6 +23,7 @@ from connenv.core.validation import (
     check_vector,
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.spec import Measure, Spec
 from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
@@ -127,7 +128,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     Terminated when the shell's centre is within `success_radius` of the target, checked at the end of each
     step (`info["is_success"]`). Truncated after 300 steps (30 s at the default dt) by the registration's time
-    limit; the gait planner (`agents.gaits`) needs at most 103 steps on seeds 0–99, and 111 on targets 1 m away
+    limit; the gait planner (`agents.controllers.kozlov_shell`) needs at most 103 steps on seeds 0–99, and 111 on targets 1 m away
     in 90 directions.
 
     ## Arguments
@@ -168,6 +169,8 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
     """
 
+    name = "KozlovShell-v0"  # how bad make kwargs name the env
+
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
     def __init__(
@@ -202,7 +205,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         params["shell_inertia"] = None if shell_inertia is None else check_scale("shell_inertia", shell_inertia, disc)
         self.full_system, self.reduced_system = KozlovShell(**params), ReducedKozlovShell(**params)
         self.success_radius = check_scale("success_radius", success_radius, 0.05, 0.5, open_high=True)
-        check_stepper_options("KozlovShell-v0", stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         if integrator in ("magnus", "dop853"):
             stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
         self.stepper = make_stepper(integrator, self.full_system, **stepper_options)
@@ -231,7 +234,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         return super().step(action)
 
     def _make_renderer(self):
-        from connenv.envs.rendering_shell import KozlovShellRenderer
+        from connenv.rendering.kozlov_shell import KozlovShellRenderer
 
         system = self.full_system
         return KozlovShellRenderer(
@@ -347,3 +350,23 @@ def _check_box(u1_max, u2_max, a, b):
         )
     return u1_max, u2_max
 
+
+SPECS = (
+    Spec(
+        "connenv/KozlovShell-v0", KozlovShellEnv, KozlovShellVectorEnv, max_episode_steps=300, dt_max=DT_MAX,
+        physics="kozlov-shell.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
+        starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
+        state_keys={"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3}, option_keys={"target": 2},
+        fast_start={"state": {"momentum": (27.0, 20.0, 5.0)}},
+        golden=(
+            ("shell", {"max_episode_steps": 60, "success_radius": 0.3}, None),
+            (
+                "shell_dop853",
+                {"max_episode_steps": 60, "success_radius": 0.3, "integrator": "dop853", "rtol": 1e-8, "atol": 1e-10},
+                None,
+            ),
+            ("shell_full", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),
+        ),
+        bench="shell",
+    ),
+)

@@ -24,6 +24,7 @@ from connenv.core.validation import (
     ndim,
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.rolling_ball import (
     RollingBall,
@@ -168,6 +169,8 @@ class RollingBallEnv(TaskEnv):
     length / distance; 1 where the start is the target, distance 0) and `"is_success"`.
     """
 
+    name = "RollingBall-v0"  # how bad make kwargs name the env
+
     metadata = {**TaskEnv.metadata, "measures": ("angle_error", "path_ratio")}
     measures_distance = True  # whether start solves for the optimal arc (info "distance"); the vector env may not
 
@@ -186,7 +189,7 @@ class RollingBallEnv(TaskEnv):
         self.v_max = check_scale("v_max", v_max, 1.0)
         self.tolerance = check_scale("tolerance", tolerance, 0.05, math.pi, open_high=True)
         self.system = RollingBall(check_scale("radius", radius, 1.0))
-        check_stepper_options(type(self).__name__, stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.observation_space = self._observation_space()
@@ -207,7 +210,7 @@ class RollingBallEnv(TaskEnv):
         return finite_action(action, self.action_space)
 
     def _make_renderer(self):
-        from connenv.envs.rendering import RollingBallRenderer
+        from connenv.rendering.rolling_ball import RollingBallRenderer
 
         return RollingBallRenderer(self.system.radius, self.render_mode, self.metadata["render_fps"])
 
@@ -350,6 +353,8 @@ class RollingBallPoseEnv(RollingBallEnv):
     what is still open".
     """
 
+    name = "RollingBallPose-v0"  # how bad make kwargs name the env
+
     metadata = {**RollingBallEnv.metadata, "measures": ("angle_error", "position_error", "path_length")}
 
     def __init__(self, render_mode: str | None = None, *, position_tolerance: float = 0.05, **kwargs):
@@ -408,6 +413,8 @@ class RollingBallGoalEnv(RollingBallEnv):
     `env_method`, which unwraps), but SB3's `check_env(gym.make(...))` raises AttributeError on it: check the env
     itself, `check_env(env.unwrapped)`.
     """
+
+    name = "RollingBallGoal-v0"  # how bad make kwargs name the env
 
     def _observation_space(self):
         box = spaces.Box(-1.0, 1.0, (6,), np.float32)
@@ -477,3 +484,24 @@ class RollingBallGoalVectorEnv(RollingBallVectorEnv):
     """RollingBallGoal-v0 over a batch, dict observations of arrays; as RollingBallVectorEnv."""
 
     single_env = RollingBallGoalEnv
+
+
+BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse", "state_keys": {"x": 0, "y": 0},
+        "rotations": ((("state", "R"), "state R"), (("target",), "target"))}
+SPECS = (
+    Spec(
+        "connenv/RollingBall-v0", RollingBallEnv, RollingBallVectorEnv, max_episode_steps=200, **BALL,
+        measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
+        golden=(("ball", {"max_episode_steps": 50, "tolerance": 1.5}, None),), bench="ball",
+    ),
+    Spec(
+        "connenv/RollingBallPose-v0", RollingBallPoseEnv, RollingBallPoseVectorEnv, max_episode_steps=300, **BALL,
+        measure=Measure("path length", "m", "path_length"), controllers=("holonomy",),
+        golden=(("ball_pose", {"max_episode_steps": 50, "tolerance": 2.5, "position_tolerance": 0.3}, None),),
+    ),
+    Spec(
+        "connenv/RollingBallGoal-v0", RollingBallGoalEnv, RollingBallGoalVectorEnv, max_episode_steps=200, **BALL,
+        measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
+        golden=(("ball_goal", {"max_episode_steps": 50, "tolerance": 1.5}, None),),
+    ),
+)

@@ -19,8 +19,8 @@ from connenv.core.validation import (
     check_vector,
 )
 from connenv.envs.base import SCALAR
-from connenv.envs.connection import DT_MAX  # noqa: F401  (ConnectionEnv's dt range, this env's)
-from connenv.envs.connection import ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv  # DT_MAX: its dt range
+from connenv.envs.spec import Measure, Spec
 from connenv.systems import rolling_coin
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -86,7 +86,7 @@ class RollingCoinEnv(ConnectionEnv):
 
     Terminated when parked (`info["is_success"]`): |d| ≤ `position_tolerance` (0.05 m) and |θ* − θ| ≤
     `heading_tolerance` (0.05 rad, wrapped); φ is free. Truncated after 200 steps (20 s) by the registration's
-    time limit; the reference planner (`agents.lawton.CoinPlanner`) needs at most π/2 + 3/(R · 2) + π s, 78 steps.
+    time limit; the reference planner (`agents.controllers.rolling_coin.CoinPlanner`) needs at most π/2 + 3/(R · 2) + π s, 78 steps.
 
     ## Arguments
 
@@ -233,7 +233,7 @@ class RollingCoinEnv(ConnectionEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering_lawton import CoinRenderer
+        from connenv.rendering.rolling_coin import CoinRenderer
 
         return CoinRenderer(self.radius, self.render_mode, self.metadata["render_fps"])
 
@@ -247,3 +247,15 @@ class RollingCoinVectorEnv(ConnectionVectorEnv):
     ``connenv.envs.vector``): every row stepped by the same closed form as the single env."""
 
     single_env = RollingCoinEnv
+
+
+SPECS = (
+    Spec(
+        "connenv/RollingCoin-v0", RollingCoinEnv, RollingCoinVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
+        physics="RollingCoin.md", measure=Measure("time to park", "s", "time_to_success"),
+        controllers=("turn_roll_turn",), variants=({}, {"integrator": "magnus"}),
+        state_keys={"x": 0, "y": 0, "theta": 0, "phi": 0}, option_keys={"target": 3},
+        golden=(("coin", {"max_episode_steps": 60, "position_tolerance": 0.5}, None),),
+        bench="coin",
+    ),
+)

@@ -20,6 +20,7 @@ from connenv.core.validation import (
     check_vector,
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface
 from connenv.systems.surfaces import LENGTH_MIN, check_surface, make_surface
@@ -35,7 +36,7 @@ START = {"bowl": (0.0, -4.0)}  # the start on a built-in surface where the origi
 
 
 @dataclass
-class CoinState(State):
+class CoinSurfaceState(State):
     """y = (x, y, φ, φ̇); the heading θ; the target (x, y); the time t; E and its value at reset E₀; where the
     last step started (x, y) and the closest approach of its chord to the target, m."""
 
@@ -162,6 +163,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
     `"left_arena"` and `"is_success"`.
     """
 
+    name = "RollingCoinSurface-v0"  # how bad make kwargs name the env
+
     def __init__(
         self,
         render_mode: str | None = None,
@@ -195,7 +198,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
             "g": check_number("g", g, SCALE_MIN, MAGNITUDE_BOUND),
         }
         self.system = (RollingCoinPlane if on_plane else RollingCoinSurface)(self.surface, **parameters)
-        check_stepper_options("RollingCoinSurface-v0", stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         if integrator is None:
             integrator, defaults = ("exact", {}) if on_plane else GENERAL_INTEGRATOR
             stepper_options = {**defaults, **stepper_options}
@@ -251,7 +254,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
         return super().step(action)
 
     def _make_renderer(self):
-        from connenv.envs.rendering_coin_surface import CoinSurfaceRenderer
+        from connenv.rendering.rolling_coin_surface import CoinSurfaceRenderer
 
         return CoinSurfaceRenderer(self.surface, self.arena, self.system.radius, self.render_mode,
                                    self.metadata["render_fps"])
@@ -276,7 +279,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
         closest approach of the chord from `previous` (the coin's position where None, at reset)."""
         energy = ops.real(self.system.energy(y))
         previous = y[..., :2].copy() if previous is None else previous
-        state = CoinState(y, theta, target, t, energy, energy if energy0 is None else energy0, previous, 0.0)
+        state = CoinSurfaceState(y, theta, target, t, energy, energy if energy0 is None else energy0, previous, 0.0)
         return state.replace(miss=self.closest_approach(state, ops))
 
     def start(self, options):
@@ -383,3 +386,18 @@ class RollingCoinSurfaceVectorEnv(TaskVectorEnv):
 
     def advance(self, s, rate):
         return self.env.rolled(s, rate, self.stepper, BATCH)
+
+
+SPECS = (
+    Spec(
+        "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv, RollingCoinSurfaceVectorEnv, max_episode_steps=200,
+        dt_max=DT_MAX, physics="RollingCoinSurface.md", measure=Measure("time to target", "s", "time_to_success"),
+        controllers=("steer",), variants=({}, {"surface": "plane"}),
+        state_keys={"x": 0, "y": 0, "theta": 0, "phi": 0, "phi_dot": 0}, option_keys={"target": 2},
+        golden=(
+            ("coin_surface", {"max_episode_steps": 40, "tolerance": 1.0}, None),
+            ("coin_plane", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"}, None),
+        ),
+        bench="coin_surface",
+    ),
+)

@@ -12,6 +12,7 @@ from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import check_dt, check_keys, check_number, check_scale, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
+from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.backend import components, namespace
 from connenv.systems.skier import Skier, check_curvature
@@ -168,6 +169,8 @@ class SkierEnv(TaskEnv):
     (ε) and `"is_success"`.
     """
 
+    name = "Skier-v0"  # how bad make kwargs name the env
+
     def __init__(
         self,
         render_mode: str | None = None,
@@ -203,7 +206,7 @@ class SkierEnv(TaskEnv):
                 f"g={g!r} with dt={dt!r} is out of range: the step in the time of 9.81 m/s², dt √(g/9.81) = "
                 f"{self.scaled_dt:.6g} s, must be at most {DT_MAX} s"
             )
-        check_stepper_options("Skier-v0", stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
 
         xs = self.trail.grid()
         f, f1, f2, _ = self.trail.profile(xs)
@@ -243,7 +246,7 @@ class SkierEnv(TaskEnv):
         return integrator, options
 
     def _make_renderer(self):
-        from connenv.envs.rendering import SkierRenderer
+        from connenv.rendering.skier import SkierRenderer
 
         return SkierRenderer(self.trail, self.h_max, self.render_mode, self.metadata["render_fps"])
 
@@ -393,3 +396,25 @@ class SkierVectorEnv(TaskVectorEnv):
 
     def advance(self, s, h_cmd):
         return self.env.advance(s, h_cmd, self.stepper, BATCH)
+
+
+SPECS = (
+    Spec(
+        "connenv/Skier-v0", SkierEnv, SkierVectorEnv, max_episode_steps=1000, dt_max=DT_MAX, physics="skier.md",
+        measure=Measure("time to target", "s", "time_to_success"), controllers=("pumping",),
+        play="space", space_action=1.0,  # held: the skier rises (h_max)
+        variants=(
+            {},
+            {"trail": "halfpipe"},
+            {"trail": "0.25*x**2", "trail_params": {"domain": (-5.0, 5.0)}, "target_x": 4.0},
+            {"integrator": "rk4", "substeps": 8},
+        ),
+        state_keys={"x": 0, "x_dot": 0, "p": 0, "h": 0},
+        fast_start={"state": {"x": 0.0, "x_dot": 23.0}},
+        golden=(
+            ("skier", {"max_episode_steps": 80}, None),
+            ("skier_ramp", {"max_episode_steps": 40, "max_height_speed": 3.0, "target_x": 0.3}, None),
+        ),
+        bench="skier",
+    ),
+)

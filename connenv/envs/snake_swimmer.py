@@ -25,6 +25,7 @@ from connenv.core.validation import (
     decimal,
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.spec import Measure, Spec
 from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
@@ -207,6 +208,8 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     `"distance"`.
     """
 
+    name = "SnakeSwimmer-v0"  # how bad make kwargs name the env
+
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
     def __init__(
@@ -239,7 +242,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         self.success_radius = check_scale(
             "success_radius", success_radius, 0.1 * self.body_length, self.body_length, open_high=True
         )
-        check_stepper_options("SnakeSwimmer-v0", stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         if integrator in ("magnus", "dop853"):
             stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
         self.stepper = make_stepper(integrator, self.full_system, **stepper_options)
@@ -269,7 +272,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return super().step(action)
 
     def _make_renderer(self):
-        from connenv.envs.rendering_snake import SnakeSwimmerRenderer
+        from connenv.rendering.snake_swimmer import SnakeSwimmerRenderer
 
         system = self.full_system
         return SnakeSwimmerRenderer(
@@ -366,3 +369,18 @@ def snake_rule(system, max_speed, dt, atol):
             if room > 0.0:
                 segments.append((start, direction * max_speed, min(dt, room)))
     return fixed_rule(system, segments, atol)
+
+
+SPECS = (
+    Spec(
+        "connenv/SnakeSwimmer-v0", SnakeSwimmerEnv, SnakeSwimmerVectorEnv, max_episode_steps=1000, dt_max=DT_MAX,
+        physics="SnakeSwimmer.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
+        starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
+        state_keys={"x": 0, "y": 0, "theta": 0, "alpha": 0, "beta": 0, "momentum": 3}, option_keys={"target": 2},
+        golden=(
+            ("snake", {"max_episode_steps": 60, "success_radius": 2.9}, None),
+            ("snake_full", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),
+        ),
+        bench="snake",
+    ),
+)

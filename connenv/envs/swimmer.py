@@ -1,4 +1,4 @@
-"""What the planar swimmers in an ideal fluid share, KozlovShell-v0 and SnakeSwimmer-v0: a pose (x, y, θ) on SE(2),
+"""What the planar swimmers in an ideal fluid share, Kozlov's shell and the snake: a pose (x, y, θ) on SE(2),
 a body momentum (P₁, P₂, Π) in the full (Kirchhoff) model, whose spatial momentum is conserved, and the task of
 reaching a target point."""
 

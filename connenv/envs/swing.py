@@ -13,6 +13,7 @@ from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_scale, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
+from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.backend import components, namespace
 from connenv.systems.swing import Swing
@@ -141,6 +142,8 @@ class SwingEnv(TaskEnv):
     `"amplitude"` (rad) and `"is_success"`.
     """
 
+    name = "Swing-v0"  # how bad make kwargs name the env
+
     def __init__(
         self,
         render_mode: str | None = None,
@@ -167,7 +170,7 @@ class SwingEnv(TaskEnv):
         self.system = Swing(
             mass=check_scale("mass", mass, 1.0), g=check_scale("g", g, 9.81)
         )
-        check_stepper_options("Swing-v0", stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
 
         self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / self.r_min)
@@ -179,7 +182,7 @@ class SwingEnv(TaskEnv):
         self.state = self.at(np.zeros(2), self.r_max, 0.0, 0.0)
 
     def _make_renderer(self):
-        from connenv.envs.rendering import SwingRenderer
+        from connenv.rendering.swing import SwingRenderer
 
         return SwingRenderer(self.r_max, self.render_mode, self.metadata["render_fps"])
 
@@ -275,3 +278,20 @@ class SwingVectorEnv(TaskVectorEnv):
 
     def advance(self, s, r_cmd):
         return self.env.advance(s, r_cmd, self.stepper, BATCH)
+
+
+SPECS = (
+    Spec(
+        "connenv/Swing-v0", SwingEnv, SwingVectorEnv, max_episode_steps=500, dt_max=DT_MAX, physics="swing.md",
+        measure=Measure("time to target", "s", "time_to_success"), controllers=("pumping",),
+        play="space", space_action=-1.0,  # held: the child stands (r_min)
+        variants=({}, {"integrator": "rk4", "substeps": 4}),
+        state_keys={"theta": 0, "theta_dot": 0, "p": 0, "r": 0},
+        fast_start={"state": {"theta": 3.0, "theta_dot": 7.7, "r": 1.6}},
+        golden=(
+            ("swing", {"max_episode_steps": 60, "target_amplitude": 0.3}, None),
+            ("swing_ramp", {"max_episode_steps": 60, "max_radial_speed": 2.0}, None),
+        ),
+        bench="swing",
+    ),
+)

@@ -19,6 +19,7 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import BATCH, SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.spec import Measure, Spec
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
 
 __all__ = ["DT_MAX", "TubeTwistEnv", "TubeTwistVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
@@ -244,7 +245,7 @@ class TubeTwistEnv(ConnectionEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering import TubeRenderer
+        from connenv.rendering.tube import TubeRenderer
 
         return TubeRenderer(self.render_mode, self.metadata["render_fps"])
 
@@ -263,3 +264,15 @@ class TubeTwistVectorEnv(ConnectionVectorEnv):
 
     def advance(self, state, kappa):
         return self.env.bent(state, kappa, self.stepper, BATCH)
+
+
+SPECS = (
+    Spec(
+        "connenv/TubeTwist-v0", TubeTwistEnv, TubeTwistVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
+        physics="TubeTwist.md", measure=Measure("bend / shortest loop", "", "path_ratio"), controllers=("cap", "square"),
+        play="mouse", variants=({}, {"integrator": "magnus"}), option_keys={"target": 0},
+        rotations=((("state", "R"), "state R"),),
+        golden=(("tube", {"max_episode_steps": 40, "tolerance": 0.6}, None),),
+        bench="tube",
+    ),
+)

@@ -26,55 +26,16 @@ import scipy
 import threadpoolctl
 
 import connenv  # noqa: F401  (registers the envs)
+from connenv.envs.spec import registry
 
 PATH = Path(__file__).with_name("trajectories.json")
 SEEDS = (0, 1)
 STEPS = 300
 ROWS = 3
 
-# (name, id, make kwargs, reset options); short episodes so that a run holds terminations and resets
-CASES = [
-    ("swing", "connenv/Swing-v0", {"max_episode_steps": 60, "target_amplitude": 0.3}, None),
-    ("swing_ramp", "connenv/Swing-v0", {"max_episode_steps": 60, "max_radial_speed": 2.0}, None),
-    ("skier", "connenv/Skier-v0", {"max_episode_steps": 80}, None),
-    ("skier_ramp", "connenv/Skier-v0", {"max_episode_steps": 40, "max_height_speed": 3.0, "target_x": 0.3}, None),
-    ("ball", "connenv/RollingBall-v0", {"max_episode_steps": 50, "tolerance": 1.5}, None),
-    (
-        "ball_pose",
-        "connenv/RollingBallPose-v0",
-        {"max_episode_steps": 50, "tolerance": 2.5, "position_tolerance": 0.3},
-        None,
-    ),
-    ("ball_goal", "connenv/RollingBallGoal-v0", {"max_episode_steps": 50, "tolerance": 1.5}, None),
-    ("shell", "connenv/KozlovShell-v0", {"max_episode_steps": 60, "success_radius": 0.3}, None),
-    (
-        "shell_dop853",
-        "connenv/KozlovShell-v0",
-        {"max_episode_steps": 60, "success_radius": 0.3, "integrator": "dop853", "rtol": 1e-8, "atol": 1e-10},
-        None,
-    ),
-    ("shell_full", "connenv/KozlovShell-v0", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),
-    ("snake", "connenv/SnakeSwimmer-v0", {"max_episode_steps": 60, "success_radius": 2.9}, None),
-    ("snake_full", "connenv/SnakeSwimmer-v0", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),
-    ("kapitza", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "planar"}, None),
-    ("kapitza_fall", "connenv/KapitzaPendulum-v0", {"max_episode_steps": 100, "pivot": "horizontal"}, None),
-    ("sleigh", "connenv/ChaplyginSleigh-v0", {"max_episode_steps": 60, "tolerance": 0.5}, None),
-    ("sleigh_fit", "connenv/ChaplyginSleigh-v0", {"max_episode_steps": 60, "offset": 0.0, "box": 0.0}, None),
-    ("swingup", "connenv/KapitzaSwingUp-v0", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),
-    ("coin", "connenv/RollingCoin-v0", {"max_episode_steps": 60, "position_tolerance": 0.5}, None),
-    ("beanie", "connenv/ElroysBeanie-v0", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),
-    ("coin_surface", "connenv/RollingCoinSurface-v0", {"max_episode_steps": 40, "tolerance": 1.0}, None),
-    (
-        "coin_plane",
-        "connenv/RollingCoinSurface-v0",
-        {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"},
-        None,
-    ),
-    ("bead", "connenv/BeadOnBar-v0", {"max_episode_steps": 60}, None),
-    ("tube", "connenv/TubeTwist-v0", {"max_episode_steps": 40, "tolerance": 0.6}, None),
-    ("cat", "connenv/FallingCat-v0", {"max_episode_steps": 60, "fall_time": 0.4, "max_bend": 0.5}, None),
-]
-
+CASES = [(name, spec.id, kwargs, options) for spec in registry.values() for name, kwargs, options in spec.golden]
+"""(name, id, make kwargs, reset options) of each spec's golden cases: short episodes, so that a run holds
+terminations and resets."""
 
 def flatten(value, prefix, out):
     """{dotted key: float array} of an observation or info, strings and masks left out."""

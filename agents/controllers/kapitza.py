@@ -140,3 +140,15 @@ class KapitzaSwingUp:
         pump = np.clip((target - u) / self.tracking, -self.speed, self.speed) / self.v_max
         hold, _ = self.vibration.predict(obs)
         return np.where(holding[..., None], hold, pump[..., None]).astype(np.float32), holding
+
+
+def kapitza(env):
+    return KapitzaVibration(env)
+
+
+def damped(env):
+    return KapitzaVibration(env, modulation=DAMPING_MODULATION)
+
+
+def swingup(env):
+    return KapitzaSwingUp(env)

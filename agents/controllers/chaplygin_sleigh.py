@@ -116,3 +116,11 @@ class TailFirst(Gaits):
         turn = max(-(math.pi / 2 - self.min_angle), min(math.pi / 2 - self.min_angle, self.gain * beta))
         d = np.array([[math.cos(math.pi / 2 + turn), math.sin(math.pi / 2 + turn)]])
         return shake(u[None], u_dot[None], d, self.reach(d), self.speed, self.dt)[0].astype(np.float32)
+
+
+def planner(env):
+    return ShakePlanner(env)
+
+
+def tail_first(env):
+    return TailFirst(env)

@@ -1,4 +1,4 @@
-"""pygame drawing of KozlovShell-v0: the shell, its inner mass, the target and the wake."""
+"""pygame drawing of Kozlov's shell: the shell, its inner mass, the target and the wake."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from connenv.envs.rendering import Canvas
+from connenv.rendering import Canvas
 
 OUTLINE_POINTS = 64
 

@@ -1,10 +1,10 @@
-"""pygame drawing of BeadOnBar-v0: the bar through its pivot, the bead on it, and the target on the bar."""
+"""pygame drawing of the bead on a turning bar: the bar through its pivot, the bead on it, and the target on the bar."""
 
 from __future__ import annotations
 
 import math
 
-from connenv.envs.rendering import Canvas
+from connenv.rendering import Canvas
 
 
 class BeadRenderer:

@@ -1,5 +1,5 @@
-"""Reference controllers of Lawton's connection envs, from their geometry: the coin's turn–roll–turn planner and the
-beanie's dead-beat law. Both answer SB3's ``predict`` on the envs' observations (batched or not)."""
+"""Reference controller of RollingCoin-v0, from its geometry: the turn–roll–turn planner. It answers SB3's
+``predict`` on the env's observations (batched or not)."""
 
 from __future__ import annotations
 
@@ -45,21 +45,5 @@ class CoinPlanner:
         return np.clip(np.stack([steer, roll], axis=-1), -1.0, 1.0).astype(np.float32), state
 
 
-class BeanieDeadBeat:
-    """Turn ElroysBeanie-v0's body onto θ* in as few steps as the beanie's speed allows, then hold it.
-
-    From μ = (I₁ + I₂) θ̇ + I₂ ψ̇, a step of constant ψ̇ turns the body by (μ − I₂ ψ̇) dt/(I₁ + I₂). The law asks
-    for the turn e = θ* − θ in one step, ψ̇ = (μ − (I₁ + I₂) e/dt)/I₂, clipped to the speed bound: the fastest
-    approach (the bound binds until the last step), landing exactly on θ*; there e = 0 gives ψ̇ = μ/I₂, the
-    spin that holds the body still. It reads e from (sin e, cos e) and μ from the observation.
-    """
-
-    def __init__(self, env):
-        self.total, self.beanie = env.body_inertia + env.beanie_inertia, env.beanie_inertia
-        self.dt, self.speed = env.dt, env.max_beanie_speed
-
-    def predict(self, obs, state=None, episode_start=None, deterministic=True):
-        obs = np.asarray(obs, np.float64)
-        error, momentum = np.arctan2(obs[..., 0], obs[..., 1]), obs[..., 2]
-        psi_dot = (momentum - self.total * error / self.dt) / self.beanie
-        return np.clip(psi_dot / self.speed, -1.0, 1.0).astype(np.float32)[..., None], state
+def turn_roll_turn(env):
+    return CoinPlanner(env)

@@ -13,6 +13,7 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from connenv.envs.rolling_ball import RollingBallPoseEnv
 from connenv.systems.rolling_ball import RollingBall, from_six_d, split_legs
 
 MATCH = 1e-5  # largest difference between the observed and the predicted attitude error (and position) of a plan
@@ -88,6 +89,15 @@ class Holonomy(PlanFollower):
         return split_legs(self.ball.holonomy_legs(rotation, position), self.step_length)
 
 
-def for_env(controller, pose: bool = False):
-    """A factory of the controller for an unwrapped rolling-ball env, with its radius, v_max and dt."""
-    return lambda env: controller(env.system.radius, env.v_max, env.dt, pose)
+def for_env(controller, env):
+    """The controller for an unwrapped rolling-ball env, with its radius, v_max and dt; the pose task's asks for
+    the position too."""
+    return controller(env.system.radius, env.v_max, env.dt, isinstance(env, RollingBallPoseEnv))
+
+
+def arc(env):
+    return for_env(OptimalArc, env)
+
+
+def holonomy(env):
+    return for_env(Holonomy, env)

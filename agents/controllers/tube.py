@@ -13,7 +13,7 @@ the exact model, so the loop closes and turns the tip by A to rounding.
 - ``square``: a regular spherical quadrilateral of the same area, each side cut into steps of equal bends: longer,
   for comparison.
 
-As agents.rolling_ball's planners, it follows its plan open loop and plans again when the observation is not the
+As agents.controllers.rolling_ball's planners, it follows its plan open loop and plans again when the observation is not the
 one the plan predicted (a new episode, a disturbance) or the plan is spent.
 """
 
@@ -70,3 +70,11 @@ def for_env(env, sides: int | None = None):
     """The planner for an env's max_bend_rate and dt."""
     env = env.unwrapped
     return LoopPlanner(env.max_shape_speed, env.dt, sides)
+
+
+def cap(env):
+    return for_env(env)
+
+
+def square(env):
+    return for_env(env, sides=4)

@@ -63,3 +63,7 @@ class BeadTilt:
         wanted = (side * error < 0.0) & (outward < self.creep)
         push = np.sqrt(np.maximum(self.creep - outward, 0.0) / (np.maximum(np.abs(r), 1e-12) * self.dt))
         return np.where(wanted, np.minimum(push, self.omega_max), 0.0)
+
+
+def tilt(env):
+    return BeadTilt(env)

@@ -1,4 +1,4 @@
-"""pygame drawing of RollingCoinSurface-v0: the coin from above on the surface's contour map, with its track."""
+"""pygame drawing of the coin rolling on a surface: the coin from above on the surface's contour map, with its track."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from connenv.envs.rendering import SIZE, Canvas
+from connenv.rendering import SIZE, Canvas
 
 CONTOURS = 16  # bands of the contour map over the arena's height range
 LOW, HIGH = np.array([70.0, 120.0, 190.0]), np.array([235.0, 225.0, 200.0])  # colours of the lowest and highest band

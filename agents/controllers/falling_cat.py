@@ -93,3 +93,7 @@ class KaneScher(RowPlanner):
         out = np.array([beta, 0.0])
         _, loop = self.chords(beta, n, math.copysign(1.0, roll))
         return np.concatenate([straighten, self.radial(origin, out), loop, self.radial(out, origin)])
+
+
+def kane_scher(env):
+    return KaneScher(env)

@@ -1,4 +1,4 @@
-"""pygame drawing of SnakeSwimmer-v0: the three elliptic links, the target and the wake."""
+"""pygame drawing of the snake swimmer: the three elliptic links, the target and the wake."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from connenv.envs.rendering import Canvas
+from connenv.rendering import Canvas
 
 OUTLINE_POINTS = 48
 WAKE_COLOURS = ((200, 170, 170), (170, 170, 170), (170, 190, 210))  # rear, middle, front

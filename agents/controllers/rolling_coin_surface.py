@@ -71,3 +71,7 @@ class SteerToTarget:
 def wrap(angle):
     """angle into (−π, π]."""
     return math.pi - np.mod(math.pi - angle, 2.0 * math.pi)
+
+
+def steer(env):
+    return SteerToTarget(env)

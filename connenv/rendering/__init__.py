@@ -1,0 +1,91 @@
+"""pygame drawing for the envs, as in Gymnasium's classic control (pygame is an optional dependency): the Canvas
+every renderer draws on, and one module per env module (connenv.rendering.swing draws connenv.envs.swing's envs),
+which the env imports on its first render."""
+
+from __future__ import annotations
+
+import numpy as np
+from gymnasium.error import DependencyNotInstalled
+
+SIZE = 500
+
+
+class Canvas:
+    """A square pygame surface in world coordinates (metres, y up), shown or returned as an array."""
+
+    def __init__(self, half_width: float, center_y: float, render_mode: str, fps: int, center_x: float = 0.0):
+        try:
+            import pygame
+        except ImportError as e:
+            raise DependencyNotInstalled(
+                'pygame is not installed, run `pip install "gymnasium[classic-control]"`'
+            ) from e
+        self.pygame, self.render_mode, self.fps = pygame, render_mode, fps
+        self.scale = SIZE / (2 * half_width)
+        self.center_x, self.center_y = center_x, center_y
+        pygame.font.init()
+        if render_mode == "human":
+            pygame.display.init()
+            self.screen = pygame.display.set_mode((SIZE, SIZE))
+        else:
+            self.screen = pygame.Surface((SIZE, SIZE))
+        self.clock = pygame.time.Clock()
+        self.font = pygame.font.Font(None, 22)
+
+    def px(self, x, y):
+        return int(SIZE / 2 + (x - self.center_x) * self.scale), int(SIZE / 2 - (y - self.center_y) * self.scale)
+
+    def show(self):
+        if self.render_mode == "human":
+            self.pygame.event.pump()
+            self.clock.tick(self.fps)
+            self.pygame.display.flip()
+            return None
+        return np.transpose(np.array(self.pygame.surfarray.pixels3d(self.screen)), axes=(1, 0, 2))
+
+    def close(self):
+        if self.render_mode == "human":
+            self.pygame.display.quit()
+
+
+class CoordinatePlot:
+    """The coordinates against time: each q and u over the last WINDOW seconds (from the left edge, scrolling once
+    the window is full), scaled to the range they have covered; or, with a user's ``draw(state, canvas)``, that picture on a Canvas spanning [-1, 1]² (metres
+    by default: the callback may change ``canvas.scale``)."""
+
+    WINDOW = 10.0  # s of history shown
+    COLORS = ((204, 77, 77), (77, 110, 204), (77, 160, 77), (200, 140, 40), (140, 77, 180), (60, 60, 60))
+
+    def __init__(self, n: int, m: int, render_mode: str, fps: int, draw=None):
+        self.canvas = Canvas(1.0, 0.0, render_mode, fps)
+        self.labels = [f"q{i}" for i in range(n)] + [f"u{i}" for i in range(m)]
+        self.user_draw, self.history = draw, []
+
+    def draw(self, state: dict):
+        c, pg = self.canvas, self.canvas.pygame
+        c.screen.fill((255, 255, 255))
+        if self.user_draw is not None:
+            self.user_draw(state, c)
+            return c.show()
+        if self.history and state["t"] < self.history[-1][0]:  # a reset
+            self.history = []
+        self.history.append((state["t"], *state["q"], *state["u"]))
+        trace = np.array([row for row in self.history if row[0] >= state["t"] - self.WINDOW])
+        self.history = [tuple(row) for row in trace]
+        low, high = trace[:, 1:].min(), trace[:, 1:].max()
+        half = max(0.5 * (high - low), 1e-9)
+        mid = 0.5 * (high + low)
+        top, height = 40, SIZE - 60
+        x = 10 + (trace[:, 0] - trace[0, 0]) / self.WINDOW * (SIZE - 20)
+        for k, label in enumerate(self.labels):
+            y = top + height * (0.5 - 0.45 * (trace[:, 1 + k] - mid) / half)
+            color = self.COLORS[k % len(self.COLORS)]
+            if len(trace) > 1:
+                pg.draw.lines(c.screen, color, False, list(zip(x.astype(int), y.astype(int))), 2)
+            c.screen.blit(c.font.render(f"{label} = {trace[-1, 1 + k]:+.3f}", True, color), (10 + 110 * k, SIZE - 18))
+        text = f"t = {state['t']:5.2f} s   range [{low:.3g}, {high:.3g}]"
+        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()

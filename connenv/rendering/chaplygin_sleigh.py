@@ -1,0 +1,53 @@
+"""pygame drawing of the Chaplygin sleigh."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from connenv.rendering import SIZE, Canvas
+
+
+class SleighRenderer:
+    """Top view: the track of the knife edge, the sled (its outline, the knife edge at P, the mass's box or rail
+    around C), the mass and the target disc."""
+
+    def __init__(self, offset: float, rail: float, box: float, tolerance: float, render_mode: str, fps: int):
+        self.offset, self.rail, self.box, self.tolerance = offset, rail, box, tolerance
+        self.canvas = Canvas(3.0, 0.0, render_mode, fps)
+        self.track = []
+
+    def draw(self, pose, u, target, t: float):
+        c, pg = self.canvas, self.canvas.pygame
+        x, y, phi = pose
+        if t == 0.0:
+            self.track = []
+        self.track.append((x, y))
+        e1, e2 = np.array([math.cos(phi), math.sin(phi)]), np.array([-math.sin(phi), math.cos(phi)])
+        P = np.array([x, y])
+        C = P + self.offset * e1
+        c.center_x, c.center_y = 0.5 * (P + target)  # the sled and the target in view
+        c.scale = SIZE / (2.0 * max(2.5, 0.6 * float(np.hypot(*(P - target))) + 1.0))
+        c.screen.fill((255, 255, 255))
+        pg.draw.circle(c.screen, (200, 230, 200), c.px(*target), max(int(self.tolerance * c.scale), 3))
+        pg.draw.circle(c.screen, (60, 140, 60), c.px(*target), 4)
+        if len(self.track) > 1:
+            pg.draw.lines(c.screen, (150, 150, 150), False, [c.px(*p) for p in self.track], 2)
+        half = 1.2 * self.rail
+        front = self.offset + 1.2 * max(self.box, 0.1)
+        corners = [P - 0.1 * e1 + half * e2, P + front * e1 + half * e2, P + front * e1 - half * e2,
+                   P - 0.1 * e1 - half * e2]
+        pg.draw.polygon(c.screen, (225, 225, 240), [c.px(*p) for p in corners])
+        pg.draw.polygon(c.screen, (60, 60, 90), [c.px(*p) for p in corners], 2)
+        pg.draw.line(c.screen, (40, 40, 40), c.px(*(P - 0.15 * e1)), c.px(*(P + 0.15 * e1)), 5)  # the knife edge
+        b, r = self.box, self.rail
+        box = [C + b * e1 + r * e2, C + b * e1 - r * e2, C - b * e1 - r * e2, C - b * e1 + r * e2]
+        pg.draw.lines(c.screen, (120, 120, 160), True, [c.px(*p) for p in box], 2)  # the mass's box (a rail if b = 0)
+        pg.draw.circle(c.screen, (0, 0, 0), c.px(*C), 3)
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*(C + u[0] * e1 + u[1] * e2)), 8)
+        c.screen.blit(c.font.render(f"t = {t:5.2f} s", True, (0, 0, 0)), (10, 10))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()

@@ -1,0 +1,43 @@
+"""pygame drawing of Elroy's beanie."""
+
+from __future__ import annotations
+
+import math
+
+from connenv.rendering import Canvas
+
+
+class BeanieRenderer:
+    """The body (a disk with a radius drawn at θ), the beanie on it (a smaller disk with its propeller at θ + ψ),
+    the target θ* as a dashed line, and the beanie's winding ψ/2π counted beside; a bar shows the hold."""
+
+    def __init__(self, render_mode: str, fps: int):
+        self.canvas = Canvas(1.5, 0.0, render_mode, fps)
+
+    def draw(self, theta, psi, target, momentum, t, held):
+        c, pg = self.canvas, self.canvas.pygame
+        c.screen.fill((255, 255, 255))
+
+        def ray(angle, length):
+            return c.px(length * math.cos(angle), length * math.sin(angle))
+
+        pg.draw.circle(c.screen, (225, 225, 235), c.px(0.0, 0.0), int(1.0 * c.scale))
+        pg.draw.circle(c.screen, (60, 60, 60), c.px(0.0, 0.0), int(1.0 * c.scale), 2)
+        for k in range(12):  # dashes toward the target, past the body's rim
+            pg.draw.line(c.screen, (90, 170, 90), ray(target, 0.1 * k), ray(target, 0.1 * k + 0.05), 3)
+        pg.draw.line(c.screen, (60, 60, 120), c.px(0.0, 0.0), ray(theta, 1.0), 5)  # the body's mark
+        pg.draw.circle(c.screen, (250, 230, 120), c.px(0.0, 0.0), int(0.4 * c.scale))
+        pg.draw.circle(c.screen, (150, 120, 40), c.px(0.0, 0.0), int(0.4 * c.scale), 2)
+        for blade in (0.0, math.pi):  # the beanie's propeller, at θ + ψ in space
+            pg.draw.line(c.screen, (204, 77, 77), c.px(0.0, 0.0), ray(theta + psi + blade, 0.38), 4)
+        width = int(held * 200)
+        pg.draw.rect(c.screen, (220, 220, 230), (10, 470, 200, 14))
+        pg.draw.rect(c.screen, (90, 170, 90), (10, 470, min(width, 200), 14))
+        lines = [f"t = {t:5.2f} s   θ* − θ = {math.remainder(target - theta, 2 * math.pi):+6.3f} rad",
+                 f"beanie turns ψ/2π = {psi / (2 * math.pi):+7.2f}   μ = {momentum:+5.2f}"]  # fmt: skip
+        for k, text in enumerate(lines):
+            c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10 + 20 * k))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()

@@ -1,0 +1,31 @@
+"""pygame drawing of Kapitza's pendulum."""
+
+from __future__ import annotations
+
+import math
+
+from connenv.rendering import Canvas
+
+
+class KapitzaRenderer:
+    """The pivot's travel as a bar, the pivot, rod and bob; the time in the corner."""
+
+    def __init__(self, length: float, a_max: float, render_mode: str, fps: int):
+        self.length, self.a_max = length, a_max
+        self.canvas = Canvas(1.3 * (length + a_max), 0.0, render_mode, fps)
+
+    def draw(self, theta: float, u, t: float):
+        c, pg = self.canvas, self.canvas.pygame
+        c.screen.fill((255, 255, 255))
+        a = self.a_max
+        pg.draw.rect(c.screen, (225, 225, 235), pg.Rect(*c.px(-a, a), 2 * a * c.scale + 1, 2 * a * c.scale + 1))
+        pivot = c.px(u[0], u[1])
+        bob = c.px(u[0] + self.length * math.sin(theta), u[1] - self.length * math.cos(theta))
+        pg.draw.line(c.screen, (60, 60, 60), pivot, bob, 3)
+        pg.draw.circle(c.screen, (204, 77, 77), bob, 12)
+        pg.draw.circle(c.screen, (0, 0, 0), pivot, 5)
+        c.screen.blit(c.font.render(f"t = {t:5.2f} s", True, (0, 0, 0)), (10, 10))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()

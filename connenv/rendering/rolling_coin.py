@@ -1,0 +1,43 @@
+"""pygame drawing of the rolling coin from above."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from connenv.rendering import Canvas
+
+
+class CoinRenderer:
+    """Top view: the track of the contact point, the coin as a segment along its heading (its edge seen from
+    above) with a tick at the rolled angle φ, and the target pose as a hollow outline."""
+
+    def __init__(self, radius: float, render_mode: str, fps: int):
+        self.radius = radius
+        self.canvas = Canvas(4.0, 0.0, render_mode, fps)
+
+    def coin(self, position, theta, colour, width):
+        c, pg = self.canvas, self.canvas.pygame
+        heading = self.radius * np.array([math.sin(theta), math.cos(theta)])
+        pg.draw.line(c.screen, colour, c.px(*(position - heading)), c.px(*(position + heading)), width)
+        pg.draw.circle(c.screen, colour, c.px(*(position + heading)), 5)  # the front
+
+    def draw(self, track, theta, phi, target, t):
+        c, pg = self.canvas, self.canvas.pygame
+        c.center_x, c.center_y = 0.5 * (track[-1] + target[:2])
+        c.screen.fill((255, 255, 255))
+        pg.draw.circle(c.screen, (0, 0, 0), c.px(0.0, 0.0), 3)  # the origin
+        pg.draw.circle(c.screen, (160, 200, 160), c.px(*target[:2]), max(int(0.05 * c.scale), 2))
+        self.coin(target[:2], target[2], (120, 180, 120), 2)
+        if len(track) > 1:
+            pg.draw.lines(c.screen, (150, 150, 150), False, [c.px(*p) for p in track], 2)
+        self.coin(track[-1], theta, (60, 60, 120), 6)
+        tick = track[-1] + self.radius * math.cos(phi) * np.array([math.sin(theta), math.cos(theta)])
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*tick), 4)  # a point of the rim: where φ has turned it
+        text = f"t = {t:5.2f} s   distance = {np.hypot(*(target[:2] - track[-1])):5.3f} m"
+        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()

@@ -1,0 +1,31 @@
+"""pygame drawing of the swing."""
+
+from __future__ import annotations
+
+import math
+
+from connenv.rendering import SIZE, Canvas
+
+
+class SwingRenderer:
+    """Pivot, rod and bob; the reachable radii as a shaded band; the time in the corner."""
+
+    def __init__(self, r_max: float, render_mode: str, fps: int):
+        self.canvas = Canvas(1.15 * r_max, 0.0, render_mode, fps)
+
+    def draw(self, theta: float, r: float, r_min: float, t: float):
+        c, pg = self.canvas, self.canvas.pygame
+        c.screen.fill((255, 255, 255))
+        pivot = c.px(0.0, 0.0)
+        r_max = SIZE / (2 * 1.15 * c.scale)
+        pg.draw.circle(c.screen, (235, 235, 245), pivot, int(r_max * c.scale), 0)
+        pg.draw.circle(c.screen, (255, 255, 255), pivot, int(r_min * c.scale), 0)
+        bob = c.px(r * math.sin(theta), -r * math.cos(theta))
+        pg.draw.line(c.screen, (60, 60, 60), pivot, bob, 3)
+        pg.draw.circle(c.screen, (204, 77, 77), bob, 12)
+        pg.draw.circle(c.screen, (0, 0, 0), pivot, 5)
+        c.screen.blit(c.font.render(f"t = {t:5.2f} s   r = {r:4.2f} m", True, (0, 0, 0)), (10, 10))
+        return c.show()
+
+    def close(self):
+        self.canvas.close()
