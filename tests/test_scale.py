@@ -17,6 +17,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 import yaml
@@ -99,6 +100,8 @@ def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(r
     (aside,) = tmp_path.glob(f"{folders[1].name}.*")
     assert files_of(aside) == interrupted
     assert [json.loads((folder / "results.json").read_text())["timesteps"] for folder in folders] == [2 * ROLLOUT] * 2
+    periodic = np.load(folders[0] / "evaluations.npz")  # the evaluations before the checkpoint kept, successes too
+    assert len(periodic["successes"]) == len(periodic["timesteps"]) == 2
 
 
 def test_a_sampled_configuration_becomes_rl_zoo3_hyperparameters():
