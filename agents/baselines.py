@@ -13,8 +13,8 @@ after each periodic evaluation, between rollouts; a run whose worker process die
 checkpoint, and the other runs go on; a run folder that cannot be resumed (other hyperparameters, or no checkpoint
 yet) is moved aside to {folder}.{date-time} and the run trained anew. PPO trains on the native vector envs
 (``--vector-env``), SAC on one env.
-``collect`` picks, for each (env, algo), the seed whose periodic evaluation scored best, copies its
-best_model.zip with the VecNormalize statistics it was evaluated with to agents/pretrained/{env}_{algo}/, records
+``collect`` picks, for each (env, algo), the seed whose best model returns most on EPISODES selection episodes (reset
+with seeds SELECTION_SEED + i), copies its best_model.zip with the VecNormalize statistics it was evaluated with to agents/pretrained/{env}_{algo}/, records
 the training steps and wall time of every seed in agents/pretrained/runs.json and writes the periodic evaluations
 of all seeds to docs/baselines/curves.csv. ``table`` evaluates random, each analytic controller and each pretrained
 model on the same 100 episodes (seeds 0..99) with agents.evaluate, writes docs/baselines/results.{json,md} and
@@ -70,7 +70,11 @@ EPISODES = 100
 UNSEEN_SEED = 100_000
 """The score's episode i is reset with seed UNSEEN_SEED + i. Training resets with its seed plus the env's rank
 (below 100), the periodic evaluation likewise, the table with 0..99, agents.imitate's diagnosis with 10 000..10 099
-(evaluation) and 20 000 and up (demonstrations)."""
+(evaluation) and 20 000 and up (demonstrations), collect's choice of the shipped seed with SELECTION_SEED + i."""
+SELECTION_SEED = 50_000
+"""collect ships the seed whose best model returns most on EPISODES episodes reset from here: a periodic evaluation's
+10 episodes pick the best checkpoint of a seed, but are too few to rank seeds whose successes differ by a few
+percent, and the table's and the score's episodes must not choose the model they report."""
 UNSEEN = DOCS / "unseen.json"
 LONG = "_long"  # the book of the budget curves: agents/hyperparams/ppo_long.yml
 
@@ -199,14 +203,17 @@ def copy_best_model(folder: Path, target: Path, env_id: str, algo: str):
     model.save(target / "best_model.zip")
 
 
-def seed_record(folder: Path) -> tuple[dict, list[dict]]:
-    """A finished run's steps, wall time and best periodic return, and its curve as CSV rows."""
+def seed_record(folder: Path, env_id: str, algo: str) -> tuple[dict, list[dict]]:
+    """A finished run's steps, wall time, best periodic return and its best model's mean return on the selection
+    episodes, and its curve as CSV rows."""
     results = json.loads((folder / "results.json").read_text())
     curve = evaluations(folder)
+    selection = episodes_record(env_id, str(folder / "best_model.zip"), algo, SELECTION_SEED)
     record = {
         "timesteps": results["timesteps"],
         "train_seconds": round(results["train_seconds"], 1),
         "best_periodic_return": float(curve["return"].max()),
+        "selection_return": round(float(np.mean(selection["returns"])), 6),
     }
     rows = [
         {"seed": results["seed"], "timesteps": int(t), "return": f"{r:.6g}", "success": f"{s:.2f}"}
@@ -224,14 +231,25 @@ def collect_pair(env_id: str, algo: str, entry: dict | None, runs: Path = RUNS, 
             raise FileNotFoundError(f"{folder}: not finished with the current hyperparameters; run train first")
     records, rows = {}, []
     for seed, folder in zip(seeds, folders, strict=True):
-        records[seed], seed_rows = seed_record(folder)
+        records[seed], seed_rows = seed_record(folder, env_id, algo)
         rows += [{"env": env_id, "algo": algo, **row} for row in seed_rows]
-    best = max(records, key=lambda seed: records[seed]["best_periodic_return"])
+    best = max(records, key=lambda seed: records[seed]["selection_return"])
     digest = hashlib.sha256((run_folder(env_id, algo, best, runs) / "best_model.zip").read_bytes()).hexdigest()
     target = PRETRAINED / f"{short(env_id)}_{algo}"
+    mark_shipped(env_id, algo, best)
     if entry is None or entry.get("source_sha256") != digest or not (target / "best_model.zip").is_file():
         copy_best_model(run_folder(env_id, algo, best, runs), target, env_id, algo)
     return {"pretrained_seed": best, "source_sha256": digest, "seeds": records}, rows
+
+
+def mark_shipped(env_id: str, algo: str, seed: int):
+    """unseen.json's "shipped" flags of an (env, algo)'s runs, once collect has chosen the seed it ships."""
+    if UNSEEN.is_file():
+        data = json.loads(UNSEEN.read_text())
+        for record in data["envs"].get(env_id, {}).get("runs", []):
+            if record["algo"] == algo:
+                record["shipped"] = record["seed"] == seed
+        UNSEEN.write_text(unseen_text(data))
 
 
 def collect(envs: list[str], algos: list[str], runs: Path = RUNS, seeds=SEEDS):
@@ -435,10 +453,14 @@ def run_seeds(env_id: str, algo: str, runs: Path) -> list[int]:
     return sorted(int(match[1]) for folder in runs.glob("*") if (match := pattern.fullmatch(folder.name)))
 
 
-def unseen_record(env_id: str, spec: str, algo: str | None = None) -> dict:
-    """The returns and successes of a policy (agents.evaluate's spec) on the score's unseen episodes."""
-    _, policy = make_policy(spec, env_id, UNSEEN_SEED, algo)
-    episodes = evaluate(env_id, policy, EPISODES, UNSEEN_SEED)
+def episodes_record(env_id: str, spec: str, algo: str | None = None, first_seed: int = UNSEEN_SEED) -> dict:
+    """The returns and successes of a policy (agents.evaluate's spec) on EPISODES episodes from first_seed on: by
+    default the score's unseen episodes."""
+    import torch
+
+    torch.set_num_threads(1)
+    _, policy = make_policy(spec, env_id, first_seed, algo)
+    episodes = evaluate(env_id, policy, EPISODES, first_seed)
     returns = [float(f"{episode.ret:.10g}") for episode in episodes]  # enough for any score, short in the file
     return {"returns": returns, "successes": [episode.success for episode in episodes]}
 
@@ -448,7 +470,7 @@ def shipped_records(env_id: str, algos: list[str]) -> list[dict]:
     record = json.loads((PRETRAINED / "runs.json").read_text())[env_id]
     return [
         {"algo": algo, "seed": record[algo]["pretrained_seed"], "of_seeds": len(record[algo]["seeds"]),
-         **unseen_record(env_id, str(PRETRAINED / f"{short(env_id)}_{algo}" / "best_model.zip"), algo)}
+         **episodes_record(env_id, str(PRETRAINED / f"{short(env_id)}_{algo}" / "best_model.zip"), algo)}
         for algo in algos if algo in record
     ]  # fmt: skip
 
@@ -465,18 +487,15 @@ def run_records(env_id: str, algos: list[str], runs: Path) -> list[dict]:
                 model = folder / "best_model.zip"
                 shipped = hashlib.sha256(model.read_bytes()).hexdigest() == record.get(algo, {}).get("source_sha256")
                 records.append({"algo": algo, "seed": seed, "timesteps": timesteps, "shipped": shipped,
-                                **unseen_record(env_id, str(model), algo)})  # fmt: skip
+                                **episodes_record(env_id, str(model), algo)})  # fmt: skip
     return records
 
 
 def unseen_env(env_id: str, algos: list[str], runs: Path, pretrained: bool) -> dict:
     """unseen.json's entry of an env: random's and the analytic controller's episodes, and the algorithms' runs
     (under "runs") or shipped models (under "pretrained {version}", the release that shipped them)."""
-    import torch
-
-    torch.set_num_threads(1)
     analytic = next(iter(CONTROLLERS[env_id]))
-    entry = {"random": unseen_record(env_id, "random"), "analytic": {"name": analytic, **unseen_record(env_id, analytic)}}
+    entry = {"random": episodes_record(env_id, "random"), "analytic": {"name": analytic, **episodes_record(env_id, analytic)}}
     if pretrained:
         entry[f"pretrained {connenv.__version__}"] = shipped_records(env_id, algos)
     else:

@@ -292,6 +292,7 @@ class BestStatsExperimentManager(ExperimentManager):
                 callback.evaluations_timesteps = data["timesteps"].tolist()
                 callback.evaluations_results = data["results"].tolist()
                 callback.evaluations_length = data["ep_lengths"].tolist()
+                callback.evaluations_successes = data["successes"].tolist() if "successes" in data else []
                 if len(data["results"]):
                     callback.best_mean_reward = float(np.max(np.mean(data["results"], axis=1)))
         return resumed

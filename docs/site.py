@@ -161,9 +161,44 @@ def page(env_id: str) -> str:
     lines += [header, "|---|---|", *rest, ""]
     for title, body in merged_sections(cls).items():
         lines += [f"## {title}", "", body, ""]
+    lines += reference_results(env_id)
     if "Version History" not in merged_sections(cls):  # a class with later versions has its own
         lines += ["## Version History", "", VERSION_HISTORY, ""]
     return "\n".join(lines)
+
+
+def reference_results(env_id: str) -> list[str]:
+    """The env's section of the benchmark, from the files its commands wrote (docs/baselines/): the score on the
+    unseen episodes, and where they were run, the behaviour clones of the diagnosis and the 10x budget curve."""
+    import csv
+    import json
+
+    from agents import score
+
+    unseen = json.loads((DOCS / "baselines" / "unseen.json").read_text())
+    if env_id not in unseen["envs"]:
+        return []
+    lines = [
+        "## Reference results", "",
+        f"Every seed on the score's unseen episodes (reset with seeds {unseen['first_seed']} and up), from "
+        "`python -m agents.baselines score` ([all envs](../baselines/score.md), "
+        "[how they were trained](../guides/reference-results.md)):", "",
+        *score.env_table({"envs": {env_id: unseen["envs"][env_id]}}), "",
+    ]  # fmt: skip
+    diagnosis = {entry["env"]: entry for entry in json.loads((DOCS / "baselines" / "diagnosis.json").read_text())}
+    if env_id in diagnosis:
+        clone = diagnosis[env_id]["clone_summary"]
+        lines += [f"- Behaviour clones of the analytic controller into PPO's network (`python -m agents.imitate "
+                  f"--diagnose`), on their own evaluation episodes: {100 * clone['success_mean']:.0f}% success "
+                  f"[{100 * clone['success_ci'][0]:.0f}, {100 * clone['success_ci'][1]:.0f}]."]  # fmt: skip
+    with (DOCS / "baselines" / "long.csv").open() as file:
+        curve = [row for row in csv.DictReader(file) if row["env"] == env_id]
+    if curve:
+        best = max(float(row["success"]) for row in curve)
+        lines += [f"- PPO at 10x the budget (one seed, `python -m agents.baselines collect --long`): "
+                  f"{100 * float(curve[-1]['success']):.0f}% of its periodic evaluation episodes at "
+                  f"{int(curve[-1]['timesteps']):,} steps, {100 * best:.0f}% at best."]  # fmt: skip
+    return lines + ([""] if lines[-1] else [])
 
 
 def tests_of(path: str) -> list[str]:

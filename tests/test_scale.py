@@ -17,6 +17,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 import yaml
@@ -99,6 +100,8 @@ def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(r
     (aside,) = tmp_path.glob(f"{folders[1].name}.*")
     assert files_of(aside) == interrupted
     assert [json.loads((folder / "results.json").read_text())["timesteps"] for folder in folders] == [2 * ROLLOUT] * 2
+    periodic = np.load(folders[0] / "evaluations.npz")  # the evaluations before the checkpoint kept, successes too
+    assert len(periodic["successes"]) == len(periodic["timesteps"]) == 2
 
 
 def test_a_sampled_configuration_becomes_rl_zoo3_hyperparameters():
@@ -247,3 +250,27 @@ def test_unseen_scores_every_finished_seed_on_the_unseen_episodes_and_skips_runs
     assert entry["analytic"]["returns"] == pytest.approx([episode.ret for episode in analytic], rel=1e-9)
     by_algo = score.env_scores({**entry, "runs": entry["runs"] + [{**entry["analytic"], "algo": "copy", "seed": 0}]})
     assert by_algo["copy"][0]["score"] == 1.0
+
+
+def test_collect_ships_the_seed_whose_best_model_returns_most_on_the_selection_episodes(tmp_path, monkeypatch):
+    """Of two seeds, collect ships the one whose best model returns more on the selection episodes (reset with
+    SELECTION_SEED + i, none of the table's or the score's), and records every seed's mean return there."""
+    from agents import train
+
+    runs = tmp_path / "runs"
+    for seed in (0, 1):
+        train.main(baselines.train_argv("connenv/Swing-v0", "ppo", seed, runs, **TINY))
+    monkeypatch.setattr(baselines, "EPISODES", 3)
+    monkeypatch.setattr(baselines, "PRETRAINED", tmp_path / "pretrained")
+    monkeypatch.setattr(baselines, "DOCS", tmp_path / "docs")
+    monkeypatch.setattr(baselines, "UNSEEN", tmp_path / "docs" / "unseen.json")
+    baselines.collect(["connenv/Swing-v0"], ["ppo"], runs, seeds=(0, 1))
+    entry = json.loads((tmp_path / "pretrained" / "runs.json").read_text())["connenv/Swing-v0"]["ppo"]
+    returns = {}
+    for seed in (0, 1):
+        model = baselines.run_folder("connenv/Swing-v0", "ppo", seed, runs) / "best_model.zip"
+        policy = baselines.make_policy(str(model), "connenv/Swing-v0", 0, "ppo")[1]
+        episodes = baselines.evaluate("connenv/Swing-v0", policy, 3, baselines.SELECTION_SEED)
+        returns[seed] = np.mean([episode.ret for episode in episodes])
+        assert entry["seeds"][str(seed)]["selection_return"] == pytest.approx(returns[seed], rel=1e-5)
+    assert returns[0] != returns[1] and entry["pretrained_seed"] == max(returns, key=returns.get)

@@ -391,9 +391,10 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     No agent of the reference results learns this task: PPO and SAC pump the pendulum up but do not catch and hold
     it. A behaviour clone of the analytic controller into the same network does (trained with DAgger), so the
     observation and the action suffice; what is missing is learning the catch, which the reward pays only through
-    the time it saves once the lift reaches its cap. The evidence (the clones, the longest training curve, and the
-    attempts that did not help: a reward that pays the hold, a curriculum of starts released from every angle) is
-    in the reference-results guide, "What changed, and what is still open".
+    the time it saves once the lift reaches its cap. The clones' success and the longest training curve,
+    which begins to catch late in its budget, are under Reference results below; the attempts that did not help (a
+    reward that pays the hold, a curriculum of starts released from every angle) are in the reference-results
+    guide, "What changed, and what is still open".
     """
 
     name = "KapitzaSwingUp-v0"  # how bad make kwargs name the env

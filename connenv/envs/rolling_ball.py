@@ -348,9 +348,9 @@ class RollingBallPoseEnv(RollingBallEnv):
     No agent of the reference results learns this task. The reward is a trap for local improvement: a roll of
     length ℓ turns the ball by at most ℓ/ρ and moves it ℓ away, so from the origin no action pays more than standing
     still, and the target is reached only through a loop whose first half loses reward. The holonomy planner keeps
-    a plan, which a memoryless network has not been shown to reproduce. The evidence (the planner, behaviour clones,
-    a one-step greedy policy and the longest training curve) is in the reference-results guide, "What changed, and
-    what is still open".
+    a plan, which a memoryless network has not been shown to reproduce. The clones' success and the longest training
+    curve are under Reference results below; the planner, the one-step greedy policy and the attempts are in the
+    reference-results guide ("Why it did not learn, and what did", "What changed, and what is still open").
     """
 
     name = "RollingBallPose-v0"  # how bad make kwargs name the env
