@@ -6,7 +6,7 @@ smoke version of each); every figure the README or docs/ quote is printed by one
     python -m connenv.bench precision [--env NAME ...] [--quick]   work–precision charts, docs/precision/
     python -m connenv.bench stability [--env NAME ...] [--quick]   stability maps, docs/precision/
     python -m connenv.bench steppers [--env swing|skier|ball]      the energy-drift table that chose the defaults
-    python -m connenv.bench generic [--quick]                      ActiveConstraint-v0's steppers on two Lagrangians
+    python -m connenv.bench generic [--quick]                      ActiveConstraintEnv's steppers on two Lagrangians
     python -m connenv.bench [--env swing|skier|ball]               the same (the command the older docs quote)
     python -m connenv.bench [--help]                               the list of commands
 
@@ -20,6 +20,7 @@ import argparse
 import sys
 
 from connenv import cli
+from connenv.bench.common import bench_spec
 
 PROG = "python -m connenv.bench"
 
@@ -29,7 +30,7 @@ COMMANDS = {
     "precision": "work-precision charts of every env's steppers, docs/precision/",
     "stability": "stability maps of the explicit steppers, docs/precision/",
     "steppers": "the energy-drift table that chose the defaults (also with no command and --env)",
-    "generic": "ActiveConstraint-v0's steppers on two Lagrangians",
+    "generic": f"{bench_spec('generic').name}'s steppers on two Lagrangians",
 }
 
 

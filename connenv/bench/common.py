@@ -14,6 +14,7 @@ import numpy as np
 import scipy
 
 import connenv  # noqa: F401  (registers the envs)
+from connenv.envs.spec import Spec, registry
 
 OUTPUT = Path(__file__).resolve().parents[2] / "docs" / "precision"
 ATOL_PER_RTOL = 1e-2  # atol = rtol · 1e-2 for the scipy methods
@@ -34,6 +35,20 @@ def pendulum():
     env = gym.make("Pendulum-v1").unwrapped
     env.reset(seed=0)
     return env
+
+
+def bench_spec(key: str) -> Spec:
+    """The Spec of the env whose cases are `key` in the benchmarks' tables (its ``bench``): the tables name an env
+    by that key and read its id from the spec, so that the env's id is written in one place."""
+    found = [spec for spec in registry.values() if spec.bench == key]
+    if len(found) != 1:
+        raise KeyError(f"bench key {key!r} names {len(found)} registered specs, not 1")
+    return found[0]
+
+
+def env_id(key: str) -> str:
+    """The id of the env whose cases are `key` (`bench_spec`)."""
+    return bench_spec(key).id
 
 
 def describe(integrator: str, options: dict) -> str:

@@ -1,4 +1,4 @@
-"""Work–precision of ActiveConstraint-v0's steppers on systems given by their Lagrangian: the measurement behind its
+"""Work–precision of ActiveConstraintEnv's steppers on systems given by their Lagrangian: the measurement behind its
 default (DOP853 at rtol 1e-10).
 
     python -m connenv.bench generic [--quick]

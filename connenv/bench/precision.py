@@ -4,57 +4,59 @@ and the drift of the invariant, one chart per env (docs/precision/<env>_precisio
     python -m connenv.bench precision [--env swing skier ball kapitza shell bead connection coin beanie coin_surface
                                        coin_plane tube snake sleigh cat rigid_body] [--quick]
 
-Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`):
+Each env runs the same episodes under every candidate stepper (`connenv.bench.common.candidates`). A case's key
+is the ``bench`` of its env's Spec, from which its id is read (`connenv.bench.common.bench_spec`); coin_plane is
+the coin_surface env's:
 
-- swing: Swing-v0 from rest at θ₀ = π/2, 500 steps (25 s) at action +1 (r = r_max); reference: the closed-form
+- swing: from rest at θ₀ = π/2, 500 steps (25 s) at action +1 (r = r_max); reference: the closed-form
   flow. State error: |θ − θ_ref| at the end (rad). Invariant: max |E(t) − E(0)| / (m g r), E conserved at held r.
-- skier: Skier-v0 from rest at x₀ = 5.5 m, near the rim, standing (h = h_max), 500 steps at action +1;
+- skier: from rest at x₀ = 5.5 m, near the rim, standing (h = h_max), 500 steps at action +1;
   reference: DOP853 at rtol 1e-13, atol 1e-15. State error: |x − x_ref| at the end (m). Invariant:
   max |E(t) − E(0)| / (m g H), H = 3 m the valley's depth.
-- ball: RollingBall-v0 from R = I, 200 steps (one episode) of seeded random velocities; reference: the exact
+- ball: from R = I, 200 steps (one episode) of seeded random velocities; reference: the exact
   step, exact for every piecewise-constant velocity. State error: the angle between R and R_ref at the end
   (rad). Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
-- kapitza: KapitzaPendulum-v0 (dt = 0.005 s) from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt
+- kapitza: dt = 0.005 s, from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt
   with a = 0.05 m, ω = 150 rad/s (inverted is stable: a²ω² > 2 g l), each step's velocity the chord between
   samples, 400 steps (2 s); reference: the exact step. State error: |θ − θ_ref| at the end (rad). Invariant:
   the env's energy error, the change of E in the pivot's frame over the segments of constant u̇, max over the
   episode in units of m g l.
-- shell: KozlovShell-v0, 300 steps of seeded random mass positions, from rest (the reduced model, the default
+- shell: 300 steps of seeded random mass positions, from rest (the reduced model, the default
   episode) and from the body momentum (0.3, 0.1, 0.05) (the full Kirchhoff model); reference: DOP853 at rtol
   1e-13, atol 1e-15. State error: max-norm of the pose (x, y, θ) error at the end (m, rad), for each model.
   Invariant: max |S(t) − S(0)| / |S(0)| of the spatial momentum S in the full model. Besides the common
   candidates, the Magnus step (`integrator="magnus"`: the reduced model's connection; DOP853 on the full model).
-- coin: RollingCoin-v0 from the origin, 200 steps (one episode) of seeded random rates; reference: the exact
+- coin: from the origin, 200 steps (one episode) of seeded random rates; reference: the exact
   step (the chord of each arc). State error: |(x, y) − the reference's| at the end (m). Invariant: the largest
   distance of the track from the reference's over the episode (m): rolling has no conserved quantity.
-- beanie: ElroysBeanie-v0 at μ = 0.7, 200 steps of seeded random beanie speeds; reference: the exact step.
+- beanie: at μ = 0.7, 200 steps of seeded random beanie speeds; reference: the exact step.
   State error: |θ − θ_ref| at the end (rad). Invariant: the integrated momentum balance
   |(I₁ + I₂)(θ − θ₀) + I₂ (ψ − ψ₀) − μ t| / (I₁ + I₂) (rad), 0 for the flow.
-- bead: BeadOnBar-v0 from rest at r₀ = −0.5 m, θ₀ = 0, 300 steps (6 s) of the actions that a tilt law
+- bead: from rest at r₀ = −0.5 m, θ₀ = 0, 300 steps (6 s) of the actions that a tilt law
   (θ̇ = 9 (θ_d − θ), sin θ_d = (3 (r − r*) + 3 ṙ)/g, r* = 0.5 m) takes on the exact step, replayed open loop;
   reference: DOP853 at rtol 1e-13, atol 1e-15. State error: |r − r_ref| at the end (m). Invariant: none holds
   while the bar turns, so the second panel is max |r(t) − r_ref(t)| over the episode (m).
-- tube: TubeTwist-v0 from R = I, 200 steps (one episode) of seeded random bending rates; reference: the exact
+- tube: from R = I, 200 steps (one episode) of seeded random bending rates; reference: the exact
   step (one exponential per step, exact for piecewise-constant rates). State error: the angle between R and R_ref
   at the end (rad). Invariant: max ‖RᵀR − I‖ over the episode. Besides the common candidates, the builder's Magnus
   step.
-- cat: FallingCat-v0 from R = I, straight, 200 steps of seeded random bend velocities (fall_time 2 s, so that the
+- cat: from R = I, straight, 200 steps of seeded random bend velocities (fall_time 2 s, so that the
   cat does not land), the bend stopping at max_bend; reference: the exact step (Gauss–Legendre on the roll's
   integral, exact to rounding). State error: the angle between g and g_ref at the end (rad). Invariant: max
   ‖gᵀg − I‖ over the episode. Besides the common candidates, the builder's Magnus step.
-- snake: SnakeSwimmer-v0, 300 steps of seeded random joint commands, from rest (the reduced model) and from the
+- snake: 300 steps of seeded random joint commands, from rest (the reduced model) and from the
   body momentum (0.3, 0.1, 0.05) (the full model), as the shell's; the same reference, errors and invariant. Of the
   Magnus step only the default (atol 1e-12; DOP853 at rtol 1e-10 on the full model): the rule it fixes for the
   reduced model is the same over the usual range of atol (docs/physics/SnakeSwimmer.md, measured by this bench), so
   rows of other atol would differ only in DOP853's atol on the full model.
-- connection: Connection-v0 on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
+- connection: on SO(3), body frame, the non-flat connection `twisted`, 300 steps of seeded random
   shape velocities within [-1, 1]²; reference: DOP853 at rtol 1e-13 on ġ = g ξ^ in coordinates. State error:
   max |R − R_ref| over the entries at the end. Invariant: max ‖RᵀR − I‖ over the episode (orthogonality).
-- coin_surface: RollingCoinSurface-v0 on its default hill, from rest at the start with θ₀ = 0.3, 200 steps (10 s) of
+- coin_surface: on its default hill, from rest at the start with θ₀ = 0.3, 200 steps (10 s) of
   seeded random steering rates; reference: DOP853 at rtol 1e-13, atol 1e-15. State error: |(x, y) − (x, y)_ref| at
   the end (m). Invariant: max |E − E(0)| / (m g Δz), Δz the arena's height range (the env's scale).
 - coin_plane: the same on the plane z = −0.25 y (surface="plane"); reference: the exact step.
-- sleigh: ChaplyginSleigh-v0 from v = 1 m/s, ω = 1 rad/s, 300 steps of seeded random mass velocities in the box
+- sleigh: from v = 1 m/s, ω = 1 rad/s, 300 steps of seeded random mass velocities in the box
   (the mass stops at its walls, where it is held), then 300 steps from v = 1 m/s, ω = 2 rad/s with the mass held
   at u = (0.1, 0.2) m; reference: DOP853 at rtol 1e-13, atol 1e-15. State error: max-norm of the (x, y, φ) error
   at the end (m, rad), for each episode. Invariant: the env's energy error, the change of the kinetic energy T over
@@ -79,7 +81,17 @@ import numpy as np
 from connenv import cli
 from connenv.bench import rigid_body
 from connenv.bench.charts import DIVERGED, Case, Episode, pareto, plot_precision, write_precision_csv
-from connenv.bench.common import OUTPUT, beanie_balance, candidates, describe, header, make_env, pendulum, run
+from connenv.bench.common import (
+    OUTPUT,
+    beanie_balance,
+    candidates,
+    describe,
+    env_id,
+    header,
+    make_env,
+    pendulum,
+    run,
+)
 from connenv.systems.rolling_ball import rotation_angle
 
 TIGHT = ("dop853", {"rtol": 1e-13, "atol": 1e-15})
@@ -143,7 +155,7 @@ def _coin_track(dt, steps):
     """(x, y) after each of the first `steps` steps of the coin case's episode, by the exact step."""
     key = (dt, "coin")
     if key not in _TRACKS or len(_TRACKS[key]) < steps:
-        env = make_env("connenv/RollingCoin-v0", *EXACT)
+        env = make_env(env_id("coin"), *EXACT)
         env.reset(seed=0, options={"state": {}})
         track = [env.step(a)[4]["state"] for a in uniform(2)(max(steps, 200), np.random.default_rng(0))]
         _TRACKS[key] = np.array([(s["x"], s["y"]) for s in track])
@@ -155,8 +167,8 @@ BEAD_EPISODE = {"state": {"r": BEAD_START}, "target": BEAD_TARGET}
 
 
 def tilt_actions(steps, rng):
-    """The actions of the tilt law on BeadOnBar-v0's exact step (see the module), as a fixed sequence."""
-    env = make_env("connenv/BeadOnBar-v0", None, {})
+    """The actions of the tilt law on the bead's exact step (see the module), as a fixed sequence."""
+    env = make_env(env_id("bead"), None, {})
     info = env.reset(seed=0, options=BEAD_EPISODE)[1]
     actions = []
     for _ in range(steps):
@@ -172,7 +184,7 @@ def tilt_actions(steps, rng):
 def bead_reference():
     """r(t) after every step of the bead's whole episode under the reference stepper (a shortened episode's
     actions are the first of the whole one's)."""
-    env = make_env("connenv/BeadOnBar-v0", *TIGHT)
+    env = make_env(env_id("bead"), *TIGHT)
     trajectory = []
     actions = tilt_actions(BEAD_STEPS, None)
     run(env, BEAD_EPISODE, actions, measure=lambda env, info: trajectory.append(info["state"]["r"]))
@@ -185,7 +197,7 @@ def bead_drift(env, info, start):
 
 CASES = {
     "swing": Case(
-        "connenv/Swing-v0",
+        env_id("swing"),
         EXACT,
         (Episode("θ₀=π/2", {"state": {"theta": math.pi / 2, "theta_dot": 0.0}}, held([1.0]), 500),),
         lambda env, ref: abs(env.state.y[0] - ref.state.y[0]),
@@ -194,7 +206,7 @@ CASES = {
         "rad",
     ),
     "skier": Case(
-        "connenv/Skier-v0",
+        env_id("skier"),
         TIGHT,
         (Episode("x₀=5.5", {"state": {"x": 5.5, "h": 1.0}}, held([1.0]), 500),),
         lambda env, ref: abs(env.state.y[0] - ref.state.y[0]),
@@ -208,7 +220,7 @@ CASES = {
         ),
     ),
     "ball": Case(
-        "connenv/RollingBall-v0",
+        env_id("ball"),
         EXACT,
         (Episode("random v", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
         lambda env, ref: float(rotation_angle(env.state.R @ ref.state.R.T)),
@@ -217,7 +229,7 @@ CASES = {
         "rad",
     ),
     "kapitza": Case(
-        "connenv/KapitzaPendulum-v0",
+        env_id("kapitza"),
         EXACT,
         (
             Episode(
@@ -233,7 +245,7 @@ CASES = {
         "rad",
     ),
     "shell": Case(
-        "connenv/KozlovShell-v0",
+        env_id("shell"),
         TIGHT,
         (
             Episode("reduced", {"state": {}}, uniform(2), 300),
@@ -246,7 +258,7 @@ CASES = {
         steppers=MAGNUS,
     ),
     "coin": Case(
-        "connenv/RollingCoin-v0",
+        env_id("coin"),
         EXACT,
         (Episode("random rates", {"state": {}}, uniform(2), 200),),
         lambda env, ref: float(np.hypot(*(env.state.g - ref.state.g))),
@@ -256,7 +268,7 @@ CASES = {
         steppers=MAGNUS,
     ),
     "beanie": Case(
-        "connenv/ElroysBeanie-v0",
+        env_id("beanie"),
         EXACT,
         (Episode("μ=0.7", {"state": {"momentum": 0.7}}, uniform(1), 200),),
         lambda env, ref: abs(env.state.g[0] - ref.state.g[0]),
@@ -266,7 +278,7 @@ CASES = {
         steppers=MAGNUS,
     ),
     "bead": Case(
-        "connenv/BeadOnBar-v0",
+        env_id("bead"),
         TIGHT,
         (Episode("tilt law", BEAD_EPISODE, tilt_actions, BEAD_STEPS),),
         lambda env, ref: abs(env.state.y[0] - ref.state.y[0]),
@@ -275,7 +287,7 @@ CASES = {
         "m",
     ),
     "tube": Case(
-        "connenv/TubeTwist-v0",
+        env_id("tube"),
         EXACT,
         (Episode("random κ", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
         lambda env, ref: float(rotation_angle(env.state.g.reshape(3, 3) @ ref.state.g.reshape(3, 3).T)),
@@ -285,7 +297,7 @@ CASES = {
         steppers=MAGNUS,
     ),
     "cat": Case(
-        "connenv/FallingCat-v0",
+        env_id("cat"),
         EXACT,
         (Episode("random ṡ", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
         lambda env, ref: float(rotation_angle(env.state.g.reshape(3, 3) @ ref.state.g.reshape(3, 3).T)),
@@ -296,7 +308,7 @@ CASES = {
         MAGNUS,
     ),
     "snake": Case(
-        "connenv/SnakeSwimmer-v0",
+        env_id("snake"),
         TIGHT,
         (
             Episode("reduced", {"state": {}}, uniform(2), 300),
@@ -309,7 +321,7 @@ CASES = {
         steppers=(("magnus", {}),),  # one row: other atol fix the same rule (module docstring)
     ),
     "connection": Case(
-        "connenv/Connection-v0",
+        env_id("connection"),
         TIGHT,
         (Episode("random ṡ", {}, uniform(2), 300),),
         lambda env, ref: float(np.max(np.abs(env.state.g - ref.state.g))),
@@ -320,7 +332,7 @@ CASES = {
         MAGNUS,
     ),
     "coin_surface": Case(
-        "connenv/RollingCoinSurface-v0",
+        env_id("coin_surface"),
         TIGHT,
         (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
         lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
@@ -329,7 +341,7 @@ CASES = {
         "m",
     ),
     "coin_plane": Case(
-        "connenv/RollingCoinSurface-v0",
+        env_id("coin_surface"),
         EXACT,
         (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
         lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
@@ -339,7 +351,7 @@ CASES = {
         {"surface": "plane"},
     ),
     "sleigh": Case(
-        "connenv/ChaplyginSleigh-v0",
+        env_id("sleigh"),
         TIGHT,
         (
             Episode("random u̇", {"state": {"v": 1.0, "omega": 1.0}, "target": (100.0, 0.0)}, uniform(2), 300),

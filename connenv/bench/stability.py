@@ -7,7 +7,8 @@ breaks steppers, one curve per method (docs/precision/<env>_stability.png and .c
 For every parameter value and method, dt runs down the grid 1, 10^(-1/4), …, 10^-4 s (to 10^-3 with --quick;
 from 0.25 s down for the shell, whose gait needs 8 steps per loop) and the first dt at which a whole episode
 stays bounded is the method's largest stable dt: the env raised no
-StepperError and the invariant's error stayed within the bound below at every step. At constant control:
+StepperError and the invariant's error stayed within the bound below at every step. A map's key is the ``bench``
+of its env's Spec, from which its id is read (`connenv.bench.common.bench_spec`). At constant control:
 
 - swing: r held at r_min (action −1) from θ₀ = 1 rad at rest, 10 s; parameter r_min (ω = √(g/r_min));
   bounded: |E − E(0)| ≤ 0.1 m g r_min.
@@ -15,15 +16,15 @@ StepperError and the invariant's error stayed within the bound below at every st
   min(1 − κ h_max) over the trail, set by h_max = (1 − λ)/κ_max; bounded: |E − E(0)| ≤ 0.1 m g H.
 - ball: seeded random velocities for N steps whatever dt; parameter N, the horizon; bounded: ‖RᵀR − I‖ ≤ 1e-6
   (the env's own bound: past it the env raises).
-- tube: TubeTwist-v0 bent at seeded random rates for 1 s whatever dt; parameter max_bend_rate (the bend per step
+- tube: bent at seeded random rates for 1 s whatever dt; parameter max_bend_rate (the bend per step
   is max_bend_rate · dt); bounded: ‖RᵀR − I‖ ≤ 1e-9 (the env's own bound: past it the env raises).
-- cat: FallingCat-v0 from R = I bent at s = (0.5, 0), its bend swept round the circle β = 0.5 at the full speed
+- cat: from R = I bent at s = (0.5, 0), its bend swept round the circle β = 0.5 at the full speed
   (ṡ = 6 rad/s, γ̇ = 12 rad/s), each step's velocity the chord between samples of the circle, 1 s whatever dt
   (fall_time 100 s); parameter J/I (axial_inertia, transverse_inertia 0.01): the roll per radian of sweep near the
   straight cat grows as (2I − J)/(8J), and a long step's chord cuts close to it; bounded: ‖gᵀg − I‖ ≤ 1e-9 (the
   env's own bound: past it the env raises). Every method turns the cat about its spine only; what breaks is g's
   orthogonality.
-- kapitza: KapitzaPendulum-v0 from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt, a = 0.05 m,
+- kapitza: from θ₀ = π + 0.1, the pivot vibrated vertically, u₂ = a cos ωt, a = 0.05 m,
   each step's velocity the chord between samples (v_max = a ω), 2 s; parameter ω; bounded: the env's energy
   error (in the pivot's frame, on segments of constant u̇) within 0.1 m g l (the env's own bound). The grid
   starts at π/(2ω), 4 steps per period: a coarser dt samples another control. Inverted is stable for
@@ -32,17 +33,17 @@ StepperError and the invariant's error stayed within the bound below at every st
   u2_max sin 2πt/T), T = 2 s, for 10 s; parameter the mass ratio m/(M + λ₁), set by m; bounded: the spatial
   momentum within 0.1 of its norm (the env's own bound). The reduced model is not mapped: its motion is
   geometric, so a step's error depends on the path of u over the step and not on dt.
-- coin: RollingCoin-v0 steered and rolled at full rates (action (1, 1)) from the origin, 10 s: the contact point
+- coin: steered and rolled at full rates (action (1, 1)) from the origin, 10 s: the contact point
   runs round a circle of radius ρ = R φ̇/θ̇ at θ̇ = max_steer_rate; parameter max_steer_rate (the circle's angular
   rate); bounded: within 0.1 ρ of the exact circle at every step. The exact step is the circle's chord.
-- beanie: ElroysBeanie-v0 at μ = 0.7 with seeded random beanie speeds, 10 s; parameter I₂/I₁ (beanie_inertia,
+- beanie: at μ = 0.7 with seeded random beanie speeds, 10 s; parameter I₂/I₁ (beanie_inertia,
   body_inertia 1); bounded: the integrated momentum balance within 1e-9 rad. θ̇ is constant over a step of
   constant ψ̇, so every method's step is exact and the map is flat: every method holds at the top of the grid.
-- coin_surface: RollingCoinSurface-v0 on the bowl z = (x² + y²)/(2ρ), from rest at (0, −1) heading along y
+- coin_surface: on the bowl z = (x² + y²)/(2ρ), from rest at (0, −1) heading along y
   (action 0, θ = 0 held), 10 s: the coin oscillates through the bottom, ÿ = −(2 g/(3ρ)) y, harmonic at
   ω = √(2 g/(3ρ)); parameter the bowl's radius ρ; bounded: |E − E(0)| ≤ 0.1 E(0) (E(0) = m g/(2ρ), the
   bottom at E = 0).
-- bead: BeadOnBar-v0 on the horizontal bar (g = 0), spun at constant θ̇ = omega_max (action +1) from r₀ = 0.5 m
+- bead: on the horizontal bar (g = 0), spun at constant θ̇ = omega_max (action +1) from r₀ = 0.5 m
   at rest, for six e-folds of the bead's growth (6/omega_max s: r grows 200-fold), on a bar long enough to hold
   it; parameter omega_max, the rate of that growth; bounded: r within 0.1 of the closed form r₀ cosh ωt (ω =
   omega_max; g = 0, from rest) at every step. The grid starts at half the episode (ω dt = 3): in one step a method
@@ -52,7 +53,7 @@ StepperError and the invariant's error stayed within the bound below at every st
   sin 2πt/T), T = 2 s, for 10 s; parameter the links' aspect ratio a/b (a = 0.5 m), which sets the ratio of the
   added masses across and along a link, λ₂/λ₁ = (a/b)²; bounded: the spatial momentum within 0.1 of its norm (the
   env's own bound). The reduced model is not mapped, as the shell's.
-- sleigh: ChaplyginSleigh-v0 from v = 1 m/s, the mass at C driven to the box's corner at max_mass_speed (action
+- sleigh: from v = 1 m/s, the mass at C driven to the box's corner at max_mass_speed (action
   (1, 1) held: it stops at the walls, whatever dt), then held there, 10 s; parameter max_mass_speed (the sleigh
   is not fit for jumps: the move is a kick that grows with the speed, and so do the rates of the motion after it);
   bounded: the env's energy error, the change of T while the mass is held, within 1e-2 (1 + T) (the env's own
@@ -75,7 +76,7 @@ import numpy as np
 from connenv import cli
 from connenv.bench import rigid_body
 from connenv.bench.charts import StabilityMap, cell, plot_stability, top_of, write_stability_csv
-from connenv.bench.common import OUTPUT, beanie_balance, describe, header, make_env
+from connenv.bench.common import OUTPUT, beanie_balance, describe, env_id, header, make_env
 from connenv.core import StepperError
 
 BOUND = 0.1  # relative invariant error that counts as bounded (the ball: the env's 1e-6 off SO(3))
@@ -182,7 +183,7 @@ def random_speed(value, t, dt, rng):
     return rng.uniform(-1.0, 1.0, 1).astype(np.float32)
 MAPS = {
     "coin": StabilityMap(
-        "connenv/RollingCoin-v0",
+        env_id("coin"),
         "max_steer_rate θ̇ (rad/s)",
         (1.0, 10.0, 100.0, 1000.0),
         lambda omega: {"max_steer_rate": omega},
@@ -193,7 +194,7 @@ MAPS = {
         (("euler", {}), ("rk4", {}), ("magnus", {}), ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("exact", {})),
     ),
     "beanie": StabilityMap(
-        "connenv/ElroysBeanie-v0",
+        env_id("beanie"),
         "I₂/I₁",
         (0.1, 0.25, 1.0, 4.0),
         lambda ratio: {"beanie_inertia": ratio, "max_beanie_speed": max(4 * math.pi, 1.2 / ratio)},
@@ -204,7 +205,7 @@ MAPS = {
         (("euler", {}), ("rk4", {}), ("magnus", {}), ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("exact", {})),
     ),
     "swing": StabilityMap(
-        "connenv/Swing-v0",
+        env_id("swing"),
         "r_min (m)",
         (0.01, 0.03, 0.1, 0.3, 1.0, 1.6),
         lambda r: {"r_min": r, "r_max": 2.0},
@@ -215,7 +216,7 @@ MAPS = {
         (*FIXED, ("exact", {})),
     ),
     "skier": StabilityMap(
-        "connenv/Skier-v0",
+        env_id("skier"),
         "min (1 − κ h_max) on the trail",
         (0.6, 0.3, 0.1, 0.03, 0.01),
         lambda lever: {"h_max": (1.0 - lever) / VALLEY_KAPPA_MAX},
@@ -226,7 +227,7 @@ MAPS = {
         (*FIXED, ("rk8", {}), ("dop853", {"rtol": 1e-8, "atol": 1e-10}), ("rk8_energy", {})),  # the default: ⌈dt/0.05⌉
     ),
     "ball": StabilityMap(
-        "connenv/RollingBall-v0",
+        env_id("ball"),
         "horizon N (steps)",
         (10, 100, 1000, 10000),
         lambda n: {},
@@ -244,7 +245,7 @@ MAPS = {
         ),
     ),
     "tube": StabilityMap(
-        "connenv/TubeTwist-v0",
+        env_id("tube"),
         "max_bend_rate (rad/s)",
         (0.1, 1.0, 10.0, 100.0),
         lambda rate: {"max_bend_rate": rate},
@@ -255,7 +256,7 @@ MAPS = {
         SO3_METHODS,
     ),
     "cat": StabilityMap(
-        "connenv/FallingCat-v0",
+        env_id("cat"),
         "J/I",
         (0.3, 0.1, 0.03, 0.01, 0.003),
         lambda ratio: {"axial_inertia": 0.01 * ratio, "fall_time": 100.0},
@@ -266,7 +267,7 @@ MAPS = {
         SO3_METHODS,
     ),
     "kapitza": StabilityMap(
-        "connenv/KapitzaPendulum-v0",
+        env_id("kapitza"),
         "vibration frequency ω (rad/s)",
         (100.0, 200.0, 400.0, 800.0, 1600.0),
         lambda omega: {"v_max": KAPITZA_AMPLITUDE * omega},
@@ -278,7 +279,7 @@ MAPS = {
         largest=lambda omega: math.pi / (2 * omega),  # 4 steps per period: a coarser dt would sample another control
     ),
     "shell": StabilityMap(
-        "connenv/KozlovShell-v0",
+        env_id("shell"),
         "mass ratio m/(M + λ₁)",
         (0.1, 0.3, 1.0, 3.0, 10.0, 30.0),
         lambda ratio: {"mass": ratio * (1.0 + math.pi * 0.25)},  # M = 1, λ₁ = ρπb² = π/4
@@ -290,7 +291,7 @@ MAPS = {
         largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
     ),
     "coin_surface": StabilityMap(
-        "connenv/RollingCoinSurface-v0",
+        env_id("coin_surface"),
         "bowl radius ρ (m)",
         (10.0, 1.0, 0.1, 0.01, 0.001),
         lambda rho: {"surface": "bowl", "surface_params": {"radius": rho}},
@@ -302,7 +303,7 @@ MAPS = {
         largest=lambda rho: 0.5,  # the env's longest dt
     ),
     "bead": StabilityMap(
-        "connenv/BeadOnBar-v0",
+        env_id("bead"),
         "spin rate omega_max (rad/s)",
         (1.0, 3.0, 10.0, 30.0, 100.0, 300.0),
         lambda omega: {"omega_max": omega, "g": 0.0, "half_length": 100.0},
@@ -314,7 +315,7 @@ MAPS = {
         largest=lambda omega: BEAD_E_FOLDS / (2.0 * omega),  # at least 2 steps: one may land near by chance
     ),
     "snake": StabilityMap(
-        "connenv/SnakeSwimmer-v0",
+        env_id("snake"),
         "aspect ratio a/b of the links",
         (2.0, 5.0, 10.0, 30.0, 100.0),
         lambda ratio: {"b": 0.5 / ratio},
@@ -326,7 +327,7 @@ MAPS = {
         largest=lambda ratio: 0.25,  # 8 steps per loop of the gait: a coarser dt would sample another control
     ),
     "sleigh": StabilityMap(
-        "connenv/ChaplyginSleigh-v0",
+        env_id("sleigh"),
         "max_mass_speed (m/s)",
         (0.5, 4.0, 32.0, 256.0, 2048.0),
         lambda speed: {"max_mass_speed": speed},

@@ -6,16 +6,16 @@
 supersede it for choosing; it stays for the tables in docs/steppers.md.
 
 Every candidate runs a 1000-step episode at constant control (action +1 held)
-from two starts (the first only with --quick):
+from two starts (the first only with --quick); each env by the ``bench`` of its Spec:
 
-- Swing-v0: r = r_max = 2 m, from θ₀ = π/2, the task's target amplitude, and
+- swing: r = r_max = 2 m, from θ₀ = π/2, the task's target amplitude, and
   θ₀ = 3.0, near the top, where the flow is close to the separatrix. Energy
   scale m g r: E runs from −m g r (at rest at the bottom) to m g r (at the top),
   and E(0) itself is 0 at θ₀ = π/2, so a drift relative to E(0) would be meaningless.
-- Skier-v0: standing, h = h_max = 1 m, on the valley from x₀ = 2.0 (the far end
+- skier: standing, h = h_max = 1 m, on the valley from x₀ = 2.0 (the far end
   of the default starts) and x₀ = 5.5, near the rim (the most energy an episode
   holds before success). Energy scale m g H, H = 3 m the valley's depth.
-- RollingBall-v0: a straight roll at v = (v_max, 0) from R₀ = I and from
+- ball: a straight roll at v = (v_max, 0) from R₀ = I and from
   R₀ = Rx(2), whose closed form is R(t) = Ry(v_max t/ρ) R₀.
 
 For the swing and the skier the drift is the energy's, max_t |E(t) − E(0)| /
@@ -49,6 +49,7 @@ from scipy.spatial.transform import Rotation
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli
+from connenv.bench.common import env_id
 from connenv.core.integrators import INTEGRATORS
 from connenv.systems.rolling_ball import rotation_angle
 
@@ -78,21 +79,21 @@ def straight_roll_error(env, info0, info):
 
 BENCHES = {
     "swing": Bench(
-        "connenv/Swing-v0",
+        env_id("swing"),
         {"θ₀=π/2": {"theta": math.pi / 2, "theta_dot": 0.0}, "θ₀=3.0": {"theta": 3.0, "theta_dot": 0.0}},
         "|E(t) − E(0)| / (m g r)",
         energy_drift(lambda env: env.system.mass * env.system.g * env.state.r),
         "r = r_max = 2 m",
     ),
     "skier": Bench(
-        "connenv/Skier-v0",
+        env_id("skier"),
         {"x₀=2.0": {"x": 2.0, "h": 1.0}, "x₀=5.5": {"x": 5.5, "h": 1.0}},
         "|E(t) − E(0)| / (m g H)",
         energy_drift(lambda env: env.system.mass * env.system.g * env.trail.H),
         "h = h_max = 1 m on the valley",
     ),
     "ball": Bench(
-        "connenv/RollingBall-v0",
+        env_id("ball"),
         {"R₀=I": {"R": np.eye(3)}, "R₀=Rx(2)": {"R": Rotation.from_rotvec([2.0, 0.0, 0.0]).as_matrix()}},
         "angle between R(t) and its closed form",
         straight_roll_error,

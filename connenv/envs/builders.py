@@ -22,6 +22,7 @@ SPECS = (
         variants=(examples.swing, examples.rotor, examples.bead),  # one of each jump class
         state_keys={"q": 1, "p": 1, "u": 1},  # examples.swing(): n = m = 1
         fast_start={"state": {"p": [1000.0]}},
+        bench="generic",
     ),
     Spec(
         "connenv/Connection-v0", ConnectionEnv, ConnectionVectorEnv, max_episode_steps=1000, dt_max=CONNECTION_DT_MAX,
