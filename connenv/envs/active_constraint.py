@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv import examples
 from connenv.core.batched import batched
 from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JumpClass, JumpFlow, MetricField, check_metric, classify, hamiltonian
@@ -24,6 +25,7 @@ from connenv.core.validation import (
     probe,
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import TaskVectorEnv
 
@@ -181,6 +183,8 @@ class ActiveConstraintEnv(TaskEnv):
     The vector env calls a task's functions row by row.
     """
 
+    name = "ActiveConstraint-v0"  # how bad make kwargs name the env
+
     def __init__(
         self,
         system=None,
@@ -218,7 +222,7 @@ class ActiveConstraintEnv(TaskEnv):
         self.jump_class = getattr(system, "jump_class", None) or classify(system, q_samples, u_samples)
         self.control = self._check_control(control)
         self.field = system if hasattr(system, "vector_field") else MetricField(system)
-        check_stepper_options("ActiveConstraint-v0", stepper_options, type(self))
+        check_stepper_options(self.name, stepper_options, type(self))
         default = "exact" if isinstance(self.field, (ExactSegment, ExactFlow)) else "dop853"
         self.stepper = make_stepper(integrator or default, self.field, **stepper_options)
         self.jump = JumpFlow(system)
@@ -446,3 +450,18 @@ class ActiveConstraintVectorEnv(TaskVectorEnv):
 
     def advance(self, s, command):
         return self.env.stepped(s, command, self.stepper, self.jump_stepper, BATCH)
+
+
+SPECS = (
+    Spec(
+        "connenv/ActiveConstraint-v0", ActiveConstraintEnv, ActiveConstraintVectorEnv, max_episode_steps=1000,
+        dt_max=DT_MAX, physics="framework.md", example=examples.swing,
+        # the swing at rest at the bottom stays there whatever its radius does: pumping grows a swing, cannot start one
+        animation_start={"state": {"q": [0.5]}},
+        play="space", space_action=-1.0,
+        variants=(examples.swing, examples.rotor, examples.bead),  # one of each jump class
+        state_keys={"q": 1, "p": 1, "u": 1},  # examples.swing(): n = m = 1
+        fast_start={"state": {"p": [1000.0]}},
+        bench="generic",
+    ),
+)

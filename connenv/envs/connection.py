@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
 
+from connenv import examples
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import FRAMES, GROUPS, Connection, ConstantConnection, ExactConnection
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
@@ -25,6 +25,7 @@ from connenv.core.validation import (
     real_array,
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import TaskVectorEnv
 
@@ -151,7 +152,7 @@ class ConnectionEnv(TaskEnv):
     calls a task's functions row by row.
     """
 
-    name = "Connection-v0"  # the id bad make kwargs are reported against
+    name = "Connection-v0"  # how bad make kwargs name the env
 
     def __init__(
         self,
@@ -325,16 +326,13 @@ class ConnectionEnv(TaskEnv):
     # -- rendering ---------------------------------------------------------------
 
     def _make_renderer(self):
-        from connenv.envs.rendering import Canvas
+        from connenv.rendering.connection import ConnectionRenderer
 
-        return Canvas(2.0, 0.0, self.render_mode, self.metadata["render_fps"])
+        fps = self.metadata["render_fps"]
+        return ConnectionRenderer(self.group.name, self.low, self.high, self.render_mode, fps, self.draw)
 
-    def _draw(self, canvas):
-        state = self.state_dict(self.state)
-        if self.draw is not None:
-            self.draw(state, canvas)
-            return canvas.show()
-        return draw_plain(canvas, self.group.name, state, self.low, self.high)
+    def _draw(self, renderer):
+        return renderer.draw(self.state_dict(self.state))
 
 
 class ConnectionVectorEnv(TaskVectorEnv):
@@ -347,35 +345,6 @@ class ConnectionVectorEnv(TaskVectorEnv):
     def advance(self, state, s_dot):
         return self.env.stepped(state, s_dot, self.stepper, BATCH)
 
-
-def draw_plain(canvas, group: str, state: dict, low, high):
-    """The body frame (x axis red, y axis green; SO3's projected on the screen's plane, z blue, with the unit
-    circle), centred on g's position for SE2 and R2, and s as bars against its bounds; the time."""
-    pg, screen = canvas.pygame, canvas.screen
-    screen.fill((255, 255, 255))
-    g = state["g"]
-    if group == "R2":
-        canvas.center_x, canvas.center_y = g
-        origin, axes = g, np.eye(2)
-    elif group == "SE2":
-        canvas.center_x, canvas.center_y = g[:2, 2]
-        origin, axes = g[:2, 2], g[:2, :2]
-    else:
-        origin, axes = np.zeros(2), g[:2, :]
-    if group == "SO3":
-        pg.draw.circle(screen, (200, 200, 200), canvas.px(0.0, 0.0), int(canvas.scale), 1)
-    for column, colour in zip(axes.T, ((204, 60, 60), (60, 160, 60), (60, 60, 204))):
-        pg.draw.line(screen, colour, canvas.px(*origin), canvas.px(*(origin + column)), 4)
-    pg.draw.circle(screen, (0, 0, 0), canvas.px(*origin), 5)
-    size = screen.get_width()
-    for i, value in enumerate(state["s"]):  # a bar per shape coordinate: its place within the bounds
-        finite = math.isfinite(low[i]) and math.isfinite(high[i])
-        fraction = (value - low[i]) / (high[i] - low[i]) if finite else 0.5 + math.atan(value) / math.pi
-        x, width = 10 + 18 * i, 12
-        pg.draw.rect(screen, (220, 220, 230), (x, size - 110, width, 100))
-        pg.draw.rect(screen, (70, 110, 160), (x, size - 10 - int(100 * fraction), width, int(100 * fraction)))
-    screen.blit(canvas.font.render(f"t = {state['t']:5.2f}   s = {np.round(state['s'], 2)}", True, (0, 0, 0)), (10, 10))
-    return canvas.show()
 
 
 def _check_constant(connection, group, k):
@@ -424,3 +393,15 @@ def _check_exact_segment(exact_segment, group, s, dt, speed):
         name = f"exact_segment={exact_segment!r} at g = identity, s={s}, ṡ={s_dot}, τ={dt}"
         check_returned(name, probe(name, exact_segment, identity.copy(), s.copy(), s_dot, dt), identity.shape, expected)
     return exact_segment
+
+
+SPECS = (
+    Spec(
+        "connenv/Connection-v0", ConnectionEnv, ConnectionVectorEnv, max_episode_steps=1000, dt_max=DT_MAX,
+        physics="connections.md", example=examples.beanie,
+        variants=(examples.beanie, examples.rolling_ball),  # a flat and a curved connection
+        state_keys={"s": 1},  # examples.beanie(): k = 1
+        fast_start={"state": {"s": [1000.0]}},
+        bench="connection",
+    ),
+)
