@@ -257,17 +257,19 @@ def collect(envs: list[str], algos: list[str], runs: Path = RUNS, seeds=SEEDS):
     wall time of every seed into agents/pretrained/runs.json, every seed's periodic evaluations into
     docs/baselines/curves.csv."""
     record_path, curves_path = PRETRAINED / "runs.json", DOCS / "curves.csv"
-    record = json.loads(record_path.read_text()) if record_path.is_file() else {}
-    rows = []
+    read = lambda: json.loads(record_path.read_text()) if record_path.is_file() else {}  # noqa: E731
+    collected = {}
+    for env_id in envs:
+        for algo in algos:
+            collected[env_id, algo] = collect_pair(env_id, algo, read().get(env_id, {}).get(algo), runs, seeds)
+            print(f"{short(env_id)} {algo}: pretrained seed {collected[env_id, algo][0]['pretrained_seed']}", flush=True)
+    record, rows = read(), []  # read after the evaluations, which take minutes: another collect may have written
     if curves_path.is_file():
         with curves_path.open() as file:
             rows = list(csv.DictReader(file))
-    for env_id in envs:
-        for algo in algos:
-            entry, pair_rows = collect_pair(env_id, algo, record.get(env_id, {}).get(algo), runs, seeds)
-            record.setdefault(env_id, {})[algo] = entry
-            rows = [row for row in rows if (row["env"], row["algo"]) != (env_id, algo)] + pair_rows
-            print(f"{short(env_id)} {algo}: pretrained seed {entry['pretrained_seed']}", flush=True)
+    for (env_id, algo), (entry, pair_rows) in collected.items():
+        record.setdefault(env_id, {})[algo] = entry
+        rows = [row for row in rows if (row["env"], row["algo"]) != (env_id, algo)] + pair_rows
     record_path.write_text(json.dumps(record, indent=1, sort_keys=True))
     DOCS.mkdir(parents=True, exist_ok=True)
     with curves_path.open("w", newline="") as file:
