@@ -14,7 +14,8 @@ checkpoint, and the other runs go on; a run folder that cannot be resumed (other
 yet) is moved aside to {folder}.{date-time} and the run trained anew. PPO trains on the native vector envs
 (``--vector-env``), SAC on one env.
 ``collect`` picks, for each (env, algo), the seed whose best model returns most on EPISODES selection episodes (reset
-with seeds SELECTION_SEED + i), copies its best_model.zip with the VecNormalize statistics it was evaluated with to agents/pretrained/{env}_{algo}/, records
+with seeds SELECTION_SEED + i), copies its best_model.zip with the VecNormalize statistics it was evaluated with to
+agents/pretrained/{env}_{algo}/, records
 the training steps and wall time of every seed in agents/pretrained/runs.json and writes the periodic evaluations
 of all seeds to docs/baselines/curves.csv. ``table`` evaluates random, each analytic controller and each pretrained
 model on the same 100 episodes (seeds 0..99) with agents.evaluate, writes docs/baselines/results.{json,md} and
@@ -257,13 +258,16 @@ def collect(envs: list[str], algos: list[str], runs: Path = RUNS, seeds=SEEDS):
     wall time of every seed into agents/pretrained/runs.json, every seed's periodic evaluations into
     docs/baselines/curves.csv."""
     record_path, curves_path = PRETRAINED / "runs.json", DOCS / "curves.csv"
-    read = lambda: json.loads(record_path.read_text()) if record_path.is_file() else {}  # noqa: E731
+    shipped = json.loads(record_path.read_text()) if record_path.is_file() else {}
     collected = {}
     for env_id in envs:
         for algo in algos:
-            collected[env_id, algo] = collect_pair(env_id, algo, read().get(env_id, {}).get(algo), runs, seeds)
-            print(f"{short(env_id)} {algo}: pretrained seed {collected[env_id, algo][0]['pretrained_seed']}", flush=True)
-    record, rows = read(), []  # read after the evaluations, which take minutes: another collect may have written
+            collected[env_id, algo] = collect_pair(env_id, algo, shipped.get(env_id, {}).get(algo), runs, seeds)
+            print(
+                f"{short(env_id)} {algo}: pretrained seed {collected[env_id, algo][0]['pretrained_seed']}", flush=True
+            )
+    # read again after the evaluations, which take minutes: another collect may have written meanwhile
+    record, rows = json.loads(record_path.read_text()) if record_path.is_file() else {}, []
     if curves_path.is_file():
         with curves_path.open() as file:
             rows = list(csv.DictReader(file))
@@ -370,7 +374,7 @@ def training_cell(entry: dict) -> str:
 
 def format_results(reports: list[dict]) -> str:
     """One markdown table: per env, random, the analytic controllers and the pretrained models (each the best seed
-    of its pair, by periodic evaluation)."""
+    of its pair on the selection episodes)."""
     lines = [
         "| env | policy | training (per seed) | success | return | physical measure |",
         "|---|---|---|---|---|---|",
@@ -497,7 +501,10 @@ def unseen_env(env_id: str, algos: list[str], runs: Path, pretrained: bool) -> d
     """unseen.json's entry of an env: random's and the analytic controller's episodes, and the algorithms' runs
     (under "runs") or shipped models (under "pretrained {version}", the release that shipped them)."""
     analytic = next(iter(CONTROLLERS[env_id]))
-    entry = {"random": episodes_record(env_id, "random"), "analytic": {"name": analytic, **episodes_record(env_id, analytic)}}
+    entry = {
+        "random": episodes_record(env_id, "random"),
+        "analytic": {"name": analytic, **episodes_record(env_id, analytic)},
+    }
     if pretrained:
         entry[f"pretrained {connenv.__version__}"] = shipped_records(env_id, algos)
     else:
