@@ -275,7 +275,8 @@ class BestStatsExperimentManager(ExperimentManager):
 
     def resume(self, model, steps: int):
         """The model of the checkpoint at `steps`, on model's env, with its VecNormalize statistics, its replay buffer
-        and the periodic evaluations up to it."""
+        and the periodic evaluations up to it, the next due where the run never stopped would have made it (SB3's
+        EvalCallback counts its calls, one per step of the vector env, from the start of the run)."""
         path = Path(self.save_path) / "checkpoints"
         resumed = type(model).load(path / f"rl_model_{steps}_steps.zip", env=model.get_env(), device=model.device)
         if (path / f"rl_model_replay_buffer_{steps}_steps.pkl").is_file():
@@ -286,6 +287,8 @@ class BestStatsExperimentManager(ExperimentManager):
             normalize.obs_rms, normalize.ret_rms = saved.obs_rms, saved.ret_rms
         evaluations = Path(self.save_path) / "evaluations.npz"
         for callback in self.callbacks:
+            if isinstance(callback, EvalCallback):
+                callback.n_calls = steps // resumed.get_env().num_envs
             if isinstance(callback, EvalCallback) and evaluations.is_file():
                 kept = np.load(evaluations)["timesteps"] <= steps
                 data = {key: value[kept] for key, value in np.load(evaluations).items()}

@@ -102,6 +102,8 @@ def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(r
     assert [json.loads((folder / "results.json").read_text())["timesteps"] for folder in folders] == [2 * ROLLOUT] * 2
     periodic = np.load(folders[0] / "evaluations.npz")  # the evaluations before the checkpoint kept, successes too
     assert len(periodic["successes"]) == len(periodic["timesteps"]) == 2
+    never_stopped = np.load(folders[1] / "evaluations.npz")["timesteps"]
+    assert periodic["timesteps"].tolist() == never_stopped.tolist()  # the resumed run evaluates on the same steps
 
 
 def test_a_sampled_configuration_becomes_rl_zoo3_hyperparameters():
