@@ -327,10 +327,7 @@ class ActiveConstraintEnv(TaskEnv):
         segments, u_end, _ = cut(u, u_dot, low, high, self.dt)
         return None, segments, u_end
 
-    def advance(self, s, command):
-        return self.stepped(s, command, self.stepper, JUMP_STEPPER)
-
-    def stepped(self, s, command, stepper, jump_stepper, ops=SCALAR):
+    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
         """The state after a step under the command, by these steppers of the segments and of a fit system's jump:
         the single env's step (ops=SCALAR), and the vector env's over its rows (its batched steppers, ops=BATCH)."""
         delta, segments, u_end = self.segments(s.u, command, ops)
@@ -449,7 +446,7 @@ class ActiveConstraintVectorEnv(TaskVectorEnv):
         self.jump_stepper = batched(JUMP_STEPPER)
 
     def advance(self, s, command):
-        return self.env.stepped(s, command, self.stepper, self.jump_stepper, BATCH)
+        return self.env.advance(s, command, self.stepper, BATCH, self.jump_stepper)
 
 
 SPECS = (

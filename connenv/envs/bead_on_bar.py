@@ -19,12 +19,14 @@ from connenv.core.validation import (
 )
 from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env's too
     DT_MAX,
+    JUMP_STEPPER,
     ActiveConstraintEnv,
     ActiveConstraintState,
     ActiveConstraintVectorEnv,
 )
-from connenv.envs.base import BATCH, SCALAR
+from connenv.envs.base import SCALAR
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 
 OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
 START_REACH = 0.8  # |r₀| ≤ 0.8 L, and so |r*| (g > 0)
@@ -227,8 +229,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         r = rng.uniform(*OUTWARD_START)
         return L * side * r, L * side * (r + rng.uniform(*OUTWARD_DISTANCE))
 
-    def advance(self, s, command):
-        return self.track(super().advance(s, command), s.target, s)
+    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
+        return self.track(super().advance(s, command, stepper, ops, jump_stepper), s.target, s, ops)
 
     def track(self, s, target, before, ops=SCALAR):
         """The BeadState of the physical state s (an ActiveConstraintState) with target r*: inside the
@@ -311,14 +313,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         return renderer.draw(float(s.y[0]), float(s.u[0]), float(s.target), s.t, bool(s.inside))
 
 
-class BeadOnBarVectorEnv(ActiveConstraintVectorEnv):
-    """BeadOnBar-v0 over a batch (``gym.make_vec("connenv/BeadOnBar-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): ActiveConstraint-v0's batched step, and the task's state row by row."""
-
-    single_env = BeadOnBarEnv
-
-    def advance(self, s, command):
-        return self.env.track(super().advance(s, command), s.target, s, BATCH)
+BeadOnBarVectorEnv = vector_env(BeadOnBarEnv, ActiveConstraintVectorEnv)
 
 
 BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,

@@ -261,14 +261,13 @@ class ChaplyginSleighEnv(TaskEnv):
         segments, u_end, u_dot_end = bounded(u, u_dot, low, high, self.dt)
         return None, segments, u_end, u_dot_end
 
-    def advance(self, s, command, stepper=None, ops=SCALAR, jump_stepper=JUMP_STEPPER):
+    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
         """The state after a step under the command, a jump of the mass first where the sleigh is fit for jumps and
         the mass has no speed limit: one state, or rows with the vector env's steppers and ops=BATCH."""
         delta, segments, u_end, u_dot_end = self.segments(s.u, command, ops)
         y = s.y
         if delta is not None and np.any(delta != 0.0):
             y = jump_stepper(self.jump, y, s.u, delta, 1.0 if ops is SCALAR else np.ones(len(y)))
-        stepper = self.stepper if stepper is None else stepper
         y, change = run_segments(stepper, self.system, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
         return SleighState(y, u_end, u_dot_end, s.target, s.t + self.dt, s.energy_error + change)

@@ -24,10 +24,10 @@ from connenv.core.validation import (
     probe,
     real_array,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Spec
+from connenv.envs.vector import vector_env
 from connenv.envs.user_task import UserTask
-from connenv.envs.vector import TaskVectorEnv
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
@@ -244,10 +244,7 @@ class ConnectionEnv(TaskEnv):
         """ṡ of action a."""
         return a * self.max_shape_speed
 
-    def advance(self, state, s_dot):
-        return self.stepped(state, s_dot, self.stepper)
-
-    def stepped(self, state, s_dot, stepper, ops=SCALAR):
+    def advance(self, state, s_dot, stepper, ops=SCALAR):
         """The state after a step at the shape velocity ṡ, stopped where s meets a bound, by this stepper: the
         single env's step (ops=SCALAR), and the vector env's over its rows, each with its own segments (its batched
         stepper, ops=BATCH)."""
@@ -335,16 +332,7 @@ class ConnectionEnv(TaskEnv):
         return renderer.draw(self.state_dict(self.state))
 
 
-class ConnectionVectorEnv(TaskVectorEnv):
-    """Connection-v0 over a batch (``gym.make_vec("connenv/Connection-v0", num_envs=N, group=..., ...)``; see
-    ``connenv.envs.vector``): every row stepped by the same Magnus arithmetic as the single env, with its own
-    segments where its shape stops at a bound and its own substeps. A task's functions run row by row."""
-
-    single_env = ConnectionEnv
-
-    def advance(self, state, s_dot):
-        return self.env.stepped(state, s_dot, self.stepper, BATCH)
-
+ConnectionVectorEnv = vector_env(ConnectionEnv)
 
 
 def _check_constant(connection, group, k):

@@ -17,9 +17,10 @@ from connenv.core.validation import (
     check_scale,
     check_stepper_options,
 )
-from connenv.envs.base import BATCH, SCALAR
-from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv  # DT_MAX: its dt range
+from connenv.envs.base import SCALAR
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.systems import elroys_beanie
 
 MOMENTUM_RANGE = (0.25, 1.0)  # |μ| drawn at reset (kg m²/s), with a random sign
@@ -182,8 +183,8 @@ class ElroysBeanieEnv(ConnectionEnv):
             target = check_angle("target", options["target"])
         return BeanieState(np.array([theta]), np.array([psi]), 0.0, float(momentum), float(target), 0.0)
 
-    def advance(self, state, s_dot):
-        return self.drifted(state, super().advance(state, s_dot))
+    def advance(self, state, s_dot, stepper, ops=SCALAR):
+        return self.drifted(state, super().advance(state, s_dot, stepper, ops), ops)
 
     def drifted(self, before, moved, ops=SCALAR):
         """The state after the connection's step `moved` from `before`, with the dynamic phase μ dt/(I₁ + I₂)
@@ -241,14 +242,7 @@ class ElroysBeanieEnv(ConnectionEnv):
         return renderer.draw(float(s.g[0]), float(s.s[0]), s.target, s.momentum, s.t, s.held / self.hold_time)
 
 
-class ElroysBeanieVectorEnv(ConnectionVectorEnv):
-    """ElroysBeanie-v0 over a batch (``gym.make_vec("connenv/ElroysBeanie-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the connection's step of every row, then the dynamic phase, as the single env."""
-
-    single_env = ElroysBeanieEnv
-
-    def advance(self, state, s_dot):
-        return self.env.drifted(state, super().advance(state, s_dot), BATCH)
+ElroysBeanieVectorEnv = vector_env(ElroysBeanieEnv)
 
 
 SPECS = (

@@ -22,8 +22,9 @@ from connenv.core.validation import (
     decimal,
 )
 from connenv.envs.base import BATCH, SCALAR
-from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.systems import falling_cat
 
 ROLL_OFFSET = 0.2  # rad: the start's roll is π + δ, δ uniform in [−ROLL_OFFSET, ROLL_OFFSET]
@@ -152,7 +153,7 @@ class FallingCatEnv(ConnectionEnv):
         **stepper_options,
     ):
         check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        I = check_scale("transverse_inertia", transverse_inertia, 0.01, MAGNITUDE_BOUND)  # noqa: E741
+        I = check_scale("transverse_inertia", transverse_inertia, 0.01, MAGNITUDE_BOUND)
         J = check_number("axial_inertia", axial_inertia, decimal(AXIAL_RATIO_MIN * I), I, open_high=True,
                          high_name="transverse_inertia")  # fmt: skip
         self.mass = check_scale("mass", mass, 1.5, MAGNITUDE_BOUND)
@@ -215,10 +216,7 @@ class FallingCatEnv(ConnectionEnv):
         H = np.stack([spine, np.cross(up, spine), up], -1)
         return CatState(g.ravel(), s, 0.0, np.zeros(2), H.ravel())
 
-    def advance(self, state, s_dot):
-        return self.bent(state, s_dot, self.stepper)
-
-    def bent(self, state, s_dot, stepper, ops=SCALAR):
+    def advance(self, state, s_dot, stepper, ops=SCALAR):
         """The state after bending at ṡ for dt, stopped at max_bend (one state, or rows with ops=BATCH)."""
         tau, s, v = falling_cat.disc_segment(state.s, s_dot, self.max_bend, self.dt)
         g = state.g
@@ -299,14 +297,7 @@ class FallingCatEnv(ConnectionEnv):
         return renderer.draw(H.T @ g, Q_A, Q_B, self.state.s, self.state.t, roll)
 
 
-class FallingCatVectorEnv(ConnectionVectorEnv):
-    """FallingCat-v0 over a batch (``gym.make_vec("connenv/FallingCat-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): every row bent by the single env's closed-form roll."""
-
-    single_env = FallingCatEnv
-
-    def advance(self, state, s_dot):
-        return self.env.bent(state, s_dot, self.stepper, BATCH)
+FallingCatVectorEnv = vector_env(FallingCatEnv)
 
 
 SPECS = (

@@ -20,9 +20,9 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
+from connenv.envs.base import SCALAR, RenderedEnv, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from connenv.systems.kapitza import KapitzaPendulum
 
 DT_MAX = 10.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -249,12 +249,11 @@ class KapitzaPendulumEnv(TaskEnv):
             y, u, u_dot = self._check_state(options["state"], y[0])
         return self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
 
-    def advance(self, s, u_dot_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, u_dot_cmd, stepper, ops=SCALAR):
         """The state after a step at the commanded pivot velocity, each axis stopped at its end stops: one state, or
         rows (each cut at its own stops) with the vector env's stepper and ops=BATCH."""
         bounded = bounded_segments if ops is SCALAR else bounded_segments_batch
         segments, u, u_dot = bounded(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt)
-        stepper = self.stepper if stepper is None else stepper
         y, change = run_segments(stepper, self.system, s.y, segments, self.frame_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, u, u_dot, s.t + self.dt, self.system.energy(y, u_dot), s.energy_error + change, s, ops)
@@ -437,21 +436,10 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
         return info["is_success"]
 
 
-class KapitzaPendulumVectorEnv(TaskVectorEnv):
-    """KapitzaPendulum-v0 over a batch (``gym.make_vec("connenv/KapitzaPendulum-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the single env's step over the rows. Each row's step is cut at its own end stops, so
-    the steppers get one segment length per row."""
-
-    single_env = KapitzaPendulumEnv
-
-    def advance(self, s, u_dot_cmd):
-        return self.env.advance(s, u_dot_cmd, self.stepper, BATCH)
+KapitzaPendulumVectorEnv = vector_env(KapitzaPendulumEnv)
 
 
-class KapitzaSwingUpVectorEnv(KapitzaPendulumVectorEnv):
-    """KapitzaSwingUp-v0 over a batch; as KapitzaPendulumVectorEnv."""
-
-    single_env = KapitzaSwingUpEnv
+KapitzaSwingUpVectorEnv = vector_env(KapitzaSwingUpEnv)
 
 
 PENDULUM = {"dt_max": DT_MAX, "physics": "kapitza.md",

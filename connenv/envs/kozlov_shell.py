@@ -22,10 +22,10 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
-from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -276,11 +276,10 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, np.zeros(3))
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
-    def advance(self, s, u_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, u_cmd, stepper, ops=SCALAR):
         """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum. One
         state, or rows with the vector env's stepper and ops=BATCH."""
         segments = [(s.u, (u_cmd - s.u) / self.dt, self.dt)]
-        stepper = self.stepper if stepper is None else stepper
         pose, momentum = self.swim(s, segments, segments, stepper, ops)
         return ShellState(pose, momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
 
@@ -306,15 +305,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         return {"u": ops.vector(s.u)}
 
 
-class KozlovShellVectorEnv(TaskVectorEnv):
-    """KozlovShell-v0 over a batch (``gym.make_vec("connenv/KozlovShell-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the single env's step over the rows. Rows reset at rest step the reduced model, rows
-    reset with a momentum the full one."""
-
-    single_env = KozlovShellEnv
-
-    def advance(self, s, u_cmd):
-        return self.env.advance(s, u_cmd, self.stepper, BATCH)
+KozlovShellVectorEnv = vector_env(KozlovShellEnv)
 
 
 @functools.cache

@@ -25,7 +25,7 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import TaskVectorEnv, vector_env
 from connenv.systems.rolling_ball import (
     RollingBall,
     attitude_error,
@@ -244,10 +244,7 @@ class RollingBallEnv(TaskEnv):
             return s
         return s.replace(distance=self.system.optimal_arc(Rotation.from_matrix(s.error)).length)
 
-    def advance(self, s, v):
-        return self.rolled(s, v, self.stepper)
-
-    def rolled(self, s, v, stepper, ops=SCALAR):
+    def advance(self, s, v, stepper, ops=SCALAR):
         """The state after a step at velocity v (one, or one per row with ops=BATCH and a batched stepper)."""
         y = s.R.reshape(*s.R.shape[:-2], 9)
         R = run_segments(stepper, self.system, y, [(s.position, v, self.dt)])[0].reshape(s.R.shape)
@@ -470,20 +467,11 @@ class RollingBallVectorEnv(TaskVectorEnv):
         super().__init__(num_envs, max_episode_steps, **kwargs)
         self.env.measures_distance = bool(measure_distance)
 
-    def advance(self, s, v):
-        return self.env.rolled(s, v, self.stepper, BATCH)
+
+RollingBallPoseVectorEnv = vector_env(RollingBallPoseEnv, RollingBallVectorEnv)
 
 
-class RollingBallPoseVectorEnv(RollingBallVectorEnv):
-    """RollingBallPose-v0 over a batch; as RollingBallVectorEnv."""
-
-    single_env = RollingBallPoseEnv
-
-
-class RollingBallGoalVectorEnv(RollingBallVectorEnv):
-    """RollingBallGoal-v0 over a batch, dict observations of arrays; as RollingBallVectorEnv."""
-
-    single_env = RollingBallGoalEnv
+RollingBallGoalVectorEnv = vector_env(RollingBallGoalEnv, RollingBallVectorEnv)
 
 
 BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse", "state_keys": {"x": 0, "y": 0},

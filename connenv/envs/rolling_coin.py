@@ -19,8 +19,9 @@ from connenv.core.validation import (
     check_vector,
 )
 from connenv.envs.base import SCALAR
-from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv  # DT_MAX: its dt range
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.systems import rolling_coin
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -242,11 +243,7 @@ class RollingCoinEnv(ConnectionEnv):
         return renderer.draw(np.array([*self.track, s.g]), s.s[0], s.s[1], s.target, s.t)
 
 
-class RollingCoinVectorEnv(ConnectionVectorEnv):
-    """RollingCoin-v0 over a batch (``gym.make_vec("connenv/RollingCoin-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): every row stepped by the same closed form as the single env."""
-
-    single_env = RollingCoinEnv
+RollingCoinVectorEnv = vector_env(RollingCoinEnv)
 
 
 SPECS = (

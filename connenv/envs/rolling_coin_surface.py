@@ -19,9 +19,9 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface
 from connenv.systems.surfaces import LENGTH_MIN, check_surface, make_surface
 
@@ -305,10 +305,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
         phi_dot = check_number("state phi_dot", state.get("phi_dot", 0.0), -bound, bound)
         return np.array([x, yy, phi, phi_dot]), theta
 
-    def advance(self, s, rate):
-        return self.rolled(s, rate, self.stepper)
-
-    def rolled(self, s, rate, stepper, ops=SCALAR):
+    def advance(self, s, rate, stepper, ops=SCALAR):
         """The state after a step at θ̇ = rate (one, or one per row with ops=BATCH and a batched stepper)."""
         theta, theta_dot = ops.column(s.theta), ops.column(rate)
         if ops is SCALAR:
@@ -378,14 +375,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
         }
 
 
-class RollingCoinSurfaceVectorEnv(TaskVectorEnv):
-    """RollingCoinSurface-v0 over a batch (``gym.make_vec("connenv/RollingCoinSurface-v0", num_envs=N)``; see
-    ``connenv.envs.vector``); takes the single env's make kwargs."""
-
-    single_env = RollingCoinSurfaceEnv
-
-    def advance(self, s, rate):
-        return self.env.rolled(s, rate, self.stepper, BATCH)
+RollingCoinSurfaceVectorEnv = vector_env(RollingCoinSurfaceEnv)
 
 
 SPECS = (

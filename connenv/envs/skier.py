@@ -11,9 +11,9 @@ from gymnasium import spaces
 from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import check_dt, check_keys, check_number, check_scale, check_stepper_options
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
+from connenv.envs.base import SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from connenv.systems.backend import components, namespace
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
@@ -294,11 +294,10 @@ class SkierEnv(TaskEnv):
         side = math.copysign(1.0, y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
         return self.at(y, h, 0.0, side, 0.0)
 
-    def advance(self, s, h_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, h_cmd, stepper, ops=SCALAR):
         """The state after a step toward the commanded height: one state, or rows with the vector env's stepper and
         ops=BATCH."""
         segments, h = control_path(s.h, h_cmd, self.dt, self.max_height_speed, ops)
-        stepper = self.stepper if stepper is None else stepper
         y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, h, s.t + self.dt, s.side, s.energy_error + change, ops)
@@ -387,15 +386,7 @@ class SkierEnv(TaskEnv):
         }
 
 
-class SkierVectorEnv(TaskVectorEnv):
-    """Skier-v0 over a batch (``gym.make_vec("connenv/Skier-v0", num_envs=N)``; see ``connenv.envs.vector``): the
-    single env's step over the rows. With ``max_height_speed`` each row ramps for its own time, so the steppers get
-    one segment length per row."""
-
-    single_env = SkierEnv
-
-    def advance(self, s, h_cmd):
-        return self.env.advance(s, h_cmd, self.stepper, BATCH)
+SkierVectorEnv = vector_env(SkierEnv)
 
 
 SPECS = (

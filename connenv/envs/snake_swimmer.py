@@ -24,10 +24,10 @@ from connenv.core.validation import (
     check_vector,
     decimal,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
-from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
 DT_MAX = 0.25  # s: the longest dt; longer steps (joint moves up to the whole range) make the Lie-group rule's choice
@@ -311,13 +311,12 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         state = SnakeState(pose, momentum if full else np.zeros(3), s, target, 0.0, full, np.zeros(3))
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
-    def advance(self, s, s_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, s_cmd, stepper, ops=SCALAR):
         """The joints move toward s_cmd (`joint_path`); the full model also drifts with its momentum while they
         hold, and checks its spatial momentum. One state, or rows with the vector env's stepper and ops=BATCH."""
         s_dot, ramp, s_end = joint_path(s.s, s_cmd, self.dt, self.max_joint_speed)
         moving = (s.s, s_dot, ramp)  # held joints do not move the chain at zero momentum
         full = [moving, (s_end, np.zeros_like(s_dot), self.dt - ramp)]
-        stepper = self.stepper if stepper is None else stepper
         pose, momentum = self.swim(s, full, [moving], stepper, ops)
         return SnakeState(pose, momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
 
@@ -344,15 +343,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return {"alpha": ops.real(s.s[..., 0]), "beta": ops.real(s.s[..., 1])}
 
 
-class SnakeSwimmerVectorEnv(TaskVectorEnv):
-    """SnakeSwimmer-v0 over a batch (``gym.make_vec("connenv/SnakeSwimmer-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the single env's step over the rows. Rows reset at rest step the reduced model, rows
-    reset with a momentum the full one."""
-
-    single_env = SnakeSwimmerEnv
-
-    def advance(self, s, s_cmd):
-        return self.env.advance(s, s_cmd, self.stepper, BATCH)
+SnakeSwimmerVectorEnv = vector_env(SnakeSwimmerEnv)
 
 
 @functools.cache

@@ -3,18 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
-
-from dataclasses import dataclass
 
 from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_scale, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from connenv.systems.backend import components, namespace
 from connenv.systems.swing import Swing
 
@@ -207,11 +206,10 @@ class SwingEnv(TaskEnv):
             y, r = self._check_state(options["state"], theta)
         return self.at(y, r, 0.0, 0.0)
 
-    def advance(self, s, r_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, r_cmd, stepper, ops=SCALAR):
         """The state after a step toward the commanded radius: one state, or rows with the vector env's stepper and
         ops=BATCH."""
         segments, r = control_path(s.r, r_cmd, self.dt, self.max_radial_speed, ops)
-        stepper = self.stepper if stepper is None else stepper
         y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, r, s.t + self.dt, s.energy_error + change, ops)
@@ -269,15 +267,7 @@ class SwingEnv(TaskEnv):
         }
 
 
-class SwingVectorEnv(TaskVectorEnv):
-    """Swing-v0 over a batch (``gym.make_vec("connenv/Swing-v0", num_envs=N)``; see ``connenv.envs.vector``): the
-    single env's step over the rows. With ``max_radial_speed`` each row ramps for its own time, so the steppers get
-    one segment length per row."""
-
-    single_env = SwingEnv
-
-    def advance(self, s, r_cmd):
-        return self.env.advance(s, r_cmd, self.stepper, BATCH)
+SwingVectorEnv = vector_env(SwingEnv)
 
 
 SPECS = (

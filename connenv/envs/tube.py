@@ -17,9 +17,10 @@ from connenv.core.validation import (
     check_scale,
     check_stepper_options,
 )
-from connenv.envs.base import BATCH, SCALAR
-from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.base import SCALAR
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
 
 __all__ = ["DT_MAX", "TubeTwistEnv", "TubeTwistVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
@@ -190,10 +191,7 @@ class TubeTwistEnv(ConnectionEnv):
         g = R0.ravel().copy()
         return self.at(g, np.zeros(2), 0.0, g.copy(), target, 0.0)
 
-    def advance(self, state, kappa):
-        return self.bent(state, kappa, self.stepper)
-
-    def bent(self, state, kappa, stepper, ops=SCALAR):
+    def advance(self, state, kappa, stepper, ops=SCALAR):
         """The state after bending at the rates κ for dt (one state, or rows with ops=BATCH)."""
         g = run_segments(stepper, self.system, state.g, [(state.s, kappa, self.dt)])[0]
         self.check_group(g)
@@ -256,14 +254,7 @@ class TubeTwistEnv(ConnectionEnv):
         return renderer.draw(s.g.reshape(3, 3), s.R0.reshape(3, 3), trace, s.t, info["twist"], s.target)
 
 
-class TubeTwistVectorEnv(ConnectionVectorEnv):
-    """TubeTwist-v0 over a batch (``gym.make_vec("connenv/TubeTwist-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): every row bent by the single env's exponential."""
-
-    single_env = TubeTwistEnv
-
-    def advance(self, state, kappa):
-        return self.env.bent(state, kappa, self.stepper, BATCH)
+TubeTwistVectorEnv = vector_env(TubeTwistEnv)
 
 
 SPECS = (
