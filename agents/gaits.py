@@ -46,7 +46,7 @@ def trace(env, name, vertices, start, shape, tolerance=1e-12) -> Gait:
     state, actions, shapes = start, [], []
     for vertex in vertices:
         while not shapes or np.max(np.abs(np.subtract(shapes[-1], vertex))) > tolerance:
-            state = env.advance(state, env.command(np.array(vertex, float)))
+            state = env.advance(state, env.command(np.array(vertex, float)), env.stepper)
             actions.append(tuple(vertex))
             shapes.append(tuple(float(v) for v in shape(state)))
         shapes[-1] = tuple(vertex)

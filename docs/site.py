@@ -32,6 +32,31 @@ PAGES = DOCS / "envs"
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End", "Arguments")
 ANIMATION_WIDTH, ANIMATION_FPS, MAX_FRAMES, MIN_FRAMES, MIN_SECONDS = 200, 12, 90, 30, 3.0
 VERSION_HISTORY = "- v0: the first version, in connenv 0.1.0."
+STEPPERS = """## Scales, steppers and errors
+
+An action is taken in float64 (a float64 action at its own precision) and clipped into the action space, unless the
+Action Space says otherwise. A wrong shape or a non-finite value of an action, and an unknown key or a value out of
+its range of a reset option or a kwarg, is a ValueError naming it, the value and the valid range.
+
+A physical scale (a length, mass, inertia, density, g, a speed or rate bound, a tolerance) lies within a factor 1e6
+of its default either way, or down to 0 where 0 has a meaning, unless the Arguments table bounds it otherwise
+(`connenv.core.validation.check_scale`): from a toy to a ship, while the energies, momenta, observation bounds and
+rewards an env forms of its scales stay inside float64 and the float32 observation.
+
+`integrator` picks the stepper (`connenv.core.integrators.make_stepper`; the Arguments table lists the env's). The
+fixed-step methods "euler", "semi_implicit_euler" (on a state (q, p) only), "rk4", "rk8", "rk8_energy" and "gauss6"
+take `substeps`, an integer in [1, 1000] per control segment (a part of the step where the controls move
+uniformly); "rk8_energy" also takes `atol`, the energy error per segment past which it doubles them. Scipy's
+"dop853", "rk45", "lsoda" and "radau" take `rtol` and `atol`, and so does "exact" for the segments it has no closed
+form for. "magnus", the Lie-group step, takes `atol`, its error bound per segment.
+
+A stepper that diverges raises `connenv.core.StepperError`, never a NaN observation; the message names the stepper,
+the env, the time, dt and the physical parameters. Diverging is a non-finite state, an adaptive stepper that cannot
+meet its tolerance, or the invariant the env checks every step past its bound ("Diverged" above, where it has one).
+An energy error is the change of the energy over the segments where the flow conserves it, summed since reset: the
+work the controls do is exact and not counted.
+"""
+"""The generic section of every env page, after its Arguments; `steppers_section` ends it with the env's chart."""
 GALLERY_MARKS = ("<!-- gallery: python docs/site.py -->", "<!-- end of gallery -->")
 GENERATED_PHYSICS = {
     "framework.md": (
@@ -161,10 +186,25 @@ def page(env_id: str) -> str:
     lines += [header, "|---|---|", *rest, ""]
     for title, body in merged_sections(cls).items():
         lines += [f"## {title}", "", body, ""]
+        if title == "Arguments":
+            lines += steppers_section(env_id)
     lines += reference_results(env_id)
     if "Version History" not in merged_sections(cls):  # a class with later versions has its own
         lines += ["## Version History", "", VERSION_HISTORY, ""]
     return "\n".join(lines)
+
+
+def steppers_section(env_id: str) -> list[str]:
+    """STEPPERS, then where the env's steppers are compared: its section of docs/speed-accuracy.md and the command
+    that measures it, where its spec's ``bench`` key has a work–precision chart (ActiveConstraint-v0's has none)."""
+    key, guide = spec(env_id).bench, "[the speed–accuracy guide](../guides/speed-accuracy.md)"
+    if key and (DOCS / "precision" / f"{key}_precision.csv").is_file():
+        where = (f"Each stepper's errors and cost against the others are on [docs/speed-accuracy.md]"
+                 f"(../speed-accuracy.md#{key}), which `python -m connenv.bench precision --env {key}` measures; "
+                 f"{guide} says how, and over which ranges the tests check the defaults.")  # fmt: skip
+    else:
+        where = f"How steppers' errors and cost are measured, and over which ranges the tests check defaults: {guide}."
+    return [STEPPERS, where, ""]
 
 
 def reference_results(env_id: str) -> list[str]:

@@ -33,7 +33,7 @@ from gymnasium import spaces
 from connenv.core.validation import check_dt
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from throwaway.point_system import flow
 
 DT_MAX = 1.0
@@ -72,7 +72,7 @@ class PointEnv(TaskEnv):
     def command(self, a):
         return (SCALAR if a.ndim == 1 else BATCH).components(a)[0]
 
-    def advance(self, s, u, ops=SCALAR):
+    def advance(self, s, u, stepper, ops=SCALAR):
         return PointState(ops.clip(flow(s.x, u, self.dt), -10.0, 10.0), s.t + self.dt)
 
     def observe(self, s, ops=SCALAR):
@@ -93,13 +93,7 @@ class PointEnv(TaskEnv):
         return renderer.draw(self.state.x)
 
 
-class PointVectorEnv(TaskVectorEnv):
-    single_env = PointEnv
-
-    def advance(self, s, u):
-        return self.env.advance(s, u, BATCH)
-
-
+PointVectorEnv = vector_env(PointEnv)
 SPECS = (
     Spec(
         "throwaway/Point-v0", PointEnv, PointVectorEnv, max_episode_steps=50, dt_max=DT_MAX, physics="point.md",

@@ -52,17 +52,16 @@ class ActiveConstraintEnv(TaskEnv):
     ## Description
 
     Any mechanical system steered by *active constraints* (Bressan): the controller assigns the coordinates
-    u = (u¹…uᵐ) directly, and the free ones q = (q¹…qⁿ), with their conjugate momenta p, obey Hamilton's equations
+    u = (u¹…uᵐ) directly, and the free ones q = (q¹…qⁿ), with their conjugate momenta p, obey Hamilton's equations of
 
         H_u(q, p) = ½ (p − G12 u̇)ᵀ G11⁻¹ (p − G12 u̇) − ½ u̇ᵀ G22 u̇ + V(q, u),
-        q̇ = ∂H_u/∂p,   ṗ = −∂H_u/∂q,
 
-    where T = ½ q̇ᵀ G11 q̇ + q̇ᵀ G12 u̇ + ½ u̇ᵀ G22 u̇ is the kinetic energy in the metric blocks G11, G12, G22 and
-    V the potential. `system` is any object with integer attributes `n`, `m` and methods
+    T = ½ q̇ᵀ G11 q̇ + q̇ᵀ G12 u̇ + ½ u̇ᵀ G22 u̇ being the kinetic energy in the metric blocks G11, G12, G22 and V the
+    potential (docs/physics/framework.md). `system` is any object with integer attributes `n`, `m` and methods
     `metric(q, u) -> (G11, G12, G22)` and `potential(q, u)` broadcasting over leading axes; its own
-    `vector_field(y, u, u_dot)` is used if it has one (else a numerical derivative of H_u). Or build it from
-    sympy expressions with `ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u, **kwargs)`, which
-    derives the equations with exact gradients.
+    `vector_field(y, u, u_dot)` is used if it has one (else a numerical derivative of H_u). Or build it from sympy
+    expressions with `ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u, **kwargs)`, which derives the
+    equations with exact gradients.
 
     With A = G11⁻¹, K = A G12 and B = G22 − G12ᵀ A G12, the system's class `env.unwrapped.jump_class`
     (`connenv.core.JumpClass`) decides which controls are admissible:
@@ -70,29 +69,24 @@ class ActiveConstraintEnv(TaskEnv):
     | class | test | u may | default control |
     |---|---|---|---|
     | strongly fit | K ≡ 0, ∂B/∂q ≡ 0 | jump; (q, p) unchanged | "position" |
-    | fit | ∂B/∂q ≡ 0 | jump; (q, p) follow the jump equations | "position" |
+    | fit | ∂B/∂q ≡ 0 | jump; (q, p) follow the jump equations (DOP853 at 1e-13) | "position" |
     | general | ∂B/∂q ≢ 0 | move at a bounded speed only | "velocity" |
-
-    A jump of a fit system from u to u + Δu follows the straight path u(s) = u + s Δu, s ∈ [0, 1]:
-    dq/ds = −K(q, u(s)) Δu, dp/ds = ∂/∂q [pᵀ K(q, u(s))] Δu, integrated by DOP853 at rtol = atol = 1e-13.
 
     ## Action Space
 
-    `Box(-1, 1, (m,), float32)`; actions outside are clipped, a wrong shape or a non-finite value raises
-    ValueError.
+    `Box(-1, 1, (m,), float32)`.
 
-    - `control="position"`: the commanded u = u_low + (a + 1)/2 (u_high − u_low). u jumps there at the start of
-      the step or, with `max_control_speed`, moves toward it at that speed (each coordinate) and stops there.
-      Needs finite bounds and a fit or strongly fit system (or `max_control_speed`).
-    - `control="velocity"`: u̇ = a · max_control_speed through the step; a coordinate that meets a finite bound
-      stops there. Needs `max_control_speed`. The control for a coordinate that winds (infinite bounds).
+    - `control="position"`: the commanded u = u_low + (a + 1)/2 (u_high − u_low). u jumps there at the start of the
+      step or, with `max_control_speed`, moves toward it at that speed (each coordinate) and stops there. Needs finite
+      bounds and a fit or strongly fit system (or `max_control_speed`).
+    - `control="velocity"`: u̇ = a · max_control_speed through the step; a coordinate that meets a finite bound stops
+      there. Needs `max_control_speed`. The control for a coordinate that winds (infinite bounds).
 
     ## Observation Space
 
-    Default: (q, p, u), `Box(-inf, inf, (2n + m,), float32)`; a step that would take an entry beyond float32's
-    range (±3.4e38), which the observation would hold as ±inf, raises `connenv.core.StepperError`. With a task
-    that has `observation(state)`, its value as float32 (finite, of one shape) in its `observation_space` if it has
-    one, else in an unbounded Box of its shape.
+    Default: (q, p, u), `Box(-inf, inf, (2n + m,), float32)`; a step that would take an entry beyond float32's range
+    (±3.4e38) raises `connenv.core.StepperError`. With a task that has `observation(state)`, its value as float32
+    (finite, of one shape) in its `observation_space` if it has one, else in an unbounded Box of its shape.
 
     ## Rewards
 
@@ -101,11 +95,10 @@ class ActiveConstraintEnv(TaskEnv):
 
     ## Starting State
 
-    Default q = 0, p = 0, u at the midpoint of finite bounds (0 on a coordinate with an infinite bound), t = 0.
-    With `task`, `task.reset(np_random)` returns a state dict with any of q, p, u (the rest default).
-    `reset(options={"state": {...}})` sets any of `q`, `p`, `u` exactly (arrays of n, n, m finite numbers; u
-    within its bounds; every entry within ±1e3, beyond which a user's system may outrun any stepper; complex numbers
-    refused), else ValueError. Finite bounds `u_low`, `u_high` lie within ±1e3 too.
+    Default q = 0, p = 0, u at the midpoint of finite bounds (0 on a coordinate with an infinite bound), t = 0. With
+    `task`, `task.reset(np_random)` returns a state dict with any of q, p, u (the rest default).
+    `reset(options={"state": {...}})` sets any of `q`, `p`, `u` exactly (arrays of n, n, m real numbers; u within its
+    bounds; every entry within ±1e3, beyond which a user's system may outrun any stepper).
 
     ## Episode End
 
@@ -119,68 +112,33 @@ class ActiveConstraintEnv(TaskEnv):
     | kwarg | default | range |
     |---|---|---|
     | system | required | n, m, metric, potential (above) |
-    | u_low, u_high | required | numbers or m of them, u_low < u_high; ±inf allowed (velocity control) |
+    | u_low, u_high | required | numbers or m of them, u_low < u_high, within ±1e3; ±inf allowed (velocity control) |
     | dt | 0.05 | [1e-12, 1] s |
     | control | by jump_class (above) | "position", "velocity" |
     | max_control_speed | None | None or (0, 1e3], per unit of u per second |
     | integrator | below | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | | see `connenv.core.steppers` |
-    | task | None | an object with reset, reward, terminated and optionally observation, is_success (below) |
+    | substeps / rtol, atol | | the stepper's |
+    | task | None | an object with reset, reward, terminated and optionally observation, is_success (above) |
     | draw | None | `draw(state, canvas)`: draws a state dict on a `connenv.envs.rendering.Canvas` |
     | render_mode | None | "human", "rgb_array" |
 
     The default integrator is "exact" for a system that gives its closed-form step (`exact_segment(y, u, u̇, τ)` at
-    constant u̇, or `exact_flow(y, u, τ)` where u is held: connenv.core.steppers' ExactSegment and ExactFlow, as
-    BeadOnBar-v0's system does), else scipy's DOP853 at rtol = 1e-10, atol = 1e-12. A generic system has no
-    closed-form flow and time scales the env cannot know, so the step adapts to them rather than to a fixed substep
-    count; `python -m connenv.bench generic` measures the candidates (evaluations of the vector field per step, time,
-    error against DOP853 at 1e-13) on a swing and a bead on a bar, where DOP853 reaches round-off for the cost of
-    RK4 with 4 to 8 substeps. A stepper that diverges raises `connenv.core.StepperError`: a non-finite state, or
-    an energy error (the change of E = ½ pᵀ A p + V over the segments where u is held) past 1e-2 (1 + |E|), or a
-    segment that needs more than a budget of evaluations of the vector field (a stall: ever smaller steps). A
-    system without its own `vector_field` is stepped on a numerical gradient of H (scipy.differentiate, dozens of
-    calls of the metric per evaluation); its budget is 1000 evaluations per segment, against 100 000 for a
-    closed-form field, so that a step that cannot succeed (a metric turning singular ahead of the state) fails in
-    seconds. A system given through `from_lagrangian`, or with its own `vector_field`, is both faster and exact.
+    constant u̇ or `exact_flow(y, u, τ)` where u is held, as BeadOnBar-v0's does), else DOP853 at rtol 1e-10, atol
+    1e-12: a generic system's time scales are unknown, so the step adapts to them (`python -m connenv.bench generic`
+    compares the candidates). Diverged: an energy error (of E = ½ pᵀ A p + V) past 1e-2 (1 + |E|), or a segment that
+    needs more evaluations of the vector field than its budget (a stall, as where the metric turns singular ahead, fails
+    in seconds): 1000 on a numerical gradient of H (scipy.differentiate), 100 000 on a system's own `vector_field`
+    (faster and exact, as `from_lagrangian` gives).
 
-    The system's functions are tried at construction, at the samples of q and u that decide its class: a metric,
-    potential, vector_field or jump_field that raises, returns no real numbers (None, a string, complex numbers),
-    arrays of the wrong shape or non-finite values is a ValueError or TypeError naming it there, not an error at the
-    first step.
+    The system's functions are tried at construction, at the samples of q and u that decide its class: one that
+    raises, returns no real numbers, the wrong shape or non-finite values is a ValueError or TypeError naming it there.
 
-    Every `info` has `"state"`: `{"q": array(n), "p": array(n), "u": array(m), "t": float}` and
-    `"is_success"` (a bool).
+    Every `info` has `"state"`: `{"q": array(n), "p": array(n), "u": array(m), "t": float}` and `"is_success"`.
 
-    ## A task
-
-    `task` is any object with `reset(np_random) -> state dict`, `reward(state, next_state) -> float`,
-    `terminated(state) -> bool` and optionally `observation(state) -> array`, `is_success(state) -> bool` and an
-    `observation_space`, all on state dicts as in `info["state"]` (`connenv.envs.user_task`, as Connection-v0's). An
-    object without the three methods is a TypeError at construction; an answer of the wrong kind (a NaN reward, an
-    infinite observation, a reset state that is no dict of q, p, u) is a TypeError or ValueError naming the method.
-    To turn a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², to θ = 0.5 rad: at rest θ + J u/(I + J) is conserved,
-    so with I = 2, J = 1/2 the rotor turns to u ≈ −2.5 to get there:
-
-        theta, theta_dot, u, u_dot = sp.symbols("theta theta_dot u u_dot")
-        rotor = LagrangianSystem(theta_dot**2 + (theta_dot + u_dot) ** 2 / 4, 0, [theta], [u])
-
-        class TurnTo:
-            def reset(self, np_random):
-                return {"q": np_random.uniform(-0.1, 0.1, 1)}
-
-            def reward(self, state, next_state):
-                return -abs(next_state["q"][0] - 0.5)
-
-            def terminated(self, state):
-                return abs(state["q"][0] - 0.5) < 0.01
-
-            def is_success(self, state):
-                return self.terminated(state)
-
-        env = gym.make("connenv/ActiveConstraint-v0", system=rotor, u_low=-math.pi, u_high=math.pi,
-                       task=TurnTo(), max_episode_steps=200)
-
-    The vector env calls a task's functions row by row.
+    A `task`'s methods (`connenv.envs.user_task`) take state dicts as `info["state"]`; its optional `observation_space`
+    bounds its observation. Without reset, reward and terminated it is a TypeError at construction; an answer of the
+    wrong kind is a TypeError or ValueError naming the method. The vector env calls it row by row.
+    docs/guides/own-system.md gives one: turn a body with a rotor to a target angle.
     """
 
     name = "ActiveConstraint-v0"  # how bad make kwargs name the env
@@ -327,10 +285,7 @@ class ActiveConstraintEnv(TaskEnv):
         segments, u_end, _ = cut(u, u_dot, low, high, self.dt)
         return None, segments, u_end
 
-    def advance(self, s, command):
-        return self.stepped(s, command, self.stepper, JUMP_STEPPER)
-
-    def stepped(self, s, command, stepper, jump_stepper, ops=SCALAR):
+    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
         """The state after a step under the command, by these steppers of the segments and of a fit system's jump:
         the single env's step (ops=SCALAR), and the vector env's over its rows (its batched steppers, ops=BATCH)."""
         delta, segments, u_end = self.segments(s.u, command, ops)
@@ -449,7 +404,7 @@ class ActiveConstraintVectorEnv(TaskVectorEnv):
         self.jump_stepper = batched(JUMP_STEPPER)
 
     def advance(self, s, command):
-        return self.env.stepped(s, command, self.stepper, self.jump_stepper, BATCH)
+        return self.env.advance(s, command, self.stepper, BATCH, self.jump_stepper)
 
 
 SPECS = (

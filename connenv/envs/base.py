@@ -6,10 +6,9 @@ Its task code is functions of that state, written once for both with the operati
 Python floats, ``BATCH`` on numpy arrays):
 
 - ``command(action)``: what the action asks of the assigned coordinates;
-- ``advance(state, command)``: the next state, physics through ``connenv.core.segments.run_segments``. Written
-  once as ``advance(state, command, stepper, ops)``, it serves the vector env too, which calls its prototype's with
-  its batched stepper (row i stepped as the single state) and ops=BATCH (FallingCat's ``bent``, ActiveConstraint's
-  and Connection's ``stepped`` likewise);
+- ``advance(state, command, stepper, ops)``: the next state, physics through ``connenv.core.segments.run_segments``:
+  the single env's step with its stepper, and the vector env's with the batched stepper (row i stepped as the
+  single state) and ops=BATCH;
 - ``observe(state, ops)``, ``describe(state, ops)`` (the info), ``reward(before, after, info, ops)`` and
   ``terminated(state, info, ops)`` (default: ``info["is_success"]``).
 
@@ -145,7 +144,7 @@ class TaskEnv(RenderedEnv):
         command = self.command(self.check_action(action))
         before = self.state
         try:
-            self.state = self.advance(before, command)
+            self.state = self.advance(before, command, self.stepper)
         except StepperError as error:
             raise self._stepper_error(error, before.t) from error
         info = self.describe(self.state)
@@ -169,7 +168,7 @@ class TaskEnv(RenderedEnv):
     def command(self, action):
         raise NotImplementedError
 
-    def advance(self, state, command) -> State:
+    def advance(self, state, command, stepper, ops=SCALAR) -> State:
         raise NotImplementedError
 
     def observe(self, state, ops=SCALAR):

@@ -19,12 +19,14 @@ from connenv.core.validation import (
 )
 from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env's too
     DT_MAX,
+    JUMP_STEPPER,
     ActiveConstraintEnv,
     ActiveConstraintState,
     ActiveConstraintVectorEnv,
 )
-from connenv.envs.base import BATCH, SCALAR
+from connenv.envs.base import SCALAR
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 
 OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
 START_REACH = 0.8  # |r₀| ≤ 0.8 L, and so |r*| (g > 0)
@@ -55,29 +57,17 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     r"""
     ## Description
 
-    A bead of mass m slides without friction on a straight bar of half-length L that turns about a fixed pivot O
-    in a vertical plane. The controller assigns the bar's angle θ from the horizontal (an *active constraint*,
-    Bressan), and the bead at signed distance r from O moves by
-
-        T = ½ m (ṙ² + r² θ̇²),   V = m g r sin θ,   p = m ṙ,
-        ṙ = p / m,   ṗ = m r θ̇² − m g sin θ.
-
-    Tilting slides the bead down the bar; spinning flings it away from the pivot (the centrifugal term m r θ̇²
-    never pulls it in). The env is `ActiveConstraintEnv` on the system built from this T and V
-    (`connenv.systems.bead_on_bar`, a `LagrangianSystem`), which derives the equations and the class:
-    B = G22 − G12ᵀ G11⁻¹ G12 = m r² depends on r, so the system is *general* (quadratic in θ̇), θ may not jump,
-    and the builder's default control for the class is the rate θ̇. The task: bring the bead to rest at a target.
-
-    With g = 0 (Bressan's horizontal bar) the only force is centrifugal, r r̈ = r² θ̇² ≥ 0: a bead at rest can
-    only move away from the pivot and never slows down. Its slow motion is the differential inclusion ṙ ≥ 0
-    (for r > 0): every nondecreasing path r(t) is traced, to any precision, by the full system with small
-    momentum (spin in short bursts and coast), and no other. The target then lies farther out, and success is
-    to arrive there slowly.
+    A bead of mass m slides without friction on a straight bar of half-length L that turns about a fixed pivot O in a
+    vertical plane. The controller assigns the bar's angle θ from the horizontal (an *active constraint*, Bressan), and
+    the bead at signed distance r from O moves by ṙ = p/m, ṗ = m r θ̇² − m g sin θ: tilting slides it down the bar,
+    spinning flings it away from the pivot. The env is `ActiveConstraintEnv` on the system of T = ½ m (ṙ² + r² θ̇²) and
+    V = m g r sin θ (`connenv.systems.bead_on_bar`), of the *general* class: θ may not jump, and the control is its rate
+    (docs/physics/BeadOnBar.md). The task: bring the bead to rest at a target. With g = 0 (Bressan's horizontal bar) it
+    can only move away from the pivot, ṙ ≥ 0: the target lies farther out, and success is to arrive there slowly.
 
     ## Action Space
 
-    `Box(-1, 1, (1,), float32)`: θ̇ = a · omega_max, constant over the step. Actions outside are clipped; a wrong
-    shape or a non-finite value raises ValueError. θ winds freely.
+    `Box(-1, 1, (1,), float32)`: θ̇ = a · omega_max, constant over the step. θ winds freely.
 
     ## Observation Space
 
@@ -96,31 +86,28 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     ## Rewards
 
-    With the potential Φ = −(|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L, per step
+    With the potential Φ = −(|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L, Φ before the step and Φ′ after it,
 
         reward = 10 (Φ′ − Φ) − 0.01 · [outside the tolerances]
 
-    (Φ before the step, Φ′ after): potential-based shaping (Ng, Harada & Russell 1999), which pays for every step
-    toward rest at the target and sums to 10 (Φ_end − Φ₀) whatever the path, so it favours no path between the
-    same ends; and a time cost charged only while the bead is outside the success tolerances (|r − r*| ≤ 0.02 L,
-    |ṙ| ≤ 0.05 L/s), which pays for reaching them fast. From any state, the rest of a 500-step episode inside the bar costs less
-    than 35 (Φ ≥ −3); leaving the bar (|r| > L) pays −exit_penalty instead (default 40) and ends the episode.
+    Potential-based shaping (Ng, Harada & Russell 1999) pays every step toward rest at the target and sums to
+    10 (Φ_end − Φ₀) whatever the path; the time cost, charged only outside the success tolerances, pays for reaching
+    them fast. From any state the rest of a 500-step episode inside the bar costs less than 35 (Φ ≥ −3); leaving the
+    bar (|r| > L) pays −exit_penalty instead (default 40) and ends the episode.
 
     ## Starting State
 
-    At rest (ṙ = 0), θ = 0, t = 0. With g > 0: r₀ uniform on [−0.8, 0.8] L, and the target r* uniform on the
-    points of [−0.8, 0.8] L at least 0.2 L from r₀. With g = 0: |r₀| uniform on [0.1, 0.6] L on either side of the
-    pivot, and r* on the same side, 0.2 to 0.3 L farther out.
-
-    `reset(options={"state": {...}, "target": r*})` sets any of `r` (in [−L, L]), `r_dot` (within ±1e3) and `theta`
-    (in [−2π, 2π]) and the target r* (in [−L, L]) exactly; the rest is drawn as above.
+    At rest (ṙ = 0), θ = 0, t = 0. With g > 0: r₀ uniform on [−0.8, 0.8] L, and the target r* uniform on the points of
+    [−0.8, 0.8] L at least 0.2 L from r₀. With g = 0: |r₀| uniform on [0.1, 0.6] L on either side of the pivot, and r*
+    on the same side, 0.2 to 0.3 L farther out. `reset(options={"state": {...}, "target": r*})` sets any of `r` (in
+    [−L, L]), `r_dot` (within ±1e3) and `theta` (in [−2π, 2π]) and the target r* (in [−L, L]) exactly; the rest is
+    drawn as above.
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`) or when the bead leaves the bar (`info["left_bar"]`). Success,
-    with g > 0: |r − r*| ≤ 0.02 L and |ṙ| ≤ 0.05 L/s held for hold_time (0.5 s: every step from entry to
-    hold_time later). With g = 0: |r − r*| ≤ 0.02 L and |ṙ| ≤ 0.05 L/s, no hold: ṙ cannot decrease, so the bead
-    that arrives slowly stops there only in the limit of the inclusion. Truncated after 500 steps (10 s) by the
+    Terminated on success (`info["is_success"]`) or when the bead leaves the bar (`info["left_bar"]`). Success:
+    |r − r*| ≤ 0.02 L and |ṙ| ≤ 0.05 L/s, held for hold_time (0.5 s: every step from entry to hold_time later) with
+    g > 0, and without a hold with g = 0, where ṙ cannot decrease. Truncated after 500 steps (10 s) by the
     registration's time limit.
 
     ## Arguments
@@ -135,28 +122,21 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     | hold_time | 0.5 | [0, 5e5] s |
     | exit_penalty | 40.0 | [0, 4e7] |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | | see `connenv.core.steppers` |
+    | substeps / rtol, atol | | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way, or down to 0 where 0 has a meaning
-    (`connenv.core.validation.check_scale`): beyond, the energies overflow.
+    The default step is the closed form of the flow at constant θ̇, exact to rounding down to θ̇ = 0. Diverged: an
+    energy error (of E = p²/(2m) + m g r sin θ, conserved while θ is held) past 1e-2 (1 + |E|).
 
-    The default stepper is the closed form of the flow at constant θ̇ (`connenv.systems.bead_on_bar`), exact to
-    rounding, including at θ̇ → 0; the builder's steppers stay available through `integrator`
-    (`python -m connenv.bench precision --env bead` charts them). A stepper that diverges raises
-    `connenv.core.StepperError`: a non-finite state, or an energy error (the change of E = p²/(2m) + m g r sin θ
-    over steps where θ is held) past 1e-2 (1 + |E|).
-
-    Every `info` has `"state"` (`r`, `r_dot`, `p`, `theta`, `t` in SI), `"target"` (r*, m), `"hold"` (s within
-    the tolerances so far), `"left_bar"` and `"is_success"`.
+    Every `info` has `"state"` (`r`, `r_dot`, `p`, `theta`, `t` in SI), `"target"` (r*, m), `"hold"` (s within the
+    tolerances so far), `"left_bar"` and `"is_success"`.
 
     ## Version History
 
-    - v1 (connenv 0.4.0): registered with omega_max = 1 rad/s instead of 2π. The dynamics, observation, reward,
-      start and episode end are v0's, and the analytic tilt law (its rate clipped to omega_max) loses no time by it.
-      At 2π rad/s a random action spins the bar so fast that the centrifugal force m r θ̇² (up to
-      4 m g at the bar's end) flings the bead off within a second: exploration meets the exit penalty, and agents
-      learned to hold the bar still before reaching the target. At 1 rad/s it is at most m L (1/s)², a tenth of
-      m g on the default bar.
+    - v1 (connenv 0.4.0): registered with omega_max = 1 rad/s instead of 2π; all else is v0's, and the analytic tilt
+      law (its rate clipped to omega_max) loses no time by it. At 2π rad/s a random action spins the bar so fast that
+      the centrifugal force m r θ̇² (up to 4 m g at the bar's end) flings the bead off within a second: exploration met
+      the exit penalty, and agents learned to hold the bar still before reaching the target. At 1 rad/s it is at most
+      m L (1/s)², a tenth of m g on the default bar.
     - v0: the first version, in connenv 0.1.0.
     """
 
@@ -227,8 +207,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         r = rng.uniform(*OUTWARD_START)
         return L * side * r, L * side * (r + rng.uniform(*OUTWARD_DISTANCE))
 
-    def advance(self, s, command):
-        return self.track(super().advance(s, command), s.target, s)
+    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
+        return self.track(super().advance(s, command, stepper, ops, jump_stepper), s.target, s, ops)
 
     def track(self, s, target, before, ops=SCALAR):
         """The BeadState of the physical state s (an ActiveConstraintState) with target r*: inside the
@@ -311,14 +291,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         return renderer.draw(float(s.y[0]), float(s.u[0]), float(s.target), s.t, bool(s.inside))
 
 
-class BeadOnBarVectorEnv(ActiveConstraintVectorEnv):
-    """BeadOnBar-v0 over a batch (``gym.make_vec("connenv/BeadOnBar-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): ActiveConstraint-v0's batched step, and the task's state row by row."""
-
-    single_env = BeadOnBarEnv
-
-    def advance(self, s, command):
-        return self.env.track(super().advance(s, command), s.target, s, BATCH)
+BeadOnBarVectorEnv = vector_env(BeadOnBarEnv, ActiveConstraintVectorEnv)
 
 
 BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,

@@ -45,8 +45,8 @@ STATE_KEYS = ("x", "y", "phi", "v", "omega", "u", "u_dot", "u_along", "u_along_d
 @dataclass
 class SleighState(State):
     """y = (x, y, φ, p₁, p₂) (P, heading, Bressan's momenta, `connenv.systems.chaplygin_sleigh`); the mass offset
-    u = (u₁ along, u₂ across) and its velocity u̇ at the end of the step (arrays (2,)); the target (x, y); the time t; the stepper's energy error
-    (the change of T over the segments where u is held, summed since reset)."""
+    u = (u₁ along, u₂ across) and its velocity u̇ at the end of the step (arrays (2,)); the target (x, y); the time t;
+    the stepper's energy error (the change of T over the segments where u is held, summed since reset)."""
 
     y: np.ndarray
     u: np.ndarray
@@ -60,37 +60,23 @@ class ChaplyginSleighEnv(TaskEnv):
     r"""
     ## Description
 
-    A sled of mass M and inertia J (about its centre of mass C) glides on a plane on a knife edge at the point P of
-    its axis, C a distance a ahead of P: P cannot slip sideways (the nonholonomic constraint of the Chaplygin
-    sleigh). A mass m moves in a box on the sled; its offset from C, u = (u₁ along the axis, |u₁| ≤ box; u₂ across
-    it, left positive, |u₂| ≤ rail), is assigned by the controller, an *active constraint*. Nothing else pushes the
-    sled: shaking the mass across propels it (tail first), shaking it along and across together turns it (box=0 is
-    a transverse rail, which cannot steer from rest: docs/physics/ChaplyginSleigh.md). With p = (p₁, p₂) = (∂T/∂v,
-    ∂T/∂ω), v the forward velocity of P and ω = φ̇,
-
-        ṗ₁ = ω P_w,   ṗ₂ = −v P_w,   P_w = M a ω + m ((a + u₁) ω + u̇₂),   (ẋ, ẏ, φ̇) = (v cos φ, v sin φ, ω)
-
-    (Lagrange–d'Alembert; derivation in `connenv.systems.chaplygin_sleigh`). With the mass held at C it is the
-    classical sleigh, which ends every motion going straight.
-
-    **Jump class.** By Bressan and Rampazzo's criterion (a system with a nonholonomic constraint is fit for jumps
-    iff the bundle orthogonal to the leaves u = const within the constraint is invariant under the constrained free
-    motion), derived at construction (`env.unwrapped.jump_class`): with a > 0, or with the box (u₁ shifts the lever
-    a + u₁), the sleigh is *not* fit for jumps, u̇ enters the equations quadratically, and the control is the
-    mass's velocity; the rail over the knife edge (box=0, offset=0) is fit and the control is the mass's position.
-    Shaking the mass is what propels the sleigh: the quadratic term is the thrust.
+    A sled of mass M and inertia J (about its centre of mass C) glides on a plane on a knife edge at the point P of its
+    axis, C a distance a ahead of P: P cannot slip sideways (the Chaplygin sleigh). A mass m moves in a box on the sled;
+    its offset from C, u = (u₁ along the axis, |u₁| ≤ box; u₂ across it, left positive, |u₂| ≤ rail), is assigned by
+    the controller, an *active constraint*. Nothing else pushes the sled: shaking the mass across propels it (tail
+    first), shaking it along and across together turns it. u̇ enters the equations quadratically (the thrust), so the
+    sleigh is not fit for jumps and the control is the mass's velocity; only the rail over the knife edge (box=0,
+    offset=0) is fit, and takes the mass's position (docs/physics/ChaplyginSleigh.md).
 
     ## Action Space
 
-    `Box(-1, 1, (2,), float32)` for (u₁, u₂); actions outside are clipped, a wrong shape or a non-finite value
-    raises ValueError.
+    `Box(-1, 1, (2,), float32)` for (u₁, u₂), by the class (`env.unwrapped.jump_class`); action 0 with u = 0 keeps the
+    mass at C.
 
     | class | action a means | |
     |---|---|---|
     | general (the default) | u̇ = a · max_mass_speed through the step | the mass stops at the box's walls |
-    | fit (box=0, offset=0) | u = a · (box, rail) commanded | reached at max_mass_speed, or a jump with max_mass_speed=None |
-
-    Action 0 with u = 0 keeps the mass at C.
+    | fit (box=0, offset=0) | u = a · (box, rail) commanded | reached at max_mass_speed; with None, a jump |
 
     ## Observation Space
 
@@ -109,20 +95,20 @@ class ChaplyginSleighEnv(TaskEnv):
 
     ## Rewards
 
-    With d the distance from P to the target before the step and d′ after it:
-    `10 (d − d′) − 0.01`: dense progress (summed, 10 (d₀ − d_T), so no loop pays) and a cost of time.
+    With d the distance from P to the target before the step and d′ after it: `10 (d − d′) − 0.01`, dense progress
+    (summed, 10 (d₀ − d_T), so no loop pays) and a cost of time.
 
     ## Starting State
 
-    At rest at the origin heading along x, the mass at C (u = u̇ = 0), t = 0; the target uniform at 1 to 2 m in
-    any direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of `x`, `y` (within
-    ±1e3 m), `phi` (±2π), `v` (±10 m/s), `omega` (±20 rad/s), `u` (u₂, ±rail), `u_dot` (±max_mass_speed, 0 without
-    it), `u_along` (u₁, ±box), `u_along_dot` (±max_mass_speed, 0 with box=0) and the target (within ±1e3 m), exactly; else ValueError.
+    At rest at the origin heading along x, the mass at C (u = u̇ = 0), t = 0; the target uniform at 1 to 2 m in any
+    direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of `x`, `y` (within ±1e3 m),
+    `phi` (±2π), `v` (±10 m/s), `omega` (±20 rad/s), `u` (u₂, ±rail), `u_dot` (±max_mass_speed, 0 without it),
+    `u_along` (u₁, ±box), `u_along_dot` (±max_mass_speed, 0 with box=0) and the target (within ±1e3 m) exactly.
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`): P within `tolerance` of the target at the end of a step.
-    Truncated after 1000 steps (50 s at the default dt) by the registration's time limit.
+    Terminated on success (`info["is_success"]`): P within `tolerance` of the target at the end of a step. Truncated
+    after 1000 steps (50 s at the default dt) by the registration's time limit.
 
     ## Arguments
 
@@ -132,26 +118,21 @@ class ChaplyginSleighEnv(TaskEnv):
     | sled_inertia | 0.1 | [1e-7, 1e5] kg m², about C |
     | offset | 0.5 | [0, 5e5] m, C ahead of P |
     | mass | 0.5 | [5e-7, 5e5] kg |
-    | rail | 0.3 | (0, ∞) m, \|u₂\| ≤ rail |
-    | box | 0.3 | [0, ∞) m, \|u₁\| ≤ box; 0: the rail alone |
-    | max_mass_speed | 2.0 | [2e-6, 2e6] m/s with max_mass_speed · dt ≤ 2 m; None (fit class only): u jumps to the command |
+    | rail | 0.3 | (0, 1e3] m, \|u₂\| ≤ rail |
+    | box | 0.3 | [0, 1e3] m, \|u₁\| ≤ box; 0: the rail alone |
+    | max_mass_speed | 2.0 | [2e-6, 2e6] m/s, with max_mass_speed · dt ≤ 2 m; None (fit class only): u jumps |
     | tolerance | 0.1 | [1e-7, 1) m |
     | dt | 0.05 | [1e-12, 1] s |
     | integrator | "rk4" (2 substeps) | "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | | see `connenv.core.steppers` |
+    | substeps / rtol, atol | | the stepper's |
     | render_mode | None | "human", "rgb_array" |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
-    beyond, the energies and momenta overflow. The mass's travel in one step, max_mass_speed · dt, is at most 2 m
-    (at the longest dt, the default speed's): the sled answers a faster shake faster, and past it the default
-    stepper's two RK4 substeps fall behind (StepperError).
+    The mass's travel in one step is at most 2 m (the default speed's at the longest dt): the sled answers a faster shake
+    faster, and past it the default's two RK4 substeps fall behind. The default is cheaper than DOP853 for the accuracy
+    the task needs. Diverged: an energy error past 1e-2 (1 + T) (T is conserved where the mass is held).
 
-    The default stepper, RK4 with 2 substeps, is cheaper than DOP853 for the accuracy the task needs
-    (docs/physics/ChaplyginSleigh.md); its errors and cost against the other steppers are on docs/speed-accuracy.md,
-    which `python -m connenv.bench precision --env sleigh` measures. A stepper that diverges raises
-    `connenv.core.StepperError`: a non-finite state, or an energy error past 1e-2 (1 + T) (T is conserved where the
-    mass is held). Every `info` has `"state"` (`x`, `y`, `phi`,
-    `v`, `omega`, `u`, `u_dot`, `u_along`, `u_along_dot`, `t`), `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
+    Every `info` has `"state"` (`x`, `y`, `phi`, `v`, `omega`, `u`, `u_dot`, `u_along`, `u_along_dot`, `t`),
+    `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
     """
 
     name = "ChaplyginSleigh-v0"  # how bad make kwargs name the env
@@ -261,14 +242,13 @@ class ChaplyginSleighEnv(TaskEnv):
         segments, u_end, u_dot_end = bounded(u, u_dot, low, high, self.dt)
         return None, segments, u_end, u_dot_end
 
-    def advance(self, s, command, stepper=None, ops=SCALAR, jump_stepper=JUMP_STEPPER):
+    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
         """The state after a step under the command, a jump of the mass first where the sleigh is fit for jumps and
         the mass has no speed limit: one state, or rows with the vector env's steppers and ops=BATCH."""
         delta, segments, u_end, u_dot_end = self.segments(s.u, command, ops)
         y = s.y
         if delta is not None and np.any(delta != 0.0):
             y = jump_stepper(self.jump, y, s.u, delta, 1.0 if ops is SCALAR else np.ones(len(y)))
-        stepper = self.stepper if stepper is None else stepper
         y, change = run_segments(stepper, self.system, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
         return SleighState(y, u_end, u_dot_end, s.target, s.t + self.dt, s.energy_error + change)

@@ -24,10 +24,10 @@ from connenv.core.validation import (
     probe,
     real_array,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Spec
+from connenv.envs.vector import vector_env
 from connenv.envs.user_task import UserTask
-from connenv.envs.vector import TaskVectorEnv
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
@@ -48,13 +48,13 @@ class ConnectionEnv(TaskEnv):
     r"""
     ## Description
 
-    A system whose shape s ∈ ℝᵏ the controller moves and whose position g in a Lie group follows through a
-    *mechanical connection* A(s) (Lawton; Marsden, Montgomery & Ratiu 1990): with ξ the group velocity,
+    A system whose shape s ∈ ℝᵏ the controller moves and whose position g in a Lie group follows through a *mechanical
+    connection* A(s) (Lawton; Marsden, Montgomery & Ratiu 1990): with ξ the group velocity,
 
         ξ = −A(s) ṡ,    ġ = g ξ^ (frame="body"),    ġ = ξ^ g (frame="space").
 
-    A falling cat, a swimmer at zero momentum, a satellite with rotors, a rolling ball: a closed loop of shapes
-    moves g by the connection's holonomy, whatever the speed at which it is run. `group` is one of
+    A falling cat, a swimmer at zero momentum, a satellite with rotors, a rolling ball: a closed loop of shapes moves g
+    by the connection's holonomy, whatever the speed at which it is run (docs/physics/connections.md). `group` is one of
 
     | group | g (in `info["state"]["g"]`) | ξ |
     |---|---|---|
@@ -63,37 +63,32 @@ class ConnectionEnv(TaskEnv):
     | "SO3" | 3×3 rotation | (ω₁, ω₂, ω₃), ω̂ v = ω × v |
     | "R2" | the vector (x, y) | (v₁, v₂) |
 
-    and `connection(s)` returns A(s) as an array of shape (dim 𝔤, k) for a shape s of shape (k,). A connection
-    that is the same at every shape (the rolling ball's, the beanie's, a tube's) may be given as that array A: its
-    flow over a step is then one exponential, the exact step (`integrator="exact"`, its default).
+    and `connection(s)` returns A(s) as an array of shape (dim 𝔤, k) for a shape s of shape (k,). A connection that is
+    the same at every shape (the rolling ball's, the beanie's, a tube's) may be given as that array A.
 
     ## Action Space
 
-    `Box(-1, 1, (k,), float32)`; actions outside are clipped, a wrong shape or a non-finite value raises
-    ValueError. The shape velocity is ṡ = action · max_shape_speed, constant over the step; a coordinate that
-    reaches a finite bound stops there for the rest of the step (the step is cut into segments at the stops).
-    Infinite bounds are allowed (a coordinate that winds, such as a rotor's angle).
+    `Box(-1, 1, (k,), float32)`: the shape velocity ṡ = action · max_shape_speed, constant over the step; a coordinate
+    that reaches a finite bound stops there for the rest of the step. Infinite bounds are allowed (a coordinate that
+    winds, such as a rotor's angle).
 
     ## Observation Space
 
-    Default: `Box(-inf, inf, (n + k,), float32)`, g flattened (4 numbers for SO2, 9 for SE2 and SO3, 2 for R2)
-    followed by s; a step that would take a coordinate of g or s beyond float32's range (±3.4e38), which the
-    observation would hold as ±inf, raises `connenv.core.StepperError`. With a `task` that has
-    `observation(state)`, its value as float32 (finite, of one shape), in the task's `observation_space` if it has
-    one, else in an unbounded Box of its shape.
+    Default: `Box(-inf, inf, (n + k,), float32)`, g flattened (4 numbers for SO2, 9 for SE2 and SO3, 2 for R2) followed
+    by s; a step that would take an entry beyond float32's range (±3.4e38) raises `connenv.core.StepperError`. With a
+    `task` that has `observation(state)`, its value as float32 (finite, of one shape), in the task's
+    `observation_space` if it has one, else in an unbounded Box of its shape.
 
     ## Rewards
 
-    Default 0. With a `task`: `task.reward(state, next_state)`, the states as in `info["state"]`: a finite real
-    number, else TypeError or ValueError naming it.
+    Default 0. With a `task`: `task.reward(state, next_state)`, the states as in `info["state"]`: a finite real number,
+    else TypeError or ValueError naming it.
 
     ## Starting State
 
-    g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0. With
-    a `task`: `task.reset(np_random)` returns a dict with any of "g" and "s" (np_random is the env's generator: all
-    randomness from it). `reset(options={"state": {"g": ..., "s": ...}})` sets either exactly (checked: g on its
-    group to 1e-9, s of shape (k,) within the bounds, every entry of both within ±1e3, real), else ValueError.
-    Finite shape bounds lie within ±1e3 too.
+    g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0. With a
+    `task`: `task.reset(np_random)` returns a dict with any of "g" and "s". `reset(options={"state": {"g": ...,
+    "s": ...}})` sets either exactly (g on its group to 1e-9, s within the bounds, every entry of both within ±1e3).
 
     ## Episode End
 
@@ -106,50 +101,37 @@ class ConnectionEnv(TaskEnv):
     | kwarg | default | range |
     |---|---|---|
     | group | (required) | "SO2", "SE2", "SO3", "R2" |
-    | connection | (required) | callable s -> A(s) of shape (dim 𝔤, k), finite; or a constant A, an array of that shape |
-    | shape_low, shape_high | (required) | arrays of shape (k,), low < high, ±inf allowed |
+    | connection | (required) | callable s -> A(s), finite, of shape (dim 𝔤, k); or a constant array A of that shape |
+    | shape_low, shape_high | (required) | arrays of shape (k,), low < high, within ±1e3; ±inf allowed |
     | dt | 0.1 | [1e-12, 100] s |
     | frame | "body" | "body", "space" |
     | max_shape_speed | 1.0 | (0, 1e3] |
-    | task | None | an object with reset, reward, terminated and optionally observation, is_success (below) |
+    | task | None | an object with reset, reward, terminated and optionally observation, is_success (above) |
     | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
     | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the steps call it once per batch |
     | exact_segment | None | callable (g, s, ṡ, τ) -> g after a segment at constant ṡ, in closed form (below) |
-    | integrator | "exact" with exact_segment or a constant A, else "magnus" | "exact" (with exact_segment or a |
-    | | | constant A), "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | atol (magnus: its error bound per segment, 1e-10) / substeps, rtol, atol (others) | | `connenv.core.steppers` |
+    | integrator | "exact" where it applies, else "magnus" | "exact" (with exact_segment or a constant A), "magnus", |
+    | | | "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | atol (magnus: 1e-10) / substeps, rtol, atol | | the stepper's |
 
-    The default step is `connenv.core.lie.Magnus`: on SO3 the sixth-order Magnus method with closed-form
-    exponentials; on SO2, R2 and SE2 (solvable groups) nested Gauss–Legendre quadratures of θ = ∫ω and of the
-    translation; with substeps chosen per segment for an error ≤ atol on the coordinates of g. Where A is constant
-    along the shape's path the step is one exponential, the exact flow. g stays on its group to rounding (the other
-    integrators step ġ in coordinates and leave SO(3) slowly). A g further than 1e-9 from its group after a step raises
-    `connenv.core.StepperError`, as does a non-finite state or a segment that needs more than 4096 substeps: the
-    substeps chosen from the estimate are checked against twice as many, and doubled while the two disagree by more
-    than atol, so that a connection with a pole on the shape's path (A → ∞) raises rather than returning a finite,
-    wrong g.
+    The default step, "magnus" (`connenv.core.lie.Magnus`), keeps g on its group to rounding with closed-form
+    exponentials, its substeps chosen per segment for an error ≤ atol; where A is constant along the path it is one
+    exponential, the exact flow. Diverged: g further than 1e-9 from its group, or a segment that needs more than 4096
+    substeps (a pole of A on the shape's path).
 
-    A callable connection is tried at construction, at the start shape and at a quarter of the way from the low
-    bound to the high one (and, with `vectorized=True`, on both at once, row for row): one that raises, returns no
-    real numbers, complex numbers, non-finite values or the wrong shape is a ValueError or TypeError naming it.
+    A system that knows its flow gives it as `exact_segment(g, s, ṡ, τ)`: g's coordinates after a segment of length τ at
+    constant ṡ from s, for one state or a batch of rows (τ a float or one per row); it is then the default step
+    (`connenv.core.lie.ExactConnection`). A row of NaN is stepped by the generic integrator instead, an infinite one
+    raises StepperError. A callable connection and an exact_segment are tried at construction (at the start shape and
+    a quarter of the way between the bounds; the segment over dt at rest and at top speed): one that raises or returns
+    no finite real numbers of the right shape is a ValueError or TypeError naming it. Every step checks the segment's
+    answer again.
 
-    A system that knows its flow in closed form gives it as `exact_segment(g, s, ṡ, τ)`: the coordinates of g after
-    a segment of length τ at constant ṡ from the shape s, for one state or a batch of rows (arrays with leading axes,
-    τ a float or one per row). It is then the default step, `integrator="exact"` (`connenv.core.lie.ExactConnection`).
-    It is tried once at construction, from g = identity at the start shape over τ = dt with ṡ = 0 and with every
-    shape coordinate at max_shape_speed: a result that is not finite real numbers of g's coordinates' shape is a
-    ValueError (TypeError for no numbers at all). Every step checks its result's shape and type again (a wrong one is a
-    ValueError naming it, before it reaches the state); a row of NaN is stepped by the generic integrator instead
-    (`connenv.core.steppers.Exact`), an infinite one raises StepperError.
+    Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}` and `"is_success"`.
 
-    Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}` and `"is_success"` (a bool).
-
-    A `task` is any object with `reset(np_random) -> state dict` (of "g" and "s"), `reward(state, next_state) ->
-    float`, `terminated(state) -> bool` and optionally `observation(state) -> array`, `is_success(state) -> bool` and
-    an `observation_space`, all on state dicts as in `info["state"]` (`connenv.envs.user_task`, as
-    ActiveConstraint-v0's). An object without the three methods is a TypeError at construction; an answer of the
-    wrong kind (a NaN reward, an infinite observation) is a TypeError or ValueError naming the method. The vector env
-    calls a task's functions row by row.
+    A `task`'s methods (`connenv.envs.user_task`) take state dicts as `info["state"]`; its optional `observation_space`
+    bounds its observation. Without reset, reward and terminated it is a TypeError at construction; an answer of the
+    wrong kind is a TypeError or ValueError naming the method. The vector env calls it row by row.
     """
 
     name = "Connection-v0"  # how bad make kwargs name the env
@@ -244,10 +226,7 @@ class ConnectionEnv(TaskEnv):
         """ṡ of action a."""
         return a * self.max_shape_speed
 
-    def advance(self, state, s_dot):
-        return self.stepped(state, s_dot, self.stepper)
-
-    def stepped(self, state, s_dot, stepper, ops=SCALAR):
+    def advance(self, state, s_dot, stepper, ops=SCALAR):
         """The state after a step at the shape velocity ṡ, stopped where s meets a bound, by this stepper: the
         single env's step (ops=SCALAR), and the vector env's over its rows, each with its own segments (its batched
         stepper, ops=BATCH)."""
@@ -335,16 +314,7 @@ class ConnectionEnv(TaskEnv):
         return renderer.draw(self.state_dict(self.state))
 
 
-class ConnectionVectorEnv(TaskVectorEnv):
-    """Connection-v0 over a batch (``gym.make_vec("connenv/Connection-v0", num_envs=N, group=..., ...)``; see
-    ``connenv.envs.vector``): every row stepped by the same Magnus arithmetic as the single env, with its own
-    segments where its shape stops at a bound and its own substeps. A task's functions run row by row."""
-
-    single_env = ConnectionEnv
-
-    def advance(self, state, s_dot):
-        return self.env.stepped(state, s_dot, self.stepper, BATCH)
-
+ConnectionVectorEnv = vector_env(ConnectionEnv)
 
 
 def _check_constant(connection, group, k):

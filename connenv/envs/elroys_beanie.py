@@ -17,9 +17,10 @@ from connenv.core.validation import (
     check_scale,
     check_stepper_options,
 )
-from connenv.envs.base import BATCH, SCALAR
-from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv  # DT_MAX: its dt range
+from connenv.envs.base import SCALAR
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.systems import elroys_beanie
 
 MOMENTUM_RANGE = (0.25, 1.0)  # |μ| drawn at reset (kg m²/s), with a random sign
@@ -43,21 +44,19 @@ class ElroysBeanieEnv(ConnectionEnv):
     r"""
     ## Description
 
-    Elroy's beanie (`connenv.systems.elroys_beanie`): a body of inertia I₁ with a beanie of inertia I₂ on it,
-    both turning about one axis; a motor spins the beanie at ψ̇ relative to the body. Their angular momentum
+    Elroy's beanie (`connenv.systems.elroys_beanie`): a body of inertia I₁ with a beanie of inertia I₂ on it, both
+    turning about one axis; a motor spins the beanie at ψ̇ relative to the body. Their angular momentum
     μ = (I₁ + I₂) θ̇ + I₂ ψ̇ is conserved, so the body turns by
 
         θ̇ = −I₂/(I₁ + I₂) ψ̇ + μ/(I₁ + I₂):
 
-    ConnectionEnv on SO(2) with the flat connection A = I₂/(I₁ + I₂) (the geometric phase, −2π A per turn of
-    the beanie, whatever its speed profile) plus the dynamic phase μ t/(I₁ + I₂) of the momentum, which this env
-    adds to the connection's step (exact: the group is abelian). μ is drawn nonzero at reset, so the body drifts
-    unless the beanie spins at μ/I₂.
+    the geometric phase of the flat connection A = I₂/(I₁ + I₂) on SO(2), −2π A per turn of the beanie whatever its
+    speed profile, plus the dynamic phase μ t/(I₁ + I₂), both exact (`ConnectionEnv`). μ is drawn nonzero at reset, so
+    the body drifts unless the beanie spins at μ/I₂.
 
     ## Action Space
 
-    `Box(-1, 1, (1,), float32)`: ψ̇ = a · max_beanie_speed, constant over the step; outside the box clipped; a wrong
-    shape or a non-finite value raises ValueError. A float64 action is used at float64 precision.
+    `Box(-1, 1, (1,), float32)`: ψ̇ = a · max_beanie_speed, constant over the step.
 
     ## Observation Space
 
@@ -75,17 +74,17 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     With e = θ* − θ wrapped into [−π, π], e before the step and e′ after it:
 
-        reward = |e| − |e′| − 0.05 · min(1, |e′|/(10 · tolerance)) · (|e′| > tolerance) + 1 · (hold completed)
+        reward = |e| − |e′| − 0.05 · min(1, |e′|/(10 tolerance)) · (|e′| > tolerance) + 1 · (hold completed)
 
-    The cost off the target grows with the error up to ten tolerances, so that the reward tells a near miss from a
-    far one; inside the tolerance there is none, so that staying there earns less than completing the hold.
+    The cost off the target grows with the error up to ten tolerances, so that the reward tells a near miss from a far
+    one; inside the tolerance there is none, so that staying there earns less than completing the hold.
 
     ## Starting State
 
-    θ = 0, ψ = 0, t = 0; |μ| uniform in [0.25, 1] kg m²/s with a uniform sign (the body drifts at up to
-    0.8 rad/s; holding needs |ψ̇| = |μ|/I₂ ≤ 4 rad/s, within the 4π rad/s bound); θ* uniform in [−π, π).
+    θ = 0, ψ = 0, t = 0; |μ| uniform in [0.25, 1] kg m²/s with a uniform sign (the body drifts at up to 0.8 rad/s;
+    holding needs |ψ̇| = |μ|/I₂ ≤ 4 rad/s, within the 4π rad/s bound); θ* uniform in [−π, π).
     `reset(options={"state": {"theta", "psi", "momentum"}, "target": θ*})` sets any of them: θ, ψ and θ* within
-    [−2π, 2π], |μ| ≤ 0.9 I₂ · max_beanie_speed (else the body could not be held), else ValueError.
+    [−2π, 2π], |μ| ≤ 0.9 I₂ · max_beanie_speed (else the body could not be held).
 
     ## Episode End
 
@@ -103,12 +102,10 @@ class ElroysBeanieEnv(ConnectionEnv):
     | tolerance | 0.01 | [1e-8, π) rad |
     | hold_time | 1.0 | [1e-6, 100] s |
     | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | atol (magnus) / substeps / rtol, atol | | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
-
-    Every `info` has `"state"` (`theta`, `psi` (both unwrapped), `momentum`, `t`), `"target"` (θ*), `"error"`
-    (θ* − θ wrapped, rad), `"held"` (s) and `"is_success"`.
+    Every `info` has `"state"` (`theta`, `psi` (both unwrapped), `momentum`, `t`), `"target"` (θ*), `"error"` (θ* − θ
+    wrapped, rad), `"held"` (s) and `"is_success"`.
     """
 
     name = "ElroysBeanie-v0"
@@ -182,8 +179,8 @@ class ElroysBeanieEnv(ConnectionEnv):
             target = check_angle("target", options["target"])
         return BeanieState(np.array([theta]), np.array([psi]), 0.0, float(momentum), float(target), 0.0)
 
-    def advance(self, state, s_dot):
-        return self.drifted(state, super().advance(state, s_dot))
+    def advance(self, state, s_dot, stepper, ops=SCALAR):
+        return self.drifted(state, super().advance(state, s_dot, stepper, ops), ops)
 
     def drifted(self, before, moved, ops=SCALAR):
         """The state after the connection's step `moved` from `before`, with the dynamic phase μ dt/(I₁ + I₂)
@@ -241,14 +238,7 @@ class ElroysBeanieEnv(ConnectionEnv):
         return renderer.draw(float(s.g[0]), float(s.s[0]), s.target, s.momentum, s.t, s.held / self.hold_time)
 
 
-class ElroysBeanieVectorEnv(ConnectionVectorEnv):
-    """ElroysBeanie-v0 over a batch (``gym.make_vec("connenv/ElroysBeanie-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the connection's step of every row, then the dynamic phase, as the single env."""
-
-    single_env = ElroysBeanieEnv
-
-    def advance(self, state, s_dot):
-        return self.env.drifted(state, super().advance(state, s_dot), BATCH)
+ElroysBeanieVectorEnv = vector_env(ElroysBeanieEnv)
 
 
 SPECS = (

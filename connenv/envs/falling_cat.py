@@ -22,8 +22,9 @@ from connenv.core.validation import (
     decimal,
 )
 from connenv.envs.base import BATCH, SCALAR
-from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.systems import falling_cat
 
 ROLL_OFFSET = 0.2  # rad: the start's roll is π + δ, δ uniform in [−ROLL_OFFSET, ROLL_OFFSET]
@@ -48,35 +49,28 @@ class FallingCatEnv(ConnectionEnv):
     ## Description
 
     Kane and Scher's falling cat (`connenv.systems.falling_cat`): two identical axisymmetric halves (mass m, axial
-    inertia J, transverse inertia I, centre of mass ℓ from the joint) that bend at the joint but never twist about
-    their own axes. Dropped at rest, the cat's angular momentum stays zero, so its attitude g (the cat frame: e₁
-    the mean spine, e₃ the back) follows the bend vector s = β (cos γ, sin γ) through a mechanical connection:
-
-        Ω = −A(s) ṡ = −f(β) γ̇ e₁,    f(β) = [I sin²(β/2) − J c (1 − c)] / (I sin²(β/2) + J c²),  c = cos(β/2).
-
-    Bending straight out turns nothing; sweeping the bend around the spine rolls the cat about it. Kane and
-    Scher's motion (bend to β₀, sweep once around, unbend) rolls it by 2π f(β₀): a half turn at f(β₀) = 1/2. Built
-    on `ConnectionEnv` (SO(3), body frame), with the roll over each step in closed form up to a Gauss–Legendre
-    quadrature exact to rounding (the default `integrator="exact"`). Gravity moves only the centre of mass in free
-    fall and does not enter.
+    inertia J, transverse inertia I, centre of mass ℓ from the joint) that bend at the joint but never twist about their
+    own axes. Dropped at rest, the cat keeps zero angular momentum, so its attitude g (the cat frame: e₁ the mean spine,
+    e₃ the back) follows the bend vector s = β (cos γ, sin γ) through a mechanical connection, Ω = −f(β) γ̇ e₁
+    (docs/physics/FallingCat.md): bending straight out turns nothing, and sweeping the bend around the spine rolls the
+    cat about it, by 2π f(β₀) for one sweep at the bend β₀ (Kane and Scher's motion). Built on `ConnectionEnv` (SO(3),
+    body frame); gravity moves only the centre of mass in free fall and does not enter.
 
     ## Action Space
 
-    `Box(-1, 1, (2,), float32)`: the bend velocity ṡ = a · max_bend_speed, constant over the step. Actions outside
-    are clipped; a wrong shape or a non-finite value raises ValueError. A bend that reaches β = max_bend stops
-    there for the rest of the step.
+    `Box(-1, 1, (2,), float32)`: the bend velocity ṡ = a · max_bend_speed, constant over the step. A bend that reaches
+    β = max_bend stops there for the rest of the step.
 
     ## Observation Space
 
-    `Box(-1, 1, (12,), float32)`:
+    `Box(-1, 1, (12,), float32)`, with H the heading frame (columns: the start spine, the horizontal across it, the
+    vertical orthogonalized to the spine):
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
-    | 0–8 | E = Hᵀ g, row by row: the cat frame in the heading frame H (E = I feet down, spine at its start) | -1 | 1 |
+    | 0–8 | E = Hᵀ g, row by row: the cat frame in H (E = I feet down, spine at its start) | -1 | 1 |
     | 9–10 | s / max_bend | -1 | 1 |
     | 11 | time left to landing / fall_time | 0 | 1 |
-
-    H has columns the start spine, the horizontal across it and the vertical (orthogonalized to the spine).
 
     ## Rewards
 
@@ -84,23 +78,22 @@ class FallingCatEnv(ConnectionEnv):
 
         reward = e − e′ + 1 · (is_success)
 
-    The roll is atan2(Z · g e₂, Z · g e₃) (0 feet down), the spine error the angle between g e₁ and its start.
-    Bending out costs β, paid back when the cat straightens; the sweep pays the roll it takes away. Summed over an
-    episode: e₀ − e_T, plus 1 on success.
+    The roll is atan2(Z · g e₂, Z · g e₃) (0 feet down), the spine error the angle between g e₁ and its start. Bending
+    out costs β, paid back when the cat straightens; the sweep pays the roll it takes away. Summed over an episode:
+    e₀ − e_T, plus 1 on success.
 
     ## Starting State
 
-    Straight (s = 0), at rest, t = 0, upside down: g = Rz(ψ) Rx(π + δ), the spine horizontal at the heading ψ
-    uniform in [0, 2π) (physically irrelevant: the cat's roll does not depend on it), δ uniform in [−0.2, 0.2].
-    `reset(options={"state": {"R": R, "bend": s}})` sets either exactly: R the front half's attitude g Q_A(s), a
-    rotation to 1e-9 whose cat frame's spine is not vertical; s with |s| ≤ max_bend; else ValueError.
+    Straight (s = 0), at rest, t = 0, upside down: g = Rz(ψ) Rx(π + δ), the spine horizontal at the heading ψ uniform
+    in [0, 2π) (the roll does not depend on it), δ uniform in [−0.2, 0.2]. `reset(options={"state": {"R": R, "bend":
+    s}})` sets either exactly: R the front half's attitude g Q_A(s), a rotation to 1e-9 whose cat frame's spine is not
+    vertical; s with |s| ≤ max_bend.
 
     ## Episode End
 
-    Terminated on success, |roll| ≤ `tolerance`, spine error ≤ `tolerance` and β ≤ `tolerance`
-    (`info["is_success"]`), or at the landing, t = fall_time: the cat meets the ground, a real end (not a
-    truncation). The registration's time limit, fall_time/dt = 60 steps, is the landing at the defaults; with
-    another fall_time or dt pass `max_episode_steps` to `gym.make`.
+    Terminated on success, |roll|, spine error and β each ≤ `tolerance` (`info["is_success"]`), or at the landing,
+    t = fall_time: the cat meets the ground, a real end (not a truncation). The registration's time limit,
+    fall_time/dt = 60 steps, is the landing at the defaults; with another fall_time or dt pass `max_episode_steps`.
 
     ## Arguments
 
@@ -116,20 +109,17 @@ class FallingCatEnv(ConnectionEnv):
     | dt | 0.01 | [1e-12, 100] s |
     | tolerance | 0.05 | [5e-8, π) rad |
     | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | `connenv.core.steppers` |
+    | atol (magnus) / substeps / rtol, atol | | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`),
-    and J/I is at least 1e-6: the roll's integrand has a complex singularity a bend of 2 artanh √(J/I) from the
-    real axis, and the exact step's Gauss–Legendre pieces grow as its inverse.
+    m and ℓ enter only the locked inertia across the spine, never the roll: they show in the angular momentum and the
+    rendering. The defaults are a slender cat (J/I = 0.03), whose half turn needs β₀ ≈ 0.35 rad and fits in the fall at
+    the bend speed (docs/physics/FallingCat.md). The default step is the roll in closed form up to a Gauss–Legendre
+    quadrature exact to rounding, whose pieces grow as J/I falls: hence J/I ≥ 1e-6. Diverged: R more than 1e-9 off
+    SO(3).
 
-    m and ℓ enter only the locked inertia across the spine, never the roll: they show in the angular momentum and
-    the rendering. The defaults are a slender cat (J/I = 0.03) whose half turn needs β₀ ≈ 0.35 rad, so that
-    Kane and Scher's motion fits in the fall at the bend speed; stouter halves need larger bends and faster ones.
-    A stepper that leaves SO(3) by more than 1e-9 raises `connenv.core.StepperError`.
-
-    Every `info` has `"state"` (`R` (3×3) the front half's attitude, `bend` (2), `t`), `"angular_momentum"` (in
-    space, about the centre of mass, summed over the two bodies' spins and motions at the end of the step: 0 to
-    rounding), `"roll"`, `"spine_error"`, `"bend_angle"` (β) and `"is_success"`.
+    Every `info` has `"state"` (`R` (3×3) the front half's attitude, `bend` (2), `t`), `"angular_momentum"` (in space,
+    about the centre of mass, at the end of the step: 0 to rounding), `"roll"`, `"spine_error"`, `"bend_angle"` (β) and
+    `"is_success"`.
     """
 
     name = "FallingCat-v0"
@@ -152,7 +142,7 @@ class FallingCatEnv(ConnectionEnv):
         **stepper_options,
     ):
         check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        I = check_scale("transverse_inertia", transverse_inertia, 0.01, MAGNITUDE_BOUND)  # noqa: E741
+        I = check_scale("transverse_inertia", transverse_inertia, 0.01, MAGNITUDE_BOUND)
         J = check_number("axial_inertia", axial_inertia, decimal(AXIAL_RATIO_MIN * I), I, open_high=True,
                          high_name="transverse_inertia")  # fmt: skip
         self.mass = check_scale("mass", mass, 1.5, MAGNITUDE_BOUND)
@@ -215,10 +205,7 @@ class FallingCatEnv(ConnectionEnv):
         H = np.stack([spine, np.cross(up, spine), up], -1)
         return CatState(g.ravel(), s, 0.0, np.zeros(2), H.ravel())
 
-    def advance(self, state, s_dot):
-        return self.bent(state, s_dot, self.stepper)
-
-    def bent(self, state, s_dot, stepper, ops=SCALAR):
+    def advance(self, state, s_dot, stepper, ops=SCALAR):
         """The state after bending at ṡ for dt, stopped at max_bend (one state, or rows with ops=BATCH)."""
         tau, s, v = falling_cat.disc_segment(state.s, s_dot, self.max_bend, self.dt)
         g = state.g
@@ -299,14 +286,7 @@ class FallingCatEnv(ConnectionEnv):
         return renderer.draw(H.T @ g, Q_A, Q_B, self.state.s, self.state.t, roll)
 
 
-class FallingCatVectorEnv(ConnectionVectorEnv):
-    """FallingCat-v0 over a batch (``gym.make_vec("connenv/FallingCat-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): every row bent by the single env's closed-form roll."""
-
-    single_env = FallingCatEnv
-
-    def advance(self, state, s_dot):
-        return self.env.bent(state, s_dot, self.stepper, BATCH)
+FallingCatVectorEnv = vector_env(FallingCatEnv)
 
 
 SPECS = (

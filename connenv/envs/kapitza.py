@@ -20,9 +20,9 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import BATCH, SCALAR, RenderedEnv, State, TaskEnv
+from connenv.envs.base import SCALAR, RenderedEnv, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from connenv.systems.kapitza import KapitzaPendulum
 
 DT_MAX = 10.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -71,31 +71,19 @@ class KapitzaPendulumEnv(TaskEnv):
     r"""
     ## Description
 
-    A pendulum, rod length l and bob mass m, whose pivot the controller moves: the pivot's position
-    u = (u₁, u₂) is an *active constraint* (Bressan). θ is the rod's angle from the downward vertical and
-    p = m l² θ̇ + m l u̇·(cos θ, sin θ) its conjugate momentum:
-
-        θ̇ = (p − m l u̇·n) / (m l²),    ṗ = m l θ̇ u̇·n′ − m g l sin θ,    n = (cos θ, sin θ), n′ = (−sin θ, cos θ)
-
-    The system is *general* in Bressan's classification: u̇ enters quadratically, so fast vibrations of the
-    pivot act as a force. Vibrated vertically, u₂ = a cos ωt with a ≪ l, the inverted pendulum is stable when
-    a²ω² > 2 g l (Kapitza 1951): the averaged motion feels U = −m g l cos θ + ¼ m a²ω² sin²θ. The goal is to
-    hold the pendulum inverted, |θ − π| ≤ `tolerance`, for the whole episode.
+    A pendulum, rod length l and bob mass m, whose pivot the controller moves: the pivot's position u = (u₁, u₂) is an
+    *active constraint* (Bressan). θ is the rod's angle from the downward vertical and p = m l² θ̇ + m l u̇·n its
+    conjugate momentum, n = (cos θ, sin θ). u̇ enters the equations quadratically (Bressan's *general* class), so fast
+    vibration of the pivot acts as a force: vibrated vertically with amplitude a ≪ l and frequency ω, the inverted
+    pendulum is stable when a²ω² > 2 g l (Kapitza 1951; docs/physics/kapitza.md). The goal is to hold the pendulum
+    inverted, |θ − π| ≤ `tolerance`, for the whole episode.
 
     ## Action Space
 
-    `Box(-1, 1, (k,), float32)`, k = 1 for a vertical or horizontal pivot and 2 for a planar one; actions
-    outside are clipped, a wrong shape or a non-finite value raises ValueError.
-
-    | Num | Action | Min | Max |
-    |-----|--------|-----|-----|
-    | 0 | pivot velocity along the actuated axis (u̇₂ vertical, u̇₁ horizontal, u̇₁ planar) = v_max · a | -1 | 1 |
-    | 1 | planar only: u̇₂ = v_max · a | -1 | 1 |
-
-    The pivot moves at the commanded velocity, constant over the step. Its travel is bounded, |uᵢ| ≤ a_max:
-    an axis that meets its end stop rests there for the rest of the step. Both the start of a motion and the
-    stop are jumps of u̇, which the equations admit (only u̇ enters them): p is continuous, θ̇ jumps by
-    −Δu̇·n/l, and the pivot never jumps in position nor leaves its travel.
+    `Box(-1, 1, (k,), float32)`: the pivot's velocity v_max · a along the actuated axes, constant over the step: u̇₂
+    for a vertical pivot, u̇₁ for a horizontal one (k = 1), (u̇₁, u̇₂) for a planar one (k = 2). An axis that meets its
+    end stop, |uᵢ| = a_max, rests there for the rest of the step. Only u̇ enters the equations, so its jumps are
+    admissible: p is continuous and θ̇ jumps by −Δu̇·n/l.
 
     ## Observation Space
 
@@ -105,12 +93,12 @@ class KapitzaPendulumEnv(TaskEnv):
     |-----|-------------|-----|-----|
     | 0 | cos θ | -1 | 1 |
     | 1 | sin θ | -1 | 1 |
-    | 2 | θ̇ / (2√(g/l)), 1 at the bottom for a pendulum that just reaches the top | -5 | 5 |
+    | 2 | θ̇ / (2√(g/l)), 1 at the bottom for a pendulum that just reaches the top; clipped (spinning fast) | -5 | 5 |
     | 3 (3, 4) | pivot position along the actuated axes, uᵢ / a_max | -1 | 1 |
     | 4 (5, 6) | pivot velocity along the actuated axes at the end of the step, u̇ᵢ / v_max | -1 | 1 |
 
-    θ̇ is clipped to its bound (reached only when spinning fast). There is no clock: the pivot's own state
-    (u, u̇) is the phase of a vibration, and the reference controllers read it there (`agents.controllers.kapitza`).
+    There is no clock: the pivot's own state (u, u̇) is the phase of a vibration, and the reference controllers read it
+    there (`agents.controllers.kapitza`).
 
     ## Rewards
 
@@ -118,21 +106,21 @@ class KapitzaPendulumEnv(TaskEnv):
 
         reward = 1 − (δ/tolerance)²
 
-    in [0, 1] while held (δ ≤ tolerance), negative on the step that falls (δ > tolerance, which ends the
-    episode), and never below 1 − (π/tolerance)² (δ ≤ π): −108.7 at the default tolerance.
+    in [0, 1] while held (δ ≤ tolerance), negative on the step that falls (δ > tolerance, which ends the episode), and
+    never below 1 − (π/tolerance)² (δ ≤ π): −108.7 at the default tolerance.
 
     ## Starting State
 
     θ₀ = π + uniform(−0.2, 0.2) rad (np_random), at rest, pivot at rest at the centre, t = 0.
-    `reset(options={"state": {...}})` sets any of `theta`, `theta_dot` or `p`, `u` (2), `u_dot` (2) exactly:
-    θ in [−2π, 2π], |θ̇| ≤ 10√(g/l) (the observed bound; p is bounded through θ̇), u and u̇ zero along
-    unactuated axes, |uᵢ| ≤ a_max and |u̇ᵢ| ≤ v_max. A value outside is refused (ValueError).
+    `reset(options={"state": {...}})` sets any of `theta`, `theta_dot` or `p`, `u` (2), `u_dot` (2) exactly: θ in
+    [−2π, 2π], |θ̇| ≤ 10√(g/l) (the observed bound; p is bounded through θ̇), u and u̇ zero along unactuated axes,
+    |uᵢ| ≤ a_max and |u̇ᵢ| ≤ v_max.
 
     ## Episode End
 
-    Terminated when the pendulum falls, δ > tolerance (`info["is_success"]` turns False). Truncated after 2000
-    steps (10 s at the default dt) by the registration's time limit; an episode that reaches it has held the
-    pendulum inverted throughout.
+    Terminated when the pendulum falls, δ > tolerance (`info["is_success"]` turns False). Truncated after 2000 steps
+    (10 s at the default dt) by the registration's time limit; an episode that reaches it has held the pendulum
+    inverted throughout.
 
     ## Arguments
 
@@ -148,32 +136,17 @@ class KapitzaPendulumEnv(TaskEnv):
     | tolerance | 0.3 | [3e-7, π) rad |
     | damping | 0.0 | [0, 1e3 m l² √(g/l)] N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, and exact's fallback) | | see `connenv.core.steppers` |
+    | substeps / rtol, atol | | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
-    beyond, the energies and the reward's floor, 1 − (π/tolerance)², overflow. The damping's scale is
-    m l² √(g/l), at which it damps the swing in about one period; a thousand times that overdamps it a
-    thousandfold, and the step (DOP853, explicit) would spend its work on the decay.
-
-    The default integrator is exact: while u̇ is constant the pivot moves uniformly, so in its frame the rod
-    swings as a plain pendulum, whose flow is closed-form (Jacobi elliptic functions). Within 1e-6 of the
-    separatrix in k², where scipy's elliptic functions lose their accuracy and where the held-inverted pendulum
-    lives, that pendulum is stepped by RK4 at ω₀h ≤ 0.01, a local error of order (ω₀h)⁵; with damping, which has
-    no closed form, the exact stepper hands the step to DOP853.
-
-    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
-    non-finite state, or, without damping, an energy error past 0.1 m g l. The energy error is the change of E
-    (in the pivot's frame) over each segment of constant u̇, where E is conserved, summed since reset; the jumps
-    of u̇ between segments do exact work and are not counted.
-
-    The exact step's errors and cost against the other steppers are on docs/speed-accuracy.md, which
-    `python -m connenv.bench precision --env kapitza` measures; tests/test_precision.py checks its energy error
-    across v_max up to 100 m/s and dt from 1 ms to 50 ms.
+    At m l² √(g/l) the damping damps the swing in about one period; beyond a thousand times that, the step would spend
+    its work on the decay. The default step is exact: at constant u̇ the rod swings in the pivot's frame as a plain
+    pendulum, whose flow is closed-form, and near its separatrix (the held-inverted pendulum) RK4 at a fine step
+    (docs/physics/kapitza.md); with damping it is DOP853. Diverged: without damping, an energy error (in the pivot's
+    frame) past 0.1 m g l.
 
     Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"`
-    (E = ½ m l² θ̇² − m g l cos θ, J, the pendulum's energy in the frame of the pivot's velocity, conserved
-    while u̇ is constant), `"deviation"` (δ, rad), `"max_deviation"` (its largest value this episode) and
-    `"is_success"`.
+    (E = ½ m l² θ̇² − m g l cos θ, J, in the frame of the pivot's velocity, conserved while u̇ is constant),
+    `"deviation"` (δ, rad), `"max_deviation"` (its largest value this episode) and `"is_success"`.
     """
 
     name = "KapitzaPendulum-v0"  # how bad make kwargs name the env
@@ -249,12 +222,11 @@ class KapitzaPendulumEnv(TaskEnv):
             y, u, u_dot = self._check_state(options["state"], y[0])
         return self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
 
-    def advance(self, s, u_dot_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, u_dot_cmd, stepper, ops=SCALAR):
         """The state after a step at the commanded pivot velocity, each axis stopped at its end stops: one state, or
         rows (each cut at its own stops) with the vector env's stepper and ops=BATCH."""
         bounded = bounded_segments if ops is SCALAR else bounded_segments_batch
         segments, u, u_dot = bounded(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt)
-        stepper = self.stepper if stepper is None else stepper
         y, change = run_segments(stepper, self.system, s.y, segments, self.frame_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, u, u_dot, s.t + self.dt, self.system.energy(y, u_dot), s.energy_error + change, s, ops)
@@ -354,9 +326,9 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     r"""
     ## Description
 
-    KapitzaPendulum-v0's pendulum and pivot, started hanging near rest: swing it up by moving the pivot,
-    then hold it inverted. Vertical pivot motion pumps energy in by parametric resonance, near twice the
-    pendulum's natural frequency √(g/l); fast vertical vibration then holds it inverted (Kapitza).
+    KapitzaPendulum-v0's pendulum and pivot, started hanging near rest: swing it up by moving the pivot, then hold it
+    inverted. Vertical pivot motion pumps energy in by parametric resonance, near twice the pendulum's natural frequency
+    √(g/l); fast vertical vibration then holds it inverted (Kapitza).
 
     ## Action Space, Observation Space, Arguments
 
@@ -364,37 +336,36 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     ## Rewards
 
-    With the lift ℓ = (E/(m g l) + 1)/2, E the energy in the pivot's frame (ℓ = 0 at rest hanging, 1 at rest
-    inverted, (1 − cos A)/2 for a swing of amplitude A), capped at 1 and floored at 1e-4:
+    With the lift ℓ = (E/(m g l) + 1)/2, E the energy in the pivot's frame (ℓ = 0 at rest hanging, 1 at rest inverted,
+    (1 − cos A)/2 for a swing of amplitude A), capped at 1 and floored at 1e-4, ℓ before the step and ℓ′ after it:
 
         reward = ln(ℓ′/ℓ) − 0.2 dt
 
-    ℓ before the step, ℓ′ after it. Parametric pumping multiplies ℓ by a factor per cycle, which the logarithm
-    pays alike at every amplitude (a potential-based shaping, Ng et al. 1999); the constant pays for time,
-    0.2 per simulated second. Summed to success: ln(ℓ_T/ℓ₀) − 0.2 t.
+    Parametric pumping multiplies ℓ by a factor per cycle, which the logarithm pays alike at every amplitude (a
+    potential-based shaping, Ng et al. 1999); the constant pays for time, 0.2 per simulated second. Summed to success:
+    ln(ℓ_T/ℓ₀) − 0.2 t.
 
     ## Starting State
 
-    θ₀ uniform on ±[0.05, 0.1] rad from hanging (np_random), at rest, pivot at rest at the centre, t = 0.
-    A pendulum exactly at rest hanging cannot be pumped by vertical motion. Reset options as KapitzaPendulum-v0.
+    θ₀ uniform on ±[0.05, 0.1] rad from hanging (np_random; a pendulum at rest hanging cannot be pumped by vertical
+    motion), at rest, pivot at rest at the centre, t = 0. Reset options as KapitzaPendulum-v0.
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`): the pendulum has stayed within `tolerance` of inverted for
-    the last `hold_time` seconds (rounded up to whole steps). Truncated after 6000 steps (30 s at the default dt).
+    Terminated on success (`info["is_success"]`): the pendulum has stayed within `tolerance` of inverted for the last
+    `hold_time` seconds (rounded up to whole steps). Truncated after 6000 steps (30 s at the default dt).
 
-    Every `info` has KapitzaPendulum-v0's keys, with `"upright_time"`, the time it has been held within
-    `tolerance` of inverted without a break (s), in place of `"max_deviation"`.
+    Every `info` has KapitzaPendulum-v0's keys, with `"upright_time"`, the time it has been held within `tolerance` of
+    inverted without a break (s), in place of `"max_deviation"`.
 
     ## Open Challenge
 
-    No agent of the reference results learns this task: PPO and SAC pump the pendulum up but do not catch and hold
-    it. A behaviour clone of the analytic controller into the same network does (trained with DAgger), so the
-    observation and the action suffice; what is missing is learning the catch, which the reward pays only through
-    the time it saves once the lift reaches its cap. The clones' success and the longest training curve,
-    which begins to catch late in its budget, are under Reference results below; the attempts that did not help (a
-    reward that pays the hold, a curriculum of starts released from every angle) are in the reference-results
-    guide, "What changed, and what is still open".
+    No agent of the reference results learns this task: PPO and SAC pump the pendulum up but do not catch and hold it.
+    A behaviour clone of the analytic controller into the same network does (trained with DAgger), so the observation
+    and the action suffice; what is missing is learning the catch, which the reward pays only through the time it saves
+    once the lift reaches its cap. The clones' success and the longest training curve, which begins to catch late in its
+    budget, are under Reference results below; the attempts that did not help (a reward that pays the hold, a curriculum
+    of starts released from every angle) are in the reference-results guide, "What changed, and what is still open".
     """
 
     name = "KapitzaSwingUp-v0"  # how bad make kwargs name the env
@@ -437,21 +408,10 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
         return info["is_success"]
 
 
-class KapitzaPendulumVectorEnv(TaskVectorEnv):
-    """KapitzaPendulum-v0 over a batch (``gym.make_vec("connenv/KapitzaPendulum-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the single env's step over the rows. Each row's step is cut at its own end stops, so
-    the steppers get one segment length per row."""
-
-    single_env = KapitzaPendulumEnv
-
-    def advance(self, s, u_dot_cmd):
-        return self.env.advance(s, u_dot_cmd, self.stepper, BATCH)
+KapitzaPendulumVectorEnv = vector_env(KapitzaPendulumEnv)
 
 
-class KapitzaSwingUpVectorEnv(KapitzaPendulumVectorEnv):
-    """KapitzaSwingUp-v0 over a batch; as KapitzaPendulumVectorEnv."""
-
-    single_env = KapitzaSwingUpEnv
+KapitzaSwingUpVectorEnv = vector_env(KapitzaSwingUpEnv)
 
 
 PENDULUM = {"dt_max": DT_MAX, "physics": "kapitza.md",

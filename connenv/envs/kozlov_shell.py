@@ -22,10 +22,10 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
-from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -55,42 +55,25 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     r"""
     ## Description
 
-    An elliptic shell, semi-axes a along its body x and b along its body y, floats in an unbounded planar
-    ideal fluid at rest at infinity (Kozlov & Ramodanov 2001). A point mass m inside sits at the body-frame
-    position u, which the controller assigns: an *active constraint* (Bressan). Moving the mass moves the
-    shell, and closed loops of u make it swim. With g = (x, y, θ) the shell's pose, ξ = (v₁, v₂, ω) its body
-    velocity and μ = (P₁, P₂, Π) the body momentum of shell, fluid and mass together,
-
-        μ = I(u) ξ + C(u) u̇,    Ṗ₁ = ω P₂,  Ṗ₂ = −ω P₁,  Π̇ = v₂ P₁ − v₁ P₂    (Kirchhoff)
-
-    with I(u) the locked inertia (shell, mass and the fluid's added masses λ₁ = ρπb², λ₂ = ρπa²,
-    λ₃ = ρπ(a² − b²)²/8) and C(u) the coupling (`connenv.systems.kozlov_shell`). The spatial momentum is
-    conserved. The system is fit for jumps, not strongly: u̇ enters the equations linearly, so a change of u
-    needs its path, here a straight segment at constant speed.
-
-    Model no more than the scene needs: at zero momentum, the default start at rest, μ stays 0 and the motion
-    is purely geometric, ξ = −I⁻¹ C u̇ (the mechanical connection), so the env integrates the reduced state
-    (x, y, θ). A nonzero initial momentum (a reset option) switches that episode to the full model,
-    (x, y, θ, P₁, P₂, Π). At zero momentum the net motion of a closed loop of u does not depend on how fast it
-    is run; loops turn the shell, and figure-eights (a loop and its mirror image run the other way) translate
-    it without net turn. The goal is to bring the shell's centre within `success_radius` of a target.
+    An elliptic shell, semi-axes a along its body x and b along its body y, floats in an unbounded planar ideal fluid at
+    rest at infinity (Kozlov & Ramodanov 2001). A point mass m inside sits at the body-frame position u, which the
+    controller assigns: an *active constraint* (Bressan). Moving the mass moves the shell, through the fluid's added
+    masses λ₁ = ρπb², λ₂ = ρπa², λ₃ = ρπ(a² − b²)²/8 (docs/physics/kozlov-shell.md). With g = (x, y, θ) the
+    shell's pose and μ = (P₁, P₂, Π) the body momentum of shell, fluid and mass: from rest, the default, μ stays 0 and
+    the motion is geometric (a mechanical connection), so the env integrates the reduced state (x, y, θ), and a closed
+    loop of u moves the shell alike however fast it is run (loops turn it, figure-eights translate it). A nonzero
+    initial momentum (a reset option) switches that episode to the full model (Kirchhoff's equations),
+    (x, y, θ, P₁, P₂, Π), whose spatial momentum is conserved. The goal is to bring the shell's centre within
+    `success_radius` of a target.
 
     ## Action Space
 
-    `Box([-1, -1], [1, 1], float32)`; actions outside are clipped, a wrong shape or a non-finite value
-    raises ValueError.
-
-    | Num | Action | Min | Max |
-    |-----|--------|-----|-----|
-    | 0 | commanded mass position along body x: u₁* = action[0] · u1_max | -1 | 1 |
-    | 1 | commanded mass position along body y: u₂* = action[1] · u2_max | -1 | 1 |
-
-    Over the step the mass moves from its current position to u* along the straight segment at constant
-    speed: u̇ = (u* − u)/dt is constant within the step.
+    `Box([-1, -1], [1, 1], float32)`: the commanded mass position u* = (action[0] · u1_max, action[1] · u2_max) in the
+    body frame. Over the step the mass moves from u to u* along the straight segment, u̇ = (u* − u)/dt.
 
     ## Observation Space
 
-    `Box(9,) float32`:
+    `Box(9,) float32`, the target and the momentum clipped to their bounds (the momentum is 0 in the reduced model):
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -104,32 +87,28 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     | 7 | P₂ / (M + m + λ₂), m/s | -10 | 10 |
     | 8 | Π / (J + λ₃), rad/s | -10 | 10 |
 
-    The target and the momentum are clipped to their bounds. The momentum is 0 in the reduced model.
-
     ## Rewards
 
     With d the distance from the shell's centre to the target before the step and d′ after it:
 
         reward = (d − d′) / success_radius − 0.01
 
-    Progress is paid in units of the success radius, one unit per 5 cm at the default; the constant pays for
-    time. Summed to success: (d₀ − d_T)/success_radius − 0.01·steps.
+    Progress in units of the success radius (one per 5 cm at the default) and a cost of time. Summed to success:
+    (d₀ − d_T)/success_radius − 0.01·steps.
 
     ## Starting State
 
-    At rest, μ = 0, at the origin with θ = 0 and the mass at the centre, u = 0, t = 0. The target is drawn by
-    np_random at a distance uniform in [0.5, 1.0] m, in a uniform direction. `reset(options={"state": {...},
-    "target": (x, y)})` sets any of `x`, `y` (within ±100 m), `theta` (in [−2π, 2π]), `u` (2, inside the box
-    |u₁| ≤ u1_max, |u₂| ≤ u2_max), `momentum` (P₁, P₂, Π in the body frame, within the observed bounds
-    |P₁| ≤ 10 (M + m + λ₁), |P₂| ≤ 10 (M + m + λ₂), |Π| ≤ 10 (J + λ₃)) and the target (within ±100 m) exactly;
-    a value outside is refused (ValueError).
+    At rest, μ = 0, at the origin with θ = 0 and the mass at the centre, u = 0, t = 0; the target at a distance uniform
+    in [0.5, 1.0] m in a uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of
+    `x`, `y` (within ±100 m), `theta` (in [−2π, 2π]), `u` (2, in the box |u₁| ≤ u1_max, |u₂| ≤ u2_max), `momentum`
+    (P₁, P₂, Π in the body frame, within the observed bounds) and the target (within ±100 m) exactly.
 
     ## Episode End
 
-    Terminated when the shell's centre is within `success_radius` of the target, checked at the end of each
-    step (`info["is_success"]`). Truncated after 300 steps (30 s at the default dt) by the registration's time
-    limit; the gait planner (`agents.controllers.kozlov_shell`) needs at most 103 steps on seeds 0–99, and 111 on targets 1 m away
-    in 90 directions.
+    Terminated when the shell's centre is within `success_radius` of the target at the end of a step
+    (`info["is_success"]`). Truncated after 300 steps (30 s at the default dt) by the registration's time limit; the
+    gait planner (`agents.controllers.kozlov_shell`) needs at most 103 steps on seeds 0–99, and 111 on targets 1 m
+    away in 90 directions.
 
     ## Arguments
 
@@ -145,28 +124,17 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     | u2_max | 0.25 | [2.5e-7, 2.5e5] m, likewise |
     | dt | 0.1 | [1e-12, 1] s |
     | success_radius | 0.05 | [5e-8, 0.5) m |
-    | integrator | "magnus" (atol 1e-10) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-8, atol 1e-10 | see `connenv.core.steppers` |
+    | integrator | "magnus" | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
+    | substeps / rtol, atol | rtol 1e-8, atol 1e-10 | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
-    beyond, the fluid's added masses (ρπa², ρπ(a² − b²)²/8) and the reward (per success_radius) overflow.
-
-    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters
-    (among them the mass ratio m/(M + λ₁)): a non-finite state, or, in the full model, a spatial momentum that
-    has moved by more than 0.1 of its norm since reset. Semi-implicit Euler updates μ, then the pose with the
-    new μ; in the reduced model μ = 0 and it is explicit Euler.
-
-    The default stepper, `integrator="magnus"`, steps the reduced model by the Lie-group step on SE(2)
-    (`connenv.core.lie`): θ = ∫ω and the translation ∫R(θ) v by Gauss–Legendre quadrature, with a rule
-    (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
-    on the motions in one dt between the corners, edge midpoints and centre of the box (corner to corner is the
-    worst). The full model has no connection and goes to DOP853 (rtol 1e-8, atol 1e-10). Their pose and spatial
-    momentum errors, and their place on the work–precision chart: docs/speed-accuracy.md, which
-    `python -m connenv.bench precision --env shell` measures.
+    The default steps the reduced model by the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule fixed
+    at construction as the cheapest that meets atol on every motion of the mass the box admits in one dt, and the full
+    model, which has no connection, by DOP853. Semi-implicit Euler is explicit Euler on the reduced model. Diverged: in
+    the full model, a spatial momentum moved by more than 0.1 of its norm since reset.
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `u` (2), `momentum` (P₁, P₂, Π, body frame), `t`, in SI),
-    `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m),
-    `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
+    `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m), `"model"`
+    ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
     """
 
     name = "KozlovShell-v0"  # how bad make kwargs name the env
@@ -276,11 +244,10 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, np.zeros(3))
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
-    def advance(self, s, u_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, u_cmd, stepper, ops=SCALAR):
         """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum. One
         state, or rows with the vector env's stepper and ops=BATCH."""
         segments = [(s.u, (u_cmd - s.u) / self.dt, self.dt)]
-        stepper = self.stepper if stepper is None else stepper
         pose, momentum = self.swim(s, segments, segments, stepper, ops)
         return ShellState(pose, momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
 
@@ -306,15 +273,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         return {"u": ops.vector(s.u)}
 
 
-class KozlovShellVectorEnv(TaskVectorEnv):
-    """KozlovShell-v0 over a batch (``gym.make_vec("connenv/KozlovShell-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the single env's step over the rows. Rows reset at rest step the reduced model, rows
-    reset with a momentum the full one."""
-
-    single_env = KozlovShellEnv
-
-    def advance(self, s, u_cmd):
-        return self.env.advance(s, u_cmd, self.stepper, BATCH)
+KozlovShellVectorEnv = vector_env(KozlovShellEnv)
 
 
 @functools.cache

@@ -25,7 +25,7 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import TaskVectorEnv, vector_env
 from connenv.systems.rolling_ball import (
     RollingBall,
     attitude_error,
@@ -91,31 +91,25 @@ class RollingBallEnv(TaskEnv):
     ## Description
 
     A ball of radius ρ rolls on a plane without slipping and without turning (spinning about the vertical); the
-    controller assigns the velocity v of its centre. A kinematic model is all this scene needs, since the
-    velocities are the controls: with R the attitude (body → space),
+    controller assigns the velocity v of its centre. With R the attitude (body → space), a kinematic model:
 
-        ω = e_z × v / ρ,    Ṙ = ω̂ R,    (ẋ, ẏ) = v,
+        ω = e_z × v / ρ,    Ṙ = ω̂ R,    (ẋ, ẏ) = v.
 
-    and a step at constant v is exact, R ← exp(Δt ω̂) R (Rodrigues). Rolling straight tilts the ball about a
-    horizontal axis; turning it about the vertical takes a loop, by the spherical area the loop encloses
-    (holonomy; Lioe 2004, Lawton slides 7–10). The goal is to reach a target attitude R*, position free; the
-    shortest way is an arc of a circle (the sub-Riemannian geodesic), whose length `info["distance"]` gives.
+    Rolling straight tilts the ball about a horizontal axis; turning it about the vertical takes a loop, by the
+    spherical area the loop encloses (holonomy; Lioe 2004, Lawton slides 7–10). The goal is to reach a target attitude
+    R*, position free; the shortest way is an arc of a circle (the sub-Riemannian geodesic), whose length
+    `info["distance"]` gives.
 
     ## Action Space
 
-    `Box(-1, 1, (2,), float32)`: v = v_max · a. An action with |a| > 1 is projected radially onto the unit disk
-    (the speed is at most v_max, the direction kept); a wrong shape or a non-finite value raises ValueError.
-
-    | Num | Action | Min | Max |
-    |-----|--------|-----|-----|
-    | 0 | vx / v_max | -1 | 1 |
-    | 1 | vy / v_max | -1 | 1 |
+    `Box(-1, 1, (2,), float32)`: v = v_max · a, (vx, vy). An action with |a| > 1 is projected radially onto the unit
+    disk (the speed is at most v_max, the direction kept) instead of clipped.
 
     ## Observation Space
 
-    `Box(-1, 1, (6,), float32)`: the attitude error P = R R*ᵀ in the continuous 6-D form (its first two
-    columns; Zhou et al. 2019). P = I at the target. In the space frame the error rolls as the ball does,
-    Ṗ = ω̂ P, so the observation is a Markov state (the body-frame error R*ᵀR is not: its rate depends on R*).
+    `Box(-1, 1, (6,), float32)`: the attitude error P = R R*ᵀ in the continuous 6-D form (its first two columns; Zhou
+    et al. 2019), P = I at the target. In the space frame the error rolls as the ball does, Ṗ = ω̂ P, so the observation
+    is a Markov state (the body-frame error R*ᵀR is not: its rate depends on R*).
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -128,21 +122,21 @@ class RollingBallEnv(TaskEnv):
 
         reward = e − e′ − 0.01
 
-    Summed to success: e₀ − e_T − 0.01·steps. A step changes e by at most v_max·dt/ρ (0.1 rad by default);
-    the constant pays for time.
+    Summed to success: e₀ − e_T − 0.01·steps. A step changes e by at most v_max·dt/ρ (0.1 rad by default); the
+    constant pays for time.
 
     ## Starting State
 
     R = I at the origin, t = 0, and R* uniform on SO(3) (scipy's `Rotation.random` on np_random).
-    `reset(options={"state": {"x", "y", "R"}, "target": R*})` sets any of them; x and y must lie in
-    [−12πρ, 12πρ] (RollingBallPose-v0's observed range), R and R* must be rotation matrices to 1e-9
-    (‖RᵀR − I‖, |det R − 1|), else ValueError: they are never re-orthonormalized.
+    `reset(options={"state": {"x", "y", "R"}, "target": R*})` sets any of them; x and y in [−12πρ, 12πρ]
+    (RollingBallPose-v0's observed range), R and R* rotation matrices to 1e-9 (‖RᵀR − I‖, |det R − 1|), never
+    re-orthonormalized.
 
     ## Episode End
 
     Terminated when e ≤ `tolerance` (`info["is_success"]`). Truncated after 200 steps by the registration's time
-    limit: the holonomy planner, the longer of the two reference controllers, needs at most ρ(π + π + π)/(v_max dt)
-    + 4 = 99 steps.
+    limit: the holonomy planner, the longer of the two reference controllers, needs at most ρ(π + π + π)/(v_max dt) + 4
+    = 99 steps.
 
     ## Arguments
 
@@ -153,20 +147,14 @@ class RollingBallEnv(TaskEnv):
     | dt | 0.1 | [1e-12, 100] s |
     | tolerance | 0.05 | [5e-8, π) rad |
     | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
-    | substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | substeps / rtol, atol | | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
-    The default exact step is the closed form for any radius and dt: R stays on SO(3) to rounding, and straight
-    rolls are Ry(vt/ρ) (tests/test_rolling_ball_*.py). Its drift off SO(3) and its cost against the other
-    steppers are on docs/speed-accuracy.md, which `python -m connenv.bench precision --env ball` measures.
+    The default step at constant v is exact, R ← exp(dt ω̂) R (Rodrigues), for any radius and dt; semi-implicit Euler is
+    refused (R is no (q, p) pair). Diverged: R more than 1e-6 off SO(3) (‖RᵀR − I‖).
 
-    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
-    non-finite state, or R more than 1e-6 off SO(3) (‖RᵀR − I‖, the invariant of Ṙ = ω̂R). Semi-implicit Euler
-    is refused (ValueError): the model is kinematic, R is no (q, p) pair, and the method would be explicit Euler.
-
-    Every `info` has `"state"` (`x`, `y`, `R` (3×3), `t`), `"angle_error"` (e, rad), `"path_length"` (m rolled
-    since reset), `"distance"` (the optimal arc's length from the start attitude, m), `"path_ratio"` (path
-    length / distance; 1 where the start is the target, distance 0) and `"is_success"`.
+    Every `info` has `"state"` (`x`, `y`, `R` (3×3), `t`), `"angle_error"` (e, rad), `"path_length"` (m rolled since
+    reset), `"distance"` (the optimal arc's length from the start attitude, m), `"path_ratio"` (path length / distance;
+    1 where the start is the target) and `"is_success"`.
     """
 
     name = "RollingBall-v0"  # how bad make kwargs name the env
@@ -244,10 +232,7 @@ class RollingBallEnv(TaskEnv):
             return s
         return s.replace(distance=self.system.optimal_arc(Rotation.from_matrix(s.error)).length)
 
-    def advance(self, s, v):
-        return self.rolled(s, v, self.stepper)
-
-    def rolled(self, s, v, stepper, ops=SCALAR):
+    def advance(self, s, v, stepper, ops=SCALAR):
         """The state after a step at velocity v (one, or one per row with ops=BATCH and a batched stepper)."""
         y = s.R.reshape(*s.R.shape[:-2], 9)
         R = run_segments(stepper, self.system, y, [(s.position, v, self.dt)])[0].reshape(s.R.shape)
@@ -311,9 +296,9 @@ class RollingBallPoseEnv(RollingBallEnv):
     r"""
     ## Description
 
-    RollingBall-v0's ball, now to reach the target attitude R* *and* return its centre to the origin. Rolling
-    the centre along a closed path changes the attitude by holonomy, so position and attitude are steered
-    together: five degrees of freedom from two controls.
+    RollingBall-v0's ball, now to reach the target attitude R* *and* return its centre to the origin. Rolling the centre
+    along a closed path changes the attitude by holonomy, so position and attitude are steered together: five degrees
+    of freedom from two controls.
 
     ## Observation Space
 
@@ -335,22 +320,22 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     ## Episode End
 
-    Terminated when e ≤ `tolerance` and d ≤ `position_tolerance` (0.05 m). Truncated after 300 steps: the
-    holonomy planner needs at most ρ(2π + 2π)/(v_max dt) + 7 = 133 steps.
+    Terminated when e ≤ `tolerance` and d ≤ `position_tolerance` (0.05 m). Truncated after 300 steps: the holonomy
+    planner needs at most ρ(2π + 2π)/(v_max dt) + 7 = 133 steps.
 
     ## Arguments
 
-    Those of RollingBall-v0, and `position_tolerance` = 0.05, in [5e-8, 5e4] m. Everything else, the starting state,
-    the action and `info` (plus `"position_error"`, d), is RollingBall-v0's.
+    Those of RollingBall-v0, and `position_tolerance` = 0.05, in [5e-8, 5e4] m. Everything else, the starting state, the
+    action and `info` (plus `"position_error"`, d), is RollingBall-v0's.
 
     ## Open Challenge
 
-    No agent of the reference results learns this task. The reward is a trap for local improvement: a roll of
-    length ℓ turns the ball by at most ℓ/ρ and moves it ℓ away, so from the origin no action pays more than standing
-    still, and the target is reached only through a loop whose first half loses reward. The holonomy planner keeps
-    a plan, which a memoryless network has not been shown to reproduce. The clones' success and the longest training
-    curve are under Reference results below; the planner, the one-step greedy policy and the attempts are in the
-    reference-results guide ("Why it did not learn, and what did", "What changed, and what is still open").
+    No agent of the reference results learns this task. The reward is a trap for local improvement: a roll of length ℓ
+    turns the ball by at most ℓ/ρ and moves it ℓ away, so from the origin no action pays more than standing still, and
+    the target is reached only through a loop whose first half loses reward. The holonomy planner keeps a plan, which a
+    memoryless network has not been shown to reproduce. The clones' success and the longest training curve are under
+    Reference results below; the planner, the one-step greedy policy and the attempts are in the reference-results
+    guide ("Why it did not learn, and what did", "What changed, and what is still open").
     """
 
     name = "RollingBallPose-v0"  # how bad make kwargs name the env
@@ -385,8 +370,8 @@ class RollingBallGoalEnv(RollingBallEnv):
     r"""
     ## Description
 
-    RollingBall-v0's task as a goal-conditioned env for hindsight experience replay (SB3's `HerReplayBuffer`),
-    after gymnasium-robotics' GoalEnv: dict observations and a vectorized `compute_reward`.
+    RollingBall-v0's task as a goal-conditioned env for hindsight experience replay (SB3's `HerReplayBuffer`), after
+    gymnasium-robotics' GoalEnv: dict observations and a vectorized `compute_reward`.
 
     ## Observation Space
 
@@ -402,16 +387,14 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     ## Rewards
 
-    Sparse: `compute_reward(achieved_goal, desired_goal, info)` = −1 while the geodesic angle between the two
-    exceeds `tolerance`, else 0; it takes batches (leading axes) and the env's reward is its value.
+    Sparse: `compute_reward(achieved_goal, desired_goal, info)` = −1 while the geodesic angle between the two exceeds
+    `tolerance`, else 0; it takes batches (leading axes) and the env's reward is its value. Everything else is
+    RollingBall-v0's; `compute_terminated` is success, `compute_truncated` False (the time limit truncates).
 
-    Everything else is RollingBall-v0's; `compute_terminated` is success, `compute_truncated` False (the time
-    limit truncates).
-
-    `compute_reward` is a method of this env, not of the wrappers `gym.make` puts around it: Gymnasium 1.x
-    wrappers no longer forward unknown attributes. HER is unaffected (SB3's vec envs reach it through
-    `env_method`, which unwraps), but SB3's `check_env(gym.make(...))` raises AttributeError on it: check the env
-    itself, `check_env(env.unwrapped)`.
+    `compute_reward` is a method of this env, not of the wrappers `gym.make` puts around it (Gymnasium 1.x wrappers no
+    longer forward unknown attributes). HER is unaffected (SB3's vec envs reach it through `env_method`, which
+    unwraps), but SB3's `check_env(gym.make(...))` raises AttributeError on it: check the env itself,
+    `check_env(env.unwrapped)`.
     """
 
     name = "RollingBallGoal-v0"  # how bad make kwargs name the env
@@ -470,20 +453,11 @@ class RollingBallVectorEnv(TaskVectorEnv):
         super().__init__(num_envs, max_episode_steps, **kwargs)
         self.env.measures_distance = bool(measure_distance)
 
-    def advance(self, s, v):
-        return self.env.rolled(s, v, self.stepper, BATCH)
+
+RollingBallPoseVectorEnv = vector_env(RollingBallPoseEnv, RollingBallVectorEnv)
 
 
-class RollingBallPoseVectorEnv(RollingBallVectorEnv):
-    """RollingBallPose-v0 over a batch; as RollingBallVectorEnv."""
-
-    single_env = RollingBallPoseEnv
-
-
-class RollingBallGoalVectorEnv(RollingBallVectorEnv):
-    """RollingBallGoal-v0 over a batch, dict observations of arrays; as RollingBallVectorEnv."""
-
-    single_env = RollingBallGoalEnv
+RollingBallGoalVectorEnv = vector_env(RollingBallGoalEnv, RollingBallVectorEnv)
 
 
 BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse", "state_keys": {"x": 0, "y": 0},

@@ -19,8 +19,9 @@ from connenv.core.validation import (
     check_vector,
 )
 from connenv.envs.base import SCALAR
-from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv  # DT_MAX: its dt range
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.systems import rolling_coin
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -40,26 +41,23 @@ class RollingCoinEnv(ConnectionEnv):
     r"""
     ## Description
 
-    A coin of radius R stands upright on the plane and rolls without slipping (`connenv.systems.rolling_coin`).
-    The controller steers its heading θ (from the y axis) and rolls it by φ; its contact point (x, y) follows
-    through the mechanical connection of rolling,
+    A coin of radius R stands upright on the plane and rolls without slipping (`connenv.systems.rolling_coin`). The
+    controller steers its heading θ (from the y axis) and rolls it by φ; its contact point (x, y) follows through the
+    mechanical connection of rolling,
 
         ẋ = R sin θ φ̇,    ẏ = R cos θ φ̇,
 
-    ConnectionEnv on the group ℝ² with the shape (θ, φ). Steering alone never moves the coin, rolling moves it along
-    its heading: parking it beside where it stands takes a manoeuvre. The step is exact in closed form (the chord of
-    the arc rolled at constant rates), for any rates and dt.
+    ConnectionEnv on the group ℝ² with the shape (θ, φ). Steering alone never moves the coin, rolling moves it along its
+    heading: parking it beside where it stands takes a manoeuvre.
 
     ## Action Space
 
-    `Box(-1, 1, (2,), float32)`: (θ̇, φ̇) = (a₀ · max_steer_rate, a₁ · max_roll_rate), constant over the step;
-    outside the box clipped; a wrong shape or a non-finite value raises ValueError. A float64 action is used at
-    float64 precision.
+    `Box(-1, 1, (2,), float32)`: (θ̇, φ̇) = (a₀ · max_steer_rate, a₁ · max_roll_rate), constant over the step.
 
     ## Observation Space
 
-    `Box(4,) float32`: the target seen from the coin, with d = (x* − x, y* − y), the heading f = (sin θ, cos θ)
-    and its right-hand side r = (cos θ, −sin θ):
+    `Box(4,) float32`: the target seen from the coin, with d = (x* − x, y* − y), the heading f = (sin θ, cos θ) and its
+    right-hand side r = (cos θ, −sin θ):
 
     | Num | Observation | Min | Max | Unit |
     |-----|-------------|-----|-----|------|
@@ -70,23 +68,23 @@ class RollingCoinEnv(ConnectionEnv):
 
     ## Rewards
 
-    With the cost c = |d| + R |θ* − θ| (the heading error wrapped into [−π, π], weighed by the radius: m),
-    c before the step and c′ after it:
+    With the cost c = |d| + R |θ* − θ| (the heading error wrapped into [−π, π], weighed by the radius: m), c before the
+    step and c′ after it:
 
         reward = c − c′ − 0.01 + 1 · (parked after the step)
 
     ## Starting State
 
-    The coin at the origin, θ = 0, φ = 0, t = 0. The target: at a distance drawn uniformly in [1, 3] m in a
-    uniform direction, its heading θ* uniform in [−π, π). `reset(options={"state": {"x", "y", "theta", "phi"},
-    "target": (x*, y*, θ*)})` sets any of them: x, y, φ and x*, y* within ±1e3, θ and θ* within [−2π, 2π], else
-    ValueError.
+    The coin at the origin, θ = 0, φ = 0, t = 0. The target: at a distance uniform in [1, 3] m in a uniform direction,
+    its heading θ* uniform in [−π, π). `reset(options={"state": {"x", "y", "theta", "phi"}, "target": (x*, y*, θ*)})`
+    sets any of them: x, y, φ and x*, y* within ±1e3, θ and θ* within [−2π, 2π].
 
     ## Episode End
 
     Terminated when parked (`info["is_success"]`): |d| ≤ `position_tolerance` (0.05 m) and |θ* − θ| ≤
-    `heading_tolerance` (0.05 rad, wrapped); φ is free. Truncated after 200 steps (20 s) by the registration's
-    time limit; the reference planner (`agents.controllers.rolling_coin.CoinPlanner`) needs at most π/2 + 3/(R · 2) + π s, 78 steps.
+    `heading_tolerance` (0.05 rad, wrapped); φ is free. Truncated after 200 steps (20 s) by the registration's time
+    limit; the reference planner (`agents.controllers.rolling_coin.CoinPlanner`) needs at most π/2 + 3/(R · 2) + π s,
+    78 steps.
 
     ## Arguments
 
@@ -99,9 +97,9 @@ class RollingCoinEnv(ConnectionEnv):
     | position_tolerance | 0.05 | [5e-8, 5e4] m |
     | heading_tolerance | 0.05 | [5e-8, π) rad |
     | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | atol (magnus) / substeps (euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | atol (magnus) / substeps / rtol, atol | | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
+    The default step is exact in closed form (the chord of the arc rolled at constant rates), for any rates and dt.
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `t`), `"target"` (x*, y*, θ*), `"distance"` (|d|, m),
     `"heading_error"` (θ* − θ wrapped into [−π, π], rad) and `"is_success"`.
@@ -242,11 +240,7 @@ class RollingCoinEnv(ConnectionEnv):
         return renderer.draw(np.array([*self.track, s.g]), s.s[0], s.s[1], s.target, s.t)
 
 
-class RollingCoinVectorEnv(ConnectionVectorEnv):
-    """RollingCoin-v0 over a batch (``gym.make_vec("connenv/RollingCoin-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): every row stepped by the same closed form as the single env."""
-
-    single_env = RollingCoinEnv
+RollingCoinVectorEnv = vector_env(RollingCoinEnv)
 
 
 SPECS = (

@@ -19,9 +19,9 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface
 from connenv.systems.surfaces import LENGTH_MIN, check_surface, make_surface
 
@@ -54,38 +54,23 @@ class RollingCoinSurfaceEnv(TaskEnv):
     r"""
     ## Description
 
-    A vertical coin of radius R and mass m rolls without slipping over a surface of height z(x, y), under
-    gravity g. The controller assigns its heading θ (measured from the y-axis), an active constraint, by its
-    rate; gravity does the rest. Rolling forbids any motion but along the heading,
-
-        ẋ = R sin θ φ̇,    ẏ = R cos θ φ̇,    (3/2) m R² φ̈ = − m g R (z_x sin θ + z_y cos θ),
-
-    (φ the rolling angle; Hand & Finch pp. 62–64), so the coin goes where it points, at the speed the slope
-    along its heading gives it. Steering does no work: the energy E = ¾ m R² φ̇² + m g z is conserved whatever
-    the steering, and a coin at rest reaches exactly the points below it. On the default surface, a plane
-    sloping down along +y with a hill in the way, the target lies behind the hill: rolling straight at it, the
-    coin climbs the hill, stops short and rolls back; it has to be steered around. At a constant heading the
-    coin rolls on a straight line whatever the surface, so reaching a target around an obstacle takes steering.
-
-    The rolling constraint is nonholonomic, so the coin is not one of `ActiveConstraintEnv`'s holonomic
-    systems (free coordinates with momenta in a Lagrangian of q and u), nor a `ConnectionEnv` (φ is not
-    assigned but driven by gravity): the env is a task of the same layer (`TaskEnv`), stepped through the same
-    control segments and steppers. On a plane the step is exact, in closed form at any constant θ̇
-    (`connenv.systems.rolling_coin_surface`).
+    A vertical coin of radius R and mass m rolls without slipping over a surface of height z(x, y), under gravity g. The
+    controller assigns its heading θ (from the y-axis), an active constraint, by its rate; gravity does the rest: the
+    coin goes where it points, ẋ = R sin θ φ̇, ẏ = R cos θ φ̇ (φ the rolling angle), at the speed the slope along its
+    heading gives it (docs/physics/RollingCoinSurface.md). Steering does no work: E = ¾ m R² φ̇² + m g z is conserved,
+    and a coin at rest reaches exactly the points below it. At a held heading it rolls on a straight line, so reaching
+    a target around an obstacle takes steering: on the default surface, a plane sloping down along +y with a hill in
+    the way, the target lies behind the hill.
 
     ## Action Space
 
-    `Box(-1, 1, (1,), float32)`; actions outside are clipped, a wrong shape or a non-finite value raises
-    ValueError.
-
-    | Num | Action | Min | Max |
-    |-----|--------|-----|-----|
-    | 0 | steering rate θ̇ = a · max_steer_rate, held over the step | -1 | 1 |
+    `Box(-1, 1, (1,), float32)`: the steering rate θ̇ = a · max_steer_rate, held over the step.
 
     ## Observation Space
 
-    `Box(9,) float32`, with L the arena's half-width, D = `target_distance`, v* = √(4 g Δz/3) the speed of a
-    drop through the arena's height range Δz (z_max − z_min over |x|, |y| ≤ L) and G the steepest slope there:
+    `Box(9,) float32`, each entry clipped to its bounds (the position once the coin has left the arena, which ends the
+    episode), with L the arena's half-width, D = `target_distance`, v* = √(4 g Δz/3) the speed of a drop through the
+    arena's height range Δz (z_max − z_min over |x|, |y| ≤ L) and G the steepest slope there:
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -99,9 +84,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
     | 7 | z_x / G, the slope at the coin | -1 | 1 |
     | 8 | z_y / G | -1 | 1 |
 
-    Each entry is clipped to its bounds (the position once the coin has left the arena, which ends the
-    episode).
-
     ## Rewards
 
     With d the distance from the coin to the target before the step and d′ after it (m):
@@ -112,30 +94,28 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
     ## Starting State
 
-    At rest (φ̇ = 0, φ = 0) at the start, the origin (on the bowl (0, −4)), with the heading θ uniform in
-    [−π, π) (np_random). The target is drawn at `target_distance` (4 m) from the start, in a direction within
-    ±`target_angle` (0.25 rad) of the steepest descent there, uniform: on the default hill, 4 m down the slope
-    and up to 1 m to either side, straight behind the hill. The construction checks that every such target
-    lies in the arena and below the start, so that the coin can reach it. `reset(options={"state": {...},
-    "target": (x, y)})` sets any of `x`, `y` (in the arena), `theta`, `phi` (in [−2π, 2π]), `phi_dot` (|R φ̇|
-    ≤ 3 v*) and the target (in the arena) exactly; a value outside is refused (ValueError). A target above the
-    coin's energy cannot be reached.
+    At rest (φ̇ = 0, φ = 0) at the origin, with the heading θ uniform in [−π, π) (np_random). The target lies at
+    `target_distance` (4 m) from the start, in a direction uniform within ±`target_angle` (0.25 rad) of the steepest
+    descent there: on the default hill, 4 m down the slope and up to 1 m to either side, straight behind the hill. The
+    construction checks that every such target lies in the arena and below the start, so that the coin can reach it.
+    `reset(options={"state": {...}, "target": (x, y)})` sets any of `x`, `y` (in the arena), `theta`, `phi` (in
+    [−2π, 2π]), `phi_dot` (|R φ̇| ≤ 3 v*) and the target (in the arena) exactly; a target above the coin's energy cannot
+    be reached.
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`): the chord of the step, the segment from where the coin
-    started it to where it ended it, passes within `tolerance` (0.1 m) of the target. The chord stands for the
-    track, which curves away from it by at most v dt² max_steer_rate/8 (2.5 mm at 4 m/s, the default
-    parameters). Terminated too, without success, when the coin leaves the arena, |x| or |y| > L. Truncated
-    after 200 steps (10 s at the default dt) by the registration's time limit.
+    Terminated on success (`info["is_success"]`): the chord of the step, from where the coin started it to where it
+    ended it, passes within `tolerance` (0.1 m) of the target; the track curves away from the chord by at most
+    v dt² max_steer_rate/8 (2.5 mm at 4 m/s with the defaults). Terminated too, without success, when the coin leaves
+    the arena, |x| or |y| > L. Truncated after 200 steps (10 s at the default dt) by the registration's time limit.
 
     ## Arguments
 
     | kwarg | default | range |
     |---|---|---|
     | surface | "hill" | "plane", "bowl", "hill", or a sympy expression in x and y (or its text) |
-    | slope | None: (0, −0.25) | (sx, sy), each in [−10, 10]; the plane's and the hill's tilt, z = sx x + sy y (+ hill) |
-    | surface_params | None | bowl: radius=5.0 in [1e-3, 1e3] (z = (x² + y²)/(2 radius)); hill: height=1.0 in [0, 1e3], width=0.6 in [1e-3, 1e3], center=(0, 2); a sympy surface: its symbols besides x and y, each in [−1e3, 1e3] |
+    | slope | None: (0, −0.25) | (sx, sy), each in [−10, 10]: the plane's and hill's tilt, z = sx x + sy y (+ hill) |
+    | surface_params | None | per surface (below) |
     | radius | 0.5 | [1e-3, 1e3] m |
     | mass | 1.0 | [1e-6, 1e3] kg |
     | g | 9.81 | [1e-6, 1e3] m/s² |
@@ -145,22 +125,21 @@ class RollingCoinSurfaceEnv(TaskEnv):
     | target_distance | 4.0 | (0, 1e3] m |
     | target_angle | 0.25 | [0, π/2] rad |
     | arena | 6.0 | (0, 1e3] m, the half-width L of the square arena |
-    | integrator | None: "exact" on a plane, else "rk4" with 8 substeps | "exact" (plane only), "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy) | | see `connenv.core.steppers` |
+    | integrator | "exact" on a plane, else "rk4" | "exact" (plane only), "euler", "semi_implicit_euler", "rk4", |
+    | | | "dop853", "rk45", "lsoda", "radau" |
+    | substeps / rtol, atol | 8 substeps (rk4) | the stepper's |
 
-    The defaults' errors and cost against the other steppers, and where they stand on the work–precision chart,
-    are on docs/speed-accuracy.md, which `python -m connenv.bench precision --env coin_surface coin_plane`
-    measures; the tests check RK4 ×8's energy over an episode of random steering on the default surfaces. Fixed
-    steps fail on surfaces curved enough for the dt (where: `python -m connenv.bench stability --env
-    coin_surface`, charted on the env's docs page); there take `integrator="dop853"`. Semi-implicit Euler splits the state into q = (x, y, φ) and φ̇, which stands for the
-    momentum (3/2) m R² φ̇.
+    `surface_params`: bowl: radius=5.0 in [1e-3, 1e3] (z = (x² + y²)/(2 radius)); hill: height=1.0 in [0, 1e3],
+    width=0.6 in [1e-3, 1e3], center=(0, 2); a sympy surface: its symbols besides x and y, each in [−1e3, 1e3].
 
-    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
-    non-finite state, or an energy error |E − E₀| past 1e-3 m g Δz (Δz as in the observation).
+    On a plane the default step is exact, in closed form at any constant θ̇. Fixed steps fail on surfaces curved enough
+    for the dt (where: `python -m connenv.bench stability --env coin_surface`); there take `integrator="dop853"`. On a
+    plane the chart is `--env coin_plane`. Semi-implicit Euler takes q = (x, y, φ) and φ̇ for the momentum
+    (3/2) m R² φ̇. Diverged: an energy error |E − E₀| past 1e-3 m g Δz (Δz as in the observation).
 
-    Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `phi_dot`, `t`, in SI), `"energy"` (E, J, z = 0 the
-    reference height), `"distance"` (d′, m), `"miss"` (the closest approach of the step's chord, m),
-    `"left_arena"` and `"is_success"`.
+    Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `phi_dot`, `t`, in SI), `"energy"` (E, J, z = 0 the reference
+    height), `"distance"` (d′, m), `"miss"` (the closest approach of the step's chord, m), `"left_arena"` and
+    `"is_success"`.
     """
 
     name = "RollingCoinSurface-v0"  # how bad make kwargs name the env
@@ -305,10 +284,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
         phi_dot = check_number("state phi_dot", state.get("phi_dot", 0.0), -bound, bound)
         return np.array([x, yy, phi, phi_dot]), theta
 
-    def advance(self, s, rate):
-        return self.rolled(s, rate, self.stepper)
-
-    def rolled(self, s, rate, stepper, ops=SCALAR):
+    def advance(self, s, rate, stepper, ops=SCALAR):
         """The state after a step at θ̇ = rate (one, or one per row with ops=BATCH and a batched stepper)."""
         theta, theta_dot = ops.column(s.theta), ops.column(rate)
         if ops is SCALAR:
@@ -378,14 +354,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
         }
 
 
-class RollingCoinSurfaceVectorEnv(TaskVectorEnv):
-    """RollingCoinSurface-v0 over a batch (``gym.make_vec("connenv/RollingCoinSurface-v0", num_envs=N)``; see
-    ``connenv.envs.vector``); takes the single env's make kwargs."""
-
-    single_env = RollingCoinSurfaceEnv
-
-    def advance(self, s, rate):
-        return self.env.rolled(s, rate, self.stepper, BATCH)
+RollingCoinSurfaceVectorEnv = vector_env(RollingCoinSurfaceEnv)
 
 
 SPECS = (

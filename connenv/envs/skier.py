@@ -11,9 +11,9 @@ from gymnasium import spaces
 from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import check_dt, check_keys, check_number, check_scale, check_stepper_options
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
+from connenv.envs.base import SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from connenv.systems.backend import components, namespace
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
@@ -55,33 +55,22 @@ class SkierEnv(TaskEnv):
     r"""
     ## Description
 
-    A skier on a narrow trail y = f(x) in a vertical plane pumps by raising and
-    lowering the barycentre (Bressan): the controller assigns its height h above
-    the trail, along the trail's normal, an *active constraint*. With x the
-    horizontal position of the feet, σ = √(1 + f′²), curvature κ = f″/σ³ and slope
-    angle φ (tan φ = f′), the barycentre moves with T = ½ m [(1 − κh)² σ² ẋ² + ḣ²]
-    in the potential V = m g (f + h cos φ); p = m (1 − κh)² σ² ẋ. The skier is
-    strongly fit for jumps: a jump of h leaves (x, p) unchanged. Standing up
-    where the trail curves up and the skier is fast, and crouching at the turning
-    points, pumps energy in, as on a swing (on the circular `halfpipe` it is
-    exactly a swing of radius R − h). The goal is to escape the valley: reach a
-    rim, or `target_x` on a trail without rims.
+    A skier on a narrow trail y = f(x) in a vertical plane pumps by raising and lowering the barycentre (Bressan): the
+    controller assigns its height h above the trail, along the trail's normal, an *active constraint*. x is the feet's
+    horizontal position, σ = √(1 + f′²), κ = f″/σ³ the curvature, φ the slope angle and p = m (1 − κh)² σ² ẋ
+    (docs/physics/skier.md); a jump of h leaves (x, p) unchanged. Standing up where the trail curves up and the skier is
+    fast, and crouching at the turning points, pumps energy in, as on a swing (on the circular `halfpipe` it is exactly
+    a swing of radius R − h). The goal is to escape the valley: reach a rim, or `target_x` on a trail without rims.
 
     ## Action Space
 
-    `Box(-1, 1, (1,), float32)`; actions outside are clipped, a wrong shape or a
-    non-finite value raises ValueError.
-
-    | Num | Action | Min | Max |
-    |-----|--------|-----|-----|
-    | 0 | commanded height: h = h_min + (a + 1)/2 · (h_max − h_min) | -1 | 1 |
-
-    By default h jumps to the command at the start of the step. With
-    `max_height_speed` set, h moves toward it at that speed instead.
+    `Box(-1, 1, (1,), float32)`: the commanded height h = h_min + (a + 1)/2 · (h_max − h_min). h jumps there at the
+    start of the step or, with `max_height_speed`, moves toward it at that speed.
 
     ## Observation Space
 
-    `Box(6,) float32`:
+    `Box(6,) float32`, the position and the speed clipped to their bounds (the position only once the skier has left the
+    domain, after success):
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -92,38 +81,31 @@ class SkierEnv(TaskEnv):
     | 4 | (h − h_mid)/h_half over [h_min, h_max] | -1 | 1 |
     | 5 | κ h_max, the curvature at the feet in units of 1/h_max | -k* | k* |
 
-    k* is max |κ| h_max over the trail. The position and the speed are clipped
-    to their bounds (the position only once the skier has left the domain, after
-    success).
+    k* is max |κ| h_max over the trail.
 
     ## Rewards
 
-    With z = E/(m g) the height the barycentre would reach at rest, z₀ its
-    lowest value (at rest at the bottom, crouched) and z* the value that just
-    reaches the goal crouched (at a rim of the valley z* = H + h_min), the
-    progress is ε = (z − z₀)/(z* − z₀), Δz = z* − z₀, and
+    With z = E/(m g) the height the barycentre would reach at rest, z₀ its lowest value (at rest at the bottom,
+    crouched) and z* the value that just reaches the goal crouched (H + h_min at a rim of the valley), the progress is
+    ε = (z − z₀)/(z* − z₀), Δz = z* − z₀, and, ε before the step and ε′ after it,
 
         reward = ln(max(ε′, 1e-4) / max(ε, 1e-4)) − 0.01
 
-    ε before the step, ε′ after it. The logarithm pays each pumping half-cycle
-    for the factor by which it multiplies the energy above the bottom, as on the
-    swing; the constant pays for time. Summed to success: ln(ε_T/ε₀) − 0.01·steps.
+    The logarithm pays each pumping half-cycle for the factor by which it multiplies the energy above the bottom, as on
+    the swing; the constant pays for time. Summed to success: ln(ε_T/ε₀) − 0.01·steps.
 
     ## Starting State
 
-    At rest with h = h_min, x₀ uniform on 0.5 ≤ |x₀ − x_b| ≤ 2.0 m (np_random),
-    x_b the trail's lowest point (x = 0 on the valley). From there escape is
-    impossible at constant h. `reset(options={"state": {...}})` sets any of `x`
-    (in the trail's domain), `x_dot` (within the observed speed, |σẋ| ≤ 3 v*) or
-    `p` (the same bound times m (1 − κh)² σ²), `h` (in [h_min, h_max]) exactly; a
-    value outside is refused (ValueError).
+    At rest with h = h_min, x₀ uniform on 0.5 ≤ |x₀ − x_b| ≤ 2.0 m (np_random), x_b the trail's lowest point (x = 0 on
+    the valley), from where no held h escapes. `reset(options={"state": {...}})` sets any of `x` (in the trail's
+    domain), `x_dot` (|σẋ| ≤ 3 v*, the observed speed) or `p` (that bound times m (1 − κh)² σ²) and `h` (in
+    [h_min, h_max]) exactly.
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`): x at or beyond a rim (|x| ≥ L/2
-    on the valley, the lips on the halfpipe) or at or past `target_x`, checked at
-    the end of each step. Truncated after 1000 steps (50 s at the default dt) by
-    the registration's time limit.
+    Terminated on success (`info["is_success"]`): x at or beyond a rim (|x| ≥ L/2 on the valley, the lips on the
+    halfpipe) or at or past `target_x`, checked at the end of each step. Truncated after 1000 steps (50 s at the default
+    dt) by the registration's time limit.
 
     ## Arguments
 
@@ -134,39 +116,27 @@ class SkierEnv(TaskEnv):
     | mass | 70.0 | [7e-5, 7e7] kg |
     | g | 9.81 | [9.81e-6, 9.81e6] m/s², with dt √(g/9.81) ≤ 10 s |
     | dt | 0.05 | [1e-12, 10] s |
-    | trail | "valley" | "valley", "halfpipe", a sympy expression in x (or its text), or four callables (f, f′, f″, f‴) |
-    | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; user trails: domain=(lo, hi) and the expression's other symbols |
+    | trail | "valley" | "valley", "halfpipe", a sympy expression in x (or its text), or callables (f, f′, f″, f‴) |
+    | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; others: domain=(lo, hi) |
     | target_x | None | required for a trail without rims: a point of the domain above the bottom, Δz ≥ 1e-9 \|z\| |
     | max_height_speed | None | None or [1e-6, 1e6] m/s |
-    | integrator | "rk8_energy" (⌈dt √(g/9.81) / 0.05 s⌉ substeps) where 1 − κ h_max ≥ 0.5 on the whole trail, else "dop853" (rtol 1e-8, atol 1e-10) | "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "gauss6", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4, rk8, rk8_energy, gauss6) / rtol, atol (scipy) / atol (rk8_energy) | | see `connenv.core.steppers` |
+    | integrator | below | "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "gauss6", "dop853", "rk45", |
+    | | | "lsoda", "radau" |
+    | substeps / rtol, atol | below | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
-    Under g the skier moves as under 9.81 m/s² with time scaled by √(g/9.81) (E, p and the speeds scale with it),
-    so the default stepper's substeps follow the scaled step dt √(g/9.81), and that scaled step keeps within the
-    longest dt measured at 9.81 m/s², 10 s.
+    A user trail's `trail_params` also give the values of its expression's other symbols. Under g the skier moves as
+    under 9.81 m/s² with time scaled by √(g/9.81), so the longest dt, and the default's substeps, are those of the
+    scaled step dt √(g/9.81).
 
-    The default stepper depends on how close the barycentre can come to the trail's centre of curvature. Where
-    1 − κ h_max ≥ 0.5 on the whole trail (the default valley and halfpipe), it is "rk8_energy": DOP853's
-    eighth-order formula at a fixed substep of at most 0.05 s, followed, where h is held, by one Newton step back
-    onto the energy level the step started on (the flow conserves E there). Removing the energy error removes
-    what drives the phase error near the rims, where the period grows steeply with E. A step whose energy error
-    passes 1e-8 m g Δz is taken again with twice the substeps. Nearer the centre of curvature, w = (1 − κh)σ gets
-    small and the motion fast where it is, and a fixed step needs many substeps to follow DOP853's accuracy, so the
-    default stays the adaptive DOP853 at rtol 1e-8 there. The default's errors and cost against the other steppers
-    (its place on the work–precision chart) are on docs/speed-accuracy.md, which `python -m connenv.bench precision
-    --env skier` measures; tests/test_precision.py checks the default across 1 − κ h_max ≥ 0.01 and dt from 0.01
-    to 0.2 s.
+    The default stepper, where 1 − κ h_max ≥ 0.5 on the whole trail (the valley and the halfpipe), is "rk8_energy":
+    ⌈dt √(g/9.81) / 0.05 s⌉ substeps of DOP853's formula, projected back onto the energy level where h is held, which
+    removes the phase error near the rims; a step whose energy error passes 1e-8 m g Δz is taken again with twice the
+    substeps. Nearer the centre of curvature it is DOP853 at rtol 1e-8, atol 1e-10 (why: docs/guides/env-notes.md).
+    Diverged: an energy error past 0.1 m g Δz. Beyond its domain a trail continues as its osculating parabola, so the
+    step that crosses a rim stays finite.
 
-    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
-    non-finite state, or an energy error past 0.1 m g Δz (Δz as in the observation). The energy error is the
-    change of E over the segments where h is held, where E is conserved, summed since reset.
-
-    Beyond its domain a trail continues as its osculating parabola, so the step
-    that crosses a rim stays finite. Every `info` has `"state"` (`x`, `x_dot`,
-    `p`, `h`, `t`, `s` the arc length from the trail's origin, `kappa`, in SI),
-    `"energy"` (E = p²/(2 m (1 − κh)² σ²) + m g (f + h cos φ), J), `"progress"`
-    (ε) and `"is_success"`.
+    Every `info` has `"state"` (`x`, `x_dot`, `p`, `h`, `t`, `s` the arc length from the trail's origin, `kappa`, in
+    SI), `"energy"` (E = p²/(2 m (1 − κh)² σ²) + m g (f + h cos φ), J), `"progress"` (ε) and `"is_success"`.
     """
 
     name = "Skier-v0"  # how bad make kwargs name the env
@@ -294,11 +264,10 @@ class SkierEnv(TaskEnv):
         side = math.copysign(1.0, y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
         return self.at(y, h, 0.0, side, 0.0)
 
-    def advance(self, s, h_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, h_cmd, stepper, ops=SCALAR):
         """The state after a step toward the commanded height: one state, or rows with the vector env's stepper and
         ops=BATCH."""
         segments, h = control_path(s.h, h_cmd, self.dt, self.max_height_speed, ops)
-        stepper = self.stepper if stepper is None else stepper
         y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, h, s.t + self.dt, s.side, s.energy_error + change, ops)
@@ -387,15 +356,7 @@ class SkierEnv(TaskEnv):
         }
 
 
-class SkierVectorEnv(TaskVectorEnv):
-    """Skier-v0 over a batch (``gym.make_vec("connenv/Skier-v0", num_envs=N)``; see ``connenv.envs.vector``): the
-    single env's step over the rows. With ``max_height_speed`` each row ramps for its own time, so the steppers get
-    one segment length per row."""
-
-    single_env = SkierEnv
-
-    def advance(self, s, h_cmd):
-        return self.env.advance(s, h_cmd, self.stepper, BATCH)
+SkierVectorEnv = vector_env(SkierEnv)
 
 
 SPECS = (

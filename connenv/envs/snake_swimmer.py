@@ -24,10 +24,10 @@ from connenv.core.validation import (
     check_vector,
     decimal,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
-from connenv.envs.vector import TaskVectorEnv
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
 DT_MAX = 0.25  # s: the longest dt; longer steps (joint moves up to the whole range) make the Lie-group rule's choice
@@ -94,46 +94,28 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     r"""
     ## Description
 
-    Three identical rigid elliptic links, semi-axes a along the link and b across it, hinged tip to tip, float in
-    an unbounded planar ideal fluid at rest at infinity (Kanso, Marsden, Rowley & Melli-Huber 2005). The
-    controller assigns the two joint angles s = (α, β): an *active constraint* (Bressan). Bending the chain moves
-    it, and closed loops of (α, β) make it swim. With g = (x, y, θ) the middle link's pose, ξ = (v₁, v₂, ω) its
-    body velocity and μ = (P₁, P₂, Π) the body momentum of chain and fluid together,
-
-        μ = 𝕀_loc(α, β) ξ + 𝕀_c(α, β) ṡ,    Ṗ₁ = ω P₂,  Ṗ₂ = −ω P₁,  Π̇ = v₂ P₁ − v₁ P₂    (Kirchhoff)
-
-    with 𝕀_loc the locked inertia (the chain frozen in its shape, with the fluid's added masses of each link,
-    λ₁ = ρπb² along it, λ₂ = ρπa² across it, λ₃ = ρπ(a² − b²)²/8 in rotation) and 𝕀_c the coupling, both derived
-    from the links' body velocities in `connenv.systems.snake_swimmer`. Each link's fluid is that of the link
-    alone: the links' interaction through the fluid is neglected (Kanso et al.'s model). The spatial momentum is
-    conserved. The system is fit for jumps, not strongly (the joint angles fix the shape up to a rigid motion;
-    `connenv.core.mechanics.classify` derives it from the metric): a change of (α, β) needs its path, here the
-    straight segment at the joints' top speed.
-
-    From rest, the default, μ stays 0 and the motion is geometric, ξ = −𝕀_loc⁻¹ 𝕀_c ṡ (the mechanical connection),
-    so the env integrates the reduced state (x, y, θ). A nonzero initial momentum (a reset option) switches that
-    episode to the full model, (x, y, θ, P₁, P₂, Π). At zero momentum the net motion of a closed loop of (α, β)
-    does not depend on how fast it is run. There is no drag: the fluid stores momentum and dissipates nothing.
-    The goal is to bring the middle link's centre within `success_radius` of a target 1 to 2 body lengths away
-    (a body length is 6a, the straight chain's length).
+    Three identical rigid elliptic links, semi-axes a along the link and b across it, hinged tip to tip, float in an
+    unbounded planar ideal fluid at rest at infinity (Kanso, Marsden, Rowley & Melli-Huber 2005); each link's fluid is
+    that of the link alone, and there is no drag. The controller assigns the two joint angles s = (α, β), an *active
+    constraint* (Bressan), and closed loops of (α, β) make the chain swim (docs/physics/SnakeSwimmer.md). With
+    g = (x, y, θ) the middle link's pose and μ = (P₁, P₂, Π) the body momentum of chain and fluid: from rest, the
+    default, μ stays 0 and the motion is geometric (a mechanical connection), so the env integrates the reduced state
+    (x, y, θ), and a closed loop of (α, β) moves the chain alike however fast it is run. A nonzero initial momentum (a
+    reset option) switches that episode to the full model (Kirchhoff's equations), (x, y, θ, P₁, P₂, Π), whose spatial
+    momentum is conserved. The goal is to bring the middle link's centre within `success_radius` of a target 1 to 2
+    body lengths away (a body length is 6a, the straight chain's length).
 
     ## Action Space
 
-    `Box([-1, -1], [1, 1], float32)`; actions outside are clipped, a wrong shape or a non-finite value raises
-    ValueError.
-
-    | Num | Action | Min | Max |
-    |-----|--------|-----|-----|
-    | 0 | commanded rear joint angle: α* = action[0] · 2π/3 | -1 | 1 |
-    | 1 | commanded front joint angle: β* = action[1] · 2π/3 | -1 | 1 |
-
-    Within the step the joints move from (α, β) toward (α*, β*) along the straight segment, the one with further
-    to go at `max_joint_speed` and the other in proportion, and hold there once they arrive; if they cannot
-    arrive within dt they stop where they got to.
+    `Box([-1, -1], [1, 1], float32)`: the commanded joint angles (α*, β*) = action · 2π/3 (rear, front). Within the
+    step the joints move toward them along the straight segment, the one with further to go at `max_joint_speed` and
+    the other in proportion, and hold there once they arrive; if they cannot arrive within dt they stop where they got
+    to.
 
     ## Observation Space
 
-    `Box(9,) float32`, with L = 6a the body length:
+    `Box(9,) float32`, with L = 6a the body length and 𝕀_loc(0) the straight chain's locked inertia; the target and the
+    momentum (0 in the reduced model) clipped to their bounds:
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -147,31 +129,26 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     | 7 | P₂ / 𝕀_loc(0)₂₂, m/s | -10 | 10 |
     | 8 | Π / 𝕀_loc(0)₃₃, rad/s | -10 | 10 |
 
-    The target and the momentum are clipped to their bounds; 𝕀_loc(0) is the straight chain's locked inertia. The
-    momentum is 0 in the reduced model.
-
     ## Rewards
 
     With d the distance from the middle link's centre to the target before the step and d′ after it:
 
         reward = (d − d′) / success_radius − 0.01
 
-    Progress is paid in units of the success radius; the constant pays for time. Summed to success:
-    (d₀ − d_T)/success_radius − 0.01·steps.
+    Progress in units of the success radius and a cost of time. Summed to success: (d₀ − d_T)/success_radius −
+    0.01·steps.
 
     ## Starting State
 
-    At rest, μ = 0, straight (α = β = 0), at the origin with θ = 0, t = 0. The target is drawn by np_random at a
-    distance uniform in [1, 2] body lengths, in a uniform direction. `reset(options={"state": {...},
-    "target": (x, y)})` sets any of `x`, `y` (within ±100 m), `theta` (in [−2π, 2π]), `alpha`, `beta` (in
-    [−2π/3, 2π/3]), `momentum` (P₁, P₂, Π in the body frame, within the observed bounds |P_k| ≤ 10 𝕀_loc(0)_kk)
-    and the target (within ±100 m) exactly; a value outside is refused (ValueError).
+    At rest, μ = 0, straight (α = β = 0), at the origin with θ = 0, t = 0; the target at a distance uniform in [1, 2]
+    body lengths in a uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of
+    `x`, `y` (within ±100 m), `theta` (in [−2π, 2π]), `alpha`, `beta` (in [−2π/3, 2π/3]), `momentum` (P₁, P₂, Π in the
+    body frame, |P_k| ≤ 10 𝕀_loc(0)_kk, the observed bounds) and the target (within ±100 m) exactly.
 
     ## Episode End
 
-    Terminated when the middle link's centre is within `success_radius` of the target, checked at the end of each
-    step (`info["is_success"]`). Truncated after 1000 steps (50 s at the default dt) by the registration's time
-    limit.
+    Terminated when the middle link's centre is within `success_radius` of the target at the end of a step
+    (`info["is_success"]`). Truncated after 1000 steps (50 s at the default dt) by the registration's time limit.
 
     ## Arguments
 
@@ -184,28 +161,17 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     | max_joint_speed | 3.0 | [3e-6, 1e3] rad/s |
     | dt | 0.05 | [1e-12, 0.25] s |
     | success_radius | None: 0.1 body length, 0.6a | [6e-7 a, 6a) m |
-    | integrator | "magnus" (atol 1e-12) | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, magnus) | rtol 1e-10, atol 1e-12 | see `connenv.core.steppers` |
+    | integrator | "magnus" | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
+    | substeps / rtol, atol | rtol 1e-10, atol 1e-12 | the stepper's |
 
-    The links' aspect ratio a/b is at most 100: the connection of thinner links varies so fast with the shape that
-    the Lie-group rule chosen at construction (below) needs tens of pieces, and choosing it takes minutes.
-
-    A stepper that diverges raises `connenv.core.StepperError` naming the stepper, dt and the parameters: a
-    non-finite state, or, in the full model, a spatial momentum that has moved by more than 0.1 of its norm since
-    reset.
-
-    The default stepper, `integrator="magnus"`, steps the reduced model by the Lie-group step on SE(2)
-    (`connenv.core.lie`): θ = ∫ω and the translation ∫R(θ) v by Gauss–Legendre quadrature, with a rule
-    (pieces × points) fixed at construction as the cheapest that meets atol on every step the env admits, judged
-    on the motions at top speed in the eight directions from a 3 × 3 grid of joint angles (the corners, edge
-    midpoints and centre of the joints' square). The full model has no connection and goes to DOP853 (rtol 1e-10,
-    atol 1e-12). Its pose and spatial momentum errors, and its place on the work–precision chart:
-    `python -m connenv.bench precision --env snake` (on the env's docs page).
+    The default steps the reduced model by the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule fixed
+    at construction as the cheapest that meets atol on every joint motion at top speed, and the full model, which has
+    no connection, by DOP853. Thinner links than a/b = 100 would need a rule of tens of pieces, minutes to choose.
+    Diverged: in the full model, a spatial momentum moved by more than 0.1 of its norm since reset.
 
     Every `info` has `"state"` (`x`, `y`, `theta` (the middle link), `alpha`, `beta`, `momentum` (P₁, P₂, Π, body
-    frame), `t`, in SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y),
-    `"distance"` (m), `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final
-    `"distance"`.
+    frame), `t`, in SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"`
+    (m), `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
     """
 
     name = "SnakeSwimmer-v0"  # how bad make kwargs name the env
@@ -311,13 +277,12 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         state = SnakeState(pose, momentum if full else np.zeros(3), s, target, 0.0, full, np.zeros(3))
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
-    def advance(self, s, s_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, s_cmd, stepper, ops=SCALAR):
         """The joints move toward s_cmd (`joint_path`); the full model also drifts with its momentum while they
         hold, and checks its spatial momentum. One state, or rows with the vector env's stepper and ops=BATCH."""
         s_dot, ramp, s_end = joint_path(s.s, s_cmd, self.dt, self.max_joint_speed)
         moving = (s.s, s_dot, ramp)  # held joints do not move the chain at zero momentum
         full = [moving, (s_end, np.zeros_like(s_dot), self.dt - ramp)]
-        stepper = self.stepper if stepper is None else stepper
         pose, momentum = self.swim(s, full, [moving], stepper, ops)
         return SnakeState(pose, momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
 
@@ -344,15 +309,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return {"alpha": ops.real(s.s[..., 0]), "beta": ops.real(s.s[..., 1])}
 
 
-class SnakeSwimmerVectorEnv(TaskVectorEnv):
-    """SnakeSwimmer-v0 over a batch (``gym.make_vec("connenv/SnakeSwimmer-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the single env's step over the rows. Rows reset at rest step the reduced model, rows
-    reset with a momentum the full one."""
-
-    single_env = SnakeSwimmerEnv
-
-    def advance(self, s, s_cmd):
-        return self.env.advance(s, s_cmd, self.stepper, BATCH)
+SnakeSwimmerVectorEnv = vector_env(SnakeSwimmerEnv)
 
 
 @functools.cache

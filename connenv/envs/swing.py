@@ -3,18 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
-
-from dataclasses import dataclass
 
 from connenv.core.integrators import make_stepper
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_scale, check_stepper_options
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import vector_env
 from connenv.systems.backend import components, namespace
 from connenv.systems.swing import Swing
 
@@ -41,70 +40,55 @@ class SwingEnv(TaskEnv):
     r"""
     ## Description
 
-    A child on a swing pumps it by standing and squatting: the controller assigns
-    the distance r from the pivot to the barycentre, an *active constraint*
-    (Bressan). The swing is a point mass m on a massless rod of length r,
-    at angle θ from the downward vertical, with angular momentum p = m r² θ̇:
+    A child on a swing pumps it by standing and squatting: the controller assigns the distance r from the pivot to the
+    barycentre, an *active constraint* (Bressan). The swing is a point mass m on a massless rod of length r, at angle θ
+    from the downward vertical, with angular momentum p = m r² θ̇:
 
         θ̇ = p / (m r²),    ṗ = −m g r sin θ.
 
-    The system is strongly fit for jumps: a jump of r leaves (θ, p) unchanged.
-    Shortening r near the bottom and lengthening it at the extremes multiplies
-    1 − cos(amplitude) by (r_max/r_min)³ per half swing (Piccoli & Kulkarni 2005).
-    The goal is to reach `target_amplitude` as fast as possible.
+    It is strongly fit for jumps: a jump of r leaves (θ, p) unchanged. Shortening r near the bottom and lengthening it
+    at the extremes multiplies 1 − cos(amplitude) by (r_max/r_min)³ per half swing (Piccoli & Kulkarni 2005). The goal
+    is to reach `target_amplitude` as fast as possible.
 
     ## Action Space
 
-    `Box(-1, 1, (1,), float32)`; actions outside are clipped, a wrong shape or a
-    non-finite value raises ValueError.
-
-    | Num | Action | Min | Max |
-    |-----|--------|-----|-----|
-    | 0 | commanded radius: r = r_min + (a + 1)/2 · (r_max − r_min) | -1 | 1 |
-
-    By default r jumps to the command at the start of the step. With
-    `max_radial_speed` set, r moves toward it at that speed instead.
+    `Box(-1, 1, (1,), float32)`: the commanded radius r = r_min + (a + 1)/2 · (r_max − r_min). r jumps there at the
+    start of the step or, with `max_radial_speed`, moves toward it at that speed.
 
     ## Observation Space
 
-    `Box(4,) float32`:
+    `Box(4,) float32`, with ρ = r_max/r_min:
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
     | 0 | cos θ | -1 | 1 |
     | 1 | sin θ | -1 | 1 |
-    | 2 | θ̇ / (2 √(g/r_min)), 1 at the bottom for a swing that just reaches the top at r_min | -ρ² | ρ² |
+    | 2 | θ̇ / (2 √(g/r_min)): 1 at the bottom for a swing that just reaches the top at r_min | -ρ² | ρ² |
     | 3 | (r − r_mid) / r_half, r_mid and r_half the centre and half-width of [r_min, r_max] | -1 | 1 |
 
-    ρ = r_max/r_min. Until success the swing is below the top (h < 2), so
-    |θ̇| ≤ 2√(g/r_min) before a jump and ρ² times that after one: the bound
-    holds for every state an episode can reach, and reset states must respect
-    it. Stepping on after success may saturate it.
+    Below the top (h < 2, until success) |θ̇| ≤ 2√(g/r_min), and ρ² times that after a jump: the bound holds in every
+    episode up to success (stepping on after it may saturate it), and for every reset state.
 
     ## Rewards
 
-    With h = (E + m g r)/(m g r) the energy above the bottom in units of m g r
-    (h = 1 − cos A for a swing of amplitude A; E is conserved at constant r):
+    With h = (E + m g r)/(m g r) the energy above the bottom in units of m g r (1 − cos A at amplitude A), h before the
+    step and h′ after it:
 
         reward = ln(max(h′, 1e-4) / max(h, 1e-4)) − 0.01
 
-    h before the step, h′ after it. The logarithm pays each half swing of
-    pumping alike, since pumping multiplies h by (r_max/r_min)³; the constant
-    pays for time. Summed to success it is ln(h*/h₀) − 0.01·steps.
+    Pumping multiplies h by ρ³ per half swing, which the logarithm pays alike at every amplitude; the constant pays for
+    time. Summed to success: ln(h*/h₀) − 0.01·steps.
 
     ## Starting State
 
-    θ₀ uniform on ±[0.05, 0.1] rad (np_random), θ̇₀ = 0, r = r_max, t = 0. A
-    swing exactly at rest at the bottom cannot be pumped. `reset(options={"state":
-    {...}})` sets any of `theta` (in [−2π, 2π]), `theta_dot` (within the observed
-    bound, |θ̇| ≤ 2ρ² √(g/r_min)) or `p` (the same bound times m r²), `r` (in
-    [r_min, r_max]) exactly; a value outside is refused (ValueError).
+    θ₀ uniform on ±[0.05, 0.1] rad (np_random; a swing at rest at the bottom cannot be pumped), θ̇₀ = 0, r = r_max,
+    t = 0. `reset(options={"state": {...}})` sets any of `theta` (in [−2π, 2π]), `theta_dot` (|θ̇| ≤ 2ρ² √(g/r_min), the
+    observed bound) or `p` (that bound times m r²) and `r` (in [r_min, r_max]) exactly.
 
     ## Episode End
 
-    Terminated when the amplitude implied by the current energy at the current
-    radius reaches `target_amplitude` (`info["is_success"]`). Truncated after
-    500 steps (25 s at the default dt) by the registration's time limit; the
+    Terminated when the amplitude of the current energy at the current radius reaches `target_amplitude`
+    (`info["is_success"]`). Truncated after 500 steps (25 s at the default dt) by the registration's time limit; the
     ideal pumping schedule needs 10.3 s.
 
     ## Arguments
@@ -119,27 +103,13 @@ class SwingEnv(TaskEnv):
     | target_amplitude | π/2 | (0, π]; π means going over the top |
     | max_radial_speed | None | None or [1e-6, 1e6] m/s |
     | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (euler, semi_implicit_euler, rk4) / rtol, atol (scipy, and exact where r moves) | | see `connenv.core.steppers` |
+    | substeps / rtol, atol | | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`):
-    beyond, the energies and the observation's bound (r_max/r_min)² leave float64 and float32.
+    The default step is the pendulum's closed-form flow at constant r, without truncation error (docs/physics/swing.md).
+    Diverged: an energy error past 0.1 m g r_max.
 
-    The default integrator is the closed-form pendulum flow: at constant r the
-    swing is a pendulum, whose flow is Jacobi's elliptic functions, so the step
-    makes no truncation error. Its errors and cost against the other steppers are
-    on docs/speed-accuracy.md, which `python -m connenv.bench precision --env swing`
-    measures; tests/test_precision.py checks its energy across r_min from 0.05 m
-    and dt from 0.01 to 0.5 s.
-
-    A stepper that diverges raises `connenv.core.StepperError` naming the stepper,
-    dt and the parameters: a non-finite state, or an energy error past
-    0.1 m g r_max. The energy error is the change of E over the segments where r
-    is held, where E is conserved (a jump's work is exact and not counted),
-    summed since reset.
-
-    Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `r`, `t` in SI),
-    `"energy"` (E = p²/(2 m r²) − m g r cos θ, J), `"lift"` (h, above),
-    `"amplitude"` (rad) and `"is_success"`.
+    Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `r`, `t` in SI), `"energy"` (E = p²/(2 m r²) − m g r cos θ,
+    J), `"lift"` (h), `"amplitude"` (rad) and `"is_success"`.
     """
 
     name = "Swing-v0"  # how bad make kwargs name the env
@@ -207,11 +177,10 @@ class SwingEnv(TaskEnv):
             y, r = self._check_state(options["state"], theta)
         return self.at(y, r, 0.0, 0.0)
 
-    def advance(self, s, r_cmd, stepper=None, ops=SCALAR):
+    def advance(self, s, r_cmd, stepper, ops=SCALAR):
         """The state after a step toward the commanded radius: one state, or rows with the vector env's stepper and
         ops=BATCH."""
         segments, r = control_path(s.r, r_cmd, self.dt, self.max_radial_speed, ops)
-        stepper = self.stepper if stepper is None else stepper
         y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, r, s.t + self.dt, s.energy_error + change, ops)
@@ -269,15 +238,7 @@ class SwingEnv(TaskEnv):
         }
 
 
-class SwingVectorEnv(TaskVectorEnv):
-    """Swing-v0 over a batch (``gym.make_vec("connenv/Swing-v0", num_envs=N)``; see ``connenv.envs.vector``): the
-    single env's step over the rows. With ``max_radial_speed`` each row ramps for its own time, so the steppers get
-    one segment length per row."""
-
-    single_env = SwingEnv
-
-    def advance(self, s, r_cmd):
-        return self.env.advance(s, r_cmd, self.stepper, BATCH)
+SwingVectorEnv = vector_env(SwingEnv)
 
 
 SPECS = (

@@ -17,9 +17,10 @@ from connenv.core.validation import (
     check_scale,
     check_stepper_options,
 )
-from connenv.envs.base import BATCH, SCALAR
-from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState, ConnectionVectorEnv
+from connenv.envs.base import SCALAR
+from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
+from connenv.envs.vector import vector_env
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
 
 __all__ = ["DT_MAX", "TubeTwistEnv", "TubeTwistVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
@@ -48,37 +49,25 @@ class TubeTwistEnv(ConnectionEnv):
 
     The tip of a tube that bends but cannot twist, as surgical and imaging probes are (Lawton): its frame R ∈ SO(3)
     (tip → space) has columns N, B, T (normal, binormal, tangent), and the controller sets its bending rates
-    κ = (κ₁, κ₂) in the tip's frame, with no rate about T:
+    κ = (κ₁, κ₂) in the tip's frame, with no rate about T: Ṙ = R ω̂, ω = (κ₁, κ₂, 0). N is parallel transported along
+    the curve T traces on the unit sphere, so the only way to turn the tip about its own axis is a loop of T: back where
+    it started, the tip has turned by the area the loop encloses (counterclockwise seen from outside, mod 2π;
+    docs/physics/TubeTwist.md). The task is to turn it by a target angle ψ* and bring the tangent back. Built on
+    `ConnectionEnv` (SO(3), body frame, the shape the accumulated bend s = ∫κ dt, a constant connection).
 
-        Ṙ = R ω̂,    ω = (κ₁, κ₂, 0).
-
-    N is then parallel transported along the curve that T traces on the unit sphere. The only way to turn the tip
-    about its own axis is a loop of T: back where it started, the tip has turned by the area the loop encloses
-    (counterclockwise seen from outside, mod 2π). The task is to turn it by a target angle ψ* and bring the tangent
-    back. Built on `ConnectionEnv`: SO(3) in the body frame, the shape being the accumulated bend s = ∫κ dt (the
-    tangent's trace rolled out on the plane) and the constant connection A = −[[1, 0], [0, 1], [0, 0]]; each step
-    is one exponential, R ← R exp(dt ω̂), exact.
-
-    The *twist* ψ (`info["twist"]`) is the angle by which N has turned about T relative to the start frame R₀,
-    measured once T is carried back to T₀ along the great circle between them: with Q = R₀ᵀR and G that rotation,
-    G Q = Rz(ψ). On a closed loop of T it is the enclosed area; while T is away it is the area of the path closed
-    by that geodesic. At T = −T₀, where no geodesic is singled out, ψ = 0.
+    The *twist* ψ (`info["twist"]`) is the angle by which N has turned about T relative to the start frame R₀, measured
+    once T is carried back to T₀ along the great circle between them: with Q = R₀ᵀR and G that rotation, G Q = Rz(ψ).
+    On a closed loop of T it is the enclosed area; while T is away it is the area of the path closed by that geodesic.
+    At T = −T₀, where no geodesic is singled out, ψ = 0.
 
     ## Action Space
 
-    `Box(-1, 1, (2,), float32)`: κ = a · max_bend_rate, constant over the step. Actions outside are clipped; a
-    float64 action is used at its precision (not rounded to float32); a wrong shape or a non-finite value raises
-    ValueError.
-
-    | Num | Action | Min | Max |
-    |-----|--------|-----|-----|
-    | 0 | κ₁ / max_bend_rate (bend about N) | -1 | 1 |
-    | 1 | κ₂ / max_bend_rate (bend about B) | -1 | 1 |
+    `Box(-1, 1, (2,), float32)`: κ = a · max_bend_rate, constant over the step (κ₁ bends about N, κ₂ about B).
 
     ## Observation Space
 
-    `Box(-1, 1, (11,), float32)`: the error E = Rz(ψ*)ᵀ R₀ᵀ R, the frame relative to the target frame R₀ Rz(ψ*)
-    (E = I at the goal), which turns as the tip does, Ė = E ω̂, so it is a Markov state; then the twist error.
+    `Box(-1, 1, (11,), float32)`: the error E = Rz(ψ*)ᵀ R₀ᵀ R, the frame relative to the target frame R₀ Rz(ψ*) (E = I
+    at the goal), which turns as the tip does, Ė = E ω̂, so it is a Markov state; then the twist error.
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -88,24 +77,23 @@ class TubeTwistEnv(ConnectionEnv):
 
     ## Rewards
 
-    With the cost e = θ_T + |ψ − ψ*| (θ_T the angle between T and T₀, the twist error wrapped into [−π, π)),
-    e before the step and e′ after it:
+    With the cost e = θ_T + |ψ − ψ*| (θ_T the angle between T and T₀, the twist error wrapped into [−π, π)), e before
+    the step and e′ after it:
 
         reward = e − e′ − 0.01
 
-    Bending T radially away from T₀ costs θ_T; going round pays back the twist it adds, at the rate tan(θ_T/2) per
-    radian of bend, so the reward leads round a loop. Summed to success: e₀ − e_T − 0.01 · steps.
+    Bending T radially away from T₀ costs θ_T; going round pays back the twist it adds, at tan(θ_T/2) per radian of
+    bend, so the reward leads round a loop. Summed to success: e₀ − e_T − 0.01 · steps.
 
     ## Starting State
 
-    R = R₀ = I, s = 0, t = 0, and ψ* uniform in [0.3, 3] rad. `reset(options={"state": {"R": R₀}, "target": ψ*})`
-    sets either: R₀ a rotation matrix to 1e-9 (‖RᵀR − I‖, |det R − 1|; never re-orthonormalized), ψ* in [−π, π],
-    else ValueError.
+    R = R₀ = I, s = 0, t = 0, and ψ* uniform in [0.3, 3] rad. `reset(options={"state": {"R": R₀}, "target": ψ*})` sets
+    either: R₀ a rotation matrix to 1e-9 (‖RᵀR − I‖, |det R − 1|; never re-orthonormalized), ψ* in [−π, π].
 
     ## Episode End
 
-    Terminated when θ_T ≤ `tolerance` and |ψ − ψ*| ≤ `tolerance` (`info["is_success"]`). Truncated after 200 steps
-    by the registration's time limit: the cap controller, a loop of the shortest length, needs at most
+    Terminated when θ_T ≤ `tolerance` and |ψ − ψ*| ≤ `tolerance` (`info["is_success"]`). Truncated after 200 steps by
+    the registration's time limit: the cap controller, a loop of the shortest length, needs at most
     √(3 (4π − 3))/(max_bend_rate · dt) ≈ 108 steps.
 
     ## Arguments
@@ -116,16 +104,15 @@ class TubeTwistEnv(ConnectionEnv):
     | dt | 0.05 | [1e-12, 100] s |
     | tolerance | 0.02 | [2e-8, π) rad |
     | integrator | "exact" | "exact" (Rodrigues), "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps (euler, rk4) / rtol, atol (scipy, magnus) | | `connenv.core.steppers` |
+    | substeps / rtol, atol | | the stepper's |
 
-    A physical scale lies within a factor 1e6 of its default either way (`connenv.core.validation.check_scale`).
-    R stays on SO(3) to rounding under the exact step; a stepper that leaves it by more than 1e-9 (‖RᵀR − I‖)
-    raises `connenv.core.StepperError` (the generic steppers integrate Ṙ = R ω̂ in coordinates and drift off).
+    The default step is one exponential, R ← R exp(dt ω̂), exact, and keeps R on SO(3) to rounding; the generic steppers
+    integrate Ṙ = R ω̂ in coordinates and drift off. Diverged: R more than 1e-9 off SO(3) (‖RᵀR − I‖).
 
-    Every `info` has `"state"` (`R` (3×3), `t`), `"twist"` (ψ), `"twist_error"` (ψ − ψ*, wrapped),
-    `"tangent_error"` (θ_T), `"path_length"` (the bend ∫|κ| dt since reset, rad), `"path_ratio"` (path length over
-    √(A (4π − A)), A = |ψ*|: the length of a circle enclosing the area ψ*, the shortest loop that does the task;
-    isoperimetric inequality on the sphere) and `"is_success"`.
+    Every `info` has `"state"` (`R` (3×3), `t`), `"twist"` (ψ), `"twist_error"` (ψ − ψ*, wrapped), `"tangent_error"`
+    (θ_T), `"path_length"` (the bend ∫|κ| dt since reset, rad), `"path_ratio"` (path length over √(A (4π − A)),
+    A = |ψ*|: the length of a circle enclosing the area ψ*, the shortest loop that does the task; isoperimetric
+    inequality on the sphere) and `"is_success"`.
     """
 
     name = "TubeTwist-v0"
@@ -190,10 +177,7 @@ class TubeTwistEnv(ConnectionEnv):
         g = R0.ravel().copy()
         return self.at(g, np.zeros(2), 0.0, g.copy(), target, 0.0)
 
-    def advance(self, state, kappa):
-        return self.bent(state, kappa, self.stepper)
-
-    def bent(self, state, kappa, stepper, ops=SCALAR):
+    def advance(self, state, kappa, stepper, ops=SCALAR):
         """The state after bending at the rates κ for dt (one state, or rows with ops=BATCH)."""
         g = run_segments(stepper, self.system, state.g, [(state.s, kappa, self.dt)])[0]
         self.check_group(g)
@@ -256,14 +240,7 @@ class TubeTwistEnv(ConnectionEnv):
         return renderer.draw(s.g.reshape(3, 3), s.R0.reshape(3, 3), trace, s.t, info["twist"], s.target)
 
 
-class TubeTwistVectorEnv(ConnectionVectorEnv):
-    """TubeTwist-v0 over a batch (``gym.make_vec("connenv/TubeTwist-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): every row bent by the single env's exponential."""
-
-    single_env = TubeTwistEnv
-
-    def advance(self, state, kappa):
-        return self.env.bent(state, kappa, self.stepper, BATCH)
+TubeTwistVectorEnv = vector_env(TubeTwistEnv)
 
 
 SPECS = (

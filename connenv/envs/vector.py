@@ -3,9 +3,9 @@
 Each vector env keeps one single env, its *prototype*: it checks the make kwargs, holds the spaces, the system
 and the constants, and its task functions (``connenv.envs.base``: command, observe, describe, reward,
 terminated) are the ones the vector env calls, on its state of arrays over the rows, with the array operations of
-``BATCH`` in place of the scalar ones of ``SCALAR``. A subclass gives only ``advance(state, command)``, the
-single env's physics over the batch: where the single env writes it as a function of the stepper and ops, the
-prototype's function with the batched stepper and ``BATCH``.
+``BATCH`` in place of the scalar ones of ``SCALAR``. `vector_env` makes the vector env of a task, whose
+``advance(state, command, stepper, ops)`` then runs with the batched stepper and ``BATCH``; a subclass overrides
+``advance`` only where the rows need more (a second batched stepper).
 
 Seeding, resets and autoreset are Gymnasium's SyncVectorEnv's, so that row i of a vector env and env i of a
 SyncVectorEnv made from the same id and kwargs follow the same episodes (to rounding; tests):
@@ -46,9 +46,8 @@ from connenv.envs.base import BATCH
 
 
 class TaskVectorEnv(VectorEnv):
-    """Base of the native vector envs. Subclasses set ``single_env`` (the task class) and define
-    ``advance(state, command)``: the state of every row after a step (see the module). ``self.state`` is the
-    prototype's State over the rows."""
+    """Base of the native vector envs (see the module; `vector_env` makes them). ``single_env`` is the task
+    class; ``self.state`` is the prototype's State over the rows."""
 
     metadata: ClassVar[dict] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
     single_env: type
@@ -144,4 +143,14 @@ class TaskVectorEnv(VectorEnv):
         return masked
 
     def advance(self, state, command):
-        raise NotImplementedError
+        return self.env.advance(state, command, self.stepper, BATCH)
+
+
+def vector_env(single_env: type, base: type = TaskVectorEnv) -> type:
+    """The native vector env of a task class: a subclass of base (TaskVectorEnv, or the vector env of the class
+    the task extends) that steps the rows by the task's own ``advance`` with the batched stepper. Named after the
+    task and placed in its module, so that its "module:Class" entry point and pickles find it."""
+    name = single_env.__name__.removesuffix("Env") + "VectorEnv"
+    doc = f"{single_env.name} over a batch: the single env's advance over the rows (see connenv.envs.vector)."
+    attributes = {"single_env": single_env, "__module__": single_env.__module__, "__qualname__": name, "__doc__": doc}
+    return type(name, (base,), attributes)

@@ -8,8 +8,9 @@ n(θ) = (cos θ, sin θ) the direction in which the bob moves as θ grows,
     G11 = m l²,   G12 = m l nᵀ,   G22 = m I,    p = m l² θ̇ + m l u̇·n
 
 Bressan's B = G22 − G21 A G12 = m (I − n nᵀ) depends on θ: the system is *general*, u̇ enters the (θ, p)
-equations quadratically and fast vibrations of the pivot act as an effective force (Kapitza). Hamilton's
-equations of H_u = (p − m l u̇·n)²/(2 m l²) − ½ m |u̇|² + V are
+equations quadratically and fast vibrations of the pivot act as an effective force. Vibrated vertically,
+u₂ = a cos ωt with a ≪ l, the averaged motion feels U = −m g l cos θ + ¼ m a²ω² sin²θ, so the inverted pendulum is
+stable when a²ω² > 2 g l (Kapitza 1951). Hamilton's equations of H_u = (p − m l u̇·n)²/(2 m l²) − ½ m |u̇|² + V are
 
     θ̇ = (p − m l u̇·n) / (m l²),    ṗ = m l θ̇ u̇·n′ − m g l sin θ − c θ̇
 
