@@ -131,7 +131,7 @@ class ActiveConstraintEnv(TaskEnv):
 
     The default integrator is "exact" for a system that gives its closed-form step (`exact_segment(y, u, u̇, τ)` at
     constant u̇, or `exact_flow(y, u, τ)` where u is held: connenv.core.steppers' ExactSegment and ExactFlow, as
-    BeadOnBar-v0's system does), else scipy's DOP853 at rtol = 1e-10, atol = 1e-12. A generic system has no
+    the bead on a bar does), else scipy's DOP853 at rtol = 1e-10, atol = 1e-12. A generic system has no
     closed-form flow and time scales the env cannot know, so the step adapts to them rather than to a fixed substep
     count; `python -m connenv.bench generic` measures the candidates (evaluations of the vector field per step, time,
     error against DOP853 at 1e-13) on a swing and a bead on a bar, where DOP853 reaches round-off for the cost of
@@ -155,7 +155,7 @@ class ActiveConstraintEnv(TaskEnv):
 
     `task` is any object with `reset(np_random) -> state dict`, `reward(state, next_state) -> float`,
     `terminated(state) -> bool` and optionally `observation(state) -> array`, `is_success(state) -> bool` and an
-    `observation_space`, all on state dicts as in `info["state"]` (`connenv.envs.user_task`, as Connection-v0's). An
+    `observation_space`, all on state dicts as in `info["state"]` (`connenv.envs.user_task`, as ConnectionEnv's). An
     object without the three methods is a TypeError at construction; an answer of the wrong kind (a NaN reward, an
     infinite observation, a reset state that is no dict of q, p, u) is a TypeError or ValueError naming the method.
     To turn a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², to θ = 0.5 rad: at rest θ + J u/(I + J) is conserved,

@@ -43,7 +43,7 @@ ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which
 
 @dataclass
 class BeadState(ActiveConstraintState):
-    """ActiveConstraint-v0's state (y = (r, p), u = (θ,), t, the energy error) and the task's: the target r*,
+    """ActiveConstraintEnv's state (y = (r, p), u = (θ,), t, the energy error) and the task's: the target r*,
     whether the bead is within the target's tolerances, and for how long it has been (s)."""
 
     target: float
@@ -313,7 +313,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
 class BeadOnBarVectorEnv(ActiveConstraintVectorEnv):
     """BeadOnBar-v0 over a batch (``gym.make_vec("connenv/BeadOnBar-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): ActiveConstraint-v0's batched step, and the task's state row by row."""
+    ``connenv.envs.vector``): ActiveConstraintEnv's batched step, and the task's state row by row."""
 
     single_env = BeadOnBarEnv
 

@@ -147,7 +147,7 @@ class ConnectionEnv(TaskEnv):
     A `task` is any object with `reset(np_random) -> state dict` (of "g" and "s"), `reward(state, next_state) ->
     float`, `terminated(state) -> bool` and optionally `observation(state) -> array`, `is_success(state) -> bool` and
     an `observation_space`, all on state dicts as in `info["state"]` (`connenv.envs.user_task`, as
-    ActiveConstraint-v0's). An object without the three methods is a TypeError at construction; an answer of the
+    ActiveConstraintEnv's). An object without the three methods is a TypeError at construction; an answer of the
     wrong kind (a NaN reward, an infinite observation) is a TypeError or ValueError naming the method. The vector env
     calls a task's functions row by row.
     """
