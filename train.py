@@ -1,6 +1,6 @@
 """Train an agent with rl-zoo3, then compare it with the analytic controller and a random policy:
 
-    python train.py --env connenv/Swing-v0 --algo ppo --timesteps 150000 --seed 0
+    python train.py --env ID --algo ppo --timesteps N --seed 0    # ID: a connenv id (--help lists them)
 
 The command of ``agents.train``, whose docstring (and ``python train.py --help``) says what a run does and leaves.
 """

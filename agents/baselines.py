@@ -64,7 +64,7 @@ ENVS = tuple(spec.id for spec in registry.values() if spec.measure and spec.cont
 UNTRAINED = ()
 """Envs with hyperparameters and analytic controllers whose reference runs are still to be trained: ``train`` and
 ``collect`` take them; the table holds ENVS."""
-ALGOS = ("ppo", "sac")  # SAC on RollingBallGoal-v0 is SAC + HER (agents/hyperparams/sac.yml)
+ALGOS = ("ppo", "sac")  # SAC on a goal env is SAC + HER (its entry of agents/hyperparams/sac.yml)
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
 FINAL_EPISODES = 10  # train.py's own table at the end of a run; the results table is evaluated on EPISODES
 EPISODES = 100
@@ -77,20 +77,23 @@ SELECTION_SEED = 50_000
 10 episodes pick the best checkpoint of a seed, but are too few to rank seeds whose successes differ by a few
 percent, and the table's and the score's episodes must not choose the model they report."""
 UNSEEN = DOCS / "unseen.json"
-LONG = "_long"  # the book of the budget curves: agents/hyperparams/ppo_long.yml
+LONG = "long"  # the key of an env's budget curve in agents/hyperparams/ppo.yml: the hyperparameters it overrides
+BOOK = "hyperparams.yml"  # a budget curve's run folder holds the hyperparameters it trains with, for train.py
 
 
 def short(env_id: str) -> str:
     return env_id.split("/")[-1]
 
 
-def hyperparams_file(algo: str, book: str = "") -> Path:
-    """agents/hyperparams/{algo}{book}.yml: the baselines' hyperparameters, or another book of them ("_long")."""
-    return HYPERPARAMS / f"{algo}{book}.yml"
+def hyperparams_file(algo: str) -> Path:
+    return HYPERPARAMS / f"{algo}.yml"
 
 
 def hyperparams(algo: str, env_id: str, book: str = "") -> dict:
-    return yaml.safe_load(hyperparams_file(algo, book).read_text())[env_id]
+    """The env's hyperparameters in agents/hyperparams/{algo}.yml as train.py takes them (without LONG); with book
+    LONG, its budget curve's (LONG's over them)."""
+    entry = yaml.safe_load(hyperparams_file(algo).read_text())[env_id]
+    return {key: value for key, value in entry.items() if key != LONG} | (entry[book] if book else {})
 
 
 def run_config(folder: Path, env_id: str) -> dict | None:
@@ -120,10 +123,14 @@ def train_argv(
     book: str = "",
 ) -> list[str]:
     """train.py's arguments for a run: a periodic evaluation and a checkpoint `evaluations` times, resumed from its
-    last checkpoint if it has one; the hyperparameters of `book`."""
+    last checkpoint if it has one; the hyperparameters of `book`, written into the run folder (BOOK) for train.py."""
     timesteps = timesteps or int(float(hyperparams(algo, env_id, book)["n_timesteps"]))
     argv = ["--env", env_id, "--algo", algo, "--seed", str(seed), "--runs", str(runs), "--timesteps", str(timesteps)]
-    argv += ["--hyperparams", str(hyperparams_file(algo, book))] if book else []
+    if book:
+        path = run_folder(env_id, algo, seed, runs) / BOOK
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(yaml.safe_dump({env_id: hyperparams(algo, env_id, book)}))
+        argv += ["--hyperparams", str(path)]
     frequency = str(max(timesteps // evaluations, 1))
     argv += ["--eval-freq", frequency, "--checkpoint-freq", frequency, "--eval-episodes", str(FINAL_EPISODES)]
     return argv + ["--resume"] + (["--vector-env"] if algo == "ppo" else [])
@@ -298,7 +305,7 @@ def collect_long(envs: list[str], runs: Path):
         for seed in seeds:
             folder = run_folder(env_id, "ppo", seed, runs)
             if run_config(folder, env_id) != hyperparams("ppo", env_id, LONG):
-                raise FileNotFoundError(f"{folder}: not trained with {hyperparams_file('ppo', LONG).name}")
+                raise FileNotFoundError(f"{folder}: not trained with the hyperparameters of its budget curve")
             curve = evaluations(folder)
             rows += [{"env": env_id, "seed": seed, "timesteps": int(t), "return": f"{r:.6g}", "success": f"{s:.2f}"}
                      for t, r, s in zip(curve["timesteps"], curve["return"], curve["success"], strict=True)]  # fmt: skip
@@ -563,13 +570,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument(
         "--long",
         action="store_true",
-        help="train, collect: the budget curves (PPO at 10x, agents/hyperparams/ppo_long.yml; default envs: its, "
-        "seeds: 0, runs: runs/long), collected into docs/baselines/long.{csv,png}",
+        help="train, collect: the budget curves (PPO at 10x, the `long` keys of agents/hyperparams/ppo.yml; default "
+        "envs: those that have one, seeds: 0, runs: runs/long), collected into docs/baselines/long.{csv,png}",
     )
     args = parser.parse_args(argv)
     if args.long:
         defaults = parser.parse_args([args.command])
-        long_envs = list(yaml.safe_load(hyperparams_file("ppo", LONG).read_text()))
+        entries = yaml.safe_load(hyperparams_file("ppo").read_text())
+        long_envs = [env_id for env_id in ENVS if LONG in entries[env_id]]
         args.env = long_envs if args.env == defaults.env else args.env
         args.seeds = [0] if args.seeds == defaults.seeds else args.seeds
         args.runs = RUNS.parent / "long" if args.runs == defaults.runs else args.runs

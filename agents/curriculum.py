@@ -1,11 +1,12 @@
 """Start curricula: training episodes that start where the task's own start rarely leads, through the env's reset
 options, while the periodic and the final evaluations keep the task's start.
 
-KapitzaSwingUp-v0's agents pump energy in but do not learn to catch and hold the pendulum, which only a swing that
-reaches the top slowly shows them; its clones show that the network can (docs/guides/reference-results.md). Some
-of the training episodes are released at rest from any angle, up to inverted: the hold is then learned where it is
-paid, and each higher start is a swing-up already partly done. BeadOnBar-v0's agents bring the bead to rest short of
-the target; some training episodes put the target close to the bead, where the last centimetres are the task.
+The Kapitza swing-up's agents pump energy in but do not learn to catch and hold the pendulum, which only a swing
+that reaches the top slowly shows them; its clones show that the network can (docs/guides/reference-results.md).
+Some of the training episodes are released at rest from any angle, up to inverted: the hold is then learned where it
+is paid, and each higher start is a swing-up already partly done. The agents of the bead on a bar bring the bead to
+rest short of the target; some training episodes put the target close to the bead, where the last centimetres are
+the task.
 
 A curriculum is a hyperparameter of train.py (agents/hyperparams), the name of a function here, which rl-zoo3 never
 sees; train.py wraps the training env alone in ``StartCurriculum(env, starts)``.

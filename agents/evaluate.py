@@ -1,6 +1,8 @@
 """Evaluate policies on the same seeded episodes and print one table row per policy.
 
-    python -m agents.evaluate --env connenv/Swing-v0 --policy analytic random runs/Swing-v0_ppo_s0/connenv-Swing-v0.zip
+    python -m agents.evaluate --env ID --policy analytic random runs/NAME_ppo_s0/connenv-NAME.zip
+
+ID is a connenv id (``--help`` lists them), NAME the id without its namespace.
 
 Episode i of every policy starts from ``reset(seed=seed + i)``, so the rows compare like with like. A policy is
 ``analytic`` (the env's first controller in agents.controllers), the name of one of its controllers (``arc``,
@@ -39,6 +41,7 @@ from connenv.cli import positive_int, seed_int, writable_file
 PROG = "python -m agents.evaluate"
 PRETRAINED = Path(__file__).parent / "pretrained"
 ENV_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("connenv/"))
+DEFAULT_ENV = "connenv/Swing-v0"  # --env of this command and of train.py when none is given (README's first example)
 CONTROLLER_NAMES = sorted({name for env_id in CONTROLLERS for name in controller_names(env_id)})
 GIF_SIZE = 200  # pixels
 GIF_FRAME_STRIDE = 2  # keep one frame in two
@@ -147,7 +150,7 @@ def algo_of(model_path: Path) -> str:
 def env_kwargs_of(specs: str | list[str] | None) -> dict:
     """The make kwargs of --env-kwargs: each spec a JSON object (``'{"dt": 0.02}'``) or ``module:factory``, a
     function of a module in the working directory or on the Python path that returns the kwargs dict or a system,
-    which becomes {"system": system} (connenv/ActiveConstraint-v0's); a later spec updates the earlier ones, so that
+    which becomes {"system": system} (ActiveConstraintEnv's); a later spec updates the earlier ones, so that
     ``my_robot:system '{"u_low": -3, "u_high": 3}'`` completes a system with its bounds. None: no kwargs. A spec
     that gives no kwargs raises ValueError naming it."""
     kwargs = {}
@@ -362,7 +365,7 @@ ENV_KWARGS_HELP = (
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="connenv/Swing-v0", choices=ENV_IDS)
+    parser.add_argument("--env", default=DEFAULT_ENV, choices=ENV_IDS, help="default: %(default)s")
     parser.add_argument(
         "--policy",
         nargs="+",

@@ -1,10 +1,10 @@
 """Features extractors: what a policy computes from an observation before its MLP, where the MLP should not have to.
 
-RollingBallGoal-v0 observes the attitude R and the target R* (6-D form each), as HER needs: a relabelled goal must
-leave the observation valid, so the env cannot observe their product. But the optimal arc is a feedback law of the
-attitude error P = R R*ᵀ alone, and an MLP given R and R* does not learn to compose them (its clones reach 1–5%,
-and 99–100% from P: docs/guides/reference-results.md). ``AttitudeError`` computes P inside the policy, from whatever
-goal HER puts beside the attitude, so relabelling stays valid.
+The rolling ball's goal env (RollingBallGoalEnv) observes the attitude R and the target R* (6-D form each), as HER
+needs: a relabelled goal must leave the observation valid, so the env cannot observe their product. But the optimal
+arc is a feedback law of the attitude error P = R R*ᵀ alone, and an MLP given R and R* does not learn to compose
+them (its clones reach 1–5%, and 99–100% from P: docs/guides/reference-results.md). ``AttitudeError`` computes P
+inside the policy, from whatever goal HER puts beside the attitude, so relabelling stays valid.
 
 In an rl-zoo3 hyperparameter file (whose policy_kwargs string is evaluated without imports):
 
@@ -29,7 +29,7 @@ def from_six_d(x: th.Tensor) -> th.Tensor:
 
 class AttitudeError(BaseFeaturesExtractor):
     """The 6-D form of P = R R*ᵀ, R from "achieved_goal" and R* from "desired_goal": the observation of
-    RollingBall-v0, computed from RollingBallGoal-v0's. No parameters; "observation" (R again) is left out, since the
+    RollingBallEnv, computed from RollingBallGoalEnv's. No parameters; "observation" (R again) is left out, since the
     task is invariant under a common rotation of R and R*."""
 
     def __init__(self, observation_space: gym.spaces.Dict):

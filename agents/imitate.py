@@ -1,7 +1,7 @@
 """Behaviour cloning of the analytic controllers into the policy class RL trains, and the diagnosis it serves
 (docs/guides/reference-results.md, "Why it did not learn, and what did").
 
-    python -m agents.imitate --env connenv/BeadOnBar-v0 --episodes 20 --epochs 30 --seed 0 --out runs/imitate
+    python -m agents.imitate --env ID --episodes 20 --epochs 30 --seed 0 --out runs/imitate  # --help lists the ids
     python -m agents.imitate --diagnose --jobs 2 --write docs/baselines/diagnosis.json
 
 A clone is the policy of SB3's PPO with the env's entry of agents/hyperparams/ppo.yml (its policy class, net_arch
@@ -17,19 +17,20 @@ Then DAgger (Ross, Gordon & Bagnell 2011): the clone drives, the controller runs
 observations, its own memory threaded through the episode, and labels every visited state; the clone is trained
 on all labels so far. This is sound only where the controller answers for a state it did not plan for, which
 `diagnose` measures as the success of the controller made memoryless (`Memoryless`: it forgets its plan and mode
-before every step). BeadOnBar's tilt law and RollingCoin's planner keep no memory; the balls' optimal arc
-(RollingBall-v0, RollingBallGoal-v0) is replanned from any state into the rest of the same arc; KapitzaSwingUp's mode (pumping or holding, a hysteresis of
-the angle) is threaded along the clone's episode. RollingBallPose's holonomy planner and SnakeSwimmer's gait planner
-cannot label: planned afresh from a state inside a plan, the ball's loops are placed anew and the snake returns to
-its base shape, and neither then reaches the target. Those two are cloned from demonstrations alone (no DAgger
-rounds), which tests whether a memoryless MLP reproduces the plans on the states they visit.
+before every step). The bead's tilt law and the coin's planner keep no memory; the balls' optimal arc is replanned
+from any state into the rest of the same arc; the Kapitza swing-up's mode (pumping or holding, a hysteresis of the
+angle) is threaded along the clone's episode. The ball's holonomy planner and the snake's gait planner cannot label:
+planned afresh from a state inside a plan, the ball's loops are placed anew and the snake returns to its base
+shape, and neither then reaches the target. Those two are cloned from demonstrations alone (no DAgger rounds),
+which tests whether a memoryless MLP reproduces the plans on the states they visit.
 
-The diagnosis evaluates, on the episodes reset with seeds EVAL_SEED, EVAL_SEED + 1, ... (EVAL_EPISODES of them, 50
-for the swing-up; seeds that no training, tuning or selection used): the analytic controller, the same made memoryless, a clone per seed, the best
-pretrained RL model (chosen by the committed table, docs/baselines/results.json, seeds 0..99), random and, on the
-dense-shaped nonholonomic tasks, a one-step greedy ascent of the reward (`GreedyReward`, on the first 20). Returns carry a 95%
-bootstrap interval (scipy.stats.bootstrap, BCa); the clones' mean over seeds a percentile-bootstrap interval over
-the seeds.
+The diagnosed envs and their budgets are the ``CLONES`` of their controller modules (agents.controllers), where the
+reasons for each are. The diagnosis evaluates, on the episodes reset with seeds EVAL_SEED, EVAL_SEED + 1, ... (the
+budget's eval_episodes of them; seeds that no training, tuning or selection used): the analytic controller, the same
+made memoryless, a clone per seed, the best pretrained RL model (chosen by the committed table,
+docs/baselines/results.json, seeds 0..99), random and, on the dense-shaped nonholonomic tasks, a one-step greedy
+ascent of the reward (`GreedyReward`, on the budget's first greedy_episodes). Returns carry a 95% bootstrap interval
+(scipy.stats.bootstrap, BCa); the clones' mean over seeds a percentile-bootstrap interval over the seeds.
 """
 
 from __future__ import annotations
@@ -47,8 +48,9 @@ import yaml
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli
+from connenv.envs.spec import registry
 from agents.baselines import DOCS, HYPERPARAMS, hyperparams, pretrained_label, short
-from agents.controllers import CONTROLLERS, controller
+from agents.controllers import CONTROLLERS, controller, module_of
 from agents.evaluate import (
     RandomPolicy,
     evaluate,
@@ -70,17 +72,6 @@ HELD_OUT = 5  # demonstration episodes kept out of training, on which the clone'
 BATCH = 256
 LEARNING_RATE = 1e-3
 CONFIDENCE = 0.95
-DIAGNOSED = (
-    "connenv/BeadOnBar-v0",
-    "connenv/KapitzaSwingUp-v0",
-    "connenv/RollingBallPose-v0",
-    "connenv/RollingBallGoal-v0",
-    "connenv/RollingCoin-v0",
-    "connenv/SnakeSwimmer-v0",
-    "connenv/RollingBall-v0",
-)
-"""The six tasks of issue 31's table, and RollingBall-v0 as a control for RollingBallGoal-v0: the same ball, the same
-optimal-arc controller and its dense reward, but the attitude error P = R R*ᵀ as observation instead of R and R*."""
 CLONE_SEEDS = (0, 1, 2)
 DAGGER_EPISODES = 10  # clone episodes a DAgger round
 
@@ -89,31 +80,27 @@ DAGGER_EPISODES = 10  # clone episodes a DAgger round
 class Budget:
     """How much a clone learns from: demonstrations, regression epochs (at the start and after each DAgger round),
     DAgger rounds; and the diagnosis's evaluation episodes, the first greedy_episodes of them also for the greedy
-    policy (it steps a copy of the env once per candidate action)."""
+    policy (0: none; it steps a copy of the env once per candidate action)."""
 
     demonstrations: int = 100
     epochs: int = 100
     rounds: int = 4
     eval_episodes: int = EVAL_EPISODES
-    greedy_episodes: int = 20
+    greedy_episodes: int = 0
 
 
-BUDGETS = {
-    "connenv/BeadOnBar-v0": Budget(demonstrations=20),
-    "connenv/RollingBallGoal-v0": Budget(demonstrations=200),
-    "connenv/RollingBall-v0": Budget(demonstrations=200),
-    "connenv/RollingBallPose-v0": Budget(demonstrations=200, epochs=300, rounds=0),
-    "connenv/RollingCoin-v0": Budget(rounds=0),
-    "connenv/SnakeSwimmer-v0": Budget(rounds=0),
-    "connenv/KapitzaSwingUp-v0": Budget(demonstrations=10, epochs=30, eval_episodes=50),
-}
-"""Each env's budget where not Budget()'s. No DAgger where the controller cannot label a state it did not plan for
-(see the module docstring), nor on RollingCoin-v0, whose planner rolls only within `agents.controllers.rolling_coin.ALIGNED` of the
-line to the target and so labels every state a clone visits near that line "turn, do not roll": the DAgger
-rollouts' own success fell over the rounds there. Fewer demonstrations, epochs and evaluation episodes for the
-swing-up, whose episodes are many times longer than the others'."""
-GREEDY = ("connenv/RollingBallPose-v0", "connenv/RollingCoin-v0")
-"""The dense-shaped nonholonomic tasks (RollingBallGoal-v0's reward is sparse: a greedy step sees −1 everywhere)."""
+def clone_budgets() -> dict[str, Budget]:
+    """The diagnosed envs' budgets, in the registry's order: the ``CLONES`` of their controller modules."""
+    budgets = {}
+    for env_id in CONTROLLERS:
+        clones = getattr(module_of(registry[env_id]), "CLONES", {})
+        if env_id in clones:
+            budgets[env_id] = Budget(**clones[env_id])
+    return budgets
+
+
+BUDGETS = clone_budgets()
+DIAGNOSED = tuple(BUDGETS)
 GREEDY_POINTS = 5  # candidate actions per action dimension: a grid of GREEDY_POINTS^dim over the action box
 CLONABLE = sorted(set(CONTROLLERS) & set(yaml.safe_load((HYPERPARAMS / "ppo.yml").read_text())))
 """The envs with an analytic controller and PPO hyperparameters."""
@@ -387,7 +374,7 @@ def diagnose_env(env_id: str, seeds=CLONE_SEEDS, out: Path | None = None, plan: 
     model = best_pretrained(env_id)
     rows["rl"] = evaluated(pretrained_label(model), make_policy(str(model), env_id, EVAL_SEED)[1])
     rows["random"] = evaluated("random", RandomPolicy(env.action_space, EVAL_SEED))
-    if env_id in GREEDY:
+    if plan.greedy_episodes:
         rows["greedy"] = row("greedy", run_greedy(env_id, min(plan.greedy_episodes, episodes), EVAL_SEED))
     success, returns = [c["success_rate"] for c in clones], [c["return_mean"] for c in clones]
     summary = {

@@ -1,16 +1,18 @@
 """Train an agent with rl-zoo3, then compare it with the analytic controller and a random policy.
 
-    python train.py --env connenv/Swing-v0 --algo ppo --timesteps 150000 --seed 0
+    python train.py --env ID --algo ppo --timesteps N --seed 0    # ID: a connenv id (--help lists them)
 
-Hyperparameters come from agents/hyperparams/{algo}.yml (rl-zoo3's layout, the env id as top-level key) or from
---hyperparams PATH; --timesteps overrides their n_timesteps. rl-zoo3's ExperimentManager reads them, builds the
-envs, shows a progress bar and evaluates periodically on a separate env: every --eval-freq steps, by default a
-tenth of the budget (at most 25 000 steps, and at least one rollout of an on-policy algorithm, whose policy changes
-only once per rollout). The run folder, runs/{env}_{algo}_s{seed}/, is laid out as rl-zoo3's: the model {env}.zip,
-best_model.zip and evaluations.npz of the periodic evaluation, {env}/config.yml (the hyperparameters used),
-{env}/args.yml and {env}/vecnormalize.pkl if normalized; train.py adds {env}/best_vecnormalize.pkl, the statistics
-best_model.zip was evaluated with (rl-zoo3 overwrites vecnormalize.pkl with the final ones), and results.json, the
-final evaluation of agents.evaluate on the same episodes for every policy ("status": "finished").
+Hyperparameters come from agents/hyperparams/{algo}.yml (rl-zoo3's layout, the env id as top-level key, or
+``default`` for every env without its own) or from --hyperparams PATH, without the key ``long`` (the budget curves'
+overrides, which agents.baselines reads); --timesteps overrides their n_timesteps. rl-zoo3's ExperimentManager reads
+them, builds the envs, shows a progress bar and evaluates periodically on a separate env: every --eval-freq steps,
+by default a tenth of the budget (at most 25 000 steps, and at least one rollout of an on-policy algorithm, whose
+policy changes only once per rollout). The run folder, runs/{env}_{algo}_s{seed}/, is laid out as rl-zoo3's: the
+model {env}.zip, best_model.zip and evaluations.npz of the periodic evaluation, {env}/config.yml (the
+hyperparameters used), {env}/args.yml and {env}/vecnormalize.pkl if normalized; train.py adds
+{env}/best_vecnormalize.pkl, the statistics best_model.zip was evaluated with (rl-zoo3 overwrites vecnormalize.pkl
+with the final ones), and results.json, the final evaluation of agents.evaluate on the same episodes for every
+policy ("status": "finished").
 
 A run folder holds one run. If it holds an earlier one, train.py refuses to start, naming the two ways out: --resume
 continues the earlier run from its last checkpoint, --overwrite moves it aside to {run}.{date-time} and trains anew.
@@ -24,10 +26,10 @@ interrupted command, so that a calling script sees it.
 
 With --env-kwargs the envs are made with the kwargs given as a JSON object ('{"dt": 0.02}') or as module:factory,
 the kwargs factory() returns (a dict, or a system, which becomes {"system": system}); several update one another in
-order. Enough to train on a user's own system,
+order. Enough to train on a user's own system, BUILDER the id of one of the two builders (README):
 
-    python train.py --env connenv/ActiveConstraint-v0 --env-kwargs my_robot:env_kwargs --algo ppo
-    python train.py --env connenv/ActiveConstraint-v0 --env-kwargs my_robot:system '{"u_low": -3, "u_high": 3}'
+    python train.py --env BUILDER --env-kwargs my_robot:env_kwargs --algo ppo
+    python train.py --env BUILDER --env-kwargs my_robot:system '{"u_low": -3, "u_high": 3}'
 
 The module is imported from the working directory or the Python path; the analytic controller is then left out of
 the final evaluation (there is none for a user's system). Bad input of any argument ends train.py in one line
@@ -83,7 +85,7 @@ warnings.filterwarnings("ignore", category=TqdmExperimentalWarning)  # SB3's pro
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="connenv/Swing-v0", choices=evaluate.ENV_IDS)
+    parser.add_argument("--env", default=evaluate.DEFAULT_ENV, choices=evaluate.ENV_IDS, help="default: %(default)s")
     parser.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
     parser.add_argument("--timesteps", type=evaluate.positive_int, help="default: n_timesteps of the hyperparameters")
     parser.add_argument("--seed", type=evaluate.seed_int, default=0)
@@ -122,8 +124,8 @@ def hyperparams_fault(path: Path, env_id: str) -> str | None:
         loaded = yaml.safe_load(path.read_text())
     except (yaml.YAMLError, UnicodeDecodeError) as error:
         return f"is not YAML ({error})"
-    if not (isinstance(loaded, dict) and isinstance(loaded.get(env_id), dict)):
-        return f"holds no hyperparameters for {env_id} (rl-zoo3's layout: the env id as key of a mapping)"
+    if not (isinstance(loaded, dict) and isinstance(loaded.get(env_id, loaded.get("default")), dict)):
+        return f"holds no hyperparameters for {env_id} (rl-zoo3's layout: the env id, or default, as key of a mapping)"
     return None
 
 
@@ -240,8 +242,11 @@ class BestStatsExperimentManager(ExperimentManager):
 
     def read_hyperparameters(self):
         """rl-zoo3's, noting the rollout length n_steps of an on-policy algorithm (1 for an off-policy one), with
-        the hyperparameter "curriculum" taken out for train.py (it stays in the saved config.yml)."""
+        the hyperparameter "curriculum" taken out for train.py (it stays in the saved config.yml) and "long" left
+        out (of the saved config.yml too, which agents.baselines compares with the env's hyperparameters)."""
         hyperparams, saved_hyperparams = super().read_hyperparameters()
+        for held in (hyperparams, saved_hyperparams):
+            held.pop("long", None)
         if "curriculum" in hyperparams:
             self.curriculum = curriculum.wrapper(hyperparams.pop("curriculum"))
         n_steps = inspect.signature(ALGOS[self.algo]).parameters.get("n_steps")

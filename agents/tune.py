@@ -1,6 +1,6 @@
 """Hyperparameter sweeps on Ray Tune: Optuna proposes, ASHA stops the trials that trail at the periodic evaluations.
 
-    python -m agents.tune --env connenv/RollingBallPose-v0 --algo sac --samples 16 --timesteps 40000 [--address ADDR]
+    python -m agents.tune --env ID --algo sac --samples 16 --timesteps 40000 [--address ADDR]  # --help lists the ids
 
 Each trial is one train.py run of ``--timesteps`` steps (one CPU), with the env's hyperparameters from
 agents/hyperparams/{algo}.yml where rl-zoo3's search space replaces what it samples: rl-zoo3's own samplers

@@ -8,7 +8,7 @@ wants the first observation of the new episode now, the last one in ``info["term
 partial reset (``reset(options={"reset_mask": done})``), so a row's episodes are the single env's.
 
     from agents.vec_env import make_native_vec_env
-    venv = make_native_vec_env("connenv/Swing-v0", n_envs=8, seed=0)   # VecMonitor(NativeVecEnv(...))
+    venv = make_native_vec_env(env_id, n_envs=8, seed=0)   # VecMonitor(NativeVecEnv(...)), env_id a connenv id
     PPO("MlpPolicy", venv).learn(10_000)
 
 Seeds are SB3's: ``seed(s)`` seeds row i with s + i at the next reset, which the native env passes on as

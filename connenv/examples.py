@@ -1,13 +1,13 @@
 """Worked examples of the two builders, each as make kwargs: what the guide "Your own system" shows, the benchmarks time and the
 contract tests check the generic ids with.
 
-- ``rotor()``: ActiveConstraint-v0 on a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², fit for jumps;
-- ``swing()``: ActiveConstraint-v0 on the swing from its Lagrangian, T = ½ m (ṙ² + r² θ̇²), V = −m g r cos θ,
+- ``rotor()``: ActiveConstraintEnv on a body with a rotor, T = ½ I θ̇² + ½ J (θ̇ + u̇)², fit for jumps;
+- ``swing()``: ActiveConstraintEnv on the swing from its Lagrangian, T = ½ m (ṙ² + r² θ̇²), V = −m g r cos θ,
   strongly fit, with the swing env's radii;
-- ``bead()``: ActiveConstraint-v0 on a bead on a rotating bar, T = ½ m (ṙ² + r² θ̇²), V = m g r sin θ, general
+- ``bead()``: ActiveConstraintEnv on a bead on a rotating bar, T = ½ m (ṙ² + r² θ̇²), V = m g r sin θ, general
   (the bar's angle θ is steered by its rate);
-- ``beanie()``: Connection-v0 on Elroy's beanie, SO(2) with A = I₂/(I₁+I₂), flat;
-- ``rolling_ball()``: Connection-v0 on the ball rolled without turning, SO(3) in the space frame, shape the contact
+- ``beanie()``: ConnectionEnv on Elroy's beanie, SO(2) with A = I₂/(I₁+I₂), flat;
+- ``rolling_ball()``: ConnectionEnv on the ball rolled without turning, SO(3) in the space frame, shape the contact
   point, A = −(1/ρ) [[0, −1], [1, 0], [0, 0]] so that ω = e_z × v/ρ.
 
 Every value is picklable (module-level functions, partials, sympy systems), as vector envs and copies need.

@@ -9,8 +9,8 @@ Every other env: the arrow keys, ←/→ on the first action and ↓/↑ on the 
 
 R resets, Esc or Q quits; an episode's end shows its outcome, and the next key (or a second) starts a new one.
 
-    python -m connenv.play connenv/Swing-v0 [--seed 0] [--scale 1.5] [--kwargs dt=0.02 ...] [--fast] [--frames N]
-                                           [--screenshot window.png]
+    python -m connenv.play ENV_ID [--seed 0] [--scale 1.5] [--kwargs dt=0.02 ...] [--fast] [--frames N]
+                                  [--screenshot window.png]    # ENV_ID: a connenv id (--help lists them)
 
 ``Player`` holds everything but the window (events in, action and text out), so that it runs headless too.
 """
@@ -141,7 +141,7 @@ def parse_kwargs(pairs: list[str]) -> dict:
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("env_id", metavar="ENV_ID", choices=env_ids(), help="a connenv id, e.g. connenv/Swing-v0")
+    parser.add_argument("env_id", metavar="ENV_ID", choices=env_ids(), help="a connenv id")
     parser.add_argument("--seed", type=cli.seed_int, help="of the first episode")
     parser.add_argument(
         "--scale", type=cli.positive_float, default=1.0, help="of the window against the env's 500-pixel frame"

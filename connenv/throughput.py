@@ -60,29 +60,13 @@ import scipy
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli
 from connenv.core.integrators import INTEGRATORS
-from connenv.envs.spec import spec
+from connenv.envs.spec import registry, spec
 
 PROG = "python -m connenv.throughput"
 SINGLE_STEPS = 3000
 REFERENCE = "CartPole-v1"  # Gymnasium's native vector env, the vector table's reference (issue 15)
 ROUNDS = 5
 SIZES = (1, 64, 1024, 4096)
-SINGLE_TARGETS = {  # issue 20: the largest ratio to Pendulum-v1's step
-    "connenv/Swing-v0": 1.5,
-    "connenv/KapitzaPendulum-v0": 1.5,
-    "connenv/KapitzaSwingUp-v0": 1.5,
-    "connenv/RollingBall-v0": 1.5,
-    "connenv/RollingBallPose-v0": 1.5,
-    "connenv/RollingBallGoal-v0": 3.0,
-    "connenv/Skier-v0": 5.0,
-}
-VECTOR_TARGETS = {  # issue 20: the smallest fraction of CartPole-v1's native vector env at N = 4096
-    "connenv/Swing-v0": 0.35,
-    "connenv/Skier-v0": 0.15,
-    "connenv/KapitzaPendulum-v0": 0.1,
-    "connenv/KapitzaSwingUp-v0": 0.1,
-    "connenv/RollingBall-v0": 0.1,
-}
 TRAINING = {"n_envs": 8, "n_steps": 256, "rollouts": 2}  # PPO's settings for --training, env and Pendulum-v1 alike
 
 
@@ -228,12 +212,13 @@ def step_breakdown(env_id: str, n: int, steps: int, seed: int = 0):
 
 
 def shell_steppers(integrators, n: int, steps: int, seconds: float, seed: int = 0):
-    """The shell's reduced model (KozlovShell-v0's default episode) stepped by each integrator as the env steps it,
+    """The shell's reduced model (KozlovShellEnv's default episode) stepped by each integrator as the env steps it,
     a straight mass motion to a random command per step of 0.1 s: one state against Pendulum-v1's env step, and N = n
     rows by the batched stepper against Gymnasium's native CartPole-v1 vector env, each pair alternated in one loop
     (issue 15's targets: ≤ 5× and ≥ 0.1×). The system is stepped directly, without the env's task code."""
     from connenv.core.batched import batched
     from connenv.core.integrators import make_stepper
+    from connenv.envs.kozlov_shell import KozlovShellEnv
     from connenv.systems.kozlov_shell import ReducedKozlovShell
 
     system, dt, u_max = ReducedKozlovShell(), 0.1, np.array([0.5, 0.25])
@@ -251,7 +236,7 @@ def shell_steppers(integrators, n: int, steps: int, seconds: float, seed: int = 
         integrator, _, atol = name.partition(":")  # "magnus:1e-9": the Magnus step with atol 1e-9
         options = {"rtol": 1e-8, "atol": 1e-10} if integrator == "dop853" else {"atol": float(atol)} if atol else {}
         if integrator == "default":  # the env's own: the Lie-group step with the rule fixed at construction
-            stepper = gym.make("connenv/KozlovShell-v0").unwrapped.stepper
+            stepper = KozlovShellEnv().stepper
         else:
             stepper = make_stepper(integrator, system, **options)
         y, y_ref, u = np.zeros(3), np.zeros(3), np.zeros(2)
@@ -366,7 +351,7 @@ def single_table(report: Report, env_ids, steps: int, misses: list):
     rows = []
     for env_id in env_ids:
         env_time, pendulum_time = single_step_times(env_id, steps)
-        ratio, target = env_time / pendulum_time, SINGLE_TARGETS.get(env_id)
+        ratio, target = env_time / pendulum_time, spec(env_id).single_target
         result = verdict(ratio, target, at_most=True)
         misses += [f"{env_id} single {ratio:.2f}× (target ≤ {target}×)"] if result == "MISSED" else []
         rows.append(
@@ -382,7 +367,7 @@ def vector_table(report: Report, env_ids, sizes, seconds: float, sync_max: int, 
     for env_id in env_ids:
         for n in sizes:
             native, sync, cartpole = vector_rates(env_id, n, seconds, n <= sync_max)
-            fraction, target = native / cartpole, VECTOR_TARGETS.get(env_id) if n == 4096 else None
+            fraction, target = native / cartpole, spec(env_id).vector_target if n == 4096 else None
             result = verdict(fraction, target, at_most=False)
             misses += [f"{env_id} N={n} {fraction:.3f}× CartPole (target ≥ {target}×)"] if result == "MISSED" else []
             rows.append(
@@ -451,10 +436,11 @@ def bounds_table(report: Report, n: int, seed: int = 0):
 
     from connenv.core.integrators import make_stepper
     from connenv.core.steppers import RK8
+    from connenv.envs.skier import SkierEnv
     from connenv.systems.swing import Swing, ellipj_one
 
     rng = np.random.default_rng(seed)
-    skier = gym.make("connenv/Skier-v0").unwrapped
+    skier = SkierEnv()
     swing, r = Swing(), rng.uniform(1.6, 2.0, (n, 1))
     theta_dot = rng.uniform(-4.0, 4.0, n) * np.sqrt(swing.g / r[:, 0])  # up to twice the separatrix's speed
     rows = np.stack([rng.uniform(-np.pi, np.pi, n), swing.mass * r[:, 0] ** 2 * theta_dot], axis=-1)
@@ -469,7 +455,7 @@ def bounds_table(report: Report, n: int, seed: int = 0):
         gym.make("Pendulum-v1"),
         gym.make_vec("CartPole-v1", n, vectorization_mode="vector_entry_point"),
     )
-    task_layers = {env_id: task_layer(env_id, seed) for env_id in SINGLE_TARGETS}
+    task_layers = {env_id: task_layer(env_id, seed) for env_id in registry if spec(env_id).single_target}
     for env in (pendulum, cartpole):
         env.reset(seed=seed)
     one, push = np.zeros(1, np.float32), np.zeros(n, int)

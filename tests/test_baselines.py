@@ -7,6 +7,7 @@ import json
 import re
 
 import pytest
+import yaml
 
 from agents import baselines, evaluate
 
@@ -68,3 +69,19 @@ def test_every_trainable_env_has_hyperparameters_an_analytic_controller_and_a_ph
     for algo in baselines.ALGOS:
         assert int(float(baselines.hyperparams(algo, env_id)["n_timesteps"])) > 0
     assert env_id in baselines.CONTROLLERS and env_id in baselines.MEASURES
+
+
+def test_train_py_leaves_out_the_budget_curve_and_a_curve_trains_with_it(tmp_path):
+    """An env's `long` key in ppo.yml is what its budget curve changes: train.py reads the env's entry without it
+    (the run's config.yml, which collect compares with `hyperparams`), and the curve's run with it over the rest."""
+    from agents import train
+
+    env_id = "connenv/RollingCoin-v0"
+    entry = yaml.safe_load(baselines.hyperparams_file("ppo").read_text())[env_id]
+    own = {key: value for key, value in entry.items() if key != baselines.LONG}
+    for book, expected in (("", own), (baselines.LONG, {**own, **entry[baselines.LONG]})):
+        args = train.parse_args(baselines.train_argv(env_id, "ppo", 0, tmp_path, book=book))
+        hyperparams, saved = train.experiment(args).read_hyperparameters()
+        assert dict(saved) == expected == baselines.hyperparams("ppo", env_id, book)
+        assert baselines.LONG not in hyperparams
+    assert expected["n_timesteps"] > own["n_timesteps"]

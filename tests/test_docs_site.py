@@ -122,10 +122,14 @@ def test_every_internal_link_of_the_built_site_names_a_file(built_site):
 
 
 def test_the_site_builds_strictly_with_a_page_per_env(built_site):
+    """Each env's page, linked from the nav with its physics page (mkdocs.yml's wildcards, expanded by docs/nav.py)."""
     site = site_module()
+    nav = (built_site / "index.html").read_text()
     for env_id in site.env_ids():
         page = built_site / "envs" / site.name(env_id) / "index.html"
         assert page.is_file() and f"{site.name(env_id)}.gif" in page.read_text()
+        physics = site.spec(env_id).physics.removesuffix(".md")
+        assert f'href="envs/{site.name(env_id)}/"' in nav and f'href="physics/{physics}/"' in nav, env_id
     assert (built_site / "envs" / "Swing-v0.gif").is_file()
 
 

@@ -67,3 +67,8 @@ class BeadTilt:
 
 def tilt(env):
     return BeadTilt(env)
+
+
+CLONES = {"connenv/BeadOnBar-v0": {"demonstrations": 20}}
+"""agents.imitate's diagnosis of the env (agents.imitate.Budget's fields where not its defaults): the tilt law keeps
+no memory, so it labels the states of DAgger's rounds."""

@@ -101,3 +101,15 @@ def arc(env):
 
 def holonomy(env):
     return for_env(Holonomy, env)
+
+
+CLONES = {
+    "connenv/RollingBall-v0": {"demonstrations": 200},
+    "connenv/RollingBallPose-v0": {"demonstrations": 200, "epochs": 300, "rounds": 0, "greedy_episodes": 20},
+    "connenv/RollingBallGoal-v0": {"demonstrations": 200},
+}
+"""agents.imitate's diagnosis (agents.imitate.Budget's fields where not its defaults). The ball is the goal env's
+control: the same optimal arc and dense reward, with the attitude error P = R R*ᵀ observed instead of R and R*. No
+DAgger for the pose: the holonomy planner, planned afresh inside a plan, places its loops anew, so it cannot label a
+state it did not plan for. The pose's reward is dense-shaped, so a greedy ascent of it is diagnosed too (the goal
+env's is sparse: a greedy step sees −1 everywhere)."""

@@ -47,3 +47,10 @@ class CoinPlanner:
 
 def turn_roll_turn(env):
     return CoinPlanner(env)
+
+
+CLONES = {"connenv/RollingCoin-v0": {"rounds": 0, "greedy_episodes": 20}}
+"""agents.imitate's diagnosis (agents.imitate.Budget's fields where not its defaults). No DAgger: the planner rolls
+only within ALIGNED of the line to the target, so it labels every state a clone visits near that line "turn, do not
+roll", and the DAgger rollouts' own success fell over the rounds. The reward is dense-shaped, so a greedy ascent of
+it is diagnosed too."""

@@ -49,3 +49,6 @@ def gaits(env, scales=SCALES):
     return GaitPlanner(env, gaits, BASE, env.body_length)
 
 
+CLONES = {"connenv/SnakeSwimmer-v0": {"rounds": 0}}
+"""agents.imitate's diagnosis (agents.imitate.Budget's fields where not its defaults). No DAgger: the gait planner,
+planned afresh inside a plan, returns the snake to its base shape, so it cannot label a state it did not plan for."""

@@ -123,7 +123,7 @@ class ActiveConstraintEnv(TaskEnv):
     | render_mode | None | "human", "rgb_array" |
 
     The default integrator is "exact" for a system that gives its closed-form step (`exact_segment(y, u, u̇, τ)` at
-    constant u̇ or `exact_flow(y, u, τ)` where u is held, as BeadOnBar-v0's does), else DOP853 at rtol 1e-10, atol
+    constant u̇ or `exact_flow(y, u, τ)` where u is held, as the bead on a bar's does), else DOP853 at rtol 1e-10, atol
     1e-12: a generic system's time scales are unknown, so the step adapts to them (`python -m connenv.bench generic`
     compares the candidates). Diverged: an energy error (of E = ½ pᵀ A p + V) past 1e-2 (1 + |E|), or a segment that
     needs more evaluations of the vector field than its budget (a stall, as where the metric turns singular ahead, fails

@@ -45,7 +45,7 @@ ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which
 
 @dataclass
 class BeadState(ActiveConstraintState):
-    """ActiveConstraint-v0's state (y = (r, p), u = (θ,), t, the energy error) and the task's: the target r*,
+    """ActiveConstraintEnv's state (y = (r, p), u = (θ,), t, the energy error) and the task's: the target r*,
     whether the bead is within the target's tolerances, and for how long it has been (s)."""
 
     target: float

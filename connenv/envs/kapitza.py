@@ -426,11 +426,12 @@ SPECS = (
             ("kapitza", {"max_episode_steps": 100, "pivot": "planar"}, None),
             ("kapitza_fall", {"max_episode_steps": 100, "pivot": "horizontal"}, None),
         ),
-        bench="kapitza",
+        bench="kapitza", single_target=1.5, vector_target=0.1,
     ),
     Spec(
         "connenv/KapitzaSwingUp-v0", KapitzaSwingUpEnv, KapitzaSwingUpVectorEnv, max_episode_steps=6000, **PENDULUM,
         measure=Measure("time to target", "s", "time_to_success"), controllers=("swingup",),
         golden=(("swingup", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),),
+        single_target=1.5, vector_target=0.1,
     ),
 )

@@ -467,15 +467,18 @@ SPECS = (
         "connenv/RollingBall-v0", RollingBallEnv, RollingBallVectorEnv, max_episode_steps=200, **BALL,
         measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
         golden=(("ball", {"max_episode_steps": 50, "tolerance": 1.5}, None),), bench="ball",
+        single_target=1.5, vector_target=0.1,
     ),
     Spec(
         "connenv/RollingBallPose-v0", RollingBallPoseEnv, RollingBallPoseVectorEnv, max_episode_steps=300, **BALL,
         measure=Measure("path length", "m", "path_length"), controllers=("holonomy",),
         golden=(("ball_pose", {"max_episode_steps": 50, "tolerance": 2.5, "position_tolerance": 0.3}, None),),
+        single_target=1.5,
     ),
     Spec(
         "connenv/RollingBallGoal-v0", RollingBallGoalEnv, RollingBallGoalVectorEnv, max_episode_steps=200, **BALL,
         measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
         golden=(("ball_goal", {"max_episode_steps": 50, "tolerance": 1.5}, None),),
+        single_target=3.0,
     ),
 )

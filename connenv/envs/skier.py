@@ -376,6 +376,6 @@ SPECS = (
             ("skier", {"max_episode_steps": 80}, None),
             ("skier_ramp", {"max_episode_steps": 40, "max_height_speed": 3.0, "target_x": 0.3}, None),
         ),
-        bench="skier",
+        bench="skier", single_target=5.0, vector_target=0.15,
     ),
 )

@@ -61,7 +61,9 @@ class Spec:
     step of dt_max costs the stepper most); ``golden`` (golden trajectories: (name, make kwargs with
     max_episode_steps, reset options)).
 
-    Benchmarks: ``bench`` (the key of its cases in connenv.bench's tables).
+    Benchmarks: ``bench`` (the key of its cases in connenv.bench's tables); ``single_target`` and
+    ``vector_target`` (connenv.throughput's targets, issue 20: the largest ratio of its step time to Pendulum-v1's,
+    and the smallest fraction of CartPole-v1's native vector env-steps/s at N = 4096; None: no target).
     """
 
     id: str
@@ -85,6 +87,8 @@ class Spec:
     fast_start: dict | None = None
     golden: tuple[tuple[str, dict, dict | None], ...] = ()
     bench: str | None = None
+    single_target: float | None = None
+    vector_target: float | None = None
 
     @property
     def name(self) -> str:

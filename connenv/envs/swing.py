@@ -253,6 +253,6 @@ SPECS = (
             ("swing", {"max_episode_steps": 60, "target_amplitude": 0.3}, None),
             ("swing_ramp", {"max_episode_steps": 60, "max_radial_speed": 2.0}, None),
         ),
-        bench="swing",
+        bench="swing", single_target=1.5, vector_target=0.35,
     ),
 )

@@ -1,4 +1,4 @@
-"""A user's task for the two builders (ActiveConstraint-v0, Connection-v0), checked where it meets the env.
+"""A user's task for the two builders (ActiveConstraintEnv, ConnectionEnv), checked where it meets the env.
 
 A task is any object with ``reset(np_random) -> state dict``, ``reward(state, next_state) -> float`` and
 ``terminated(state) -> bool``, and optionally ``observation(state) -> array``, ``is_success(state) -> bool`` and an

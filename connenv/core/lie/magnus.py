@@ -268,7 +268,7 @@ class Magnus:
 
     With ``pieces`` given, every segment is stepped once with that many pieces (substeps on SO3), without the
     estimate: for a caller that knows its admissible segments and has chosen the rule for them once (`fixed_rule`),
-    as KozlovShell-v0 does. SE2's body frame then takes `se2_body_flow` with ``points`` Gauss nodes per piece, one
+    as KozlovShellEnv does. SE2's body frame then takes `se2_body_flow` with ``points`` Gauss nodes per piece, one
     state on Python floats throughout.
     """
 
