@@ -26,8 +26,8 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Spec
-from connenv.envs.vector import vector_env
 from connenv.envs.user_task import UserTask
+from connenv.envs.vector import vector_env
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
