@@ -153,6 +153,16 @@ SWIMMER = (
 """The swimmers' (shell's, snake's) episodes from rest and with a momentum, pose error, and momentum drift."""
 
 
+COIN_SURFACE = (
+    (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
+    lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
+    "max |E − E(0)| / (m g Δz)",
+    energy_drift(lambda env: env.system.mass * env.system.g * env.height_range),
+    "m",
+)
+"""The coin's episode on a surface and on the plane (its reference then the exact step), position error, energy."""
+
+
 def coin_track_error(env, info, start):
     """The distance of the coin from the exact step's track at this step (the episode's seeded actions)."""
     steps = round(info["state"]["t"] / env.dt)
@@ -329,25 +339,8 @@ CASES = {
         {"group": "SO3", "connection": twisted, "shape_low": [-1.0, -1.0], "shape_high": [1.0, 1.0], "dt": 0.1},
         MAGNUS,
     ),
-    "coin_surface": Case(
-        env_id("coin_surface"),
-        TIGHT,
-        (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
-        lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
-        "max |E − E(0)| / (m g Δz)",
-        energy_drift(lambda env: env.system.mass * env.system.g * env.height_range),
-        "m",
-    ),
-    "coin_plane": Case(
-        env_id("coin_surface"),
-        EXACT,
-        (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
-        lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
-        "max |E − E(0)| / (m g Δz)",
-        energy_drift(lambda env: env.system.mass * env.system.g * env.height_range),
-        "m",
-        {"surface": "plane"},
-    ),
+    "coin_surface": Case(env_id("coin_surface"), TIGHT, *COIN_SURFACE),
+    "coin_plane": Case(env_id("coin_surface"), EXACT, *COIN_SURFACE, {"surface": "plane"}),
     "sleigh": Case(
         env_id("sleigh"),
         TIGHT,
