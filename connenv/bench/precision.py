@@ -460,9 +460,13 @@ def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
     return rows, write_precision_csv(name, case, rows, folder), plot_precision(name, case, rows, folder, fraction)
 
 
-def main(argv=None):
+def parse_args(argv=None):
     names = [*CASES, "rigid_body"]  # rigid_body: a system without an env (connenv.bench.rigid_body)
-    args = parse_chart_args("precision", __doc__.split("\n")[0], names, "a fifth of every episode", argv)
+    return parse_chart_args("precision", __doc__.split("\n")[0], names, "a fifth of every episode", argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
     fraction = 0.2 if args.quick else 1.0
 
     def draw(name):

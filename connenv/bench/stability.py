@@ -394,9 +394,13 @@ def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
     return rows, path, plot_stability(name, stability_map, rows, grid, folder)
 
 
-def main(argv=None):
+def parse_args(argv=None):
     names = [*MAPS, "rigid_body"]  # rigid_body: a system without an env (connenv.bench.rigid_body)
-    args = parse_chart_args("stability", __doc__.split("\n")[0], names, "dt down to 1e-3 only", argv)
+    return parse_chart_args("stability", __doc__.split("\n")[0], names, "dt down to 1e-3 only", argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
     smallest = 1e-3 if args.quick else 1e-4
 
     def draw(name):

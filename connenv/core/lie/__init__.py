@@ -37,6 +37,7 @@ from connenv.core.lie.connections import (
     Connection,
     ConstantConnection,
     ExactConnection,
+    connection_system,
     constant_connection,
     group_velocity,
 )
@@ -63,6 +64,7 @@ __all__ = [
     "ExactConnection",
     "Group",
     "Magnus",
+    "connection_system",
     "constant_connection",
     "fixed_rule",
     "gauss_rule",
