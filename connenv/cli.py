@@ -44,48 +44,36 @@ def run(main: Callable, prog: str, argv: list[str] | None = None):
         raise SystemExit(2) from error
 
 
+def parsed(text: str, convert, valid, expected: str):
+    """convert(text) if it converts and is valid, else argparse's error saying what was expected."""
+    try:
+        value = convert(text)
+    except ValueError:
+        value = None
+    if value is None or not valid(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not {expected}")
+    return value
+
+
 def positive_int(text: str) -> int:
     """argparse type: an integer > 0, also written as 1e5."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = 0.0
-    if not (value > 0 and value.is_integer()):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer (valid: 1, 2, ...)")
+    value = parsed(text, float, lambda v: v > 0 and v.is_integer(), "a positive integer (valid: 1, 2, ...)")
     return int(value)
 
 
 def non_negative_int(text: str) -> int:
     """argparse type: an integer ≥ 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer ≥ 0 (valid: 0, 1, 2, ...)")
-    return value
+    return parsed(text, int, lambda v: v >= 0, "an integer ≥ 0 (valid: 0, 1, 2, ...)")
 
 
 def positive_float(text: str) -> float:
     """argparse type: a finite number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (0 < value < math.inf):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number > 0")
-    return value
+    return parsed(text, float, lambda v: 0 < v < math.inf, "a finite number > 0")
 
 
 def seed_int(text: str) -> int:
     """argparse type: a seed, an integer in [0, 2³² − 1]."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if not 0 <= value <= SEED_MAX:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a seed (valid: an integer in [0, {SEED_MAX}])")
-    return value
+    return parsed(text, int, lambda v: 0 <= v <= SEED_MAX, f"a seed (valid: an integer in [0, {SEED_MAX}])")
 
 
 def unwritable(path: Path, directory: bool) -> str | None:

@@ -14,6 +14,7 @@ import numpy as np
 import scipy
 
 import connenv  # noqa: F401  (registers the envs)
+from connenv import cli
 from connenv.envs.spec import Spec, registry
 
 OUTPUT = Path(__file__).resolve().parents[2] / "docs" / "precision"
@@ -28,6 +29,25 @@ def header(name: str):
         f"load average {os.getloadavg()[0]:.2f}",
         flush=True,
     )
+
+
+def parse_chart_args(kind: str, description: str, names: list[str], quick: str, argv=None):
+    """The arguments of ``python -m connenv.bench <kind>``: the charts to draw (--env) and --quick."""
+    parser = cli.ArgumentParser(prog=f"python -m connenv.bench {kind}", description=description)
+    parser.add_argument("--env", nargs="+", choices=sorted(names), default=names)
+    parser.add_argument("--quick", action="store_true", help=quick)
+    return parser.parse_args(argv)
+
+
+def draw_charts(kind: str, names, draw):
+    """Draw each named chart, ``draw(name) -> (rows, csv path, png path)``, saying what it wrote and the wall time."""
+    header(kind)
+    OUTPUT.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    for name in names:
+        _, csv_path, png_path = draw(name)
+        print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")
+    print(f"\nwall time: {time.perf_counter() - start:.0f} s")
 
 
 def pendulum():

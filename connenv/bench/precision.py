@@ -74,11 +74,9 @@ from __future__ import annotations
 
 import functools
 import math
-import time
 
 import numpy as np
 
-from connenv import cli
 from connenv.bench import rigid_body
 from connenv.bench.charts import DIVERGED, Case, Episode, pareto, plot_precision, write_precision_csv
 from connenv.bench.common import (
@@ -86,9 +84,10 @@ from connenv.bench.common import (
     beanie_balance,
     candidates,
     describe,
+    draw_charts,
     env_id,
-    header,
     make_env,
+    parse_chart_args,
     pendulum,
     run,
 )
@@ -139,6 +138,29 @@ def momentum_drift(env, info, start):
         return math.nan
     s0 = np.asarray(start["spatial_momentum"])
     return float(np.linalg.norm(np.asarray(info["spatial_momentum"]) - s0) / np.linalg.norm(s0))
+
+
+SWIMMER = (
+    (
+        Episode("reduced", {"state": {}}, uniform(2), 300),
+        Episode("full", {"state": {"momentum": (0.3, 0.1, 0.05)}}, uniform(2), 300),
+    ),
+    lambda env, ref: float(np.max(np.abs(env.state.pose - ref.state.pose))),
+    "max |S − S(0)| / |S(0)| (full model)",
+    momentum_drift,
+    "m, rad",
+)
+"""The swimmers' (shell's, snake's) episodes from rest and with a momentum, pose error, and momentum drift."""
+
+
+COIN_SURFACE = (
+    (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
+    lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
+    "max |E − E(0)| / (m g Δz)",
+    energy_drift(lambda env: env.system.mass * env.system.g * env.height_range),
+    "m",
+)
+"""The coin's episode on a surface and on the plane (its reference then the exact step), position error, energy."""
 
 
 def coin_track_error(env, info, start):
@@ -247,14 +269,7 @@ CASES = {
     "shell": Case(
         env_id("shell"),
         TIGHT,
-        (
-            Episode("reduced", {"state": {}}, uniform(2), 300),
-            Episode("full", {"state": {"momentum": (0.3, 0.1, 0.05)}}, uniform(2), 300),
-        ),
-        lambda env, ref: float(np.max(np.abs(env.state.pose - ref.state.pose))),
-        "max |S − S(0)| / |S(0)| (full model)",
-        momentum_drift,
-        "m, rad",
+        *SWIMMER,
         steppers=MAGNUS,
     ),
     "coin": Case(
@@ -310,14 +325,7 @@ CASES = {
     "snake": Case(
         env_id("snake"),
         TIGHT,
-        (
-            Episode("reduced", {"state": {}}, uniform(2), 300),
-            Episode("full", {"state": {"momentum": (0.3, 0.1, 0.05)}}, uniform(2), 300),
-        ),
-        lambda env, ref: float(np.max(np.abs(env.state.pose - ref.state.pose))),
-        "max |S − S(0)| / |S(0)| (full model)",
-        momentum_drift,
-        "m, rad",
+        *SWIMMER,
         steppers=(("magnus", {}),),  # one row: other atol fix the same rule (module docstring)
     ),
     "connection": Case(
@@ -331,25 +339,8 @@ CASES = {
         {"group": "SO3", "connection": twisted, "shape_low": [-1.0, -1.0], "shape_high": [1.0, 1.0], "dt": 0.1},
         MAGNUS,
     ),
-    "coin_surface": Case(
-        env_id("coin_surface"),
-        TIGHT,
-        (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
-        lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
-        "max |E − E(0)| / (m g Δz)",
-        energy_drift(lambda env: env.system.mass * env.system.g * env.height_range),
-        "m",
-    ),
-    "coin_plane": Case(
-        env_id("coin_surface"),
-        EXACT,
-        (Episode("random θ̇", {"state": {"theta": 0.3}}, uniform(1), 200),),
-        lambda env, ref: float(np.hypot(*(env.state.y[:2] - ref.state.y[:2]))),
-        "max |E − E(0)| / (m g Δz)",
-        energy_drift(lambda env: env.system.mass * env.system.g * env.height_range),
-        "m",
-        {"surface": "plane"},
-    ),
+    "coin_surface": Case(env_id("coin_surface"), TIGHT, *COIN_SURFACE),
+    "coin_plane": Case(env_id("coin_surface"), EXACT, *COIN_SURFACE, {"surface": "plane"}),
     "sleigh": Case(
         env_id("sleigh"),
         TIGHT,
@@ -470,22 +461,15 @@ def chart(name, folder=OUTPUT, fraction=1.0, steppers=None):
 
 
 def parse_args(argv=None):
-    parser = cli.ArgumentParser(prog="python -m connenv.bench precision", description=__doc__.split("\n")[0])
-    parser.add_argument("--env", nargs="+", choices=sorted([*CASES, "rigid_body"]), default=[*CASES, "rigid_body"])
-    parser.add_argument("--quick", action="store_true", help="a fifth of every episode")
-    return parser.parse_args(argv)
+    names = [*CASES, "rigid_body"]  # rigid_body: a system without an env (connenv.bench.rigid_body)
+    return parse_chart_args("precision", __doc__.split("\n")[0], names, "a fifth of every episode", argv)
 
 
 def main(argv=None):
     args = parse_args(argv)
-    header("precision")
-    OUTPUT.mkdir(parents=True, exist_ok=True)
-    start = time.perf_counter()
-    for name in args.env:
-        fraction = 0.2 if args.quick else 1.0
-        if name == "rigid_body":  # a system without an env: connenv.bench.rigid_body
-            _, csv_path, png_path = rigid_body.precision_chart(OUTPUT, fraction)
-        else:
-            _, csv_path, png_path = chart(name, fraction=fraction)
-        print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")
-    print(f"\nwall time: {time.perf_counter() - start:.0f} s")
+    fraction = 0.2 if args.quick else 1.0
+
+    def draw(name):
+        return rigid_body.precision_chart(OUTPUT, fraction) if name == "rigid_body" else chart(name, fraction=fraction)
+
+    draw_charts("precision", args.env, draw)

@@ -69,14 +69,12 @@ grid held.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
-from connenv import cli
 from connenv.bench import rigid_body
 from connenv.bench.charts import StabilityMap, cell, plot_stability, top_of, write_stability_csv
-from connenv.bench.common import OUTPUT, beanie_balance, describe, env_id, header, make_env
+from connenv.bench.common import OUTPUT, beanie_balance, describe, draw_charts, env_id, make_env, parse_chart_args
 from connenv.core import StepperError
 
 BOUND = 0.1  # relative invariant error that counts as bounded (the ball: the env's 1e-6 off SO(3))
@@ -397,22 +395,15 @@ def chart(name, folder=OUTPUT, smallest=1e-4, values=None, methods=None):
 
 
 def parse_args(argv=None):
-    parser = cli.ArgumentParser(prog="python -m connenv.bench stability", description=__doc__.split("\n")[0])
-    parser.add_argument("--env", nargs="+", choices=sorted([*MAPS, "rigid_body"]), default=[*MAPS, "rigid_body"])
-    parser.add_argument("--quick", action="store_true", help="dt down to 1e-3 only")
-    return parser.parse_args(argv)
+    names = [*MAPS, "rigid_body"]  # rigid_body: a system without an env (connenv.bench.rigid_body)
+    return parse_chart_args("stability", __doc__.split("\n")[0], names, "dt down to 1e-3 only", argv)
 
 
 def main(argv=None):
     args = parse_args(argv)
-    header("stability")
-    OUTPUT.mkdir(parents=True, exist_ok=True)
-    start = time.perf_counter()
-    for name in args.env:
-        smallest = 1e-3 if args.quick else 1e-4
-        if name == "rigid_body":  # a system without an env: connenv.bench.rigid_body
-            _, csv_path, png_path = rigid_body.stability_chart(OUTPUT, smallest)
-        else:
-            _, csv_path, png_path = chart(name, smallest=smallest)
-        print(f"wrote {csv_path.relative_to(OUTPUT.parents[1])}, {png_path.relative_to(OUTPUT.parents[1])}")
-    print(f"\nwall time: {time.perf_counter() - start:.0f} s")
+    smallest = 1e-3 if args.quick else 1e-4
+
+    def draw(name):
+        return rigid_body.stability_chart(OUTPUT, smallest) if name == "rigid_body" else chart(name, smallest=smallest)
+
+    draw_charts("stability", args.env, draw)

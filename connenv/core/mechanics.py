@@ -32,7 +32,7 @@ from typing import Protocol
 import numpy as np
 from scipy.differentiate import derivative
 
-from connenv.core.steppers import MAX_EVALUATIONS
+from connenv.core.steppers import MAX_EVALUATIONS, Scipy
 from connenv.core.validation import check_returned, probe
 
 NUMERICAL_EVALUATIONS = 1_000  # per segment, of a vector field that is a numerical gradient (MetricField, JumpFlow
@@ -130,6 +130,11 @@ class MetricField:
 
     def vector_field(self, y, u, u_dot):
         return vector_field(self.system, y, u, u_dot)
+
+
+JUMP_STEPPER = Scipy("DOP853", rtol=1e-13, atol=1e-13)
+"""The stepper of a `JumpFlow` over s ∈ [0, 1]: tolerances at rounding, since the jump is a map, not a step to
+be refined."""
 
 
 @dataclass(frozen=True)

@@ -8,11 +8,10 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv import examples
-from connenv.core.batched import batched
 from connenv.core.integrators import make_stepper
-from connenv.core.mechanics import JumpClass, JumpFlow, MetricField, check_metric, classify, hamiltonian
+from connenv.core.mechanics import JUMP_STEPPER, JumpClass, JumpFlow, MetricField, check_metric, classify, hamiltonian
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.steppers import ExactFlow, ExactSegment, Scipy, check_observable
+from connenv.core.steppers import ExactFlow, ExactSegment, check_observable
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
@@ -24,14 +23,13 @@ from connenv.core.validation import (
     check_vector,
     probe,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import JumpVectorEnv, vector_env
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
-JUMP_STEPPER = Scipy("DOP853", rtol=1e-13, atol=1e-13)  # the jump flow over s ∈ [0, 1]
 
 CONTROLS = ("position", "velocity")
 
@@ -393,18 +391,7 @@ def check_fields(system, q, u):
             check_returned(name, value, y[point].shape, f"real finite arrays of y's shape {y[point].shape}")
 
 
-class ActiveConstraintVectorEnv(TaskVectorEnv):
-    """ActiveConstraint-v0 over a batch (``gym.make_vec("connenv/ActiveConstraint-v0", num_envs=N, system=...)``;
-    see ``connenv.envs.vector``): row i steps as the single env steps one state."""
-
-    single_env = ActiveConstraintEnv
-
-    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
-        super().__init__(num_envs, max_episode_steps, **kwargs)
-        self.jump_stepper = batched(JUMP_STEPPER)
-
-    def advance(self, s, command):
-        return self.env.advance(s, command, self.stepper, BATCH, self.jump_stepper)
+ActiveConstraintVectorEnv = vector_env(ActiveConstraintEnv, JumpVectorEnv)
 
 
 SPECS = (

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.mechanics import JUMP_STEPPER
 from connenv.core.segments import check_drift
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
@@ -19,14 +20,12 @@ from connenv.core.validation import (
 )
 from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env's too
     DT_MAX,
-    JUMP_STEPPER,
     ActiveConstraintEnv,
     ActiveConstraintState,
-    ActiveConstraintVectorEnv,
 )
 from connenv.envs.base import SCALAR
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
+from connenv.envs.vector import JumpVectorEnv, vector_env
 
 OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
 START_REACH = 0.8  # |r₀| ≤ 0.8 L, and so |r*| (g > 0)
@@ -291,7 +290,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         return renderer.draw(float(s.y[0]), float(s.u[0]), float(s.target), s.t, bool(s.inside))
 
 
-BeadOnBarVectorEnv = vector_env(BeadOnBarEnv, ActiveConstraintVectorEnv)
+BeadOnBarVectorEnv = vector_env(BeadOnBarEnv, JumpVectorEnv)
 
 
 BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,

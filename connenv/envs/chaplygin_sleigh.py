@@ -8,9 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.batched import batched
 from connenv.core.integrators import make_stepper
-from connenv.core.mechanics import JumpClass
+from connenv.core.mechanics import JUMP_STEPPER, JumpClass, JumpFlow
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
@@ -22,10 +21,9 @@ from connenv.core.validation import (
     check_stepper_options,
     check_vector,
 )
-from connenv.envs.active_constraint import JUMP_STEPPER, JumpFlow
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv
+from connenv.envs.vector import JumpVectorEnv, vector_env
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -310,19 +308,7 @@ class ChaplyginSleighEnv(TaskEnv):
         return renderer.draw(s.y[:3].copy(), s.u.copy(), s.target.copy(), s.t)
 
 
-class ChaplyginSleighVectorEnv(TaskVectorEnv):
-    """ChaplyginSleigh-v0 over a batch (``gym.make_vec("connenv/ChaplyginSleigh-v0", num_envs=N)``; see
-    ``connenv.envs.vector``): the single env's step over the rows, each row's mass stopped at its bounds at its own
-    time."""
-
-    single_env = ChaplyginSleighEnv
-
-    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
-        super().__init__(num_envs, max_episode_steps, **kwargs)
-        self.jump_stepper = batched(JUMP_STEPPER)
-
-    def advance(self, s, command):
-        return self.env.advance(s, command, self.stepper, BATCH, self.jump_stepper)
+ChaplyginSleighVectorEnv = vector_env(ChaplyginSleighEnv, JumpVectorEnv)
 
 
 SPECS = (

@@ -9,7 +9,7 @@ from gymnasium import spaces
 
 from connenv import examples
 from connenv.core.integrators import make_stepper
-from connenv.core.lie import FRAMES, GROUPS, Connection, ConstantConnection, ExactConnection
+from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, ExactConnection, connection_system
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
 from connenv.core.steppers import StepperError, check_observable
 from connenv.core.validation import (
@@ -18,16 +18,14 @@ from connenv.core.validation import (
     check_dt,
     check_keys,
     check_number,
-    check_returned,
     check_stepper_options,
     check_vector,
-    probe,
     real_array,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Spec
-from connenv.envs.vector import vector_env
 from connenv.envs.user_task import UserTask
+from connenv.envs.vector import vector_env
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
@@ -166,20 +164,8 @@ class ConnectionEnv(TaskEnv):
         if not isinstance(vectorized, (bool, np.bool_)):
             raise TypeError(f"vectorized={vectorized!r} must be True or False")
         self.task, self.draw = (None if task is None else UserTask(task, ("g", "s"))), draw
-        if not callable(connection):
-            if exact_segment is not None:
-                raise ValueError(f"exact_segment={exact_segment!r} is for a callable connection; a constant A "
-                                 "has its own exact step (one exponential)")
-            A = _check_constant(connection, self.group, self.low.size)
-            self.system = ConstantConnection(group, frame, A=A)
-        elif exact_segment is None:
-            connection = _check_connection(connection, self.group, self.sample_shapes(), bool(vectorized))
-            self.system = Connection(group, frame, connection, bool(vectorized))
-        else:
-            connection = _check_connection(connection, self.group, self.sample_shapes(), bool(vectorized))
-            exact_segment = _check_exact_segment(exact_segment, self.group, self.start_shape(), self.dt,
-                                                 self.max_shape_speed)  # fmt: skip
-            self.system = ExactConnection(group, frame, connection, bool(vectorized), exact_segment)
+        self.system = connection_system(group, frame, connection, bool(vectorized), exact_segment,
+                                        self.sample_shapes(), self.dt, self.max_shape_speed)  # fmt: skip
         check_stepper_options(self.name, stepper_options, type(self))
         if integrator is None:
             integrator = "exact" if isinstance(self.system, (ConstantConnection, ExactConnection)) else "magnus"
@@ -315,54 +301,6 @@ class ConnectionEnv(TaskEnv):
 
 
 ConnectionVectorEnv = vector_env(ConnectionEnv)
-
-
-def _check_constant(connection, group, k):
-    """A constant connection as a float array, if it is real, finite, of shape (dim 𝔤, k)."""
-    expected = (
-        f"a callable s -> A(s) or a constant A: finite, of shape {(group.dim, k)} (dim 𝔤, k) for group {group.name} "
-        f"and a shape of {k} coordinates"
-    )
-    A = real_array("connection", connection, expected)
-    if A.shape != (group.dim, k) or not np.all(np.isfinite(A)):
-        raise ValueError(f"connection={connection!r} must be {expected}")
-    return A
-
-
-def _check_connection(connection, group, shapes, vectorized):
-    """The connection, if it is callable and A(s) at each sample shape is real, finite, of shape (dim 𝔤, k); with
-    vectorized, A of the batch of samples is (N, dim 𝔤, k) and row i is A of shape i (to rounding). Else
-    ValueError (TypeError for what is no real numbers) naming connection, or vectorized."""
-    if not callable(connection):
-        raise ValueError(f"connection={connection!r} must be a callable s -> A(s)")
-    shape = (group.dim, shapes.shape[-1])
-    expected = (f"A(s), finite real numbers of shape {shape} (dim 𝔤, k) for group {group.name} and a shape of "
-                f"{shape[1]} coordinates")  # fmt: skip
-    single = []
-    for s in shapes:
-        name = f"connection(s) at s={s}"
-        single.append(check_returned(name, probe(name, connection, s.copy()), shape, expected))
-    if vectorized:
-        name = f"connection(s) at a batch of {len(shapes)} shapes s={shapes.tolist()} (vectorized=True)"
-        expected = f"(N, dim 𝔤, k) = {(len(shapes), *shape)}, A of each shape, or vectorized=False"
-        batch = check_returned(name, probe(name, connection, shapes.copy()), (len(shapes), *shape), expected)
-        if not np.allclose(batch, single, rtol=1e-9, atol=1e-12 * (1.0 + np.max(np.abs(single)))):
-            raise ValueError(f"{name} returned {batch.tolist()}, not A of each shape {np.stack(single).tolist()}; "
-                             "expected A of each row, or vectorized=False")  # fmt: skip
-    return connection
-
-
-def _check_exact_segment(exact_segment, group, s, dt, speed):
-    """exact_segment, if it is callable and from g = identity at the shape s gives a real, finite g of its group's
-    size after τ = dt, both at ṡ = 0 and with every shape coordinate at the top speed."""
-    if not callable(exact_segment):
-        raise ValueError(f"exact_segment={exact_segment!r} must be a callable (g, s, ṡ, τ) -> g, or None")
-    identity = np.array(group.identity(), dtype=float)
-    expected = f"the coordinates of g on {group.name}: finite real numbers of shape {identity.shape}"
-    for s_dot in (np.zeros_like(s), np.full_like(s, speed)):
-        name = f"exact_segment={exact_segment!r} at g = identity, s={s}, ṡ={s_dot}, τ={dt}"
-        check_returned(name, probe(name, exact_segment, identity.copy(), s.copy(), s_dot, dt), identity.shape, expected)
-    return exact_segment
 
 
 SPECS = (

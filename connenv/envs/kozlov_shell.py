@@ -24,8 +24,8 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
+from connenv.envs.vector import vector_env
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state

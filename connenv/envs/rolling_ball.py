@@ -23,7 +23,7 @@ from connenv.core.validation import (
     finite_action,
     ndim,
 )
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv, vector_env
 from connenv.systems.rolling_ball import (

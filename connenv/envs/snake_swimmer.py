@@ -26,8 +26,8 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
+from connenv.envs.vector import vector_env
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
 DT_MAX = 0.25  # s: the longest dt; longer steps (joint moves up to the whole range) make the Lie-group rule's choice

@@ -41,6 +41,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from connenv.core.batched import batched
+from connenv.core.mechanics import JUMP_STEPPER
 from connenv.core.steppers import StepperError
 from connenv.envs.base import BATCH
 
@@ -144,6 +145,18 @@ class TaskVectorEnv(VectorEnv):
 
     def advance(self, state, command):
         return self.env.advance(state, command, self.stepper, BATCH)
+
+
+class JumpVectorEnv(TaskVectorEnv):
+    """The vector env of a task whose step may begin with a fit system's jump (`connenv.core.mechanics.JumpFlow`):
+    its advance takes the jump's stepper, batched, too."""
+
+    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
+        super().__init__(num_envs, max_episode_steps, **kwargs)
+        self.jump_stepper = batched(JUMP_STEPPER)
+
+    def advance(self, state, command):
+        return self.env.advance(state, command, self.stepper, BATCH, self.jump_stepper)
 
 
 def vector_env(single_env: type, base: type = TaskVectorEnv) -> type:

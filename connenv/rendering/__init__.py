@@ -43,15 +43,30 @@ class Canvas:
             return None
         return np.transpose(np.array(self.pygame.surfarray.pixels3d(self.screen)), axes=(1, 0, 2))
 
+    def caption(self, *lines: str):
+        """The lines of text in the top left corner, and the frame shown (`show`)."""
+        for k, text in enumerate(lines):
+            self.screen.blit(self.font.render(text, True, (0, 0, 0)), (10, 10 + 20 * k))
+        return self.show()
+
     def close(self):
         if self.render_mode == "human":
             self.pygame.display.quit()
 
 
-class CoordinatePlot:
+class Renderer:
+    """Base of the renderers: each draws on its ``canvas``, which closing closes."""
+
+    canvas: Canvas
+
+    def close(self):
+        self.canvas.close()
+
+
+class CoordinatePlot(Renderer):
     """The coordinates against time: each q and u over the last WINDOW seconds (from the left edge, scrolling once
-    the window is full), scaled to the range they have covered; or, with a user's ``draw(state, canvas)``, that picture on a Canvas spanning [-1, 1]² (metres
-    by default: the callback may change ``canvas.scale``)."""
+    the window is full), scaled to the range they have covered; or, with a user's ``draw(state, canvas)``, that
+    picture on a Canvas spanning [-1, 1]² (metres by default: the callback may change ``canvas.scale``)."""
 
     WINDOW = 10.0  # s of history shown
     COLORS = ((204, 77, 77), (77, 110, 204), (77, 160, 77), (200, 140, 40), (140, 77, 180), (60, 60, 60))
@@ -83,9 +98,4 @@ class CoordinatePlot:
             if len(trace) > 1:
                 pg.draw.lines(c.screen, color, False, list(zip(x.astype(int), y.astype(int))), 2)
             c.screen.blit(c.font.render(f"{label} = {trace[-1, 1 + k]:+.3f}", True, color), (10 + 110 * k, SIZE - 18))
-        text = f"t = {state['t']:5.2f} s   range [{low:.3g}, {high:.3g}]"
-        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(f"t = {state['t']:5.2f} s   range [{low:.3g}, {high:.3g}]")

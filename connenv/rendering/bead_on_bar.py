@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class BeadRenderer:
+class BeadRenderer(Renderer):
     """The bar at its angle with the pivot, the target as a ring on the bar (green while the bead is within the
     tolerances), the bead, and the time, r and r* in the corner."""
 
@@ -27,8 +27,4 @@ class BeadRenderer:
         pg.draw.circle(c.screen, (204, 77, 77), c.px(r * along[0], r * along[1]), size)
         pg.draw.circle(c.screen, (0, 0, 0), c.px(0.0, 0.0), 5)
         text = f"t = {t:5.2f} s   r = {r:+5.3f} m   r* = {target:+5.3f} m"
-        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(text)

@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 
-from connenv.rendering import SIZE, Canvas
+from connenv.rendering import SIZE, Canvas, Renderer
 
 
-class SleighRenderer:
+class SleighRenderer(Renderer):
     """Top view: the track of the knife edge, the sled (its outline, the knife edge at P, the mass's box or rail
     around C), the mass and the target disc."""
 
@@ -46,8 +46,4 @@ class SleighRenderer:
         pg.draw.lines(c.screen, (120, 120, 160), True, [c.px(*p) for p in box], 2)  # the mass's box (a rail if b = 0)
         pg.draw.circle(c.screen, (0, 0, 0), c.px(*C), 3)
         pg.draw.circle(c.screen, (204, 77, 77), c.px(*(C + u[0] * e1 + u[1] * e2)), 8)
-        c.screen.blit(c.font.render(f"t = {t:5.2f} s", True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(f"t = {t:5.2f} s")

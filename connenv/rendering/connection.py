@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class ConnectionRenderer:
+class ConnectionRenderer(Renderer):
     """The body frame (x axis red, y axis green; SO3's projected on the screen's plane, z blue, with the unit
     circle), centred on g's position for SE2 and R2, and s as bars against its bounds; the time. With a user's
     ``draw(state, canvas)``, that picture instead, on a Canvas spanning [-2, 2]²."""
@@ -47,9 +47,4 @@ class ConnectionRenderer:
             x, width = 10 + 18 * i, 12
             pg.draw.rect(screen, (220, 220, 230), (x, size - 110, width, 100))
             pg.draw.rect(screen, (70, 110, 160), (x, size - 10 - int(100 * fraction), width, int(100 * fraction)))
-        text = f"t = {state['t']:5.2f}   s = {np.round(state['s'], 2)}"
-        screen.blit(canvas.font.render(text, True, (0, 0, 0)), (10, 10))
-        return canvas.show()
-
-    def close(self):
-        self.canvas.close()
+        return canvas.caption(f"t = {state['t']:5.2f}   s = {np.round(state['s'], 2)}")

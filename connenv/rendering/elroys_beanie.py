@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class BeanieRenderer:
+class BeanieRenderer(Renderer):
     """The body (a disk with a radius drawn at θ), the beanie on it (a smaller disk with its propeller at θ + ψ),
     the target θ* as a dashed line, and the beanie's winding ψ/2π counted beside; a bar shows the hold."""
 
@@ -35,9 +35,4 @@ class BeanieRenderer:
         pg.draw.rect(c.screen, (90, 170, 90), (10, 470, min(width, 200), 14))
         lines = [f"t = {t:5.2f} s   θ* − θ = {math.remainder(target - theta, 2 * math.pi):+6.3f} rad",
                  f"beanie turns ψ/2π = {psi / (2 * math.pi):+7.2f}   μ = {momentum:+5.2f}"]  # fmt: skip
-        for k, text in enumerate(lines):
-            c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10 + 20 * k))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(*lines)

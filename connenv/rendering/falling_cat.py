@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class CatRenderer:
+class CatRenderer(Renderer):
     """The cat seen from the side (its start spine to the right, up is up): the two halves as thick bars from the
     joint, with legs along each half's −e₃ (feet); beside it, a dial seen along the spine with the back's
     direction (feet down: the back up); the time, the roll and the bend."""
@@ -38,9 +38,4 @@ class CatRenderer:
         pg.draw.line(c.screen, (60, 60, 204), dial, back, 4)
         lines = [f"t = {t:5.2f} s   roll = {roll:+6.3f} rad",
                  f"bend β = {math.hypot(*bend):4.2f} rad  γ = {math.atan2(bend[1], bend[0]):+5.2f} rad"]  # fmt: skip
-        for k, text in enumerate(lines):
-            c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10 + 20 * k))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(*lines)

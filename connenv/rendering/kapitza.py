@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class KapitzaRenderer:
+class KapitzaRenderer(Renderer):
     """The pivot's travel as a bar, the pivot, rod and bob; the time in the corner."""
 
     def __init__(self, length: float, a_max: float, render_mode: str, fps: int):
@@ -24,8 +24,4 @@ class KapitzaRenderer:
         pg.draw.line(c.screen, (60, 60, 60), pivot, bob, 3)
         pg.draw.circle(c.screen, (204, 77, 77), bob, 12)
         pg.draw.circle(c.screen, (0, 0, 0), pivot, 5)
-        c.screen.blit(c.font.render(f"t = {t:5.2f} s", True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(f"t = {t:5.2f} s")

@@ -6,12 +6,12 @@ import math
 
 import numpy as np
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 OUTLINE_POINTS = 64
 
 
-class KozlovShellRenderer:
+class KozlovShellRenderer(Renderer):
     """The ellipse with its body x axis, the inner mass, the target with its success circle, and the path of the
     centre (the wake) drawn over the shell; the view is centred between the start and the target."""
 
@@ -42,8 +42,4 @@ class KozlovShellRenderer:
             pg.draw.lines(c.screen, (90, 90, 90), False, [c.px(*p) for p in path], 1)
         pg.draw.circle(c.screen, (204, 77, 77), c.px(*to_space([u])[0]), 7)
         distance = math.hypot(target[0] - x, target[1] - y)
-        c.screen.blit(c.font.render(f"t = {t:5.2f} s   distance = {distance:4.2f} m", True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(f"t = {t:5.2f} s   distance = {distance:4.2f} m")

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class RollingBallRenderer:
+class RollingBallRenderer(Renderer):
     """Top view following the ball: the path it has rolled, the ball with its body axes (solid where they point
     up, hollow where down) and, in the corner, the target attitude's axes for comparison."""
 
@@ -39,8 +39,4 @@ class RollingBallRenderer:
         pg.draw.circle(c.screen, (60, 60, 60), c.px(*inset), int(0.8 * self.radius * c.scale), 1)
         self.axes(R_target, inset, 0.8 * self.radius)
         text = f"t = {t:5.2f} s   angle error = {angle_error:5.3f} rad   (target: lower right)"
-        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(text)

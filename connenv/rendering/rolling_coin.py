@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class CoinRenderer:
+class CoinRenderer(Renderer):
     """Top view: the track of the contact point, the coin as a segment along its heading (its edge seen from
     above) with a tick at the rolled angle φ, and the target pose as a hollow outline."""
 
@@ -36,8 +36,4 @@ class CoinRenderer:
         tick = track[-1] + self.radius * math.cos(phi) * np.array([math.sin(theta), math.cos(theta)])
         pg.draw.circle(c.screen, (204, 77, 77), c.px(*tick), 4)  # a point of the rim: where φ has turned it
         text = f"t = {t:5.2f} s   distance = {np.hypot(*(target[:2] - track[-1])):5.3f} m"
-        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(text)

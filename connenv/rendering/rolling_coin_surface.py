@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 
-from connenv.rendering import SIZE, Canvas
+from connenv.rendering import SIZE, Canvas, Renderer
 
 CONTOURS = 16  # bands of the contour map over the arena's height range
 LOW, HIGH = np.array([70.0, 120.0, 190.0]), np.array([235.0, 225.0, 200.0])  # colours of the lowest and highest band
 
 
-class CoinSurfaceRenderer:
+class CoinSurfaceRenderer(Renderer):
     """The arena's contour map (height bands, lighter uphill, with their edges as contour lines), the target with
     its tolerance circle, the coin's track, and the coin seen from above: a bar of its diameter along the heading,
     with a dot at the contact point; the time, speed and distance in the corner."""
@@ -52,8 +52,4 @@ class CoinSurfaceRenderer:
         pg.draw.circle(c.screen, (0, 0, 0), c.px(*contact), 4)
         distance = math.hypot(target[0] - y[0], target[1] - y[1])
         text = f"t = {t:5.2f} s   v = {self.radius * y[3]:5.2f} m/s   distance = {distance:5.2f} m"
-        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(text)

@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class SkierRenderer:
+class SkierRenderer(Renderer):
     """The trail, and the skier as a stick figure: legs bent at the knee as h drops, torso and head along the normal."""
 
     def __init__(self, trail, h_max: float, render_mode: str, fps: int):
@@ -38,8 +38,4 @@ class SkierRenderer:
         head = neck + 0.15 * self.h_max * normal
         pg.draw.circle(c.screen, (204, 77, 77), c.px(*head), max(int(0.15 * self.h_max * c.scale), 3))
         pg.draw.circle(c.screen, (0, 0, 0), c.px(*hip), 4)
-        c.screen.blit(c.font.render(f"t = {t:5.2f} s   h = {h:4.2f} m", True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(f"t = {t:5.2f} s   h = {h:4.2f} m")

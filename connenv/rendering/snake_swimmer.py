@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 OUTLINE_POINTS = 48
 WAKE_COLOURS = ((200, 170, 170), (170, 170, 170), (170, 190, 210))  # rear, middle, front
 
 
-class SnakeSwimmerRenderer:
+class SnakeSwimmerRenderer(Renderer):
     """Each link an ellipse (the middle one darker, the front one's axis marked), the target with its success
     circle, and the wake: the path of every link's centre since reset; the view is centred between the start and
     the target."""
@@ -44,8 +44,4 @@ class SnakeSwimmerRenderer:
         pg.draw.circle(c.screen, (204, 77, 77), c.px(*nose), 4)
         middle = links[1]
         distance = math.hypot(target[0] - middle[0], target[1] - middle[1])
-        c.screen.blit(c.font.render(f"t = {t:5.2f} s   distance = {distance:4.2f} m", True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(f"t = {t:5.2f} s   distance = {distance:4.2f} m")

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 
-from connenv.rendering import SIZE, Canvas
+from connenv.rendering import SIZE, Canvas, Renderer
 
 
-class SwingRenderer:
+class SwingRenderer(Renderer):
     """Pivot, rod and bob; the reachable radii as a shaded band; the time in the corner."""
 
     def __init__(self, r_max: float, render_mode: str, fps: int):
@@ -24,8 +24,4 @@ class SwingRenderer:
         pg.draw.line(c.screen, (60, 60, 60), pivot, bob, 3)
         pg.draw.circle(c.screen, (204, 77, 77), bob, 12)
         pg.draw.circle(c.screen, (0, 0, 0), pivot, 5)
-        c.screen.blit(c.font.render(f"t = {t:5.2f} s   r = {r:4.2f} m", True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(f"t = {t:5.2f} s   r = {r:4.2f} m")

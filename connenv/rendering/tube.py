@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class TubeRenderer:
+class TubeRenderer(Renderer):
     """The unit sphere of tangent directions seen from the side of B₀ above the start tangent T₀: the trace of the tip's
     tangent T (solid in front, faint behind), the tip frame at T (N red, B green, T blue from the centre), and at T₀
     the start normal (grey) and the target normal R₀ Rz(ψ*) e₁ (pink)."""
@@ -46,8 +46,4 @@ class TubeRenderer:
             pg.draw.line(c.screen, self.COLORS[i], c.px(*tip[:2]), c.px(*(tip + 0.3 * frame[:, i])[:2]), 4)
         pg.draw.circle(c.screen, self.COLORS[2], c.px(*tip[:2]), 6, 0 if tip[2] >= 0 else 2)
         text = f"t = {t:5.2f} s   twist = {twist:+5.3f} rad   target = {target:+5.3f} rad"
-        c.screen.blit(c.font.render(text, True, (0, 0, 0)), (10, 10))
-        return c.show()
-
-    def close(self):
-        self.canvas.close()
+        return c.caption(text)

@@ -1,14 +1,8 @@
 """Lie groups of motions and the integrator of a mechanical connection on them.
 
 A mechanical connection A(s) (Lawton) turns shape changes ṡ into a group velocity ξ = −A(s) ṡ, which moves the
-group element g by ġ = g ξ^ (body frame: ξ in the moving body's coordinates) or ġ = ξ^ g (space frame). Groups:
-
-| group | g as a matrix | coordinates of g (the state) | algebra coordinates ξ | bracket |
-|---|---|---|---|---|
-| "SO2" | 2×2 rotation | θ | ω | 0 |
-| "SE2" | 3×3 homogeneous | (x, y, θ) | (v₁, v₂, ω) | (ω' v₂ − ω v₂', ω v₁' − ω' v₁, 0) |
-| "SO3" | 3×3 rotation | its 9 entries, row by row | (ω₁, ω₂, ω₃), ω̂ v = ω × v | ω × ω' |
-| "R2" | the vector itself | (x, y) | (v₁, v₂) | 0 |
+group element g by ġ = g ξ^ (body frame: ξ in the moving body's coordinates) or ġ = ξ^ g (space frame). The groups
+and their coordinates are in `connenv.core.lie.groups`.
 
 Everything here works on *components*: tuples of Python floats for one state (the fast path: no numpy call per
 operation) or of arrays over the rows of a batch, with the same arithmetic, so that row i of a batch follows the
@@ -43,6 +37,7 @@ from connenv.core.lie.connections import (
     Connection,
     ConstantConnection,
     ExactConnection,
+    connection_system,
     constant_connection,
     group_velocity,
 )
@@ -69,6 +64,7 @@ __all__ = [
     "ExactConnection",
     "Group",
     "Magnus",
+    "connection_system",
     "constant_connection",
     "fixed_rule",
     "gauss_rule",

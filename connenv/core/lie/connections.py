@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from connenv.core.lie.groups import GROUPS
+from connenv.core.validation import check_returned, probe, real_array
 
 
 @dataclass(frozen=True)
@@ -103,6 +104,72 @@ class ConstantConnection(Connection):
         step = group.exp([tau * c for c in xi])
         g = group.product(g, step) if self.frame == "body" else group.product(step, g)
         return np.array(g) if single else np.stack(np.broadcast_arrays(*g), -1)
+
+
+def connection_system(group, frame, connection, vectorized, exact_segment, shapes, dt, speed) -> Connection:
+    """The system of a connection given as a builder's argument, checked: a constant A (ConstantConnection), a
+    callable s -> A(s) (Connection), or one with its exact_segment (ExactConnection). The callables are tried at the
+    sample shapes (the first the start shape; exact_segment over dt, at rest and at the top shape speed); what they
+    return wrong is a ValueError (TypeError for what is no real numbers) naming the argument."""
+    algebra = GROUPS[group]
+    if not callable(connection):
+        if exact_segment is not None:
+            raise ValueError(f"exact_segment={exact_segment!r} is for a callable connection; a constant A "
+                             "has its own exact step (one exponential)")  # fmt: skip
+        return ConstantConnection(group, frame, A=_check_constant(connection, algebra, shapes.shape[-1]))
+    connection = _check_connection(connection, algebra, shapes, vectorized)
+    if exact_segment is None:
+        return Connection(group, frame, connection, vectorized)
+    exact_segment = _check_exact_segment(exact_segment, algebra, shapes[0], dt, speed)
+    return ExactConnection(group, frame, connection, vectorized, exact_segment)
+
+
+def _check_constant(connection, group, k):
+    """A constant connection as a float array, if it is real, finite, of shape (dim 𝔤, k)."""
+    expected = (
+        f"a callable s -> A(s) or a constant A: finite, of shape {(group.dim, k)} (dim 𝔤, k) for group {group.name} "
+        f"and a shape of {k} coordinates"
+    )
+    A = real_array("connection", connection, expected)
+    if A.shape != (group.dim, k) or not np.all(np.isfinite(A)):
+        raise ValueError(f"connection={connection!r} must be {expected}")
+    return A
+
+
+def _check_connection(connection, group, shapes, vectorized):
+    """The connection, if it is callable and A(s) at each sample shape is real, finite, of shape (dim 𝔤, k); with
+    vectorized, A of the batch of samples is (N, dim 𝔤, k) and row i is A of shape i (to rounding). Else
+    ValueError (TypeError for what is no real numbers) naming connection, or vectorized."""
+    if not callable(connection):
+        raise ValueError(f"connection={connection!r} must be a callable s -> A(s)")
+    shape = (group.dim, shapes.shape[-1])
+    expected = (f"A(s), finite real numbers of shape {shape} (dim 𝔤, k) for group {group.name} and a shape of "
+                f"{shape[1]} coordinates")  # fmt: skip
+    single = []
+    for s in shapes:
+        name = f"connection(s) at s={s}"
+        single.append(check_returned(name, probe(name, connection, s.copy()), shape, expected))
+    if vectorized:
+        name = f"connection(s) at a batch of {len(shapes)} shapes s={shapes.tolist()} (vectorized=True)"
+        expected = f"(N, dim 𝔤, k) = {(len(shapes), *shape)}, A of each shape, or vectorized=False"
+        batch = check_returned(name, probe(name, connection, shapes.copy()), (len(shapes), *shape), expected)
+        if not np.allclose(batch, single, rtol=1e-9, atol=1e-12 * (1.0 + np.max(np.abs(single)))):
+            raise ValueError(f"{name} returned {batch.tolist()}, not A of each shape {np.stack(single).tolist()}; "
+                             "expected A of each row, or vectorized=False")  # fmt: skip
+    return connection
+
+
+def _check_exact_segment(exact_segment, group, s, dt, speed):
+    """exact_segment, if it is callable and from g = identity at the shape s gives a real, finite g of its group's
+    size after τ = dt, both at ṡ = 0 and with every shape coordinate at the top speed."""
+    if not callable(exact_segment):
+        raise ValueError(f"exact_segment={exact_segment!r} must be a callable (g, s, ṡ, τ) -> g, or None")
+    identity = np.array(group.identity(), dtype=float)
+    expected = f"the coordinates of g on {group.name}: finite real numbers of shape {identity.shape}"
+    for s_dot in (np.zeros_like(s), np.full_like(s, speed)):
+        name = f"exact_segment={exact_segment!r} at g = identity, s={s}, ṡ={s_dot}, τ={dt}"
+        check_returned(name, probe(name, exact_segment, identity.copy(), s.copy(), s_dot, dt), identity.shape, expected)
+    return exact_segment
 
 
 def group_velocity(system, s, s_dot):
