@@ -47,8 +47,6 @@ import numpy as np
 import yaml
 
 import connenv  # noqa: F401  (registers the envs)
-from connenv import cli
-from connenv.envs.spec import registry
 from agents.baselines import DOCS, HYPERPARAMS, hyperparams, pretrained_label, short
 from agents.controllers import CONTROLLERS, controller, module_of
 from agents.evaluate import (
@@ -61,6 +59,8 @@ from agents.evaluate import (
     seed_int,
     summarize,
 )
+from connenv import cli
+from connenv.envs.spec import registry
 
 PROG = "python -m agents.imitate"
 DEMO_SEED = 20_000
