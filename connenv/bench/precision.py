@@ -163,6 +163,11 @@ COIN_SURFACE = (
 """The coin's episode on a surface and on the plane (its reference then the exact step), position error, energy."""
 
 
+def attitude_gap(env, ref):
+    """The angle between the attitudes g (in SO(3)) of the env and the reference env."""
+    return float(rotation_angle(env.state.g.reshape(3, 3) @ ref.state.g.reshape(3, 3).T))
+
+
 def coin_track_error(env, info, start):
     """The distance of the coin from the exact step's track at this step (the episode's seeded actions)."""
     steps = round(info["state"]["t"] / env.dt)
@@ -305,7 +310,7 @@ CASES = {
         env_id("tube"),
         EXACT,
         (Episode("random κ", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
-        lambda env, ref: float(rotation_angle(env.state.g.reshape(3, 3) @ ref.state.g.reshape(3, 3).T)),
+        attitude_gap,
         "max ‖RᵀR − I‖",
         lambda env, info, start: float(np.linalg.norm(info["state"]["R"].T @ info["state"]["R"] - np.eye(3))),
         "rad",
@@ -315,7 +320,7 @@ CASES = {
         env_id("cat"),
         EXACT,
         (Episode("random ṡ", {"state": {"R": np.eye(3)}}, uniform(2), 200),),
-        lambda env, ref: float(rotation_angle(env.state.g.reshape(3, 3) @ ref.state.g.reshape(3, 3).T)),
+        attitude_gap,
         "max ‖gᵀg − I‖",
         lambda env, info, start: float(env.group.off_group(env.state.g.reshape(3, 3))),
         "rad",
