@@ -25,6 +25,7 @@ but its implicit stages take a step of their own.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import ClassVar, Protocol, runtime_checkable
@@ -43,7 +44,8 @@ class SteppedSystem(Protocol):
 @runtime_checkable
 class OneStateField(Protocol):
     """A system whose vector field also takes one state as Python floats: ``vector_field_one(y, u, u̇)``, y a list,
-    is ``vector_field``'s ẏ on that state as a list, by the same arithmetic (RK8's single state skips the arrays)."""
+    is ``vector_field``'s ẏ on that state as a list, by the same arithmetic (an explicit Runge–Kutta step of one
+    state then runs on floats throughout)."""
 
     def vector_field_one(self, y, u, u_dot): ...
 
@@ -136,9 +138,11 @@ class ExplicitRungeKutta:
     """An explicit Runge–Kutta method at ``substeps`` equal steps per segment, its ``tableau`` the subclass's (as
     scipy's ``RungeKutta`` takes C, A and B from its subclasses): stage i evaluates the vector field at
     y + h Σ_j a_ij k_j and u + (t + c_i h) u̇, the step adds h/divisor · Σ_j b_j k_j, each sum in the tableau's
-    order, with the control held (u itself) where u̇ = 0. With ``floats_for_one_state``, a single state runs on
-    Python floats, where a stage sum of a few numbers costs less than numpy's per-call overhead (RK8's twelve
-    stages); a row of a batch gets the same arithmetic either way."""
+    order, with the control held (u itself) where u̇ = 0. The tableau is run as the straight-line code it stands
+    for (`compiled_substeps`). A single state runs on Python floats where the system gives its field on one
+    state (`OneStateField`), or with ``floats_for_one_state`` (RK8's twelve stages) through an array, since a
+    stage sum of a few numbers costs less than numpy's per-call overhead; a row of a batch gets the same
+    arithmetic either way."""
 
     substeps: int = 1
     tableau: ClassVar[Tableau]
@@ -146,34 +150,59 @@ class ExplicitRungeKutta:
 
     def __call__(self, system, y, u, u_dot, tau):
         held = not _moving(u_dot)
-        if self.floats_for_one_state and type(y) is np.ndarray and y.ndim == 1 and np.ndim(tau) == 0:
-            return check_finite(np.array(self._one(system, y.tolist(), u, u_dot, tau, held)), self)
-        stages, weights, divisor = self.tableau.stages, self.tableau.weights, self.tableau.divisor
         h = tau / self.substeps
-        h_b = h / divisor  # the weights' factor
-        for i in range(self.substeps):
-            K = []
-            for c, row in stages:
-                u_s = u if held else u + (i * h + c * h) * u_dot
-                K.append(system.vector_field(y if not row else y + h * _weighted(row, K), u_s, u_dot))
-            y = y + h_b * _weighted(weights, K)
-        return check_finite(y, self)
+        h_b = h / self.tableau.divisor  # the weights' factor
+        one = type(y) is np.ndarray and y.ndim == 1 and (type(tau) is not np.ndarray or tau.ndim == 0)
+        if one and (self.floats_for_one_state or conforms(system, OneStateField)):
+            substeps = compiled_substeps(self.tableau, floats=True)
+            y = substeps(_one_state_field(system), y.tolist(), u, u_dot, h, h_b, held, self.substeps)
+            if not all(map(math.isfinite, y)):
+                raise StepperError(f"{self} produced a non-finite value {y}")
+            return np.array(y)
+        substeps = compiled_substeps(self.tableau, floats=False)
+        return check_finite(substeps(system.vector_field, y, u, u_dot, h, h_b, held, self.substeps), self)
 
-    def _one(self, system, y, u, u_dot, tau, held):
-        """The step of one state y (a list of floats), in the batch's order of operations."""
-        field = _one_state_field(system)
-        stages, weights, divisor = self.tableau.stages, self.tableau.weights, self.tableau.divisor
-        h = tau / self.substeps
-        h_b = h / divisor
-        for i in range(self.substeps):
-            K = [[] for _ in y]  # K[k][j]: component k of stage j
-            for c, row in stages:
-                u_s = u if held else u + (i * h + c * h) * u_dot
-                stage = [y_k + h * _weighted(row, K_k) for y_k, K_k in zip(y, K)] if row else y
-                for K_k, f_k in zip(K, field(stage, u_s, u_dot)):
-                    K_k.append(f_k)
-            y = [y_k + h_b * _weighted(weights, K_k) for y_k, K_k in zip(y, K)]
-        return y
+
+@functools.cache
+def compiled_substeps(tableau: Tableau, floats: bool):
+    """The tableau's substeps as a Python function, compiled once: ``substeps(field, y, u, u̇, h, h_b, held, n)``
+    takes n steps of length h (h_b = h/divisor) from y, an array (one state or rows), or with ``floats`` a list of
+    one state's floats, each sum then taken component by component. Its code is `substeps_source`'s, the tableau's
+    sums written out, because a loop over the stages costs more than their arithmetic on a small state (a list of
+    stages, a call per sum, a product by each weight of 1)."""
+    namespace = {}
+    code = compile(substeps_source(tableau, floats), "<Runge-Kutta substeps>", "exec")
+    exec(code, namespace)  # noqa: S102 (code made here from a tableau of numbers, not from input)
+    return namespace["substeps"]
+
+
+def substeps_source(tableau: Tableau, floats: bool) -> str:
+    """The code of `compiled_substeps`: per substep the control u_m at each distinct node c (once for the stages
+    that share it), then for stage s ``k{s} = field(y + h * (a k_j + …), u_m, u_dot)`` and finally
+    ``y = y + h_b * (b k_j + …)``, each sum left to right in the tableau's order, as `_weighted` sums, a weight of 1
+    without its product (1·k = k exactly). A sum of one term whose weight is a power of two is taken as (h·a)·k, as
+    RK4 is written by hand (½h·k): h·a is exact, so both are h a k rounded once, unless a·k falls below the normal
+    floats. With ``floats`` each sum runs over zip(y, k_j, …)."""
+    suffix = "_" if floats else ""  # a component of k_j (floats), or k_j itself
+
+    def combined(factor, row):
+        if len(row) == 1 and math.frexp(row[0][1])[0] == 0.5:  # one term, a power of two
+            ((j, a),) = row
+            factor, terms = (factor if a == 1.0 else f"({factor} * {a!r})"), f"k{j}{suffix}"
+        else:
+            terms = "(" + " + ".join(f"k{j}{suffix}" if a == 1.0 else f"{a!r} * k{j}{suffix}" for j, a in row) + ")"
+        if not floats:
+            return f"y + {factor} * {terms}"
+        names, stages = ", ".join(f"k{j}_" for j, _ in row), ", ".join(f"k{j}" for j, _ in row)
+        return f"[y_ + {factor} * {terms} for y_, {names} in zip(y, {stages})]"
+
+    nodes = list(dict.fromkeys(c for c, _ in tableau.stages))  # the distinct c: stages at one node share its u
+    lines = ["def substeps(field, y, u, u_dot, h, h_b, held, n):", "    for i in range(n):"]
+    lines += [f"        u{m} = u if held else u + (i * h + {c!r} * h) * u_dot" for m, c in enumerate(nodes)]
+    for s, (c, row) in enumerate(tableau.stages):
+        lines.append(f"        k{s} = field({combined('h', row) if row else 'y'}, u{nodes.index(c)}, u_dot)")
+    lines += [f"        y = {combined('h_b', tableau.weights)}", "    return y"]
+    return "\n".join(lines) + "\n"
 
 
 @dataclass(frozen=True)
@@ -294,7 +323,7 @@ class EnergyProjected:
             return check_finite(np.array([y_k - shift * g_k for y_k, g_k in zip(y_new.tolist(), gradient)]), self)
         redo = ~(np.abs(excess) <= self.atol) & (substeps < self.substeps << MAX_DOUBLINGS)
         if redo.any():
-            rows = lambda a: a[redo] if np.ndim(a) else a  # noqa: E731
+            rows = lambda a: a[redo] if np.ndim(a) else a
             y_new, excess = y_new.copy(), excess.copy()
             y_new[redo] = self._held(system, y[redo], rows(u), rows(u_dot), rows(tau), 2 * substeps)
             excess[redo] = 0.0  # those rows are projected already

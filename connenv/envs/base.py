@@ -19,7 +19,7 @@ the action, advances, and reports. Nothing in a task sets attributes on the side
 from __future__ import annotations
 
 import dataclasses
-from types import SimpleNamespace
+from typing import ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -27,10 +27,11 @@ import numpy as np
 from connenv.core.segments import control_segments, control_segments_batch
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
-from connenv.systems.backend import FLOATS, NAMES
+from connenv.systems.backend import FLOATS, NAMES, operations
 
-SCALAR = SimpleNamespace(
-    **vars(FLOATS),
+SCALAR = operations(
+    "SCALAR",
+    **{name: getattr(FLOATS, name) for name in NAMES},
     clip=lambda x, low, high: min(max(x, low), high),
     column=lambda x: x,
     pack=lambda parts: np.array(parts, np.float32),
@@ -42,7 +43,8 @@ SCALAR = SimpleNamespace(
 """Operations on one state, as Python floats (the single env's): the physics' (``connenv.systems.backend.FLOATS``)
 and the task's. Several times faster than numpy on one state."""
 
-BATCH = SimpleNamespace(
+BATCH = operations(
+    "BATCH",
     **{name: getattr(np, name) for name in NAMES},
     clip=lambda x, low, high: np.minimum(np.maximum(x, low), high),
     column=lambda x: x[..., None],
@@ -91,7 +93,7 @@ class RenderedEnv(gym.Env):
     """A Gymnasium env whose subclasses give ``_make_renderer()`` and ``_draw(renderer)``; pygame loads on first
     render, as in classic control."""
 
-    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
+    metadata: ClassVar[dict] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
 
     def __init__(self, render_mode: str | None, dt: float):
         """dt: the control step, s (checked by the subclass); it sets the render frame rate."""

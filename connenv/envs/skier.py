@@ -14,7 +14,6 @@ from connenv.core.validation import check_dt, check_keys, check_number, check_sc
 from connenv.envs.base import SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
-from connenv.systems.backend import components, namespace
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
 
@@ -274,8 +273,10 @@ class SkierEnv(TaskEnv):
 
     def held_energy(self, y, h, h_dot):
         """E where the height is held (where E is conserved), 0 where it moves: one state, or rows."""
-        (h,), (h_dot,) = components(h), components(h_dot)
-        return namespace(h_dot).where(h_dot == 0.0, self.system.energy(y, h), 0.0)
+        if y.ndim == 1:  # one state, on Python floats: its energy only where it is conserved
+            (h,), (h_dot,) = h.tolist(), h_dot.tolist()
+            return self.system.energy(y, h) if h_dot == 0.0 else 0.0
+        return np.where(h_dot[..., 0] == 0.0, self.system.energy(y, h[..., 0]), 0.0)
 
     def check_energy_error(self, energy_error):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""

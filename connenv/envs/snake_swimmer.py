@@ -282,7 +282,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         hold, and checks its spatial momentum. One state, or rows with the vector env's stepper and ops=BATCH."""
         s_dot, ramp, s_end = joint_path(s.s, s_cmd, self.dt, self.max_joint_speed)
         moving = (s.s, s_dot, ramp)  # held joints do not move the chain at zero momentum
-        full = [moving, (s_end, np.zeros_like(s_dot), self.dt - ramp)]
+        full = [moving, (s_end, np.zeros(s_dot.shape), self.dt - ramp)]
         pose, momentum = self.swim(s, full, [moving], stepper, ops)
         return SnakeState(pose, momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
 
@@ -306,7 +306,8 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return s.s
 
     def shape_info(self, s, ops=SCALAR):
-        return {"alpha": ops.real(s.s[..., 0]), "beta": ops.real(s.s[..., 1])}
+        alpha, beta = ops.components(s.s)
+        return {"alpha": alpha, "beta": beta}
 
 
 SnakeSwimmerVectorEnv = vector_env(SnakeSwimmerEnv)

@@ -83,7 +83,7 @@ class PlanarSwimmer:
         return ops.pack([*body_target, c, sin, *scaled_shape, *scaled_momentum])
 
     def describe(self, s, ops=SCALAR):
-        x, y, theta = (ops.real(s.pose[..., i]) for i in range(3))
+        x, y, theta = ops.components(s.pose)
         distance = self.distance(s, ops)
         state = {"x": x, "y": y, "theta": theta, **self.shape_info(s, ops), "momentum": ops.vector(s.momentum),
                  "t": s.t}  # fmt: skip

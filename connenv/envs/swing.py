@@ -14,7 +14,6 @@ from connenv.core.validation import check_angle, check_dt, check_keys, check_num
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
-from connenv.systems.backend import components, namespace
 from connenv.systems.swing import Swing
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -187,8 +186,10 @@ class SwingEnv(TaskEnv):
 
     def held_energy(self, y, r, r_dot):
         """E where the radius is held (where E is conserved), 0 where it moves: one state, or rows."""
-        (r,), (r_dot,) = components(r), components(r_dot)
-        return namespace(r_dot).where(r_dot == 0.0, self.system.energy(y, r), 0.0)
+        if y.ndim == 1:  # one state, on Python floats: its energy only where it is conserved
+            (r,), (r_dot,) = r.tolist(), r_dot.tolist()
+            return self.system.energy(y, r) if r_dot == 0.0 else 0.0
+        return np.where(r_dot[..., 0] == 0.0, self.system.energy(y, r[..., 0]), 0.0)
 
     def check_energy_error(self, energy_error):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""

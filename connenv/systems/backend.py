@@ -19,11 +19,22 @@ outside the standard (scipy.special's Jacobi elliptic functions) are chosen by t
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
+from types import ModuleType
 
 import numpy as np
 
-FLOATS = SimpleNamespace(
+
+def operations(name: str, **functions) -> ModuleType:
+    """A namespace of operations, held as a module object, as numpy's and math's are: the interpreter specializes a
+    call through a module's attribute, and not one through a SimpleNamespace's (which then looks the name up in the
+    type and in the instance's dict on every call, in physics called many times a step)."""
+    namespace = ModuleType(name)
+    vars(namespace).update(functions)
+    return namespace
+
+
+FLOATS = operations(
+    "FLOATS",
     sin=math.sin,
     cos=math.cos,
     atan2=math.atan2,
@@ -41,7 +52,7 @@ FLOATS = SimpleNamespace(
 )
 """The Array API names used by connenv's physics, on Python floats."""
 
-NAMES = tuple(vars(FLOATS))
+NAMES = tuple(name for name in vars(FLOATS) if not name.startswith("__"))  # a module's own: __name__, …
 
 
 def namespace(x):
@@ -52,6 +63,9 @@ def namespace(x):
 def components(a):
     """The components along the last axis: Python floats of one state (a 1-D array), arrays over the rows of a
     batch."""
-    if not isinstance(a, np.ndarray):
+    try:
+        one = a.ndim == 1
+    except AttributeError:  # a sequence: its array (an array goes without a call, as this is called often)
         a = np.asarray(a, float)
-    return a.tolist() if a.ndim == 1 else [a[..., i] for i in range(a.shape[-1])]
+        one = a.ndim == 1
+    return a.tolist() if one else [a[..., i] for i in range(a.shape[-1])]

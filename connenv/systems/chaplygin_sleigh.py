@@ -66,6 +66,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from connenv.core.mechanics import JumpClass
+from connenv.systems.backend import FLOATS
 
 
 @dataclass(frozen=True)
@@ -90,11 +91,14 @@ class ChaplyginSleigh:
 
     def velocities(self, y, u, u_dot):
         """(v, ω) = A (p − G12 u̇), u and u̇ arrays (..., 2)."""
+        return self._velocities(y[..., 3], y[..., 4], u[..., 0], u[..., 1], u_dot[..., 0], u_dot[..., 1])
+
+    def _velocities(self, p1, p2, u1, u2, d1, d2):
+        """velocities on components (p₁, p₂, u₁, u₂, u̇₁, u̇₂): Python floats of one state, or arrays over rows."""
         M, J, a, m = self.sled_mass, self.sled_inertia, self.offset, self.mass
-        u1, u2, d1, d2 = u[..., 0], u[..., 1], u_dot[..., 0], u_dot[..., 1]
         total, lever = M + m, a + u1
-        p1 = y[..., 3] - m * d1
-        p2 = y[..., 4] + m * u2 * d1 - m * lever * d2
+        p1 = p1 - m * d1
+        p2 = p2 + m * u2 * d1 - m * lever * d2
         inertia = J + M * a * a + m * (u2 * u2 + lever * lever)
         det = total * inertia - m * m * u2 * u2
         return (inertia * p1 + m * u2 * p2) / det, (m * u2 * p1 + total * p2) / det
@@ -110,11 +114,23 @@ class ChaplyginSleigh:
 
     def vector_field(self, y, u, u_dot):
         """ẏ = (v cos φ, v sin φ, ω, ω P_w, −v P_w), P_w = M a ω + m ((a + u₁) ω + u̇₂), under the control (u, u̇)."""
+        if y.ndim == 1 and u.ndim == 1 and u_dot.ndim == 1:  # one state: Python floats, no array calls but the result
+            return np.array(self.vector_field_one(y.tolist(), u, u_dot))
+        rates = self._rates(y[..., 2], y[..., 3], y[..., 4], u[..., 0], u[..., 1], u_dot[..., 0], u_dot[..., 1], np)
+        return np.stack(rates, -1)
+
+    def vector_field_one(self, y, u, u_dot):
+        """vector_field of one state y = [x, y, φ, p₁, p₂] of Python floats (u and u̇ arrays (2,)), as a list."""
+        (u1, u2), (d1, d2) = u.tolist(), u_dot.tolist()
+        return self._rates(y[2], y[3], y[4], u1, u2, d1, d2, FLOATS)
+
+    def _rates(self, phi, p1, p2, u1, u2, d1, d2, ops):
+        """ẏ's components at (φ, p₁, p₂) under (u, u̇) given as components: Python floats with ops=FLOATS, or rows
+        with numpy."""
         M, a, m = self.sled_mass, self.offset, self.mass
-        v, omega = self.velocities(y, u, u_dot)
-        phi = y[..., 2]
-        lateral = M * a * omega + m * ((a + u[..., 0]) * omega + u_dot[..., 1])
-        return np.stack([v * np.cos(phi), v * np.sin(phi), omega, omega * lateral, -v * lateral], -1)
+        v, omega = self._velocities(p1, p2, u1, u2, d1, d2)
+        lateral = M * a * omega + m * ((a + u1) * omega + d2)
+        return [v * ops.cos(phi), v * ops.sin(phi), omega, omega * lateral, -v * lateral]
 
     def jump_field(self, y, u, delta_u):
         """(dy/ds) of a jump of u along u(s) = u + s Δu, for a system fit for jumps: the part of the vector field

@@ -33,10 +33,10 @@ from functools import cached_property
 
 import numpy as np
 
-from connenv.core.validation import ndim
 from connenv.systems.backend import FLOATS
 from connenv.systems.swing import Swing
 
+FLOAT = np.dtype(float)  # the dtype of the states numpy makes, one object: `_frame` tells it by identity
 SEPARATRIX_STEP = 0.01  # ω₀h of the RK4 steps near the separatrix, where the elliptic flow declines
 
 
@@ -63,19 +63,18 @@ class KapitzaPendulum:
 
     def theta_dot(self, y, u_dot):
         """θ̇ = (p − m l u̇·n) / (m l²): one state on Python floats, or rows."""
-        (theta, p), (v1, v2), ops = self._components(y, u_dot)
-        return self._spin(p, v1, v2, ops.cos(theta), ops.sin(theta)) / (self.mass * self.length * self.length)
+        return self._frame(y, u_dot)[1] / (self.mass * self.length * self.length)
 
-    def _spin(self, p, v1, v2, cos, sin):
-        """m l² θ̇ = p − m l u̇·n on components, from cos θ and sin θ."""
-        return p - self.mass * self.length * (v1 * cos + v2 * sin)
-
-    @staticmethod
-    def _components(y, u_dot):
-        """((θ, p), (u̇₁, u̇₂), ops): Python floats and FLOATS for one state, arrays and numpy for rows."""
-        if ndim(y) == 1 and ndim(u_dot) == 1:
-            return np.asarray(y, float).tolist(), np.asarray(u_dot, float).tolist(), FLOATS
-        return (y[..., 0], y[..., 1]), (u_dot[..., 0], u_dot[..., 1]), np
+    def _frame(self, y, u_dot):
+        """(θ, m l² θ̇, u̇₁, u̇₂, ops), m l² θ̇ = p − m l u̇·n the momentum in the frame of the pivot's velocity:
+        Python floats and FLOATS for one state (a float array is taken as it is), arrays and numpy for rows."""
+        if not (type(y) is np.ndarray and y.dtype is FLOAT and type(u_dot) is np.ndarray and u_dot.dtype is FLOAT):
+            y, u_dot = np.asarray(y, float), np.asarray(u_dot, float)
+        if y.ndim == 1 and u_dot.ndim == 1:
+            (theta, p), (v1, v2), ops = y.tolist(), u_dot.tolist(), FLOATS
+        else:
+            (theta, p), (v1, v2), ops = (y[..., 0], y[..., 1]), (u_dot[..., 0], u_dot[..., 1]), np
+        return theta, p - self.mass * self.length * (v1 * ops.cos(theta) + v2 * ops.sin(theta)), v1, v2, ops
 
     def momentum(self, theta, theta_dot, u_dot):
         """p = m l² θ̇ + m l u̇·n."""
@@ -95,10 +94,10 @@ class KapitzaPendulum:
         """E = ½ m l² θ̇² − m g l cos θ, the pendulum's energy in the frame moving with the pivot's velocity u̇
         (zero at pivot height); conserved while u̇ is constant and there is no damping. One state on Python floats,
         or rows."""
-        (theta, p), (v1, v2), ops = self._components(y, u_dot)
-        m, ell, c = self.mass, self.length, ops.cos(theta)
-        theta_dot = self._spin(p, v1, v2, c, ops.sin(theta)) / (m * ell * ell)
-        return 0.5 * m * ell * ell * theta_dot * theta_dot - m * self.g * ell * c
+        theta, spin, _, _, ops = self._frame(y, u_dot)
+        m, ell = self.mass, self.length
+        theta_dot = spin / (m * ell * ell)
+        return 0.5 * m * ell * ell * theta_dot * theta_dot - m * self.g * ell * ops.cos(theta)
 
     def exact_segment(self, y, u, u_dot, tau):
         """The state after a segment of length tau at constant pivot velocity u̇.
@@ -112,10 +111,9 @@ class KapitzaPendulum:
         """
         if self.damping != 0.0:
             return np.full(np.broadcast_shapes(np.shape(y), np.shape(u_dot)[:-1] + (2,)), math.nan)
-        (theta, p), (v1, v2), ops = self._components(y, u_dot)
+        theta, spin, v1, v2, ops = self._frame(y, u_dot)
         if ops is np:
-            theta, p, v1, v2 = np.broadcast_arrays(theta, p, v1, v2)
-        spin = self._spin(p, v1, v2, ops.cos(theta), ops.sin(theta))
+            theta, spin, v1, v2 = np.broadcast_arrays(theta, spin, v1, v2)
         flowed, flowed_spin = self._pendulum.pendulum_flow(theta, spin, self.length, tau, ops)
         near = ops.isnan(flowed)
         if ops.any(near):  # the state (or those rows) by RK4

@@ -51,6 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from connenv.systems.backend import FLOATS
 from connenv.systems.surfaces import Surface
 
 SERIES_BELOW = 0.3  # |Ωτ| under which (Ωτ − sin Ωτ)/(Ωτ)² is summed as its series (no cancellation)
@@ -69,18 +70,21 @@ class RollingCoinSurface:
 
     def vector_field(self, y, u, u_dot):
         """ẏ = (R sin θ φ̇, R cos θ φ̇, φ̇, −(2 g/(3 R)) (z_x sin θ + z_y cos θ)); u_dot drops out."""
-        if y.ndim == 1:  # one state: floats, no array calls but the result
-            x, yy, phi_dot, theta = float(y[0]), float(y[1]), float(y[3]), float(u[0])
-            _, z_x, z_y = self.surface.height(x, yy)
-            s, c = math.sin(theta), math.cos(theta)
-            v = self.radius * phi_dot
-            return np.array([v * s, v * c, phi_dot, -2.0 * self.g / (3.0 * self.radius) * (z_x * s + z_y * c)])
-        theta = u[..., 0]
-        _, z_x, z_y = self.surface.height(y[..., 0], y[..., 1])
-        s, c = np.sin(theta), np.cos(theta)
-        v = self.radius * y[..., 3]
-        phi_ddot = -2.0 * self.g / (3.0 * self.radius) * (z_x * s + z_y * c)
-        return np.stack(np.broadcast_arrays(v * s, v * c, y[..., 3], phi_ddot), axis=-1)
+        if y.ndim == 1:  # one state: Python floats, no array calls but the result
+            return np.array(self.vector_field_one(y.tolist(), u, u_dot))
+        return np.stack(np.broadcast_arrays(*self._rates(y[..., 0], y[..., 1], y[..., 3], u[..., 0], np)), axis=-1)
+
+    def vector_field_one(self, y, u, u_dot):
+        """vector_field of one state y = [x, y, φ, φ̇] of Python floats, as a list."""
+        x, yy, _, phi_dot = y
+        return self._rates(x, yy, phi_dot, float(u[0]), FLOATS)
+
+    def _rates(self, x, y, phi_dot, theta, ops):
+        """ẏ's components at (x, y), φ̇ and heading θ: Python floats with ops=FLOATS, or rows with numpy."""
+        _, z_x, z_y = self.surface.height(x, y)
+        s, c = ops.sin(theta), ops.cos(theta)
+        v = self.radius * phi_dot
+        return [v * s, v * c, phi_dot, -2.0 * self.g / (3.0 * self.radius) * (z_x * s + z_y * c)]
 
     def energy(self, y):
         """E = ¾ m R² φ̇² + m g z(x, y), J: z = 0 is the reference height."""

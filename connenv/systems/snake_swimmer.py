@@ -144,10 +144,13 @@ class SnakeSwimmer:
 
     # -- the full model ------------------------------------------------------
 
-    def _velocity(self, s, w_of):
-        """ξ = 𝕀_loc⁻¹ w as components, w = w_of(𝕀_c columns): the symmetric 3×3 solve by cofactors."""
-        (I11, I12, I13, I22, I23, I33), columns, _ = self._metric(s)
-        w1, w2, w3 = w_of(columns)
+    def _body_velocity(self, mu, s, s_dot):
+        """ξ = 𝕀_loc⁻¹ w, w = μ − 𝕀_c ṡ, as components: the symmetric 3×3 solve by cofactors."""
+        (I11, I12, I13, I22, I23, I33), ((ca1, ca2, ca3), (cb1, cb2, cb3)), _ = self._metric(s)
+        d_alpha, d_beta = s_dot
+        w1 = mu[0] - ca1 * d_alpha - cb1 * d_beta
+        w2 = mu[1] - ca2 * d_alpha - cb2 * d_beta
+        w3 = mu[2] - ca3 * d_alpha - cb3 * d_beta
         C11, C12, C13 = I22 * I33 - I23 * I23, I13 * I23 - I12 * I33, I12 * I23 - I13 * I22
         C22, C23, C33 = I11 * I33 - I13 * I13, I12 * I13 - I11 * I23, I11 * I22 - I12 * I12
         det = I11 * C11 + I12 * C12 + I13 * C13
@@ -156,20 +159,6 @@ class SnakeSwimmer:
             (C12 * w1 + C22 * w2 + C23 * w3) / det,
             (C13 * w1 + C23 * w2 + C33 * w3) / det,
         )
-
-    def _body_velocity(self, mu, s, s_dot):
-        """ξ = 𝕀_loc⁻¹ (μ − 𝕀_c ṡ) as components."""
-        d_alpha, d_beta = s_dot
-
-        def rhs(columns):
-            (ca1, ca2, ca3), (cb1, cb2, cb3) = columns
-            return (
-                mu[0] - ca1 * d_alpha - cb1 * d_beta,
-                mu[1] - ca2 * d_alpha - cb2 * d_beta,
-                (mu[2] - ca3 * d_alpha - cb3 * d_beta),
-            )
-
-        return self._velocity(s, rhs)
 
     def body_velocity(self, mu, s, s_dot):
         """ξ = 𝕀_loc⁻¹ (μ − 𝕀_c ṡ), shape (..., 3)."""

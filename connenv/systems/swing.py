@@ -57,7 +57,7 @@ class Swing:
 
     def energy(self, y, r):
         """E = p²/(2 m r²) − m g r cos θ (zero at pivot height): one state on Python floats, rows as arrays."""
-        if type(y) is np.ndarray and y.ndim == 1 and ndim(r) == 0:  # one state
+        if type(y) is np.ndarray and y.ndim == 1 and (type(r) is float or ndim(r) == 0):  # one state
             (theta, p), ops = y.tolist(), FLOATS
         else:
             theta, p, ops = y[..., 0], y[..., 1], np

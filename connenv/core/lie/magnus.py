@@ -20,6 +20,7 @@ import numpy as np
 from connenv.core.lie.connections import group_velocity
 from connenv.core.lie.groups import GROUPS, Group, ops_of
 from connenv.core.steppers import ConnectionSystem, Scipy, StepperError, check_finite, conforms
+from connenv.core.validation import ndim
 
 GAUSS = (0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0)  # the Gauss–Legendre nodes on [0, 1]
 BRACKET_WEIGHT = math.sqrt(3.0) / 12.0
@@ -384,7 +385,7 @@ class Magnus:
     def _fixed(self, system, y, u, u_dot, tau):
         """One flow of ``pieces`` pieces: floats for one state, arrays over rows for a batch."""
         group, frame = GROUPS[system.group], system.frame
-        single = np.ndim(y) == 1
+        single = ndim(y) == 1
         if single:
             g, u, u_dot = (tuple(np.asarray(a, float).tolist()) for a in (y, u, u_dot))
             tau = float(tau)
