@@ -19,11 +19,13 @@ the action, advances, and reports. Nothing in a task sets attributes on the side
 from __future__ import annotations
 
 import dataclasses
+from types import SimpleNamespace
 from typing import ClassVar
 
 import gymnasium as gym
 import numpy as np
 
+from connenv.core.params import Args, document
 from connenv.core.segments import control_segments, control_segments_batch
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
@@ -94,6 +96,23 @@ class RenderedEnv(gym.Env):
     render, as in classic control."""
 
     metadata: ClassVar[dict] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
+    ARGS: ClassVar[Args]
+    """The make kwargs (`connenv.core.params`): their checks, the docstring's Arguments table, `parameters()`."""
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        document(cls)
+
+    def check_args(self, kwargs: dict) -> tuple[SimpleNamespace, dict]:
+        """(ARGS checked on the make kwargs, with their defaults, as attributes, kept as ``self.args``; the
+        stepper's options). A bad one is a ValueError before anything is set."""
+        args, options = self.ARGS.check(self.name, type(self), kwargs)
+        self.args = SimpleNamespace(**args)
+        return self.args, options
+
+    def parameters(self) -> dict:
+        """The physical parameters, as a stepper's error reports them."""
+        return self.ARGS.physical(vars(self.args))
 
     def __init__(self, render_mode: str | None, dt: float):
         """dt: the control step, s (checked by the subclass); it sets the render frame rate."""

@@ -10,14 +10,12 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
+from connenv.core.params import Args, Bound, choice, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.validation import (
     check_angle,
-    check_dt,
     check_keys,
     check_number,
-    check_scale,
-    check_stepper_options,
     check_vector,
 )
 from connenv.envs.base import SCALAR, RenderedEnv, State, TaskEnv
@@ -33,6 +31,12 @@ HANG_START = (0.05, 0.1)  # rad: KapitzaSwingUp-v0 starts this far from hanging,
 STATE_KEYS = ("theta", "theta_dot", "p", "u", "u_dot")
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g l) past which it has diverged: StepperError
 DAMPING_MAX = 1e3  # the largest damping, in units of m l² √(g/l) (about one period's decay)
+
+
+def damping_max(args):
+    """The largest damping of a pendulum's arguments, N·m·s."""
+    return DAMPING_MAX * args["mass"] * args["length"] ** 2 * math.sqrt(args["g"] / args["length"])
+
 LIFT_FLOOR = 1e-4  # floor of the swing-up's lift in the reward's logarithm: amplitude ≈ 0.02 rad
 TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
 
@@ -124,20 +128,6 @@ class KapitzaPendulumEnv(TaskEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | pivot | "vertical" | "vertical", "horizontal", "planar" |
-    | length | 1.0 | [1e-6, 1e6] m, l |
-    | mass | 1.0 | [1e-6, 1e6] kg |
-    | g | 9.81 | [9.81e-6, 9.81e6] m/s² |
-    | v_max | 10.0 | [1e-5, 1e7] m/s |
-    | a_max | 0.1 | [1e-7, 1e5] m, below length |
-    | dt | 0.005 | [1e-12, 10] s |
-    | tolerance | 0.3 | [3e-7, π) rad |
-    | damping | 0.0 | [0, 1e3 m l² √(g/l)] N·m·s: torque −c θ̇ at the pivot, for tests of the averaged motion |
-    | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | | the stepper's |
-
     At m l² √(g/l) the damping damps the swing in about one period; beyond a thousand times that, the step would spend
     its work on the decay. The default step is exact: at constant u̇ the rod swings in the pivot's frame as a plain
     pendulum, whose flow is closed-form, and near its separatrix (the held-inverted pendulum) RK4 at a fine step
@@ -153,38 +143,31 @@ class KapitzaPendulumEnv(TaskEnv):
 
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ("max_deviation",)}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        pivot: str = "vertical",
-        length: float = 1.0,
-        mass: float = 1.0,
-        g: float = 9.81,
-        v_max: float = 10.0,
-        a_max: float = 0.1,
-        dt: float = 0.005,
-        tolerance: float = 0.3,
-        damping: float = 0.0,
-        integrator: str = "exact",
-        **stepper_options,
-    ):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
-        if pivot not in PIVOTS:
-            raise ValueError(f"pivot={pivot!r} is not one of {list(PIVOTS)}")
-        self.pivot, self.axes = pivot, list(PIVOTS[pivot])
-        self.actuated = slice(self.axes[0], self.axes[-1] + 1)  # the axes as a slice of u (they are contiguous)
-        length, mass, g = check_scale("length", length, 1.0), check_scale("mass", mass, 1.0), check_scale("g", g, 9.81)
-        damping_max = DAMPING_MAX * mass * length**2 * math.sqrt(g / length)
-        damping = check_number("damping", damping, 0.0, damping_max)
-        self.system = KapitzaPendulum(length=length, mass=mass, g=g, damping=damping)
-        self.v_max = check_scale("v_max", v_max, 10.0)
-        self.a_max = check_scale("a_max", a_max, 0.1, length, open_high=True, high_name="length")
-        self.tolerance = check_scale("tolerance", tolerance, 0.3, math.pi, open_high=True)
-        check_stepper_options(self.name, stepper_options, type(self))
-        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+    ARGS = Args(
+        choice("pivot", "vertical", PIVOTS),
+        scale("length", 1.0, "m", "l"),
+        scale("mass", 1.0, "kg"),
+        scale("g", 9.81, "m/s²"),
+        scale("v_max", 10.0, "m/s"),
+        scale("a_max", 0.1, "m", high="length", open_high=True),
+        step(0.005, DT_MAX),
+        scale("tolerance", 0.3, "rad", high=math.pi, open_high=True, physical=False),
+        interval("damping", 0.0, "N·m·s", 0.0, Bound(damping_max, "1e3 m l² √(g/l)"),
+                 "torque −c θ̇ at the pivot, for tests of the averaged motion"),
+        integrator("exact", "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau"),
+        options(),
+    )
 
-        self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / length)
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
+        self.pivot, self.axes = a.pivot, list(PIVOTS[a.pivot])
+        self.actuated = slice(self.axes[0], self.axes[-1] + 1)  # the axes as a slice of u (they are contiguous)
+        self.system = KapitzaPendulum(length=a.length, mass=a.mass, g=a.g, damping=a.damping)
+        self.v_max, self.a_max, self.tolerance = a.v_max, a.a_max, a.tolerance
+        self.stepper = make_stepper(a.integrator, self.system, **stepper_options)
+
+        self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / a.length)
         k = len(self.axes)
         self.action_space = spaces.Box(-1.0, 1.0, (k,), np.float32)
         high = np.array([1.0, 1.0, SPEED_BOUND] + [1.0] * 2 * k, np.float32)
@@ -201,13 +184,7 @@ class KapitzaPendulumEnv(TaskEnv):
         return renderer.draw(self.state.y[0], self.state.u, self.state.t)
 
     def parameters(self):
-        return {
-            "pivot": self.pivot,
-            "length": self.system.length,
-            "v_max": self.v_max,
-            "a_max": self.a_max,
-            "damping": self.system.damping,
-        }
+        return {"pivot": self.pivot, **super().parameters()}
 
     # -- physics ---------------------------------------------------------------
 
@@ -330,9 +307,9 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     inverted. Vertical pivot motion pumps energy in by parametric resonance, near twice the pendulum's natural frequency
     √(g/l); fast vertical vibration then holds it inverted (Kapitza).
 
-    ## Action Space, Observation Space, Arguments
+    ## Action Space, Observation Space
 
-    As KapitzaPendulum-v0, with one more argument, `hold_time` (default 2.0 s, range [2e-6, 2e6] s).
+    As KapitzaPendulum-v0.
 
     ## Rewards
 
@@ -344,6 +321,8 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     Parametric pumping multiplies ℓ by a factor per cycle, which the logarithm pays alike at every amplitude (a
     potential-based shaping, Ng et al. 1999); the constant pays for time, 0.2 per simulated second. Summed to success:
     ln(ℓ_T/ℓ₀) − 0.2 t.
+
+    ## Arguments
 
     ## Starting State
 
@@ -372,10 +351,11 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ()}
 
-    def __init__(self, render_mode: str | None = None, *, hold_time: float = 2.0, **kwargs):
-        self.hold_time = check_scale("hold_time", hold_time, 2.0)
+    ARGS = KapitzaPendulumEnv.ARGS + (scale("hold_time", 2.0, "s", physical=False),)
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
         super().__init__(render_mode, **kwargs)
-        self.hold_steps = math.ceil(self.hold_time / self.dt - 1e-9)  # hold_time in whole steps
+        self.hold_steps = math.ceil(self.args.hold_time / self.dt - 1e-9)  # hold_time in whole steps
 
     def start_angle(self):
         """θ₀, drawn from np_random: near hanging, either side."""
