@@ -111,8 +111,8 @@ class RenderedEnv(gym.Env):
         return self.args, options
 
     def parameters(self) -> dict:
-        """The physical parameters, as a stepper's error reports them."""
-        return self.ARGS.physical(vars(self.args))
+        """The physical parameters of ARGS, as a stepper's error reports them (none where there are no ARGS)."""
+        return self.ARGS.physical(vars(self.args)) if hasattr(self, "args") else {}
 
     def __init__(self, render_mode: str | None, dt: float):
         """dt: the control step, s (checked by the subclass); it sets the render frame rate."""

@@ -196,7 +196,8 @@ class ConnectionEnv(TaskEnv):
         return spaces.Box(-np.inf, np.inf, shape, np.float32)
 
     def parameters(self):
-        return {"group": self.group.name, "frame": self.system.frame, "max_shape_speed": self.max_shape_speed}
+        own = {"group": self.group.name, "frame": self.system.frame, "max_shape_speed": self.max_shape_speed}
+        return {**own, **super().parameters()}
 
     # -- physics ---------------------------------------------------------------
 

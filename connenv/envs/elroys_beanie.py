@@ -9,13 +9,12 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,
     check_keys,
     check_number,
-    check_scale,
-    check_stepper_options,
 )
 from connenv.envs.base import SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
@@ -28,6 +27,11 @@ OFF_TARGET_COST = 0.05  # reward paid per step the body is off the target by 10 
 SUCCESS_BONUS = 1.0  # reward on the step that completes the hold
 FINE_SCALE = 10.0  # the observed fine error is (θ* − θ)/(FINE_SCALE · tolerance), clipped to [−1, 1]
 HOLD_SLACK = 1e-9  # s: a hold of hold_time − HOLD_SLACK counts (the sum of dt's rounds)
+
+
+def least_speed(args):
+    """The least max_beanie_speed, rad/s: 1.2 · 1/I₂ (1.2 times the speed that holds the largest drawn μ)."""
+    return 1.2 * MOMENTUM_RANGE[1] / args["beanie_inertia"]
 
 
 @dataclass
@@ -93,17 +97,6 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | body_inertia | 1.0 | [1e-6, 1e3] kg m² |
-    | beanie_inertia | 0.25 | [2.5e-7, 1e3] kg m² |
-    | max_beanie_speed | 4π | (0, 1e3] rad/s, at least 1.2 · 1/I₂ (the largest drawn μ can be held) |
-    | dt | 0.05 | [1e-12, 100] s |
-    | tolerance | 0.01 | [1e-8, π) rad |
-    | hold_time | 1.0 | [1e-6, 100] s |
-    | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | atol (magnus) / substeps / rtol, atol | | the stepper's |
-
     Every `info` has `"state"` (`theta`, `psi` (both unwrapped), `momentum`, `t`), `"target"` (θ*), `"error"` (θ* − θ
     wrapped, rad), `"held"` (s) and `"is_success"`.
     """
@@ -111,47 +104,37 @@ class ElroysBeanieEnv(ConnectionEnv):
     name = "ElroysBeanie-v0"
     metadata = {**ConnectionEnv.metadata, "measures": ("error",)}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        body_inertia: float = 1.0,
-        beanie_inertia: float = 0.25,
-        max_beanie_speed: float = 4 * math.pi,
-        dt: float = 0.05,
-        tolerance: float = 0.01,
-        hold_time: float = 1.0,
-        integrator: str | None = None,
-        **stepper_options,
-    ):
-        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        self.body_inertia = check_scale("body_inertia", body_inertia, 1.0, MAGNITUDE_BOUND)
-        self.beanie_inertia = check_scale("beanie_inertia", beanie_inertia, 0.25, MAGNITUDE_BOUND)
-        least = 1.2 * MOMENTUM_RANGE[1] / self.beanie_inertia
-        self.max_beanie_speed = check_number(
-            "max_beanie_speed", max_beanie_speed, least, MAGNITUDE_BOUND, low_name="1.2 · 1/beanie_inertia"
-        )
-        self.tolerance = check_scale("tolerance", tolerance, 0.01, math.pi, open_high=True)
-        self.hold_time = check_scale("hold_time", hold_time, 1.0, 100.0)
+    ARGS = Args(
+        scale("body_inertia", 1.0, "kg m²", high=MAGNITUDE_BOUND),
+        scale("beanie_inertia", 0.25, "kg m²", high=MAGNITUDE_BOUND),
+        interval("max_beanie_speed", 4 * math.pi, "rad/s", Bound(least_speed, "1.2 · 1/I₂", "1.2 · 1/beanie_inertia"),
+                 MAGNITUDE_BOUND, "the largest drawn μ can be held"),
+        step(0.05, DT_MAX),
+        scale("tolerance", 0.01, "rad", high=math.pi, open_high=True, physical=False),
+        scale("hold_time", 1.0, "s", high=100.0, physical=False),
+        integrator(None, "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau", default_text='"exact"'),
+        options(names="atol (magnus) / substeps / rtol, atol"),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        self.body_inertia, self.beanie_inertia, self.tolerance = a.body_inertia, a.beanie_inertia, a.tolerance
+        self.max_beanie_speed, self.hold_time = a.max_beanie_speed, a.hold_time
         inertias = {"body_inertia": self.body_inertia, "beanie_inertia": self.beanie_inertia}
         super().__init__(
             "SO2",
             functools.partial(elroys_beanie.connection, **inertias),
             [-math.inf],
             [math.inf],
-            dt=dt,
+            dt=a.dt,
             max_shape_speed=self.max_beanie_speed,
             render_mode=render_mode,
             vectorized=True,
-            integrator=integrator,
+            integrator=a.integrator,
             exact_segment=functools.partial(elroys_beanie.exact_segment, **inertias),
             **stepper_options,
         )
         self.state = BeanieState(np.zeros(1), np.zeros(1), 0.0, MOMENTUM_RANGE[0], 0.0, 0.0)
-
-    def parameters(self):
-        return {"body_inertia": self.body_inertia, "beanie_inertia": self.beanie_inertia,
-                "max_beanie_speed": self.max_beanie_speed}  # fmt: skip
 
     def _observation_space(self):
         mu = self.momentum_bound()

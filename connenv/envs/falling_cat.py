@@ -9,15 +9,12 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
-    check_dt,
     check_keys,
-    check_number,
     check_rotation,
-    check_scale,
-    check_stepper_options,
     check_vector,
     decimal,
 )
@@ -32,6 +29,11 @@ SUCCESS_BONUS = 1.0  # reward on the step the cat is in its landing pose
 LANDING_SLACK = 1e-9  # s: t ≥ fall_time − LANDING_SLACK is the landing (the sum of dt's rounds)
 AXIAL_RATIO_MIN = 1e-6  # the least J/I: the exact step's pieces grow as 1/√(J/I) (see FallingCatEnv)
 VERTICAL = 1e-6  # a given spine within this of vertical (1 − |spine · Z|) has no roll about it: ValueError
+
+
+def axial_min(args):
+    """The least axial inertia J of the arguments: AXIAL_RATIO_MIN · I, as the table writes it."""
+    return decimal(AXIAL_RATIO_MIN * args["transverse_inertia"])
 
 
 @dataclass
@@ -97,20 +99,6 @@ class FallingCatEnv(ConnectionEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | transverse_inertia | 0.01 | [1e-8, 1e3] kg m², I: a half's inertia across its axis about its centre of mass |
-    | axial_inertia | 0.0003 | [1e-6 I, I) kg m², J: about its own axis |
-    | mass | 1.5 | [1.5e-6, 1e3] kg, m: each half |
-    | cm_distance | 0.12 | [1.2e-7, 1e3] m, ℓ: joint to a half's centre of mass |
-    | max_bend | 1.2 | [1.2e-6, 3] rad |
-    | max_bend_speed | 6.0 | [6e-6, 1e3] rad/s |
-    | fall_time | 0.6 | [6e-7, 100] s |
-    | dt | 0.01 | [1e-12, 100] s |
-    | tolerance | 0.05 | [5e-8, π) rad |
-    | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | atol (magnus) / substeps / rtol, atol | | the stepper's |
-
     m and ℓ enter only the locked inertia across the spine, never the roll: they show in the angular momentum and the
     rendering. The defaults are a slender cat (J/I = 0.03), whose half turn needs β₀ ≈ 0.35 rad and fits in the fall at
     the bend speed (docs/physics/FallingCat.md). The default step is the roll in closed form up to a Gauss–Legendre
@@ -125,55 +113,45 @@ class FallingCatEnv(ConnectionEnv):
     name = "FallingCat-v0"
     metadata = {**ConnectionEnv.metadata, "measures": ("roll_error",)}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        transverse_inertia: float = 0.01,
-        axial_inertia: float = 0.0003,
-        mass: float = 1.5,
-        cm_distance: float = 0.12,
-        max_bend: float = 1.2,
-        max_bend_speed: float = 6.0,
-        fall_time: float = 0.6,
-        dt: float = 0.01,
-        tolerance: float = 0.05,
-        integrator: str | None = None,
-        **stepper_options,
-    ):
-        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        I = check_scale("transverse_inertia", transverse_inertia, 0.01, MAGNITUDE_BOUND)
-        J = check_number("axial_inertia", axial_inertia, decimal(AXIAL_RATIO_MIN * I), I, open_high=True,
-                         high_name="transverse_inertia")  # fmt: skip
-        self.mass = check_scale("mass", mass, 1.5, MAGNITUDE_BOUND)
-        self.cm_distance = check_scale("cm_distance", cm_distance, 0.12, MAGNITUDE_BOUND)
-        self.max_bend = check_scale("max_bend", max_bend, 1.2, 3.0)
-        speed = check_scale("max_bend_speed", max_bend_speed, 6.0, MAGNITUDE_BOUND)
-        self.fall_time = check_scale("fall_time", fall_time, 0.6, 100.0)
-        self.tolerance = check_scale("tolerance", tolerance, 0.05, math.pi, open_high=True)
-        self.inertias = {"transverse_inertia": I, "axial_inertia": J}
-        longest = min(math.sqrt(2) * speed * check_dt(dt, DT_MAX), 2 * self.max_bend)  # a segment's longest bend
-        pieces = falling_cat.pieces_for(longest, I, J)
+    ARGS = Args(
+        scale("transverse_inertia", 0.01, "kg m²", "I: a half's inertia across its axis about its centre of mass",
+              high=MAGNITUDE_BOUND),
+        interval("axial_inertia", 0.0003, "kg m²", Bound(axial_min, "1e-6 I"), "transverse_inertia",
+                 "J: about its own axis", open_high=True),
+        scale("mass", 1.5, "kg", "m: each half", high=MAGNITUDE_BOUND),
+        scale("cm_distance", 0.12, "m", "ℓ: joint to a half's centre of mass", high=MAGNITUDE_BOUND),
+        scale("max_bend", 1.2, "rad", high=3.0),
+        scale("max_bend_speed", 6.0, "rad/s", high=MAGNITUDE_BOUND),
+        scale("fall_time", 0.6, "s", high=100.0, physical=False),
+        step(0.01, DT_MAX),
+        scale("tolerance", 0.05, "rad", high=math.pi, open_high=True, physical=False),
+        integrator(None, "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau", default_text='"exact"'),
+        options(names="atol (magnus) / substeps / rtol, atol"),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        self.mass, self.cm_distance, self.max_bend, self.fall_time = a.mass, a.cm_distance, a.max_bend, a.fall_time
+        self.tolerance, self.inertias = a.tolerance, {"transverse_inertia": a.transverse_inertia,
+                                                      "axial_inertia": a.axial_inertia}  # fmt: skip
+        longest = min(math.sqrt(2) * a.max_bend_speed * a.dt, 2 * self.max_bend)  # a segment's longest bend
+        pieces = falling_cat.pieces_for(longest, a.transverse_inertia, a.axial_inertia)
         super().__init__(
             "SO3",
             functools.partial(falling_cat.connection, **self.inertias),
             [-self.max_bend] * 2,
             [self.max_bend] * 2,
-            dt=dt,
+            dt=a.dt,
             frame="body",
-            max_shape_speed=speed,
+            max_shape_speed=a.max_bend_speed,
             render_mode=render_mode,
             vectorized=True,
-            integrator=integrator,
+            integrator=a.integrator,
             exact_segment=functools.partial(falling_cat.exact_segment, **self.inertias, pieces=pieces),
             **stepper_options,
         )
         eye = np.eye(3).ravel()
         self.state = CatState(eye.copy(), np.zeros(2), 0.0, np.zeros(2), eye.copy())
-
-    def parameters(self):
-        return {**self.inertias, "mass": self.mass, "cm_distance": self.cm_distance, "max_bend": self.max_bend,
-                "max_bend_speed": self.max_shape_speed}  # fmt: skip
 
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (12,), np.float32)

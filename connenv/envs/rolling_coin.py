@@ -9,13 +9,12 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,
     check_keys,
     check_number,
-    check_scale,
-    check_stepper_options,
     check_vector,
 )
 from connenv.envs.base import SCALAR
@@ -88,17 +87,6 @@ class RollingCoinEnv(ConnectionEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | radius | 0.5 | [5e-7, 1e3] m |
-    | max_steer_rate | 1.0 | [1e-6, 1e3] rad/s |
-    | max_roll_rate | 2.0 | [2e-6, 1e3] rad/s |
-    | dt | 0.1 | [1e-12, 100] s |
-    | position_tolerance | 0.05 | [5e-8, 5e4] m |
-    | heading_tolerance | 0.05 | [5e-8, π) rad |
-    | integrator | "exact" | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | atol (magnus) / substeps / rtol, atol | | the stepper's |
-
     The default step is exact in closed form (the chord of the arc rolled at constant rates), for any rates and dt.
 
     Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `t`), `"target"` (x*, y*, θ*), `"distance"` (|d|, m),
@@ -108,43 +96,35 @@ class RollingCoinEnv(ConnectionEnv):
     name = "RollingCoin-v0"
     metadata = {**ConnectionEnv.metadata, "measures": ("distance", "heading_error")}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        radius: float = 0.5,
-        max_steer_rate: float = 1.0,
-        max_roll_rate: float = 2.0,
-        dt: float = 0.1,
-        position_tolerance: float = 0.05,
-        heading_tolerance: float = 0.05,
-        integrator: str | None = None,
-        **stepper_options,
-    ):
-        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        self.radius = check_scale("radius", radius, 0.5, MAGNITUDE_BOUND)
-        steer = check_scale("max_steer_rate", max_steer_rate, 1.0, MAGNITUDE_BOUND)
-        roll = check_scale("max_roll_rate", max_roll_rate, 2.0, MAGNITUDE_BOUND)
-        self.rates = np.array([steer, roll])
-        self.position_tolerance = check_scale("position_tolerance", position_tolerance, 0.05)
-        self.heading_tolerance = check_scale("heading_tolerance", heading_tolerance, 0.05, math.pi, open_high=True)
+    ARGS = Args(
+        scale("radius", 0.5, "m", high=MAGNITUDE_BOUND),
+        scale("max_steer_rate", 1.0, "rad/s", high=MAGNITUDE_BOUND),
+        scale("max_roll_rate", 2.0, "rad/s", high=MAGNITUDE_BOUND),
+        step(0.1, DT_MAX),
+        scale("position_tolerance", 0.05, "m", physical=False),
+        scale("heading_tolerance", 0.05, "rad", high=math.pi, open_high=True, physical=False),
+        integrator(None, "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau", default_text='"exact"'),
+        options(names="atol (magnus) / substeps / rtol, atol"),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        self.radius, self.rates = a.radius, np.array([a.max_steer_rate, a.max_roll_rate])
+        self.position_tolerance, self.heading_tolerance = a.position_tolerance, a.heading_tolerance
         super().__init__(
             "R2",
             functools.partial(rolling_coin.connection, radius=self.radius),
             [-math.inf, -math.inf],
             [math.inf, math.inf],
-            dt=dt,
+            dt=a.dt,
             render_mode=render_mode,
             vectorized=True,
-            integrator=integrator,
+            integrator=a.integrator,
             exact_segment=functools.partial(rolling_coin.exact_segment, radius=self.radius),
             **stepper_options,
         )
         self.state = CoinState(np.zeros(2), np.zeros(2), 0.0, np.array([0.0, 1.0, 0.0]))
         self.track = []  # where each step since reset started: drawn behind the coin
-
-    def parameters(self):
-        return {"radius": self.radius, "max_steer_rate": self.rates[0], "max_roll_rate": self.rates[1]}
 
     def _observation_space(self):
         high = np.array([OFFSET_BOUND, OFFSET_BOUND, 1.0, 1.0], np.float32)

@@ -8,14 +8,13 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_keys,
     check_number,
     check_rotation,
-    check_scale,
-    check_stepper_options,
 )
 from connenv.envs.base import SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
@@ -98,14 +97,6 @@ class TubeTwistEnv(ConnectionEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | max_bend_rate | 1.0 | [1e-6, 1e3] rad/s |
-    | dt | 0.05 | [1e-12, 100] s |
-    | tolerance | 0.02 | [2e-8, π) rad |
-    | integrator | "exact" | "exact" (Rodrigues), "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | | the stepper's |
-
     The default step is one exponential, R ← R exp(dt ω̂), exact, and keeps R on SO(3) to rounding; the generic steppers
     integrate Ṙ = R ω̂ in coordinates and drift off. Diverged: R more than 1e-9 off SO(3) (‖RᵀR − I‖).
 
@@ -118,28 +109,23 @@ class TubeTwistEnv(ConnectionEnv):
     name = "TubeTwist-v0"
     metadata = {**ConnectionEnv.metadata, "measures": ("path_ratio", "path_length")}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        max_bend_rate: float = 1.0,
-        dt: float = 0.05,
-        tolerance: float = 0.02,
-        integrator: str = "exact",
-        **stepper_options,
-    ):
-        check_stepper_options(self.name, stepper_options, type(self))  # before ConnectionEnv's own kwargs reach it
-        self.tolerance = check_scale("tolerance", tolerance, 0.02, math.pi, open_high=True)
-        max_bend_rate = check_scale("max_bend_rate", max_bend_rate, 1.0, MAGNITUDE_BOUND)
-        infinite = [math.inf, math.inf]
-        super().__init__("SO3", BEND_CONNECTION, np.negative(infinite), infinite, dt=dt, frame="body",
-                         max_shape_speed=max_bend_rate, render_mode=render_mode, integrator=integrator,
+    ARGS = Args(
+        scale("max_bend_rate", 1.0, "rad/s", high=MAGNITUDE_BOUND),
+        step(0.05, DT_MAX),
+        scale("tolerance", 0.02, "rad", high=math.pi, open_high=True, physical=False),
+        integrator("exact", "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau",
+                   about='"exact" is Rodrigues\''),
+        options(),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        self.tolerance, infinite = a.tolerance, [math.inf, math.inf]
+        super().__init__("SO3", BEND_CONNECTION, np.negative(infinite), infinite, dt=a.dt, frame="body",
+                         max_shape_speed=a.max_bend_rate, render_mode=render_mode, integrator=a.integrator,
                          **stepper_options)  # fmt: skip
         self.state = self.at(np.eye(3).ravel(), np.zeros(2), 0.0, np.eye(3).ravel(), 1.0, 0.0)
         self.trace = []  # T at the start of each step since reset: the tangent's trace drawn on the sphere
-
-    def parameters(self):
-        return {"max_bend_rate": self.max_shape_speed, "tolerance": self.tolerance}
 
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (11,), np.float32)
