@@ -53,6 +53,7 @@ class Param:
     optional: bool = False
     default_text: str = ""
     range_text: str = ""
+    typical: float | None = None  # a scale's centre of its span where the default is None
 
     def check(self, value, args: dict):
         """value checked against its range (args: the arguments checked before it), or ValueError."""
@@ -64,9 +65,12 @@ class Param:
             return value
         (low, low_name), (high, high_name) = end(self.low, args), end(self.high, args)
         if self.kind == "scale":
-            zero = low == 0.0
-            return check_scale(self.name, value, self.default, high, zero=zero, open_high=self.open_high,
-                               high_name=high_name)  # fmt: skip
+            typical = self.default if self.typical is None else self.typical
+            value = check_scale(self.name, value, typical, high, zero=low == 0.0, open_high=self.open_high,
+                                high_name=high_name)  # fmt: skip
+            if low_name is not None and value <= low:
+                raise ValueError(f"{self.name}={value!r} is out of range: must be above {low_name}={low!r}")
+            return value
         return check_number(self.name, value, low, high, open_low=self.open_low, open_high=self.open_high,
                             low_name=low_name, high_name=high_name)  # fmt: skip
 
@@ -82,11 +86,13 @@ class Param:
             span = ", ".join(text(c) for c in self.choices)
         else:
             low, high = written(self.low), written(self.high)
+            typical, is_open = self.default if self.typical is None else self.typical, self.open_low
             if self.kind == "scale":
-                low = "0" if self.low == 0.0 else scaled(self.default, 1 / SCALE_SPAN)
-                if not isinstance(self.high, (str, Bound)) and self.high >= self.default * SCALE_SPAN:
-                    high = scaled(self.default, SCALE_SPAN)
-            brackets = "(" if self.open_low else "[", ")" if self.open_high else "]"
+                is_open = isinstance(self.low, str)
+                low = "0" if self.low == 0.0 else low if is_open else scaled(typical, 1 / SCALE_SPAN)
+                if not isinstance(self.high, (str, Bound)) and self.high >= typical * SCALE_SPAN:
+                    high = scaled(typical, SCALE_SPAN)
+            brackets = "(" if is_open else "[", ")" if self.open_high else "]"
             span = f"{'None or ' if self.optional else ''}{brackets[0]}{low}, {high}{brackets[1]}"
             span += f" {self.unit}" if self.unit else ""
         return f"| {self.name} | {default} | {self.range_text or span}{', ' + self.about if self.about else ''} |"
@@ -129,7 +135,8 @@ def scaled(default: float, factor: float) -> str:
 
 
 def scale(name, default, unit="", about="", **fields) -> Param:
-    """A physical scale: within SCALE_SPAN of its default either way (low=0.0: down to 0), at most high."""
+    """A physical scale: within SCALE_SPAN of its default (of typical where the default is None) either way, down to 0
+    with low=0.0, above another argument with low its name, at most high."""
     return Param(name, default, unit, about, kind="scale", **fields)
 
 

@@ -11,15 +11,13 @@ from gymnasium import spaces
 from scipy.spatial.transform import Rotation
 
 from connenv.core.integrators import make_stepper
+from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.steppers import StepperError
 from connenv.core.validation import (
-    check_dt,
     check_keys,
     check_number,
     check_rotation,
-    check_scale,
-    check_stepper_options,
     finite_action,
     ndim,
 )
@@ -140,15 +138,6 @@ class RollingBallEnv(TaskEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | radius | 1.0 | [1e-6, 1e6] m |
-    | v_max | 1.0 | [1e-6, 1e6] m/s |
-    | dt | 0.1 | [1e-12, 100] s |
-    | tolerance | 0.05 | [5e-8, π) rad |
-    | integrator | "exact" | "exact" (Rodrigues), "euler", "rk4", "dop853", "rk45", "lsoda", "radau" on Ṙ = ω̂R |
-    | substeps / rtol, atol | | the stepper's |
-
     The default step at constant v is exact, R ← exp(dt ω̂) R (Rodrigues), for any radius and dt; semi-implicit Euler is
     refused (R is no (q, p) pair). Diverged: R more than 1e-6 off SO(3) (‖RᵀR − I‖).
 
@@ -162,23 +151,21 @@ class RollingBallEnv(TaskEnv):
     metadata = {**TaskEnv.metadata, "measures": ("angle_error", "path_ratio")}
     measures_distance = True  # whether start solves for the optimal arc (info "distance"); the vector env may not
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        radius: float = 1.0,
-        v_max: float = 1.0,
-        dt: float = 0.1,
-        tolerance: float = 0.05,
-        integrator: str = "exact",
-        **stepper_options,
-    ):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.v_max = check_scale("v_max", v_max, 1.0)
-        self.tolerance = check_scale("tolerance", tolerance, 0.05, math.pi, open_high=True)
-        self.system = RollingBall(check_scale("radius", radius, 1.0))
-        check_stepper_options(self.name, stepper_options, type(self))
-        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+    ARGS = Args(
+        scale("radius", 1.0, "m"),
+        scale("v_max", 1.0, "m/s"),
+        step(0.1, DT_MAX),
+        scale("tolerance", 0.05, "rad", high=math.pi, open_high=True, physical=False),
+        integrator("exact", "exact", "euler", "rk4", "dop853", "rk45", "lsoda", "radau",
+                   about="exact: Rodrigues'; the others step Ṙ = ω̂R"),
+        options(),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
+        self.v_max, self.tolerance, self.system = a.v_max, a.tolerance, RollingBall(a.radius)
+        self.stepper = make_stepper(a.integrator, self.system, **stepper_options)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.observation_space = self._observation_space()
         self.state = self.at(np.eye(3), np.eye(3), np.zeros(2), 0.0, 0.0, math.nan)
@@ -205,9 +192,6 @@ class RollingBallEnv(TaskEnv):
     def _draw(self, renderer):
         s = self.state
         return renderer.draw(s.R, s.R_target, np.array([*self.path, s.position]), s.t, s.angle_error)
-
-    def parameters(self):
-        return {"radius": self.system.radius, "v_max": self.v_max}
 
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (6,), np.float32)
@@ -325,8 +309,7 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     ## Arguments
 
-    Those of RollingBall-v0, and `position_tolerance` = 0.05, in [5e-8, 5e4] m. Everything else, the starting state, the
-    action and `info` (plus `"position_error"`, d), is RollingBall-v0's.
+    Everything else, the starting state, the action and `info` (plus `"position_error"`, d), is RollingBall-v0's.
 
     ## Open Challenge
 
@@ -342,9 +325,11 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     metadata = {**RollingBallEnv.metadata, "measures": ("angle_error", "position_error", "path_length")}
 
-    def __init__(self, render_mode: str | None = None, *, position_tolerance: float = 0.05, **kwargs):
-        self.position_tolerance = check_scale("position_tolerance", position_tolerance, 0.05)
+    ARGS = RollingBallEnv.ARGS + (scale("position_tolerance", 0.05, "m", physical=False),)
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
         super().__init__(render_mode, **kwargs)
+        self.position_tolerance = self.args.position_tolerance
 
     def _observation_space(self):
         high = np.array([1.0] * 6 + [POSITION_BOUND] * 2, np.float32)

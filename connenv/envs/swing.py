@@ -9,8 +9,9 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
+from connenv.core.params import Args, integrator, interval, options, scale, step
 from connenv.core.segments import check_drift, run_segments
-from connenv.core.validation import check_angle, check_dt, check_keys, check_number, check_scale, check_stepper_options
+from connenv.core.validation import check_angle, check_keys, check_number
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
@@ -92,18 +93,6 @@ class SwingEnv(TaskEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | r_min | 1.6 | [1.6e-6, 1.6e6] m, below r_max |
-    | r_max | 2.0 | [2e-6, 2e6] m, above r_min |
-    | g | 9.81 | [9.81e-6, 9.81e6] m/s² |
-    | mass | 1.0 | [1e-6, 1e6] kg |
-    | dt | 0.05 | [1e-12, 100] s |
-    | target_amplitude | π/2 | (0, π]; π means going over the top |
-    | max_radial_speed | None | None or [1e-6, 1e6] m/s |
-    | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | | the stepper's |
-
     The default step is the pendulum's closed-form flow at constant r, without truncation error (docs/physics/swing.md).
     Diverged: an energy error past 0.1 m g r_max.
 
@@ -113,34 +102,25 @@ class SwingEnv(TaskEnv):
 
     name = "Swing-v0"  # how bad make kwargs name the env
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        r_min: float = 1.6,
-        r_max: float = 2.0,
-        g: float = 9.81,
-        mass: float = 1.0,
-        dt: float = 0.05,
-        target_amplitude: float = math.pi / 2,
-        max_radial_speed: float | None = None,
-        integrator: str = "exact",
-        **stepper_options,
-    ):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.r_min = check_scale("r_min", r_min, 1.6)
-        self.r_max = check_scale("r_max", r_max, 2.0)
-        if self.r_max <= self.r_min:
-            raise ValueError(f"r_max={r_max!r} is out of range: must be above r_min={self.r_min!r}")
-        self.target_amplitude = check_number("target_amplitude", target_amplitude, 0.0, math.pi, open_low=True)
-        self.max_radial_speed = (
-            None if max_radial_speed is None else check_scale("max_radial_speed", max_radial_speed, 1.0)
-        )
-        self.system = Swing(
-            mass=check_scale("mass", mass, 1.0), g=check_scale("g", g, 9.81)
-        )
-        check_stepper_options(self.name, stepper_options, type(self))
-        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+    ARGS = Args(
+        scale("r_min", 1.6, "m"),
+        scale("r_max", 2.0, "m", low="r_min"),
+        scale("g", 9.81, "m/s²"),
+        scale("mass", 1.0, "kg"),
+        step(0.05, DT_MAX),
+        interval("target_amplitude", math.pi / 2, "rad", 0.0, math.pi, "π means going over the top", open_low=True,
+                 physical=False),
+        scale("max_radial_speed", None, "m/s", optional=True, typical=1.0),
+        integrator("exact", "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau"),
+        options(),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
+        self.r_min, self.r_max, self.target_amplitude = a.r_min, a.r_max, a.target_amplitude
+        self.max_radial_speed, self.system = a.max_radial_speed, Swing(mass=a.mass, g=a.g)
+        self.stepper = make_stepper(a.integrator, self.system, **stepper_options)
 
         self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / self.r_min)
         self.target_lift = 1.0 - math.cos(self.target_amplitude)
@@ -157,9 +137,6 @@ class SwingEnv(TaskEnv):
 
     def _draw(self, renderer):
         return renderer.draw(self.state.y[0], self.state.r, self.r_min, self.state.t)
-
-    def parameters(self):
-        return {"r_min": self.r_min, "r_max": self.r_max, "g": self.system.g, "mass": self.system.mass}
 
     # -- physics ---------------------------------------------------------------
 
