@@ -53,7 +53,7 @@ class Param:
     optional: bool = False
     default_text: str = ""
     range_text: str = ""
-    typical: float | None = None  # a scale's centre of its span where the default is None
+    typical: End | None = None  # a scale's centre of its span where the default is None
 
     def check(self, value, args: dict):
         """value checked against its range (args: the arguments checked before it), or ValueError."""
@@ -65,7 +65,7 @@ class Param:
             return value
         (low, low_name), (high, high_name) = end(self.low, args), end(self.high, args)
         if self.kind == "scale":
-            typical = self.default if self.typical is None else self.typical
+            typical = self.default if self.typical is None else end(self.typical, args)[0]
             value = check_scale(self.name, value, typical, high, zero=low == 0.0, open_high=self.open_high,
                                 high_name=high_name)  # fmt: skip
             if low_name is not None and value <= low:
@@ -78,10 +78,8 @@ class Param:
         """The Arguments table's row: | name | default | range unit, about |."""
         default = self.default_text or (text(self.default) if isinstance(self.default, str) else
                                         NAMED.get(self.default, repr(self.default)))  # fmt: skip
-        if self.kind == "options":
-            return f"| {self.name} | {self.default_text} | {self.range_text} |"
-        if self.kind == "given":
-            return f"| {self.name} | {default} | {self.range_text} |"
+        if self.kind in ("given", "options"):
+            return cells(self.name, self.default_text if self.kind == "options" else default, self.range_text)
         if self.kind == "choice":
             span = ", ".join(text(c) for c in self.choices)
         else:
@@ -90,12 +88,19 @@ class Param:
             if self.kind == "scale":
                 is_open = isinstance(self.low, str)
                 low = "0" if self.low == 0.0 else low if is_open else scaled(typical, 1 / SCALE_SPAN)
-                if not isinstance(self.high, (str, Bound)) and self.high >= typical * SCALE_SPAN:
-                    high = scaled(typical, SCALE_SPAN)
+                capped = isinstance(self.high, (str, Bound)) or self.high < math.inf and (
+                    isinstance(typical, Bound) or self.high < typical * SCALE_SPAN)
+                high = high if capped else scaled(typical, SCALE_SPAN)
             brackets = "(" if is_open else "[", ")" if self.open_high else "]"
             span = f"{'None or ' if self.optional else ''}{brackets[0]}{low}, {high}{brackets[1]}"
             span += f" {self.unit}" if self.unit else ""
-        return f"| {self.name} | {default} | {self.range_text or span}{', ' + self.about if self.about else ''} |"
+        return cells(self.name, default, span + (f", {self.about}" if self.about else ""))
+
+
+def cells(*texts: str) -> str:
+    """A row of a markdown table, a | inside a cell escaped."""
+    escaped = (t.replace("|", "\\|") for t in texts)
+    return "|" + "|".join(f" {t} " if t else " " for t in escaped) + "|"
 
 
 def written(value: End) -> str:
@@ -127,10 +132,10 @@ def text(value) -> str:
     return f"{value:.12g}" if isinstance(value, float) else str(value)
 
 
-def scaled(default: float, factor: float) -> str:
-    """default · factor as the tables write it: 2.5e-7, or 2π·1e-6 for a named default."""
-    if default in NAMED:
-        return f"{NAMED[default]}·{text(factor)}"
+def scaled(default: float | Bound, factor: float) -> str:
+    """default · factor as the tables write it: 2.5e-7, or 2π·1e-6 for a named default or a Bound."""
+    if isinstance(default, Bound) or default in NAMED:
+        return f"{default.text if isinstance(default, Bound) else NAMED[default]}·{text(factor)}"
     return text(float(f"{default * factor:.12g}"))
 
 

@@ -204,6 +204,9 @@ class ActiveConstraintEnv(TaskEnv):
         return cls(LagrangianSystem(kinetic, potential, q, u), **kwargs)
 
     def parameters(self):
+        """A declared subclass's physical parameters, else the builder's system and controls."""
+        if hasattr(self, "args"):
+            return super().parameters()
         return {"system": self.system, "u_low": self.u_low, "u_high": self.u_high, "control": self.control}
 
     # -- checks ----------------------------------------------------------------

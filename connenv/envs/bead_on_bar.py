@@ -9,14 +9,13 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.mechanics import JUMP_STEPPER
+from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import check_drift
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,
     check_keys,
     check_number,
-    check_scale,
-    check_stepper_options,
 )
 from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env's too
     DT_MAX,
@@ -111,18 +110,6 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | half_length | 1.0 | [1e-6, 1e6] m: L |
-    | g | 9.81 | [0, 9.81e6] m/s² |
-    | mass | 1.0 | [1e-6, 1e6] kg |
-    | omega_max | 2π (v1: 1) | [2π·1e-6, 500] rad/s |
-    | dt | 0.02 | [1e-12, 1] s |
-    | hold_time | 0.5 | [0, 5e5] s |
-    | exit_penalty | 40.0 | [0, 4e7] |
-    | integrator | "exact" | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | | the stepper's |
-
     The default step is the closed form of the flow at constant θ̇, exact to rounding down to θ̇ = 0. Diverged: an
     energy error (of E = p²/(2m) + m g r sin θ, conserved while θ is held) past 1e-2 (1 + |E|).
 
@@ -141,41 +128,34 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     name = "BeadOnBar-v0"  # how bad make kwargs name the env
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        half_length: float = 1.0,
-        g: float = 9.81,
-        mass: float = 1.0,
-        omega_max: float = 2.0 * math.pi,
-        dt: float = 0.02,
-        hold_time: float = 0.5,
-        exit_penalty: float = 40.0,
-        integrator: str | None = None,
-        **stepper_options,
-    ):
-        check_stepper_options(self.name, stepper_options, type(self))
-        self.half_length = check_scale("half_length", half_length, 1.0)
-        g = check_scale("g", g, 9.81, zero=True)
-        mass = check_scale("mass", mass, 1.0)
-        self.omega_max = check_scale("omega_max", omega_max, 2.0 * math.pi, OMEGA_MAX)
-        self.hold_time = check_scale("hold_time", hold_time, 0.5, zero=True)
-        self.exit_penalty = check_scale("exit_penalty", exit_penalty, 40.0, zero=True)
+    ARGS = Args(
+        scale("half_length", 1.0, "m", "L"),
+        scale("g", 9.81, "m/s²", low=0.0),
+        scale("mass", 1.0, "kg"),
+        scale("omega_max", 2.0 * math.pi, "rad/s", high=OMEGA_MAX, default_text="2π (v1: 1)"),
+        step(0.02, DT_MAX),
+        scale("hold_time", 0.5, "s", low=0.0, physical=False),
+        scale("exit_penalty", 40.0, low=0.0, physical=False),
+        integrator(None, "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau",
+                   default_text='"exact"'),
+        options(),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        self.half_length, self.omega_max, self.hold_time, self.exit_penalty = (
+            a.half_length, a.omega_max, a.hold_time, a.exit_penalty)
         from connenv.systems.bead_on_bar import bead_on_bar  # sympy's: loaded by a make, not by import connenv
 
         super().__init__(
-            bead_on_bar(mass, g), -math.inf, math.inf, dt=dt, max_control_speed=self.omega_max,
-            integrator=integrator, render_mode=render_mode, **stepper_options,
+            bead_on_bar(a.mass, a.g), -math.inf, math.inf, dt=a.dt, max_control_speed=self.omega_max,
+            integrator=a.integrator, render_mode=render_mode, **stepper_options,
         )  # fmt: skip
-        self.mass, self.g = mass, g
-        self.hold_needed = self.hold_time if g > 0.0 else 0.0
+        self.mass, self.g = a.mass, a.g
+        self.hold_needed = self.hold_time if a.g > 0.0 else 0.0
         low = -OBSERVATION_HIGH * (np.arange(6) < 5)
         self.observation_space = spaces.Box(low.astype(np.float32), OBSERVATION_HIGH.astype(np.float32))
         self.state = self.track(self.state, 0.0, None)
-
-    def parameters(self):
-        return {"half_length": self.half_length, "g": self.g, "mass": self.mass, "omega_max": self.omega_max}
 
     # -- physics: ActiveConstraintEnv's step, and the task's part of the state --------------------------------
 

@@ -10,15 +10,13 @@ from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JUMP_STEPPER, JumpClass, JumpFlow
+from connenv.core.params import Args, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,
-    check_dt,
     check_keys,
     check_number,
-    check_scale,
-    check_stepper_options,
     check_vector,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
@@ -110,21 +108,6 @@ class ChaplyginSleighEnv(TaskEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | sled_mass | 1.0 | [1e-6, 1e6] kg |
-    | sled_inertia | 0.1 | [1e-7, 1e5] kg m², about C |
-    | offset | 0.5 | [0, 5e5] m, C ahead of P |
-    | mass | 0.5 | [5e-7, 5e5] kg |
-    | rail | 0.3 | (0, 1e3] m, \|u₂\| ≤ rail |
-    | box | 0.3 | [0, 1e3] m, \|u₁\| ≤ box; 0: the rail alone |
-    | max_mass_speed | 2.0 | [2e-6, 2e6] m/s, with max_mass_speed · dt ≤ 2 m; None (fit class only): u jumps |
-    | tolerance | 0.1 | [1e-7, 1) m |
-    | dt | 0.05 | [1e-12, 1] s |
-    | integrator | "rk4" (2 substeps) | "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | | the stepper's |
-    | render_mode | None | "human", "rgb_array" |
-
     The mass's travel in one step is at most 2 m (the default speed's at the longest dt): the sled answers a faster shake
     faster, and past it the default's two RK4 substeps fall behind. The default is cheaper than DOP853 for the accuracy
     the task needs. Diverged: an energy error past 1e-2 (1 + T) (T is conserved where the mass is held).
@@ -135,68 +118,52 @@ class ChaplyginSleighEnv(TaskEnv):
 
     name = "ChaplyginSleigh-v0"  # how bad make kwargs name the env
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        sled_mass: float = 1.0,
-        sled_inertia: float = 0.1,
-        offset: float = 0.5,
-        mass: float = 0.5,
-        rail: float = 0.3,
-        box: float = 0.3,
-        max_mass_speed: float | None = 2.0,
-        tolerance: float = 0.1,
-        dt: float = 0.05,
-        integrator: str = DEFAULT_INTEGRATOR,
-        **stepper_options,
-    ):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.system = ChaplyginSleigh(
-            check_scale("sled_mass", sled_mass, 1.0),
-            check_scale("sled_inertia", sled_inertia, 0.1),
-            check_scale("offset", offset, 0.5, zero=True),
-            check_scale("mass", mass, 0.5),
-        )
-        self.rail = check_number("rail", rail, 0.0, MAGNITUDE_BOUND, open_low=True)
-        self.box = check_number("box", box, 0.0, MAGNITUDE_BOUND)
+    ARGS = Args(
+        scale("sled_mass", 1.0, "kg"),
+        scale("sled_inertia", 0.1, "kg m²", "about C"),
+        scale("offset", 0.5, "m", "C ahead of P", low=0.0),
+        scale("mass", 0.5, "kg"),
+        interval("rail", 0.3, "m", 0.0, MAGNITUDE_BOUND, "|u₂| ≤ rail", open_low=True),
+        interval("box", 0.3, "m", 0.0, MAGNITUDE_BOUND, "|u₁| ≤ box; 0: the rail alone"),
+        scale("max_mass_speed", 2.0, "m/s", "with max_mass_speed · dt ≤ 2 m; None (fit class only): u jumps",
+              optional=True),
+        scale("tolerance", 0.1, "m", high=1.0, open_high=True, physical=False),
+        step(0.05, DT_MAX),
+        integrator(DEFAULT_INTEGRATOR, "euler", "rk4", "dop853", "rk45", "lsoda", "radau",
+                   default_text='"rk4" (2 substeps)'),
+        options(),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
+        self.system = ChaplyginSleigh(a.sled_mass, a.sled_inertia, a.offset, a.mass)
+        self.rail, self.box, self.tolerance = a.rail, a.box, a.tolerance
         self.u_high = np.array([self.box, self.rail])
-        self.tolerance = check_scale("tolerance", tolerance, 0.1, 1.0, open_high=True)
         grid = np.meshgrid(np.linspace(-self.box, self.box, 5), np.linspace(-self.rail, self.rail, 7))
         directions = ((1.0, 0.0), (0.0, 1.0), (1.0, 1.0)) if self.box > 0.0 else ((0.0, 1.0),)  # admissible u̇
         self.jump_class = self.system.jump_class(np.stack(grid, -1).reshape(-1, 2), directions)
         self.control = "velocity" if self.jump_class is JumpClass.GENERAL else "position"
-        if max_mass_speed is None and self.control == "velocity":
+        if a.max_mass_speed is None and self.control == "velocity":
             raise ValueError(
                 f"max_mass_speed=None would jump the mass, which this sleigh (offset={self.system.offset}, box={self.box}"
                 f", class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not admit; give a "
                 "speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
             )
-        self.max_mass_speed = None if max_mass_speed is None else self._check_speed(max_mass_speed)
-        check_stepper_options(self.name, stepper_options, type(self))
-        if integrator == DEFAULT_INTEGRATOR:
+        if a.max_mass_speed is not None and a.max_mass_speed * self.dt > TRAVEL_MAX:
+            raise ValueError(
+                f"max_mass_speed={a.max_mass_speed!r} is out of range with dt={self.dt!r}: the mass's travel in a "
+                f"step, max_mass_speed · dt = {a.max_mass_speed * self.dt:.6g} m, must be at most {TRAVEL_MAX} m"
+            )
+        self.max_mass_speed = a.max_mass_speed
+        if a.integrator == DEFAULT_INTEGRATOR:
             stepper_options = {"substeps": DEFAULT_SUBSTEPS, **stepper_options}
-        self.stepper = make_stepper(integrator, self.system, **stepper_options)
+        self.stepper = make_stepper(a.integrator, self.system, **stepper_options)
         self.jump = JumpFlow(self.system)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         high = np.array(OBSERVED, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = SleighState(np.zeros(5), np.zeros(2), np.zeros(2), np.array([1.0, 0.0]), 0.0, 0.0)
-
-    def _check_speed(self, max_mass_speed):
-        """max_mass_speed, a scale within SCALE_SPAN of its default whose travel in a step is at most TRAVEL_MAX."""
-        speed = check_scale("max_mass_speed", max_mass_speed, 2.0)
-        if speed * self.dt > TRAVEL_MAX:
-            raise ValueError(
-                f"max_mass_speed={max_mass_speed!r} is out of range with dt={self.dt!r}: the mass's travel in a step, "
-                f"max_mass_speed · dt = {speed * self.dt:.6g} m, must be at most {TRAVEL_MAX} m"
-            )
-        return speed
-
-    def parameters(self):
-        s = self.system
-        return {"sled_mass": s.sled_mass, "sled_inertia": s.sled_inertia, "offset": s.offset, "mass": s.mass,
-                "rail": self.rail, "box": self.box, "max_mass_speed": self.max_mass_speed}
 
     # -- physics ---------------------------------------------------------------
 

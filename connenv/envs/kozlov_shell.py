@@ -13,13 +13,11 @@ from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
+from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.validation import (
     check_angle,
-    check_dt,
     check_keys,
     check_number,
-    check_scale,
-    check_stepper_options,
     check_vector,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
@@ -34,6 +32,11 @@ POSITION_BOUND = 100.0  # m: |x|, |y| of the shell and of the target given at re
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # DOP853's in the full model; atol is the Lie-group step's too
 STATE_KEYS = ("x", "y", "theta", "u", "momentum")
+
+
+def disc_inertia(args):
+    """The default shell inertia J: a uniform elliptic disc's, shell_mass (a² + b²)/4."""
+    return args["shell_mass"] * (args["a"] ** 2 + args["b"] ** 2) / 4
 
 
 @dataclass
@@ -112,21 +115,6 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | a | 1.0 | [1e-6, 1e6] m, semi-axis along body x, a ≥ b |
-    | b | 0.5 | [5e-7, 5e5] m, at most a |
-    | shell_mass | 1.0 | [1e-6, 1e6] kg |
-    | shell_inertia | None: shell_mass (a² + b²)/4 | within 1e6 of shell_mass (a² + b²)/4, kg m² |
-    | rho | 1.0 | [0, 1e6] kg/m², fluid density |
-    | mass | 1.0 | [1e-6, 1e6] kg, the inner mass |
-    | u1_max | 0.5 | [5e-7, 5e5] m, with the box's corners inside the ellipse |
-    | u2_max | 0.25 | [2.5e-7, 2.5e5] m, likewise |
-    | dt | 0.1 | [1e-12, 1] s |
-    | success_radius | 0.05 | [5e-8, 0.5) m |
-    | integrator | "magnus" | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | rtol 1e-8, atol 1e-10 | the stepper's |
-
     The default steps the reduced model by the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule fixed
     at construction as the cheapest that meets atol on every motion of the mass the box admits in one dt, and the full
     model, which has no connection, by DOP853. Semi-implicit Euler is explicit Euler on the reduced model. Diverged: in
@@ -141,42 +129,43 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        a: float = 1.0,
-        b: float = 0.5,
-        shell_mass: float = 1.0,
-        shell_inertia: float | None = None,
-        rho: float = 1.0,
-        mass: float = 1.0,
-        u1_max: float = 0.5,
-        u2_max: float = 0.25,
-        dt: float = 0.1,
-        success_radius: float = 0.05,
-        integrator: str = DEFAULT_INTEGRATOR,
-        **stepper_options,
-    ):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
-        a = check_scale("a", a, 1.0)
-        b = _check_b(b, a)
-        self.u_max = np.array(_check_box(u1_max, u2_max, a, b))
-        params = {
-            "a": a,
-            "b": b,
-            "shell_mass": check_scale("shell_mass", shell_mass, 1.0),
-            "rho": check_scale("rho", rho, 1.0, zero=True),
-            "mass": check_scale("mass", mass, 1.0),
-        }
-        disc = params["shell_mass"] * (a**2 + b**2) / 4  # the default J: a uniform elliptic disc
-        params["shell_inertia"] = None if shell_inertia is None else check_scale("shell_inertia", shell_inertia, disc)
+    ARGS = Args(
+        scale("a", 1.0, "m", "semi-axis along body x, a ≥ b"),
+        scale("b", 0.5, "m", "at most a"),
+        scale("shell_mass", 1.0, "kg"),
+        scale("shell_inertia", None, "kg m²", optional=True, typical=Bound(disc_inertia, "shell_mass (a² + b²)/4"),
+              default_text="None: shell_mass (a² + b²)/4"),
+        scale("rho", 1.0, "kg/m²", "fluid density", low=0.0),
+        scale("mass", 1.0, "kg", "the inner mass"),
+        scale("u1_max", 0.5, "m", "with the box's corners inside the ellipse"),
+        scale("u2_max", 0.25, "m", "likewise"),
+        step(0.1, DT_MAX),
+        scale("success_radius", 0.05, "m", high=0.5, open_high=True, physical=False),
+        integrator(DEFAULT_INTEGRATOR, "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda",
+                   "radau"),
+        options("rtol 1e-8, atol 1e-10"),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
+        if a.b > a.a:
+            raise ValueError(
+                f"b={a.b!r} is out of range: must be in (0, a={a.a!r}]; the axes are ordered so that a, the larger "
+                "semi-axis, lies along body x (swap them and turn the task by 90°)"
+            )
+        if (a.u1_max / a.a) ** 2 + (a.u2_max / a.b) ** 2 >= 1.0:
+            raise ValueError(
+                f"u1_max={a.u1_max!r}, u2_max={a.u2_max!r}: the box of the mass reaches outside the shell; its corners "
+                f"must lie inside the ellipse, (u1_max/a)² + (u2_max/b)² < 1 with a={a.a!r}, b={a.b!r}"
+            )
+        self.u_max = np.array([a.u1_max, a.u2_max])
+        params = {key: getattr(a, key) for key in ("a", "b", "shell_mass", "rho", "mass", "shell_inertia")}
         self.full_system, self.reduced_system = KozlovShell(**params), ReducedKozlovShell(**params)
-        self.success_radius = check_scale("success_radius", success_radius, 0.05, 0.5, open_high=True)
-        check_stepper_options(self.name, stepper_options, type(self))
-        if integrator in ("magnus", "dop853"):
+        self.success_radius = a.success_radius
+        if a.integrator in ("magnus", "dop853"):
             stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
-        self.stepper = make_stepper(integrator, self.full_system, **stepper_options)
+        self.stepper = make_stepper(a.integrator, self.full_system, **stepper_options)
         if isinstance(self.stepper, Magnus):
             pieces, points = shell_rule(self.reduced_system, tuple(self.u_max), self.dt, self.stepper.atol)
             self.stepper = dataclasses.replace(self.stepper, pieces=pieces, points=points)
@@ -216,15 +205,8 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     def parameters(self):
         system = self.full_system
-        return {
-            "mass": system.mass,
-            "shell_mass": system.shell_mass,
-            "m/(M + λ₁)": round(system.mass / (system.shell_mass + system.added_masses[0]), 12),
-            "a": system.a,
-            "b": system.b,
-            "rho": system.rho,
-            "model": "full" if self.state.full else "reduced",
-        }
+        ratio = round(system.mass / (system.shell_mass + system.added_masses[0]), 12)
+        return {**super().parameters(), "m/(M + λ₁)": ratio, "model": "full" if self.state.full else "reduced"}
 
     # -- physics ---------------------------------------------------------------
 
@@ -284,30 +266,6 @@ def shell_rule(system, u_max, dt, atol):
     grid = [np.array([i * u_max[0], j * u_max[1]]) for i in (-1, 0, 1) for j in (-1, 0, 1)]
     segments = [(a, (b - a) / dt, dt) for a in grid for b in grid if np.any(a != b)]
     return fixed_rule(system, segments, atol)
-
-
-def _check_b(b, a):
-    """b within SCALE_SPAN of its default and at most a: the axes are ordered so that a lies along body x."""
-    b = check_scale("b", b, 0.5)
-    if b > a:
-        raise ValueError(
-            f"b={b!r} is out of range: must be in (0, a={a!r}]; the axes are ordered so that a, the larger "
-            "semi-axis, lies along body x (swap them and turn the task by 90°)"
-        )
-    return b
-
-
-def _check_box(u1_max, u2_max, a, b):
-    """(u1_max, u2_max), scales within SCALE_SPAN of their defaults, with the corners of the mass's box strictly
-    inside the ellipse."""
-    u1_max = check_scale("u1_max", u1_max, 0.5)
-    u2_max = check_scale("u2_max", u2_max, 0.25)
-    if (u1_max / a) ** 2 + (u2_max / b) ** 2 >= 1.0:
-        raise ValueError(
-            f"u1_max={u1_max!r}, u2_max={u2_max!r}: the box of the mass reaches outside the shell; its corners "
-            f"must lie inside the ellipse, (u1_max/a)² + (u2_max/b)² < 1 with a={a!r}, b={b!r}"
-        )
-    return u1_max, u2_max
 
 
 SPECS = (

@@ -9,14 +9,13 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
+from connenv.core.params import Args, given, integrator, interval, options, step
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,
-    check_dt,
     check_keys,
     check_number,
-    check_stepper_options,
     check_vector,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
@@ -111,24 +110,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | surface | "hill" | "plane", "bowl", "hill", or a sympy expression in x and y (or its text) |
-    | slope | None: (0, −0.25) | (sx, sy), each in [−10, 10]: the plane's and hill's tilt, z = sx x + sy y (+ hill) |
-    | surface_params | None | per surface (below) |
-    | radius | 0.5 | [1e-3, 1e3] m |
-    | mass | 1.0 | [1e-6, 1e3] kg |
-    | g | 9.81 | [1e-6, 1e3] m/s² |
-    | max_steer_rate | 2.0 | (0, 1e3] rad/s |
-    | dt | 0.05 | [1e-12, 0.5] s |
-    | tolerance | 0.1 | (0, 1e3] m |
-    | target_distance | 4.0 | (0, 1e3] m |
-    | target_angle | 0.25 | [0, π/2] rad |
-    | arena | 6.0 | (0, 1e3] m, the half-width L of the square arena |
-    | integrator | "exact" on a plane, else "rk4" | "exact" (plane only), "euler", "semi_implicit_euler", "rk4", |
-    | | | "dop853", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | 8 substeps (rk4) | the stepper's |
-
     `surface_params`: bowl: radius=5.0 in [1e-3, 1e3] (z = (x² + y²)/(2 radius)); hill: height=1.0 in [0, 1e3],
     width=0.6 in [1e-3, 1e3], center=(0, 2); a sympy surface: its symbols besides x and y, each in [−1e3, 1e3].
 
@@ -144,40 +125,34 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
     name = "RollingCoinSurface-v0"  # how bad make kwargs name the env
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        surface="hill",
-        slope=None,
-        surface_params: dict | None = None,
-        radius: float = 0.5,
-        mass: float = 1.0,
-        g: float = 9.81,
-        max_steer_rate: float = 2.0,
-        dt: float = 0.05,
-        tolerance: float = 0.1,
-        target_distance: float = 4.0,
-        target_angle: float = 0.25,
-        arena: float = 6.0,
-        integrator: str | None = None,
-        **stepper_options,
-    ):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.max_steer_rate = check_number("max_steer_rate", max_steer_rate, 0.0, MAGNITUDE_BOUND, open_low=True)
-        self.tolerance = check_number("tolerance", tolerance, 0.0, MAGNITUDE_BOUND, open_low=True)
-        self.target_distance = check_number("target_distance", target_distance, 0.0, MAGNITUDE_BOUND, open_low=True)
-        self.target_angle = check_number("target_angle", target_angle, 0.0, math.pi / 2)
-        self.arena = check_number("arena", arena, 0.0, 1e3, open_low=True)
-        self.surface = make_surface(surface, slope, surface_params)
+    ARGS = Args(
+        given("surface", "hill", '"plane", "bowl", "hill", or a sympy expression in x and y (or its text)'),
+        given("slope", None, "(sx, sy), each in [−10, 10]: the plane's and hill's tilt, z = sx x + sy y (+ hill)",
+              "None: (0, −0.25)"),
+        given("surface_params", None, "per surface (below)"),
+        interval("radius", 0.5, "m", LENGTH_MIN, MAGNITUDE_BOUND),
+        interval("mass", 1.0, "kg", SCALE_MIN, MAGNITUDE_BOUND),
+        interval("g", 9.81, "m/s²", SCALE_MIN, MAGNITUDE_BOUND),
+        interval("max_steer_rate", 2.0, "rad/s", 0.0, MAGNITUDE_BOUND, open_low=True),
+        step(0.05, DT_MAX),
+        interval("tolerance", 0.1, "m", 0.0, MAGNITUDE_BOUND, open_low=True, physical=False),
+        interval("target_distance", 4.0, "m", 0.0, MAGNITUDE_BOUND, open_low=True, physical=False),
+        interval("target_angle", 0.25, "rad", 0.0, math.pi / 2, physical=False),
+        interval("arena", 6.0, "m", 0.0, 1e3, "the half-width L of the square arena", open_low=True, physical=False),
+        integrator(None, "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau",
+                   default_text='"exact" on a plane, else "rk4"', about='"exact" on a plane only'),
+        options("8 substeps (rk4)"),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
+        self.max_steer_rate, self.tolerance, self.target_distance = a.max_steer_rate, a.tolerance, a.target_distance
+        self.target_angle, self.arena, surface, integrator = a.target_angle, a.arena, a.surface, a.integrator
+        self.surface = make_surface(surface, a.slope, a.surface_params)
         on_plane = self.surface.gradient_is_constant()
-        parameters = {
-            "radius": check_number("radius", radius, LENGTH_MIN, MAGNITUDE_BOUND),
-            "mass": check_number("mass", mass, SCALE_MIN, MAGNITUDE_BOUND),
-            "g": check_number("g", g, SCALE_MIN, MAGNITUDE_BOUND),
-        }
-        self.system = (RollingCoinPlane if on_plane else RollingCoinSurface)(self.surface, **parameters)
-        check_stepper_options(self.name, stepper_options, type(self))
+        self.system = (RollingCoinPlane if on_plane else RollingCoinSurface)(self.surface, radius=a.radius, mass=a.mass,
+                                                                              g=a.g)  # fmt: skip
         if integrator is None:
             integrator, defaults = ("exact", {}) if on_plane else GENERAL_INTEGRATOR
             stepper_options = {**defaults, **stepper_options}
@@ -242,14 +217,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
         s = self.state
         track = np.array([*self.path, s.y[:2]])
         return renderer.draw(s.y, s.theta, s.target, track, self.tolerance, s.t)
-
-    def parameters(self):
-        return {
-            "radius": self.system.radius,
-            "mass": self.system.mass,
-            "g": self.system.g,
-            "max_steer_rate": self.max_steer_rate,
-        }
 
     # -- physics ---------------------------------------------------------------
 

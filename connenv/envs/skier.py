@@ -9,8 +9,9 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
+from connenv.core.params import Args, given, integrator, options, scale, step
 from connenv.core.segments import check_drift, run_segments
-from connenv.core.validation import check_dt, check_keys, check_number, check_scale, check_stepper_options
+from connenv.core.validation import check_keys, check_number
 from connenv.envs.base import SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
@@ -108,21 +109,6 @@ class SkierEnv(TaskEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | h_min | 0.5 | [5e-7, 5e5] m, below h_max |
-    | h_max | 1.0 | [1e-6, 1e6] m, above h_min, with 1 − κ h_max > 0 on the whole trail |
-    | mass | 70.0 | [7e-5, 7e7] kg |
-    | g | 9.81 | [9.81e-6, 9.81e6] m/s², with dt √(g/9.81) ≤ 10 s |
-    | dt | 0.05 | [1e-12, 10] s |
-    | trail | "valley" | "valley", "halfpipe", a sympy expression in x (or its text), or callables (f, f′, f″, f‴) |
-    | trail_params | None | valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; others: domain=(lo, hi) |
-    | target_x | None | required for a trail without rims: a point of the domain above the bottom, Δz ≥ 1e-9 \|z\| |
-    | max_height_speed | None | None or [1e-6, 1e6] m/s |
-    | integrator | below | "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "gauss6", "dop853", "rk45", |
-    | | | "lsoda", "radau" |
-    | substeps / rtol, atol | below | the stepper's |
-
     A user trail's `trail_params` also give the values of its expression's other symbols. Under g the skier moves as
     under 9.81 m/s² with time scaled by √(g/9.81), so the longest dt, and the default's substeps, are those of the
     scaled step dt √(g/9.81).
@@ -140,61 +126,58 @@ class SkierEnv(TaskEnv):
 
     name = "Skier-v0"  # how bad make kwargs name the env
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        h_min: float = 0.5,
-        h_max: float = 1.0,
-        mass: float = 70.0,
-        g: float = 9.81,
-        dt: float = 0.05,
-        trail="valley",
-        trail_params: dict | None = None,
-        target_x: float | None = None,
-        max_height_speed: float | None = None,
-        integrator: str | None = None,
-        **stepper_options,
-    ):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
-        self.h_min = check_scale("h_min", h_min, 0.5)
-        self.h_max = check_scale("h_max", h_max, 1.0)
-        if self.h_max <= self.h_min:
-            raise ValueError(f"h_max={h_max!r} is out of range: must be above h_min={self.h_min!r}")
-        self.max_height_speed = (
-            None if max_height_speed is None else check_scale("max_height_speed", max_height_speed, 1.0)
-        )
-        if trail_params is not None and not isinstance(trail_params, dict):
-            raise ValueError(f"trail_params={trail_params!r} must be a dict or None")
-        self.trail = make_trail(trail, trail_params)
+    ARGS = Args(
+        scale("h_min", 0.5, "m", "below h_max"),
+        scale("h_max", 1.0, "m", "with 1 − κ h_max > 0 on the whole trail", low="h_min"),
+        scale("mass", 70.0, "kg"),
+        scale("g", G_REFERENCE, "m/s²", "with dt √(g/9.81) ≤ 10 s"),
+        step(0.05, DT_MAX),
+        given("trail", "valley",
+              '"valley", "halfpipe", a sympy expression in x (or its text), or callables (f, f′, f″, f‴)'),
+        given("trail_params", None,
+              "valley: H=3.0, L=12.0; halfpipe: radius=5.0, max_angle=1.4; others: domain=(lo, hi)"),
+        given("target_x", None,
+              "required for a trail without rims: a point of the domain above the bottom, Δz ≥ 1e-9 |z|"),
+        scale("max_height_speed", None, "m/s", optional=True, typical=1.0, physical=False),
+        integrator(None, "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "gauss6", "dop853", "rk45",
+                   "lsoda", "radau", default_text="below"),
+        options("below"),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
+        self.h_min, self.h_max, self.max_height_speed = a.h_min, a.h_max, a.max_height_speed
+        if a.trail_params is not None and not isinstance(a.trail_params, dict):
+            raise ValueError(f"trail_params={a.trail_params!r} must be a dict or None")
+        self.trail = make_trail(a.trail, a.trail_params)
         check_curvature(self.trail, self.h_max)
-        self.system = Skier(self.trail, mass=check_scale("mass", mass, 70.0), g=check_scale("g", g, G_REFERENCE))
+        self.system = Skier(self.trail, mass=a.mass, g=a.g)
         self.scaled_dt = self.dt * math.sqrt(self.system.g / G_REFERENCE)  # the step in the time of g = 9.81 m/s²
         if self.scaled_dt > DT_MAX:
             raise ValueError(
-                f"g={g!r} with dt={dt!r} is out of range: the step in the time of 9.81 m/s², dt √(g/9.81) = "
+                f"g={a.g!r} with dt={a.dt!r} is out of range: the step in the time of 9.81 m/s², dt √(g/9.81) = "
                 f"{self.scaled_dt:.6g} s, must be at most {DT_MAX} s"
             )
-        check_stepper_options(self.name, stepper_options, type(self))
 
         xs = self.trail.grid()
         f, f1, f2, _ = self.trail.profile(xs)
         sigma = np.sqrt(1.0 + f1**2)
         self.x_bottom = float(xs[np.argmin(f)])
-        self.goals = self._goals(target_x)
+        self.goals = self._goals(a.target_x)
         self.z_floor = float(np.min(f + self.h_min / sigma))
         self.z_goal = min(self._crouched_height(x) for x in self.goals)
         least = CLIMB_MIN * max(abs(self.z_floor), abs(self.z_goal))
         if not self.z_goal - self.z_floor >= least:
             raise ValueError(
-                f"target_x={target_x!r} is at the bottom of the trail: the height to climb to it, Δz = "
+                f"target_x={a.target_x!r} is at the bottom of the trail: the height to climb to it, Δz = "
                 f"{self.z_goal - self.z_floor:.3g} m, must be at least {CLIMB_MIN:g} of the barycentre's height, "
                 f"{least:.3g} m (the energy check is relative to Δz)"
             )
         self.speed_scale = math.sqrt(2.0 * self.system.g * (self.z_goal - self.z_floor))
         self.kappa_bound = float(np.max(np.abs(f2 / sigma**3))) * self.h_max
         self.min_lever = float(np.min(1.0 - f2 / sigma**3 * self.h_max))  # min of 1 − κ h_max on the trail
-        integrator, stepper_options = self._default_stepper(integrator, stepper_options)
+        integrator, stepper_options = self._default_stepper(a.integrator, stepper_options)
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         high = np.array([1.0, 1.0, 1.0, SPEED_BOUND, 1.0, self.kappa_bound], np.float32)
@@ -223,13 +206,7 @@ class SkierEnv(TaskEnv):
         return renderer.draw(self.state.y[0], self.state.h, self.h_min, self.state.t)
 
     def parameters(self):
-        return {
-            "h_min": self.h_min,
-            "h_max": self.h_max,
-            "min 1 − κ h_max": round(self.min_lever, 12),
-            "mass": self.system.mass,
-            "g": self.system.g,
-        }
+        return {**super().parameters(), "min 1 − κ h_max": round(self.min_lever, 12)}
 
     # -- construction ----------------------------------------------------------
 

@@ -13,14 +13,12 @@ from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
+from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_angle,
-    check_dt,
     check_keys,
     check_number,
-    check_scale,
-    check_stepper_options,
     check_vector,
     decimal,
 )
@@ -39,6 +37,11 @@ DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full mode
 ASPECT_MAX = 100.0  # the largest aspect ratio a/b of a link (see SnakeSwimmerEnv)
 SIZE_MIN = 1e-6  # the least a (m) and link_density: the link mass link_density · πab stays positive, so rho may be 0
 STATE_KEYS = ("x", "y", "theta", "alpha", "beta", "momentum")
+
+
+def thinnest(args):
+    """The least b of the arguments: a/ASPECT_MAX, as the table writes it."""
+    return decimal(args["a"] / ASPECT_MAX)
 
 
 @dataclass
@@ -152,18 +155,6 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
 
     ## Arguments
 
-    | kwarg | default | range |
-    |---|---|---|
-    | a | 0.5 | [1e-6, 1e3] m, the links' semi-axis along the link |
-    | b | 0.05 | [a/100, a) m, across the link |
-    | link_density | 1.0 | [1e-6, 1e3], mass per area: a link's mass is link_density · πab |
-    | rho | 1.0 | [0, 1e3], fluid density |
-    | max_joint_speed | 3.0 | [3e-6, 1e3] rad/s |
-    | dt | 0.05 | [1e-12, 0.25] s |
-    | success_radius | None: 0.1 body length, 0.6a | [6e-7 a, 6a) m |
-    | integrator | "magnus" | "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau" |
-    | substeps / rtol, atol | rtol 1e-10, atol 1e-12 | the stepper's |
-
     The default steps the reduced model by the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule fixed
     at construction as the cheapest that meets atol on every joint motion at top speed, and the full model, which has
     no connection, by DOP853. Thinner links than a/b = 100 would need a rule of tens of pieces, minutes to choose.
@@ -178,40 +169,31 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        a: float = 0.5,
-        b: float = 0.05,
-        link_density: float = 1.0,
-        rho: float = 1.0,
-        max_joint_speed: float = 3.0,
-        dt: float = 0.05,
-        success_radius: float | None = None,
-        integrator: str = DEFAULT_INTEGRATOR,
-        **stepper_options,
-    ):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
-        a = check_number("a", a, SIZE_MIN, MAGNITUDE_BOUND)
-        params = {
-            "a": a,
-            "b": check_number("b", b, decimal(a / ASPECT_MAX), a, open_high=True, high_name="a"),
-            "link_density": check_number("link_density", link_density, SIZE_MIN, MAGNITUDE_BOUND),
-            "rho": check_number("rho", rho, 0.0, MAGNITUDE_BOUND),
-        }
+    ARGS = Args(
+        interval("a", 0.5, "m", SIZE_MIN, MAGNITUDE_BOUND, "the links' semi-axis along the link"),
+        interval("b", 0.05, "m", Bound(thinnest, "a/100"), "a", "across the link", open_high=True),
+        interval("link_density", 1.0, "kg/m²", SIZE_MIN, MAGNITUDE_BOUND, "a link's mass is link_density · πab"),
+        interval("rho", 1.0, "kg/m²", 0.0, MAGNITUDE_BOUND, "fluid density"),
+        scale("max_joint_speed", 3.0, "rad/s", high=MAGNITUDE_BOUND),
+        step(0.05, DT_MAX),
+        scale("success_radius", None, "m", optional=True, typical=Bound(lambda args: 0.6 * args["a"], "0.6a"),
+              high=Bound(lambda args: 6.0 * args["a"], "6a"), open_high=True, physical=False,
+              default_text="None: 0.1 body length, 0.6a"),
+        integrator(DEFAULT_INTEGRATOR, "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda",
+                   "radau"),
+        options("rtol 1e-10, atol 1e-12"),
+    )
+
+    def __init__(self, render_mode: str | None = None, **kwargs):
+        a, stepper_options = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
+        params = {key: getattr(a, key) for key in ("a", "b", "link_density", "rho")}
         self.full_system, self.reduced_system = SnakeSwimmer(**params), ReducedSnakeSwimmer(**params)
-        self.body_length = 6.0 * a
-        self.max_joint_speed = check_scale("max_joint_speed", max_joint_speed, 3.0, MAGNITUDE_BOUND)
-        if success_radius is None:
-            success_radius = 0.1 * self.body_length
-        self.success_radius = check_scale(
-            "success_radius", success_radius, 0.1 * self.body_length, self.body_length, open_high=True
-        )
-        check_stepper_options(self.name, stepper_options, type(self))
-        if integrator in ("magnus", "dop853"):
+        self.body_length, self.max_joint_speed = 6.0 * a.a, a.max_joint_speed
+        self.success_radius = 0.1 * self.body_length if a.success_radius is None else a.success_radius
+        if a.integrator in ("magnus", "dop853"):
             stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
-        self.stepper = make_stepper(integrator, self.full_system, **stepper_options)
+        self.stepper = make_stepper(a.integrator, self.full_system, **stepper_options)
         if isinstance(self.stepper, Magnus):
             pieces, points = snake_rule(self.reduced_system, self.max_joint_speed, self.dt, self.stepper.atol)
             self.stepper = dataclasses.replace(self.stepper, pieces=pieces, points=points)
@@ -251,15 +233,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return renderer.draw(links, s.target, [*self.wake, links[:, :2]], self.success_radius, s.t)
 
     def parameters(self):
-        system = self.full_system
-        return {
-            "a": system.a,
-            "b": system.b,
-            "link_density": system.link_density,
-            "rho": system.rho,
-            "max_joint_speed": self.max_joint_speed,
-            "model": "full" if self.state.full else "reduced",
-        }
+        return {**super().parameters(), "model": "full" if self.state.full else "reduced"}
 
     # -- physics ---------------------------------------------------------------
 
