@@ -4,9 +4,10 @@ meaning. One declaration, `Args`, checks the kwargs (a ValueError naming the arg
 physical parameters its errors report.
 
 A range is one of four kinds: a *scale* (`scale`: `check_scale`'s span of SCALE_SPAN either way of the default,
-down to 0 with zero, at most a bound), an *interval* (`interval`: fixed ends), a set of *choices* (`choice`), or
-text for an argument that another check owns (`given`: a stepper's options, a builder's system). An end may be set by
-another argument, named (a_max below length), or by a `Bound`, a function of the arguments checked before it.
+down to 0 with low=0.0, at most high), an *interval* (`interval`: its ends), a set of *choices* (`choice`), or text
+for an argument that another check owns (`given`, `integrator`, `options`: a trail, a stepper and its options). An
+end may be set by an argument checked before it, by its name (a_max below length), or by a `Bound`, a function of
+them (damping below 1e3 m l² √(g/l)).
 """
 
 from __future__ import annotations

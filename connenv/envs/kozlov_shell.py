@@ -22,7 +22,7 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
+from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
 from connenv.envs.vector import vector_env
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
@@ -141,8 +141,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         scale("u2_max", 0.25, "m", "likewise"),
         step(0.1, DT_MAX),
         scale("success_radius", 0.05, "m", high=0.5, open_high=True, physical=False),
-        integrator(DEFAULT_INTEGRATOR, "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda",
-                   "radau"),
+        integrator(DEFAULT_INTEGRATOR, *INTEGRATORS),
         options("rtol 1e-8, atol 1e-10"),
     )
 

@@ -24,7 +24,7 @@ from connenv.core.validation import (
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.swimmer import MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
+from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
 from connenv.envs.vector import vector_env
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
@@ -179,8 +179,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         scale("success_radius", None, "m", optional=True, typical=Bound(lambda args: 0.6 * args["a"], "0.6a"),
               high=Bound(lambda args: 6.0 * args["a"], "6a"), open_high=True, physical=False,
               default_text="None: 0.1 body length, 0.6a"),
-        integrator(DEFAULT_INTEGRATOR, "magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda",
-                   "radau"),
+        integrator(DEFAULT_INTEGRATOR, *INTEGRATORS),
         options("rtol 1e-10, atol 1e-12"),
     )
 

@@ -15,6 +15,7 @@ TIME_COST = 0.01  # reward paid per step until success
 MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged
 TARGET_BOUND = 3.0  # the observed target, in units of target_unit, is clipped here
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
+INTEGRATORS = ("magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau")  # a swimmer's
 
 
 class PlanarSwimmer:
