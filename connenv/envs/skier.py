@@ -206,7 +206,8 @@ class SkierEnv(TaskEnv):
         return renderer.draw(self.state.y[0], self.state.h, self.h_min, self.state.t)
 
     def parameters(self):
-        return {**super().parameters(), "min 1 − κ h_max": round(self.min_lever, 12)}
+        lever = round(self.min_lever, 12)  # beside h_max, which sets it
+        return {"h_min": self.h_min, "h_max": self.h_max, "min 1 − κ h_max": lever, **super().parameters()}
 
     # -- construction ----------------------------------------------------------
 
