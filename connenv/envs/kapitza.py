@@ -339,7 +339,7 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     ## Open Challenge
 
-    No agent of the reference results learns this task: PPO and SAC pump the pendulum up but do not catch and hold it.
+    No agent of the reference results learns this task: PPO and SAC pump the pendulum up but seldom catch and hold it.
     A behaviour clone of the analytic controller into the same network does (trained with DAgger), so the observation
     and the action suffice; what is missing is learning the catch, which the reward pays only through the time it saves
     once the lift reaches its cap. The clones' success and the longest training curve, which begins to catch late in its
