@@ -41,7 +41,7 @@ import sys
 import time
 import warnings
 from collections import Counter
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -86,11 +86,48 @@ INTEGERS = (0, 1, SUBSTEPS_MAX, SUBSTEPS_MAX + 1, 10**6, 10**9, 10**18, 2**63, -
 
 # -- the envs' arguments ----------------------------------------------------------------------------------------
 
-STATE_KEYS = {spec.id: spec.state_keys for spec in registry.values()}
-"""Reset state keys of each id (its spec's): the number of entries of each (0: a number)."""
+
+
+class Declared(Mapping):
+    """{id: read(id, env)} over the registered ids, each read on first use off the unwrapped env, made with its
+    make kwargs: what the env declares (its reset state, `connenv.core.state`), a builder's sizes its example's."""
+
+    def __init__(self, read):
+        self.read, self.found = read, {}
+
+    def __getitem__(self, env_id):
+        if env_id not in registry:
+            raise KeyError(env_id)
+        if env_id not in self.found:
+            self.found[env_id] = self.read(env_id, make(env_id).unwrapped)
+        return self.found[env_id]
+
+    def __iter__(self):
+        return iter(registry)
+
+    def __len__(self):
+        return len(registry)
+
+
+def state_keys(env_id, env):
+    """The numbers and vectors of the env's declared reset state: the number of entries of each (0: a number)."""
+    shapes = env.STATE.shapes(env)
+    numeric = [key for key, field in env.STATE.fields.items() if field.kind in ("number", "vector")]
+    return {key: (shapes[key] or (0,))[0] for key in numeric}
+
+
+def rotations(env_id, env):
+    """Reset arguments that take a rotation matrix, (path in the options, name in the message): the declared reset
+    state's rotations, then the spec's reset options'."""
+    state = [(("state", key), f"state {key}") for key, field in env.STATE.fields.items() if field.kind == "rotation"]
+    return state + list(spec(env_id).rotations)
+
+
+STATE_KEYS = Declared(state_keys)
+"""Reset state keys of each id (its env's declared state): the number of entries of each (0: a number)."""
 OPTION_KEYS = {spec.id: spec.option_keys for spec in registry.values() if spec.option_keys}
 """Reset options beside "state"."""
-ROTATIONS = {spec.id: list(spec.rotations) for spec in registry.values() if spec.rotations}
+ROTATIONS = Declared(rotations)
 """Reset arguments that take a rotation matrix: (path in the options, name in the message)."""
 NOT_NUMERIC = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
                "control", "integrator", "pivot", "vectorized", "surface", "surface_params", "measure_distance"}

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.state import Fields, number
 from connenv.core.validation import check_dt
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
@@ -50,6 +51,10 @@ class PointEnv(TaskEnv):
 
     A point on a line, its velocity assigned.
 
+    ## Starting State
+
+    x uniform in [−1, 0], t = 0. `reset(options={"state": {...}})` sets x exactly:
+
     ## Arguments
 
     | name | default | range |
@@ -58,6 +63,7 @@ class PointEnv(TaskEnv):
     """
 
     name = "Point-v0"
+    STATE = Fields(number("x", "m", bound=10.0))
 
     def __init__(self, render_mode=None, dt=0.1):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
@@ -67,7 +73,8 @@ class PointEnv(TaskEnv):
         self.state = PointState(0.0, 0.0)
 
     def start(self, options):
-        return PointState(self.np_random.uniform(-1.0, 0.0), 0.0)
+        x = self.np_random.uniform(-1.0, 0.0)
+        return PointState(self.STATE.check(self, options.get("state", {}), {"x": x})["x"], 0.0)
 
     def command(self, a):
         return (SCALAR if a.ndim == 1 else BATCH).components(a)[0]
@@ -98,7 +105,7 @@ SPECS = (
     Spec(
         "throwaway/Point-v0", PointEnv, PointVectorEnv, max_episode_steps=50, dt_max=DT_MAX, physics="point.md",
         measure=Measure("time to target", "s", "time_to_success"), controllers=("toward",),
-        state_keys={"x": 0}, golden=(("point", {"max_episode_steps": 20}, None),),
+        golden=(("point", {"max_episode_steps": 20}, None),),
     ),
 )
 '''

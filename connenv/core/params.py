@@ -23,8 +23,9 @@ from connenv.core.validation import DT_MIN, SCALE_SPAN, check_number, check_scal
 
 @dataclasses.dataclass(frozen=True)
 class Bound:
-    """An end of a range that the arguments checked before it set: ``value(args)`` (args a dict of them), written
-    ``text`` in the table, and named by ``name`` in the error (None: the number alone)."""
+    """An end of a range that what is checked before it sets: ``value(args)`` (args a dict of them) for an argument,
+    ``value(env, values)`` (the values checked before it) for a key of the reset state (`connenv.core.state`);
+    written ``text`` in the table, and named by ``name`` in an argument's error (None: the number alone)."""
 
     value: Callable[[dict], float]
     text: str
@@ -118,7 +119,7 @@ def end(value: End, args: dict) -> tuple[float, str | None]:
     return value, None
 
 
-NAMED = {math.pi: "π", math.pi / 2: "π/2", 2 * math.pi: "2π", 4 * math.pi: "4π"}
+NAMED = {math.pi: "π", math.pi / 2: "π/2", 2 * math.pi / 3: "2π/3", 2 * math.pi: "2π", 4 * math.pi: "4π"}
 
 
 def text(value) -> str:

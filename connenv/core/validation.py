@@ -176,9 +176,10 @@ def real_array(name: str, value, expected: str) -> np.ndarray:
     return np.array(value, dtype=np.float64)
 
 
-def check_vector(name: str, value, size: int, low=-math.inf, high=math.inf):
+def check_vector(name: str, value, size: int, low=-math.inf, high=math.inf, note=""):
     """value as a float array of shape (size,), every entry a finite real within [low, high] (bounds a number or
-    one per entry), else ValueError naming it, the entry and the range."""
+    one per entry), else ValueError naming it, the entry (followed by ``note``, why its bound is what it is) and the
+    range."""
     expected = f"a sequence of {size} finite real numbers"
     vector = real_array(name, value, expected)
     if vector.shape != (size,) or not np.all(np.isfinite(vector)):
@@ -186,7 +187,7 @@ def check_vector(name: str, value, size: int, low=-math.inf, high=math.inf):
     low, high = np.broadcast_to(low, (size,)), np.broadcast_to(high, (size,))
     for i in np.flatnonzero((vector < low) | (vector > high)):
         interval = f"[{float(low[i])}, {float(high[i])}]"
-        raise ValueError(f"{name}[{i}]={float(vector[i])!r} is out of range: must be in {interval}")
+        raise ValueError(f"{name}[{i}]{note}={float(vector[i])!r} is out of range: must be in {interval}")
     return vector
 
 

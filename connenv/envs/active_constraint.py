@@ -11,6 +11,7 @@ from connenv import examples
 from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JUMP_STEPPER, JumpClass, JumpFlow, MetricField, check_metric, classify, hamiltonian
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
+from connenv.core.state import Fields, vector, within
 from connenv.core.steppers import ExactFlow, ExactSegment, check_observable
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
@@ -20,7 +21,6 @@ from connenv.core.validation import (
     check_number,
     check_returned,
     check_stepper_options,
-    check_vector,
     probe,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
@@ -95,8 +95,8 @@ class ActiveConstraintEnv(TaskEnv):
 
     Default q = 0, p = 0, u at the midpoint of finite bounds (0 on a coordinate with an infinite bound), t = 0. With
     `task`, `task.reset(np_random)` returns a state dict with any of q, p, u (the rest default).
-    `reset(options={"state": {...}})` sets any of `q`, `p`, `u` exactly (arrays of n, n, m real numbers; u within its
-    bounds; every entry within ±1e3, beyond which a user's system may outrun any stepper).
+    `reset(options={"state": {...}})` sets any of these exactly (every entry within ±1e3, beyond which a user's system
+    may outrun any stepper; a number stands for a vector of one entry):
 
     ## Episode End
 
@@ -140,6 +140,12 @@ class ActiveConstraintEnv(TaskEnv):
     """
 
     name = "ActiveConstraint-v0"  # how bad make kwargs name the env
+
+    STATE = Fields(
+        vector("q", "n", about="the free coordinates", bound=MAGNITUDE_BOUND, scalar=True),
+        vector("p", "n", about="their conjugate momenta", bound=MAGNITUDE_BOUND, scalar=True),
+        vector("u", "m", about="the assigned coordinates", scalar=True, **within("u_low", "u_high", MAGNITUDE_BOUND)),
+    )
 
     def __init__(
         self,
@@ -243,16 +249,6 @@ class ActiveConstraintEnv(TaskEnv):
         high = np.where(np.isfinite(self.u_high), self.u_high, self.u_start + 1.0)
         return q, np.stack([self.u_start, low, high, 0.75 * low + 0.25 * high])
 
-    def _check_state(self, state, defaults, name="options['state']"):
-        check_keys(name, state, {"q", "p", "u"})
-        values = dict(defaults)
-        for key, value in state.items():
-            value = np.ravel(value) if np.ndim(value) == 0 else value  # a number for a single coordinate
-            bounds = (self.u_low, self.u_high) if key == "u" else (-np.inf, np.inf)
-            bounds = np.maximum(bounds[0], -MAGNITUDE_BOUND), np.minimum(bounds[1], MAGNITUDE_BOUND)
-            values[key] = check_vector(f"state {key}", value, self.m if key == "u" else self.n, *bounds)
-        return values
-
     # -- physics ---------------------------------------------------------------
 
     def at(self, y, u, t, energy_error):
@@ -260,10 +256,10 @@ class ActiveConstraintEnv(TaskEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state"})
-        defaults = {"q": np.zeros(self.n), "p": np.zeros(self.n), "u": self.u_start.copy()}
+        defaults = {"u": self.u_start.copy()}
         if self.task is not None:
-            defaults = self._check_state(self.task.reset(self.np_random), defaults, "the state of task.reset")
-        values = self._check_state(options.get("state", {}), defaults)
+            defaults = self.STATE.check(self, self.task.reset(self.np_random), defaults, "the state of task.reset")
+        values = self.STATE.check(self, options.get("state", {}), defaults)
         return self.at(np.concatenate([values["q"], values["p"]]), values["u"], 0.0, 0.0)
 
     def command(self, a):
@@ -405,7 +401,6 @@ SPECS = (
         animation_start={"state": {"q": [0.5]}},
         play="space", space_action=-1.0,
         variants=(examples.swing, examples.rotor, examples.bead),  # one of each jump class
-        state_keys={"q": 1, "p": 1, "u": 1},  # examples.swing(): n = m = 1
         fast_start={"state": {"p": [1000.0]}},
         bench="generic",
     ),

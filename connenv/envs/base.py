@@ -27,6 +27,7 @@ import numpy as np
 
 from connenv.core.params import Args, document
 from connenv.core.segments import control_segments, control_segments_batch
+from connenv.core.state import Fields, document_state
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
 from connenv.systems.backend import FLOATS, NAMES, operations
@@ -102,6 +103,7 @@ class RenderedEnv(gym.Env):
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         document(cls)
+        document_state(cls)
 
     def check_args(self, kwargs: dict) -> tuple[SimpleNamespace, dict]:
         """(ARGS checked on the make kwargs, with their defaults, as attributes, kept as ``self.args``; the
@@ -154,6 +156,8 @@ class TaskEnv(RenderedEnv):
     ``command``, ``advance``, ``observe``, ``describe``, ``reward`` and may override ``terminated``."""
 
     state: State
+    STATE: ClassVar[Fields] = Fields()
+    """The reset state's keys (`connenv.core.state`): their checks in ``start``, the docstring's table of them."""
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)

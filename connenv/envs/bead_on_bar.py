@@ -11,12 +11,8 @@ from gymnasium import spaces
 from connenv.core.mechanics import JUMP_STEPPER
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import check_drift
-from connenv.core.validation import (
-    MAGNITUDE_BOUND,
-    check_angle,
-    check_keys,
-    check_number,
-)
+from connenv.core.state import Fields, angle, number
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number
 from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env's too
     DT_MAX,
     ActiveConstraintEnv,
@@ -97,9 +93,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     At rest (ṙ = 0), θ = 0, t = 0. With g > 0: r₀ uniform on [−0.8, 0.8] L, and the target r* uniform on the points of
     [−0.8, 0.8] L at least 0.2 L from r₀. With g = 0: |r₀| uniform on [0.1, 0.6] L on either side of the pivot, and r*
-    on the same side, 0.2 to 0.3 L farther out. `reset(options={"state": {...}, "target": r*})` sets any of `r` (in
-    [−L, L]), `r_dot` (within ±1e3) and `theta` (in [−2π, 2π]) and the target r* (in [−L, L]) exactly; the rest is
-    drawn as above.
+    on the same side, 0.2 to 0.3 L farther out. `reset(options={"state": {...}, "target": r*})` sets any of these
+    and the target r* (in [−L, L], L = half_length) exactly; the rest is drawn as above:
 
     ## Episode End
 
@@ -141,6 +136,12 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         options(),
     )
 
+    STATE = Fields(
+        number("r", "m", "the bead's position on the bar", bound="half_length"),
+        number("r_dot", "m/s", bound=MAGNITUDE_BOUND),
+        angle("theta", "the bar's angle"),
+    )
+
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
         self.half_length, self.omega_max, self.hold_time, self.exit_penalty = (
@@ -161,15 +162,11 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
-        given = options.get("state", {})
-        check_keys("options['state']", given, {"r", "r_dot", "theta"})
         r, target = self.draw_start()
+        state = self.STATE.check(self, options.get("state", {}), {"r": r})
         L = self.half_length
-        r = check_number("state r", given.get("r", r), -L, L)
-        r_dot = check_number("state r_dot", given.get("r_dot", 0.0), -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
-        theta = check_angle("state theta", given.get("theta", 0.0))
         target = check_number("target", options.get("target", target), -L, L)
-        s = self.at(np.array([r, self.mass * r_dot]), np.array([theta]), 0.0, 0.0)
+        s = self.at(np.array([state["r"], self.mass * state["r_dot"]]), np.array([state["theta"]]), 0.0, 0.0)
         return self.track(s, target, None)
 
     def draw_start(self):
@@ -275,7 +272,7 @@ BeadOnBarVectorEnv = vector_env(BeadOnBarEnv, JumpVectorEnv)
 
 BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,
         "measure": Measure("time to target", "s", "time_to_success"), "controllers": ("tilt",),
-        "variants": ({}, {"g": 0.0}), "state_keys": {"r": 0, "r_dot": 0, "theta": 0}, "option_keys": {"target": 0},
+        "variants": ({}, {"g": 0.0}), "option_keys": {"target": 0},
         "fast_start": {"state": {"r_dot": 1000.0}}}
 SPECS = (
     Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, BeadOnBarVectorEnv, **BEAD,

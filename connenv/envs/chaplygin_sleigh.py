@@ -10,15 +10,10 @@ from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JUMP_STEPPER, JumpClass, JumpFlow
-from connenv.core.params import Args, integrator, interval, options, scale, step
+from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.validation import (
-    MAGNITUDE_BOUND,
-    check_angle,
-    check_keys,
-    check_number,
-    check_vector,
-)
+from connenv.core.state import Fields, angle, number
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import JumpVectorEnv, vector_env
@@ -35,7 +30,17 @@ RATE_BOUND = 20.0  # |ω| (rad/s) given at reset
 OBSERVED = (10.0, 10.0, 5.0, 10.0, 1.0, 1.0, 1.0, 1.0)  # bounds of the observation (clipped), in its order
 PROGRESS_GAIN = 10.0  # reward per metre of approach
 TIME_COST = 0.01  # reward paid per step until success
-STATE_KEYS = ("x", "y", "phi", "v", "omega", "u", "u_dot", "u_along", "u_along_dot")
+
+
+def mass_speed(env, values):
+    """|u̇| given at reset: max_mass_speed, 0 without it (u jumps)."""
+    return 0.0 if env.max_mass_speed is None else env.max_mass_speed
+
+
+def along_speed(env, values):
+    """|u̇₁| given at reset: the mass's speed, 0 with box=0 (the rail alone)."""
+    return mass_speed(env, values) if env.box > 0.0 else 0.0
+
 
 
 @dataclass
@@ -97,9 +102,8 @@ class ChaplyginSleighEnv(TaskEnv):
     ## Starting State
 
     At rest at the origin heading along x, the mass at C (u = u̇ = 0), t = 0; the target uniform at 1 to 2 m in any
-    direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of `x`, `y` (within ±1e3 m),
-    `phi` (±2π), `v` (±10 m/s), `omega` (±20 rad/s), `u` (u₂, ±rail), `u_dot` (±max_mass_speed, 0 without it),
-    `u_along` (u₁, ±box), `u_along_dot` (±max_mass_speed, 0 with box=0) and the target (within ±1e3 m) exactly.
+    direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the
+    target (within ±1e3 m) exactly:
 
     ## Episode End
 
@@ -132,6 +136,18 @@ class ChaplyginSleighEnv(TaskEnv):
         integrator(DEFAULT_INTEGRATOR, "euler", "rk4", "dop853", "rk45", "lsoda", "radau",
                    default_text='"rk4" (2 substeps)'),
         options(),
+    )
+
+    STATE = Fields(
+        number("x", "m", bound=MAGNITUDE_BOUND),
+        number("y", "m", bound=MAGNITUDE_BOUND),
+        angle("phi", "the heading"),
+        number("v", "m/s", "the speed along the heading", bound=SPEED_BOUND),
+        number("omega", "rad/s", bound=RATE_BOUND),
+        number("u", "m", "u₂, across", bound="rail"),
+        number("u_dot", "m/s", bound=Bound(mass_speed, "max_mass_speed (0 without it)")),
+        number("u_along", "m", "u₁", bound="box"),
+        number("u_along_dot", "m/s", bound=Bound(along_speed, "max_mass_speed (0 with box=0)")),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
@@ -169,15 +185,7 @@ class ChaplyginSleighEnv(TaskEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
-        state = options.get("state", {})
-        check_keys("options['state']", state, STATE_KEYS)
-        values = {key: 0.0 for key in STATE_KEYS}
-        speed = 0.0 if self.max_mass_speed is None else self.max_mass_speed
-        bounds = {"x": MAGNITUDE_BOUND, "y": MAGNITUDE_BOUND, "v": SPEED_BOUND, "omega": RATE_BOUND, "u": self.rail,
-                  "u_dot": speed, "u_along": self.box, "u_along_dot": speed if self.box > 0.0 else 0.0}
-        for key, value in state.items():
-            values[key] = check_angle("state phi", value) if key == "phi" else check_number(
-                f"state {key}", value, -bounds[key], bounds[key])
+        values = self.STATE.check(self, options.get("state", {}))
         distance = self.np_random.uniform(*TARGET_DISTANCE)
         bearing = self.np_random.uniform(-math.pi, math.pi)
         target = np.array([distance * math.cos(bearing), distance * math.sin(bearing)])
@@ -284,7 +292,7 @@ SPECS = (
         dt_max=DT_MAX, physics="ChaplyginSleigh.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("planner", "tail_first"),
         variants=({}, {"offset": 0.0, "box": 0.0}),  # general: u̇ commanded; fit: u commanded
-        state_keys=dict.fromkeys(STATE_KEYS, 0), option_keys={"target": 2},
+        option_keys={"target": 2},
         golden=(
             ("sleigh", {"max_episode_steps": 60, "tolerance": 0.5}, None),
             ("sleigh_fit", {"max_episode_steps": 60, "offset": 0.0, "box": 0.0}, None),

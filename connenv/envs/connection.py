@@ -11,6 +11,7 @@ from connenv import examples
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, ExactConnection, connection_system
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
+from connenv.core.state import Fields, given, vector, within
 from connenv.core.steppers import StepperError, check_observable
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
@@ -19,7 +20,6 @@ from connenv.core.validation import (
     check_keys,
     check_number,
     check_stepper_options,
-    check_vector,
     real_array,
 )
 from connenv.envs.base import SCALAR, State, TaskEnv
@@ -85,8 +85,8 @@ class ConnectionEnv(TaskEnv):
     ## Starting State
 
     g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0. With a
-    `task`: `task.reset(np_random)` returns a dict with any of "g" and "s". `reset(options={"state": {"g": ...,
-    "s": ...}})` sets either exactly (g on its group to 1e-9, s within the bounds, every entry of both within ±1e3).
+    `task`: `task.reset(np_random)` returns a dict with any of "g" and "s". `reset(options={"state": {...}})`
+    sets either exactly:
 
     ## Episode End
 
@@ -133,6 +133,12 @@ class ConnectionEnv(TaskEnv):
     """
 
     name = "Connection-v0"  # how bad make kwargs name the env
+
+    STATE = Fields(
+        given("g", "g_shape", "check_g", "on its group to 1e-9, every entry within ±1e3", "a vector for R2"),
+        vector("s", "k", about="the shape",
+               **within("low", "high", MAGNITUDE_BOUND, ("shape_low", "shape_high"))),
+    )
 
     def __init__(
         self,
@@ -203,11 +209,11 @@ class ConnectionEnv(TaskEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state"})
-        given = self.task.reset(self.np_random) if self.task is not None else {}
-        check_keys("options['state']", options.get("state", {}), {"g", "s"})
-        given.update(options.get("state", {}))
-        g = self._check_g(given["g"]) if "g" in given else np.array(self.group.identity())
-        return ConnectionState(g, self._check_s(given["s"]) if "s" in given else self.start_shape(), 0.0)
+        defaults = {"g": np.array(self.group.identity()), "s": self.start_shape()}
+        if self.task is not None:
+            defaults = self.STATE.check(self, self.task.reset(self.np_random), defaults, "the state of task.reset")
+        state = self.STATE.check(self, options.get("state", {}), defaults)
+        return ConnectionState(state["g"], state["s"], 0.0)
 
     def command(self, a):
         """ṡ of action a."""
@@ -242,8 +248,19 @@ class ConnectionEnv(TaskEnv):
         if not off <= GROUP_BOUND:
             raise StepperError(f"{self.stepper} left SO(3): ‖RᵀR − I‖ = {off:.3g} > {GROUP_BOUND}")
 
-    def _check_g(self, value):
-        shape = (2,) if self.group.name == "R2" else (2, 2) if self.group.name == "SO2" else (3, 3)
+    @property
+    def g_shape(self) -> tuple:
+        """The shape of g as the reset state takes it: a vector for R2, a matrix for the others."""
+        return (2,) if self.group.name == "R2" else (2, 2) if self.group.name == "SO2" else (3, 3)
+
+    @property
+    def k(self) -> int:
+        """The number of shape coordinates."""
+        return self.low.size
+
+    def check_g(self, value):
+        """g given at reset: on its group to ON_GROUP, every entry within ±MAGNITUDE_BOUND; as its coordinates."""
+        shape = self.g_shape
         expected = f"finite real numbers of shape {shape} for group {self.group.name}"
         g = real_array("state g", value, expected)
         if g.shape != shape or not np.all(np.isfinite(g)):
@@ -254,10 +271,6 @@ class ConnectionEnv(TaskEnv):
         if not off <= ON_GROUP:
             raise ValueError(f"state g={value!r} is {off:.3g} off {self.group.name}; it must be on it to {ON_GROUP}")
         return self.group.coordinates(g)
-
-    def _check_s(self, value):
-        low, high = np.maximum(self.low, -MAGNITUDE_BOUND), np.minimum(self.high, MAGNITUDE_BOUND)
-        return check_vector("state s", value, self.low.size, low, high)
 
     # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
@@ -309,7 +322,6 @@ SPECS = (
         "connenv/Connection-v0", ConnectionEnv, ConnectionVectorEnv, max_episode_steps=1000, dt_max=DT_MAX,
         physics="connections.md", example=examples.beanie,
         variants=(examples.beanie, examples.rolling_ball),  # a flat and a curved connection
-        state_keys={"s": 1},  # examples.beanie(): k = 1
         fast_start={"state": {"s": [1000.0]}},
         bench="connection",
     ),

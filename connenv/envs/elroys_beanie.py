@@ -10,12 +10,8 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
-from connenv.core.validation import (
-    MAGNITUDE_BOUND,
-    check_angle,
-    check_keys,
-    check_number,
-)
+from connenv.core.state import Fields, angle, number
+from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys
 from connenv.envs.base import SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
@@ -87,8 +83,7 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     θ = 0, ψ = 0, t = 0; |μ| uniform in [0.25, 1] kg m²/s with a uniform sign (the body drifts at up to 0.8 rad/s;
     holding needs |ψ̇| = |μ|/I₂ ≤ 4 rad/s, within the 4π rad/s bound); θ* uniform in [−π, π).
-    `reset(options={"state": {"theta", "psi", "momentum"}, "target": θ*})` sets any of them: θ, ψ and θ* within
-    [−2π, 2π], |μ| ≤ 0.9 I₂ · max_beanie_speed (else the body could not be held).
+    `reset(options={"state": {...}, "target": θ*})` sets any of these and θ* (within [−2π, 2π]) exactly:
 
     ## Episode End
 
@@ -114,6 +109,13 @@ class ElroysBeanieEnv(ConnectionEnv):
         scale("hold_time", 1.0, "s", high=100.0, physical=False),
         integrator(None, "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau", default_text='"exact"'),
         options(names="atol (magnus) / substeps / rtol, atol"),
+    )
+
+    STATE = Fields(
+        angle("theta", "the body's angle"),
+        angle("psi", "the beanie's"),
+        number("momentum", "kg m²/s", "μ; else the body could not be held",
+               bound=Bound(lambda env, values: env.momentum_bound(), "0.9 I₂ · max_beanie_speed")),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
@@ -149,15 +151,11 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
-        given = options.get("state", {})
-        check_keys("options['state']", given, {"theta", "psi", "momentum"})
-        theta, psi = (check_angle(f"state {k}", given.get(k, 0.0)) for k in ("theta", "psi"))
         rng = self.np_random
         momentum = rng.uniform(*MOMENTUM_RANGE) * rng.choice((-1.0, 1.0))
         target = rng.uniform(-math.pi, math.pi)
-        if "momentum" in given:
-            bound = self.momentum_bound()
-            momentum = check_number("state momentum", given["momentum"], -bound, bound)
+        state = self.STATE.check(self, options.get("state", {}), {"momentum": momentum})
+        theta, psi, momentum = state["theta"], state["psi"], state["momentum"]
         if "target" in options:
             target = check_angle("target", options["target"])
         return BeanieState(np.array([theta]), np.array([psi]), 0.0, float(momentum), float(target), 0.0)
@@ -228,7 +226,7 @@ SPECS = (
     Spec(
         "connenv/ElroysBeanie-v0", ElroysBeanieEnv, ElroysBeanieVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="ElroysBeanie.md", measure=Measure("time to hold", "s", "time_to_success"), controllers=("dead_beat",),
-        state_keys={"theta": 0, "psi": 0, "momentum": 0}, option_keys={"target": 0},
+        option_keys={"target": 0},
         golden=(("beanie", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),),
         bench="beanie",
     ),

@@ -11,11 +11,10 @@ from gymnasium import spaces
 
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import run_segments
+from connenv.core.state import Fields, rotation, vector
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_keys,
-    check_rotation,
-    check_vector,
     decimal,
 )
 from connenv.envs.base import BATCH, SCALAR
@@ -87,9 +86,8 @@ class FallingCatEnv(ConnectionEnv):
     ## Starting State
 
     Straight (s = 0), at rest, t = 0, upside down: g = Rz(ψ) Rx(π + δ), the spine horizontal at the heading ψ uniform
-    in [0, 2π) (the roll does not depend on it), δ uniform in [−0.2, 0.2]. `reset(options={"state": {"R": R, "bend":
-    s}})` sets either exactly: R the front half's attitude g Q_A(s), a rotation to 1e-9 whose cat frame's spine is not
-    vertical; s with |s| ≤ max_bend.
+    in [0, 2π) (the roll does not depend on it), δ uniform in [−0.2, 0.2]. `reset(options={"state": {...}})` sets
+    either exactly:
 
     ## Episode End
 
@@ -129,6 +127,11 @@ class FallingCatEnv(ConnectionEnv):
         options(names="atol (magnus) / substeps / rtol, atol"),
     )
 
+    STATE = Fields(
+        rotation("R", "the front half's attitude g Q_A(s), whose cat frame's spine is not vertical"),
+        vector("bend", 2, "rad", "s, with β = |s| ≤ max_bend too", bound="max_bend"),
+    )
+
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
         self.mass, self.cm_distance, self.max_bend, self.fall_time = a.mass, a.cm_distance, a.max_bend, a.fall_time
@@ -161,16 +164,14 @@ class FallingCatEnv(ConnectionEnv):
     def start(self, options):
         check_keys("reset options", options, {"state"})
         given = options.get("state", {})
-        check_keys("options['state']", given, {"R", "bend"})
-        s = np.zeros(2)
-        if "bend" in given:
-            s = check_vector("state bend", given["bend"], 2, -self.max_bend, self.max_bend)
-            if math.hypot(*s) > self.max_bend:
-                raise ValueError(f"state bend={s.tolist()} has β = {math.hypot(*s):.6g} > max_bend={self.max_bend}")
+        state = self.STATE.check(self, given)
+        s = state["bend"]
+        if math.hypot(*s) > self.max_bend:
+            raise ValueError(f"state bend={s.tolist()} has β = {math.hypot(*s):.6g} > max_bend={self.max_bend}")
         heading = self.np_random.uniform(0.0, 2 * math.pi)
         roll = math.pi + self.np_random.uniform(-ROLL_OFFSET, ROLL_OFFSET)
         if "R" in given:
-            g = check_rotation("state R", given["R"]) @ falling_cat.halves(s)[0].T
+            g = state["R"] @ falling_cat.halves(s)[0].T
         else:
             c, n, cr, sr = math.cos(heading), math.sin(heading), math.cos(roll), math.sin(roll)
             turn = np.array([[c, -n, 0.0], [n, c, 0.0], [0.0, 0.0, 1.0]])  # Rz(ψ)
@@ -271,7 +272,7 @@ SPECS = (
     Spec(
         "connenv/FallingCat-v0", FallingCatEnv, FallingCatVectorEnv, max_episode_steps=60, dt_max=DT_MAX,
         physics="FallingCat.md", measure=Measure("roll error at landing", "rad", "roll_error"),
-        controllers=("kane_scher",), state_keys={"bend": 2}, rotations=((("state", "R"), "state R"),),
+        controllers=("kane_scher",),
         golden=(("cat", {"max_episode_steps": 60, "fall_time": 0.4, "max_bend": 0.5}, None),),
         bench="cat",
     ),

@@ -12,12 +12,8 @@ from gymnasium import spaces
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, choice, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.validation import (
-    check_angle,
-    check_keys,
-    check_number,
-    check_vector,
-)
+from connenv.core.state import Fields, angle, number, vector
+from connenv.core.validation import check_keys
 from connenv.envs.base import SCALAR, RenderedEnv, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
@@ -28,7 +24,6 @@ PIVOTS = {"vertical": (1,), "horizontal": (0,), "planar": (0, 1)}  # actuated ax
 SPEED_BOUND = 5.0  # |observed θ̇| in units of 2√(g/l) is clipped here
 HOLD_START = 0.2  # rad: KapitzaPendulum-v0 starts within this of inverted, at rest
 HANG_START = (0.05, 0.1)  # rad: KapitzaSwingUp-v0 starts this far from hanging, either side, at rest
-STATE_KEYS = ("theta", "theta_dot", "p", "u", "u_dot")
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g l) past which it has diverged: StepperError
 DAMPING_MAX = 1e3  # the largest damping, in units of m l² √(g/l) (about one period's decay)
 
@@ -36,6 +31,32 @@ DAMPING_MAX = 1e3  # the largest damping, in units of m l² √(g/l) (about one 
 def damping_max(args):
     """The largest damping of a pendulum's arguments, N·m·s."""
     return DAMPING_MAX * args["mass"] * args["length"] ** 2 * math.sqrt(args["g"] / args["length"])
+
+
+def speed_bound(env, values):
+    """|θ̇| the observation holds, rad/s."""
+    return SPEED_BOUND * env.theta_dot_scale
+
+
+def momentum_bound(sign):
+    """An end of p = m l² θ̇ + m l u̇·n: at θ̇ = ±the observed bound, at the state's θ and u̇."""
+    def value(env, values):
+        theta_dot = sign * speed_bound(env, values)
+        return float(env.system.momentum(np.float64(values["theta"]), theta_dot, values["u_dot"]))
+
+    return Bound(value, f"p({'−' if sign < 0 else ''}10√(g/l))")
+
+
+def pivot_bound(name):
+    """±the env's bound ``name`` along the actuated axes, 0 along the others."""
+    def value(env, values):
+        return np.array([getattr(env, name) if i in env.axes else 0.0 for i in range(2)])
+
+    return Bound(value, f"{name} along the actuated axes, 0 along the others")
+
+
+def pivot_note(env):
+    return f" (pivot={env.pivot!r})"
 
 LIFT_FLOOR = 1e-4  # floor of the swing-up's lift in the reward's logarithm: amplitude ≈ 0.02 rad
 TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
@@ -116,9 +137,7 @@ class KapitzaPendulumEnv(TaskEnv):
     ## Starting State
 
     θ₀ = π + uniform(−0.2, 0.2) rad (np_random), at rest, pivot at rest at the centre, t = 0.
-    `reset(options={"state": {...}})` sets any of `theta`, `theta_dot` or `p`, `u` (2), `u_dot` (2) exactly: θ in
-    [−2π, 2π], |θ̇| ≤ 10√(g/l) (the observed bound; p is bounded through θ̇), u and u̇ zero along unactuated axes,
-    |uᵢ| ≤ a_max and |u̇ᵢ| ≤ v_max.
+    `reset(options={"state": {...}})` sets any of these exactly:
 
     ## Episode End
 
@@ -158,6 +177,17 @@ class KapitzaPendulumEnv(TaskEnv):
         options(),
     )
 
+    STATE = Fields(
+        angle("theta"),
+        vector("u", 2, "m", "the pivot's position (horizontal, vertical)", bound=pivot_bound("a_max"),
+               note=pivot_note),
+        vector("u_dot", 2, "m/s", "its velocity", bound=pivot_bound("v_max"), note=pivot_note),
+        number("theta_dot", "rad/s", "the observed bound", bound=Bound(speed_bound, "10√(g/l)")),
+        number("p", "kg m²/s", "m l² θ̇ + m l u̇·n", low=momentum_bound(-1.0), high=momentum_bound(1.0),
+               range_text="that of θ̇ within its bound"),
+        either=(("theta_dot", "p"),),
+    )
+
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
         super().__init__(render_mode, a.dt)
@@ -194,9 +224,10 @@ class KapitzaPendulumEnv(TaskEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state"})
-        y, u, u_dot = np.array([self.start_angle(), 0.0]), np.zeros(2), np.zeros(2)
-        if "state" in options:
-            y, u, u_dot = self._check_state(options["state"], y[0])
+        state = self.STATE.check(self, options.get("state", {}), {"theta": self.start_angle()})
+        theta, u, u_dot = state["theta"], state["u"], state["u_dot"]
+        p = state["p"] if "p" in state else float(self.system.momentum(np.float64(theta), state["theta_dot"], u_dot))
+        y = np.array([theta, p])
         return self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
 
     def advance(self, s, u_dot_cmd, stepper, ops=SCALAR):
@@ -217,30 +248,6 @@ class KapitzaPendulumEnv(TaskEnv):
         if self.system.damping == 0.0:
             bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.system.length
             check_drift(self.stepper, "energy error", energy_error, bound, " J")
-
-    def _check_state(self, state, theta):
-        check_keys("options['state']", state, STATE_KEYS)
-        if "theta_dot" in state and "p" in state:
-            raise ValueError("options['state'] gives both theta_dot and p; give one of them")
-        u = self._pivot_vector("u", state.get("u", (0.0, 0.0)), self.a_max)
-        u_dot = self._pivot_vector("u_dot", state.get("u_dot", (0.0, 0.0)), self.v_max)
-        theta = check_angle("state theta", state.get("theta", theta))
-        bound = SPEED_BOUND * self.theta_dot_scale  # |θ̇| the observation holds
-        if "p" in state:  # p = m l² θ̇ + m l u̇·n: the same bound on θ̇
-            low, high = (float(self.system.momentum(np.float64(theta), v, u_dot)) for v in (-bound, bound))
-            p = check_number("state p", state["p"], low, high)
-        else:
-            theta_dot = check_number("state theta_dot", state.get("theta_dot", 0.0), -bound, bound)
-            p = float(self.system.momentum(np.float64(theta), theta_dot, u_dot))
-        return np.array([theta, p]), u, u_dot
-
-    def _pivot_vector(self, name, value, bound):
-        """A pivot position or velocity: 2 finite numbers, zero on unactuated axes, within ±bound."""
-        vector = check_vector(f"state {name} (horizontal, vertical)", value, 2)
-        for i, v in enumerate(vector):
-            limit = bound if i in self.axes else 0.0
-            check_number(f"state {name}[{i}] (pivot={self.pivot!r})", v, -limit, limit)
-        return vector
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
@@ -395,7 +402,6 @@ KapitzaSwingUpVectorEnv = vector_env(KapitzaSwingUpEnv)
 
 
 PENDULUM = {"dt_max": DT_MAX, "physics": "kapitza.md",
-            "state_keys": {"theta": 0, "theta_dot": 0, "p": 0, "u": 2, "u_dot": 2},
             "fast_start": {"state": {"theta": math.pi}}}  # on the separatrix: the exact step's RK4 branch
 SPECS = (
     Spec(

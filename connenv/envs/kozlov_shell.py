@@ -14,24 +14,18 @@ from gymnasium import spaces
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.params import Args, Bound, integrator, options, scale, step
-from connenv.core.validation import (
-    check_angle,
-    check_keys,
-    check_number,
-    check_vector,
-)
+from connenv.core.state import vector
+from connenv.core.validation import check_keys, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
+from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, POSITION_BOUND, TARGET_BOUND, PlanarSwimmer, swimmer_state
 from connenv.envs.vector import vector_env
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform direction
-POSITION_BOUND = 100.0  # m: |x|, |y| of the shell and of the target given at reset
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # DOP853's in the full model; atol is the Lie-group step's too
-STATE_KEYS = ("x", "y", "theta", "u", "momentum")
 
 
 def disc_inertia(args):
@@ -103,8 +97,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     At rest, μ = 0, at the origin with θ = 0 and the mass at the centre, u = 0, t = 0; the target at a distance uniform
     in [0.5, 1.0] m in a uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of
-    `x`, `y` (within ±100 m), `theta` (in [−2π, 2π]), `u` (2, in the box |u₁| ≤ u1_max, |u₂| ≤ u2_max), `momentum`
-    (P₁, P₂, Π in the body frame, within the observed bounds) and the target (within ±100 m) exactly.
+    these and the target (within ±100 m) exactly:
 
     ## Episode End
 
@@ -144,6 +137,8 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         integrator(DEFAULT_INTEGRATOR, *INTEGRATORS),
         options("rtol 1e-8, atol 1e-10"),
     )
+
+    STATE = swimmer_state(vector("u", 2, "m", "the mass, in the box |u₁| ≤ u1_max, |u₂| ≤ u2_max", bound="u_max"))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -217,10 +212,8 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         target = distance * np.array([math.cos(angle), math.sin(angle)])
         if "target" in options:
             target = check_vector("target", options["target"], 2, -POSITION_BOUND, POSITION_BOUND)
-        if "state" in options:
-            pose, u, momentum = self._check_state(options["state"])
-        else:
-            pose, u, momentum = np.zeros(3), np.zeros(2), np.zeros(3)
+        state = self.STATE.check(self, options.get("state", {}))
+        pose, u, momentum = np.array([state["x"], state["y"], state["theta"]]), state["u"], state["momentum"]
         full = bool(momentum.any())
         state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, np.zeros(3))
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
@@ -231,15 +224,6 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         segments = [(s.u, (u_cmd - s.u) / self.dt, self.dt)]
         pose, momentum = self.swim(s, segments, segments, stepper, ops)
         return ShellState(pose, momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
-
-    def _check_state(self, state):
-        """(pose, u, momentum) from options['state'], default at rest at the origin with the mass at the centre."""
-        check_keys("options['state']", state, STATE_KEYS)
-        x, y = (check_number(f"state {key}", state.get(key, 0.0), -POSITION_BOUND, POSITION_BOUND) for key in "xy")
-        pose = np.array([x, y, check_angle("state theta", state.get("theta", 0.0))])
-        u = check_vector("state u", state.get("u", (0.0, 0.0)), 2, -self.u_max, self.u_max)
-        bound = MOMENTUM_BOUND * self.momentum_scale  # the momentum the observation holds
-        return pose, u, check_vector("state momentum", state.get("momentum", (0.0, 0.0, 0.0)), 3, -bound, bound)
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
@@ -272,7 +256,7 @@ SPECS = (
         "connenv/KozlovShell-v0", KozlovShellEnv, KozlovShellVectorEnv, max_episode_steps=300, dt_max=DT_MAX,
         physics="kozlov-shell.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
         starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
-        state_keys={"x": 0, "y": 0, "theta": 0, "u": 2, "momentum": 3}, option_keys={"target": 2},
+        option_keys={"target": 2},
         fast_start={"state": {"momentum": (27.0, 20.0, 5.0)}},
         golden=(
             ("shell", {"max_episode_steps": 60, "success_radius": 0.3}, None),

@@ -11,12 +11,12 @@ from gymnasium import spaces
 from scipy.spatial.transform import Rotation
 
 from connenv.core.integrators import make_stepper
-from connenv.core.params import Args, integrator, options, scale, step
+from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.segments import run_segments
+from connenv.core.state import Fields, number, rotation
 from connenv.core.steppers import StepperError
 from connenv.core.validation import (
     check_keys,
-    check_number,
     check_rotation,
     finite_action,
     ndim,
@@ -38,9 +38,12 @@ DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up f
 TIME_COST = 0.01  # reward paid per step until success
 DRIFT_LIMIT = 1e-6  # ‖RᵀR − I‖ past which a stepper has left SO(3): StepperError
 POSITION_BOUND = 3.0  # |observed position| / (4πρ) is clipped here
-
-
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the distinct entries of a symmetric 3×3 matrix
+
+
+def position_bound(env, values):
+    """|x|, |y| given at reset, m: the position RollingBallPose-v0 observes."""
+    return POSITION_BOUND * 4 * math.pi * env.system.radius
 
 
 def check_so3(stepper, R):
@@ -126,9 +129,7 @@ class RollingBallEnv(TaskEnv):
     ## Starting State
 
     R = I at the origin, t = 0, and R* uniform on SO(3) (scipy's `Rotation.random` on np_random).
-    `reset(options={"state": {"x", "y", "R"}, "target": R*})` sets any of them; x and y in [−12πρ, 12πρ]
-    (RollingBallPose-v0's observed range), R and R* rotation matrices to 1e-9 (‖RᵀR − I‖, |det R − 1|), never
-    re-orthonormalized.
+    `reset(options={"state": {...}, "target": R*})` sets any of these and R* (a rotation matrix, as R) exactly:
 
     ## Episode End
 
@@ -159,6 +160,12 @@ class RollingBallEnv(TaskEnv):
         integrator("exact", "exact", "euler", "rk4", "dop853", "rk45", "lsoda", "radau",
                    about="exact: Rodrigues'; the others step Ṙ = ω̂R"),
         options(),
+    )
+
+    STATE = Fields(
+        number("x", "m", "RollingBallPose-v0's observed range", bound=Bound(position_bound, "12πρ")),
+        number("y", "m", bound=Bound(position_bound, "12πρ")),
+        rotation("R"),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
@@ -205,10 +212,9 @@ class RollingBallEnv(TaskEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
-        R, position = np.eye(3), np.zeros(2)
+        state = self.STATE.check(self, options.get("state", {}))
+        R, position = state["R"], np.array([state["x"], state["y"]])
         R_target = Rotation.random(rng=self.np_random).as_matrix()
-        if "state" in options:
-            R, position = self._check_state(options["state"])
         if "target" in options:
             R_target = check_rotation("target", options["target"])
         s = self.at(R, R_target, position, 0.0, 0.0, math.nan)
@@ -223,14 +229,6 @@ class RollingBallEnv(TaskEnv):
         check_so3(stepper, R)
         path_length = s.path_length + ops.hypot(v[..., 0], v[..., 1]) * self.dt
         return self.at(R, s.R_target, s.position + v * self.dt, s.t + self.dt, path_length, s.distance, ops)
-
-    def _check_state(self, state):
-        """(R, position) of options["state"]: R = I and the origin where not given."""
-        check_keys("options['state']", state, {"x", "y", "R"})
-        bound = POSITION_BOUND * 4 * math.pi * self.system.radius  # the position the Pose env observes
-        x = check_number("state x", state.get("x", 0.0), -bound, bound)
-        y = check_number("state y", state.get("y", 0.0), -bound, bound)
-        return (check_rotation("state R", state["R"]) if "R" in state else np.eye(3)), np.array([x, y])
 
     # -- task: one state (Python floats and one R), or a batch with ops=BATCH (the vector env) ----------------
 
@@ -445,8 +443,8 @@ RollingBallPoseVectorEnv = vector_env(RollingBallPoseEnv, RollingBallVectorEnv)
 RollingBallGoalVectorEnv = vector_env(RollingBallGoalEnv, RollingBallVectorEnv)
 
 
-BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse", "state_keys": {"x": 0, "y": 0},
-        "rotations": ((("state", "R"), "state R"), (("target",), "target"))}
+BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse",
+        "rotations": ((("target",), "target"),)}
 SPECS = (
     Spec(
         "connenv/RollingBall-v0", RollingBallEnv, RollingBallVectorEnv, max_episode_steps=200, **BALL,

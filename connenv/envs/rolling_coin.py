@@ -10,13 +10,8 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.params import Args, integrator, options, scale, step
-from connenv.core.validation import (
-    MAGNITUDE_BOUND,
-    check_angle,
-    check_keys,
-    check_number,
-    check_vector,
-)
+from connenv.core.state import Fields, angle, number
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
@@ -75,8 +70,8 @@ class RollingCoinEnv(ConnectionEnv):
     ## Starting State
 
     The coin at the origin, θ = 0, φ = 0, t = 0. The target: at a distance uniform in [1, 3] m in a uniform direction,
-    its heading θ* uniform in [−π, π). `reset(options={"state": {"x", "y", "theta", "phi"}, "target": (x*, y*, θ*)})`
-    sets any of them: x, y, φ and x*, y* within ±1e3, θ and θ* within [−2π, 2π].
+    its heading θ* uniform in [−π, π). `reset(options={"state": {...}, "target": (x*, y*, θ*)})` sets
+    any of these and the target (x*, y* within ±1e3, θ* within [−2π, 2π]) exactly:
 
     ## Episode End
 
@@ -105,6 +100,13 @@ class RollingCoinEnv(ConnectionEnv):
         scale("heading_tolerance", 0.05, "rad", high=math.pi, open_high=True, physical=False),
         integrator(None, "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau", default_text='"exact"'),
         options(names="atol (magnus) / substeps / rtol, atol"),
+    )
+
+    STATE = Fields(
+        number("x", "m", bound=MAGNITUDE_BOUND),
+        number("y", "m", bound=MAGNITUDE_BOUND),
+        angle("theta", "the heading"),
+        number("phi", "rad", "the roll angle", bound=MAGNITUDE_BOUND),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
@@ -142,19 +144,15 @@ class RollingCoinEnv(ConnectionEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
-        given = options.get("state", {})
-        check_keys("options['state']", given, {"x", "y", "theta", "phi"})
-        g = np.array([check_number(f"state {k}", given.get(k, 0.0), -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
-                      for k in ("x", "y")])  # fmt: skip
-        theta = check_angle("state theta", given.get("theta", 0.0))
-        phi = check_number("state phi", given.get("phi", 0.0), -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
+        state = self.STATE.check(self, options.get("state", {}))
         rng = self.np_random
         distance, direction = rng.uniform(*TARGET_DISTANCE), rng.uniform(-math.pi, math.pi)
         target = np.array([distance * math.sin(direction), distance * math.cos(direction), rng.uniform(-math.pi, math.pi)])
         if "target" in options:
             bound = [MAGNITUDE_BOUND, MAGNITUDE_BOUND, 2 * math.pi]
             target = check_vector("target", options["target"], 3, np.negative(bound), bound)
-        return CoinState(g, np.array([theta, phi]), 0.0, target)
+        g = np.array([state["x"], state["y"]])
+        return CoinState(g, np.array([state["theta"], state["phi"]]), 0.0, target)
 
     def command(self, a):
         """(θ̇, φ̇) of action a (one (2,) or a batch (N, 2))."""
@@ -228,7 +226,7 @@ SPECS = (
         "connenv/RollingCoin-v0", RollingCoinEnv, RollingCoinVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="RollingCoin.md", measure=Measure("time to park", "s", "time_to_success"),
         controllers=("turn_roll_turn",), variants=({}, {"integrator": "magnus"}),
-        state_keys={"x": 0, "y": 0, "theta": 0, "phi": 0}, option_keys={"target": 3},
+        option_keys={"target": 3},
         golden=(("coin", {"max_episode_steps": 60, "position_tolerance": 0.5}, None),),
         bench="coin",
     ),

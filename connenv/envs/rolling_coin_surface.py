@@ -9,15 +9,10 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
-from connenv.core.params import Args, given, integrator, interval, options, step
+from connenv.core.params import Args, Bound, given, integrator, interval, options, step
 from connenv.core.segments import check_drift, run_segments
-from connenv.core.validation import (
-    MAGNITUDE_BOUND,
-    check_angle,
-    check_keys,
-    check_number,
-    check_vector,
-)
+from connenv.core.state import Fields, angle, number
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
@@ -27,6 +22,11 @@ from connenv.systems.surfaces import LENGTH_MIN, check_surface, make_surface
 DT_MAX = 0.5  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until the episode ends
 SPEED_BOUND = 3.0  # |observed speed| / v* is clipped here, and bounds the speed given at reset
+
+
+def roll_rate_bound(env, values):
+    """|φ̇| given at reset, rad/s: |R φ̇| ≤ SPEED_BOUND v*."""
+    return SPEED_BOUND * env.speed_scale / env.system.radius
 ENERGY_ERROR_BOUND = 1e-3  # |E − E(0)| / (m g Δz_arena) past which a stepper has diverged: StepperError
 TARGET_ANGLES = 33  # directions sampled in the target's cone when the construction checks that it lies downhill
 GENERAL_INTEGRATOR = ("rk4", {"substeps": 8})  # the default off the plane (bench: precision, stability)
@@ -97,9 +97,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
     `target_distance` (4 m) from the start, in a direction uniform within ±`target_angle` (0.25 rad) of the steepest
     descent there: on the default hill, 4 m down the slope and up to 1 m to either side, straight behind the hill. The
     construction checks that every such target lies in the arena and below the start, so that the coin can reach it.
-    `reset(options={"state": {...}, "target": (x, y)})` sets any of `x`, `y` (in the arena), `theta`, `phi` (in
-    [−2π, 2π]), `phi_dot` (|R φ̇| ≤ 3 v*) and the target (in the arena) exactly; a target above the coin's energy cannot
-    be reached.
+    `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target (in the arena) exactly; a
+    target above the coin's energy cannot be reached:
 
     ## Episode End
 
@@ -142,6 +141,14 @@ class RollingCoinSurfaceEnv(TaskEnv):
         integrator(None, "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau",
                    default_text='"exact" on a plane, else "rk4"', about='"exact" on a plane only'),
         options("8 substeps (rk4)"),
+    )
+
+    STATE = Fields(
+        number("x", "m", "in the arena", bound="arena"),
+        number("y", "m", bound="arena"),
+        angle("theta", "the heading"),
+        angle("phi", "the roll angle"),
+        number("phi_dot", "rad/s", "|R φ̇| ≤ 3 v*", bound=Bound(roll_rate_bound, "3 v*/R")),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
@@ -234,22 +241,11 @@ class RollingCoinSurfaceEnv(TaskEnv):
         angle = self.downhill + self.np_random.uniform(-self.target_angle, self.target_angle)
         x0, y0 = self.start_point
         target = np.array([x0 + self.target_distance * math.sin(angle), y0 + self.target_distance * math.cos(angle)])
-        y = np.array([x0, y0, 0.0, 0.0])
-        if "state" in options:
-            y, theta = self._check_state(options["state"], y, theta)
+        state = self.STATE.check(self, options.get("state", {}), {"x": x0, "y": y0, "theta": theta})
+        y, theta = np.array([state["x"], state["y"], state["phi"], state["phi_dot"]]), state["theta"]
         if "target" in options:
             target = check_vector("target", options["target"], 2, -self.arena, self.arena)
         return self.at(y, theta, target, 0.0, None, None)
-
-    def _check_state(self, state, y, theta):
-        check_keys("options['state']", state, {"x", "y", "theta", "phi", "phi_dot"})
-        x = check_number("state x", state.get("x", y[0]), -self.arena, self.arena)
-        yy = check_number("state y", state.get("y", y[1]), -self.arena, self.arena)
-        theta = check_angle("state theta", state.get("theta", theta))
-        phi = check_angle("state phi", state.get("phi", 0.0))
-        bound = SPEED_BOUND * self.speed_scale / self.system.radius
-        phi_dot = check_number("state phi_dot", state.get("phi_dot", 0.0), -bound, bound)
-        return np.array([x, yy, phi, phi_dot]), theta
 
     def advance(self, s, rate, stepper, ops=SCALAR):
         """The state after a step at θ̇ = rate (one, or one per row with ops=BATCH and a batched stepper)."""
@@ -329,7 +325,7 @@ SPECS = (
         "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv, RollingCoinSurfaceVectorEnv, max_episode_steps=200,
         dt_max=DT_MAX, physics="RollingCoinSurface.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("steer",), variants=({}, {"surface": "plane"}),
-        state_keys={"x": 0, "y": 0, "theta": 0, "phi": 0, "phi_dot": 0}, option_keys={"target": 2},
+        option_keys={"target": 2},
         golden=(
             ("coin_surface", {"max_episode_steps": 40, "tolerance": 1.0}, None),
             ("coin_plane", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"}, None),

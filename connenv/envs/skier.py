@@ -9,8 +9,9 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
-from connenv.core.params import Args, given, integrator, options, scale, step
+from connenv.core.params import Args, Bound, given, integrator, options, scale, step
 from connenv.core.segments import check_drift, run_segments
+from connenv.core.state import Fields, number
 from connenv.core.validation import check_keys, check_number
 from connenv.envs.base import SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
@@ -30,6 +31,23 @@ G_REFERENCE = 9.81  # m/s²: the g at which DT_MAX and MAX_SUBSTEP were measured
 ENERGY_TOLERANCE = 1e-8  # its energy error per step, in m g Δz, past which it doubles its substeps
 DOP853_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}
 CLIMB_MIN = 1e-9  # the least Δz, relative to |z|: the energy check's bound, 0.1 m g Δz, stays far above E's rounding
+
+
+def trail_end(name):
+    """An end of the trail's domain, "lo" or "hi"."""
+    return lambda env, values: getattr(env.trail, name)
+
+
+def speed_bound(env, values):
+    """|ẋ| given at reset, at the state's x and h: |σẋ| ≤ 3 v*, the observed speed."""
+    sigma = env.system.geometry(values["x"], values["h"])[2]
+    return SPEED_BOUND * env.speed_scale / sigma
+
+
+def momentum_bound(env, values):
+    """|p| given at reset: m w² times the bound of |ẋ|, w = 1 − κh."""
+    w = env.system.geometry(values["x"], values["h"])[5]
+    return env.system.mass * w * w * speed_bound(env, values)
 
 
 @dataclass
@@ -97,9 +115,7 @@ class SkierEnv(TaskEnv):
     ## Starting State
 
     At rest with h = h_min, x₀ uniform on 0.5 ≤ |x₀ − x_b| ≤ 2.0 m (np_random), x_b the trail's lowest point (x = 0 on
-    the valley), from where no held h escapes. `reset(options={"state": {...}})` sets any of `x` (in the trail's
-    domain), `x_dot` (|σẋ| ≤ 3 v*, the observed speed) or `p` (that bound times m (1 − κh)² σ²) and `h` (in
-    [h_min, h_max]) exactly.
+    the valley), from where no held h escapes. `reset(options={"state": {...}})` sets any of these exactly:
 
     ## Episode End
 
@@ -142,6 +158,17 @@ class SkierEnv(TaskEnv):
         integrator(None, "euler", "semi_implicit_euler", "rk4", "rk8", "rk8_energy", "gauss6", "dop853", "rk45",
                    "lsoda", "radau", default_text="below"),
         options("below"),
+    )
+
+    STATE = Fields(
+        number("x", "m", low=Bound(trail_end("lo"), "lo"), high=Bound(trail_end("hi"), "hi"),
+               range_text="the trail's domain"),
+        number("h", "m", low="h_min", high="h_max"),
+        number("x_dot", "m/s", "the observed speed", bound=Bound(speed_bound, "3 v*/σ"),
+               range_text="|σẋ| ≤ 3 v*"),
+        number("p", "kg m²/s", bound=Bound(momentum_bound, "m (1 − κh)² σ² · 3 v*/σ"),
+               range_text="that of ẋ times m (1 − κh)² σ²"),
+        either=(("x_dot", "p"),),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
@@ -235,9 +262,14 @@ class SkierEnv(TaskEnv):
         check_keys("reset options", options, {"state"})
         offset = self.np_random.uniform(*START_OFFSETS) * self.np_random.choice([-1.0, 1.0])
         x0 = min(max(self.x_bottom + offset, self.trail.lo), self.trail.hi)
-        y, h = np.array([x0, 0.0]), self.h_min
-        if "state" in options:
-            y, h = self._check_state(options["state"], x0)
+        state = self.STATE.check(self, options.get("state", {}), {"x": x0, "h": self.h_min})
+        x, h = state["x"], state["h"]
+        if "p" in state:
+            p = state["p"]
+        else:
+            w = self.system.geometry(x, h)[5]
+            p = self.system.mass * w * w * state["x_dot"]
+        y = np.array([x, p])
         side = math.copysign(1.0, y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
         return self.at(y, h, 0.0, side, 0.0)
 
@@ -260,22 +292,6 @@ class SkierEnv(TaskEnv):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
         bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * (self.z_goal - self.z_floor)
         check_drift(self.stepper, "energy error", energy_error, bound, " J")
-
-    def _check_state(self, state, x):
-        check_keys("options['state']", state, {"x", "x_dot", "p", "h"})
-        if "x_dot" in state and "p" in state:
-            raise ValueError("options['state'] gives both x_dot and p; give one of them")
-        x = check_number("state x", state.get("x", x), self.trail.lo, self.trail.hi)
-        h = check_number("state h", state.get("h", self.h_min), self.h_min, self.h_max)
-        _, _, sigma, _, _, w, _ = self.system.geometry(x, h)
-        x_dot_bound = SPEED_BOUND * self.speed_scale / sigma  # |σẋ| the observation holds
-        if "p" in state:
-            p_bound = self.system.mass * w * w * x_dot_bound
-            p = check_number("state p", state["p"], -p_bound, p_bound)
-        else:
-            x_dot = check_number("state x_dot", state.get("x_dot", 0.0), -x_dot_bound, x_dot_bound)
-            p = self.system.mass * w * w * x_dot
-        return np.array([x, p]), h
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
@@ -349,7 +365,6 @@ SPECS = (
             {"trail": "0.25*x**2", "trail_params": {"domain": (-5.0, 5.0)}, "target_x": 4.0},
             {"integrator": "rk4", "substeps": 8},
         ),
-        state_keys={"x": 0, "x_dot": 0, "p": 0, "h": 0},
         fast_start={"state": {"x": 0.0, "x_dot": 23.0}},
         golden=(
             ("skier", {"max_episode_steps": 80}, None),

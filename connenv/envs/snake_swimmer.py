@@ -14,29 +14,21 @@ from gymnasium import spaces
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
-from connenv.core.validation import (
-    MAGNITUDE_BOUND,
-    check_angle,
-    check_keys,
-    check_number,
-    check_vector,
-    decimal,
-)
+from connenv.core.state import number
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector, decimal
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, TARGET_BOUND, PlanarSwimmer
+from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, POSITION_BOUND, TARGET_BOUND, PlanarSwimmer, swimmer_state
 from connenv.envs.vector import vector_env
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
 DT_MAX = 0.25  # s: the longest dt; longer steps (joint moves up to the whole range) make the Lie-group rule's choice
 # at construction take seconds
 TARGET_DISTANCES = (1.0, 2.0)  # body lengths from the start, uniform, in a uniform direction
-POSITION_BOUND = 100.0  # m: |x|, |y| of the middle link and of the target given at reset
 DEFAULT_INTEGRATOR = "magnus"
 DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full model; atol is the Lie-group step's too
 ASPECT_MAX = 100.0  # the largest aspect ratio a/b of a link (see SnakeSwimmerEnv)
 SIZE_MIN = 1e-6  # the least a (m) and link_density: the link mass link_density · πab stays positive, so rho may be 0
-STATE_KEYS = ("x", "y", "theta", "alpha", "beta", "momentum")
 
 
 def thinnest(args):
@@ -145,8 +137,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
 
     At rest, μ = 0, straight (α = β = 0), at the origin with θ = 0, t = 0; the target at a distance uniform in [1, 2]
     body lengths in a uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of
-    `x`, `y` (within ±100 m), `theta` (in [−2π, 2π]), `alpha`, `beta` (in [−2π/3, 2π/3]), `momentum` (P₁, P₂, Π in the
-    body frame, |P_k| ≤ 10 𝕀_loc(0)_kk, the observed bounds) and the target (within ±100 m) exactly.
+    these and the target (within ±100 m) exactly:
 
     ## Episode End
 
@@ -181,6 +172,11 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
               default_text="None: 0.1 body length, 0.6a"),
         integrator(DEFAULT_INTEGRATOR, *INTEGRATORS),
         options("rtol 1e-10, atol 1e-12"),
+    )
+
+    STATE = swimmer_state(
+        number("alpha", "rad", "the front joint", bound=JOINT_LIMIT),
+        number("beta", "rad", "the rear joint", bound=JOINT_LIMIT),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
@@ -245,7 +241,9 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         target = distance * np.array([math.cos(angle), math.sin(angle)])
         if "target" in options:
             target = check_vector("target", options["target"], 2, -POSITION_BOUND, POSITION_BOUND)
-        pose, s, momentum = self._check_state(options.get("state", {}))
+        state = self.STATE.check(self, options.get("state", {}))
+        pose, s = np.array([state["x"], state["y"], state["theta"]]), np.array([state["alpha"], state["beta"]])
+        momentum = state["momentum"]
         full = bool(momentum.any())
         state = SnakeState(pose, momentum if full else np.zeros(3), s, target, 0.0, full, np.zeros(3))
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
@@ -258,16 +256,6 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         full = [moving, (s_end, np.zeros(s_dot.shape), self.dt - ramp)]
         pose, momentum = self.swim(s, full, [moving], stepper, ops)
         return SnakeState(pose, momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
-
-    def _check_state(self, state):
-        """(pose, s, momentum) from options['state'], default at rest, straight, at the origin."""
-        check_keys("options['state']", state, STATE_KEYS)
-        x, y = (check_number(f"state {key}", state.get(key, 0.0), -POSITION_BOUND, POSITION_BOUND) for key in "xy")
-        pose = np.array([x, y, check_angle("state theta", state.get("theta", 0.0))])
-        s = np.array([check_number(f"state {key}", state.get(key, 0.0), -JOINT_LIMIT, JOINT_LIMIT)
-                      for key in ("alpha", "beta")])  # fmt: skip
-        bound = MOMENTUM_BOUND * self.momentum_scale  # the momentum the observation holds
-        return pose, s, check_vector("state momentum", state.get("momentum", (0.0, 0.0, 0.0)), 3, -bound, bound)
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
@@ -307,7 +295,7 @@ SPECS = (
         "connenv/SnakeSwimmer-v0", SnakeSwimmerEnv, SnakeSwimmerVectorEnv, max_episode_steps=1000, dt_max=DT_MAX,
         physics="SnakeSwimmer.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
         starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
-        state_keys={"x": 0, "y": 0, "theta": 0, "alpha": 0, "beta": 0, "momentum": 3}, option_keys={"target": 2},
+        option_keys={"target": 2},
         golden=(
             ("snake", {"max_episode_steps": 60, "success_radius": 2.9}, None),
             ("snake_full", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),

@@ -55,9 +55,10 @@ class Spec:
     "space" with ``space_action`` the action while the space bar is held).
 
     Tests: ``variants`` (make kwargs worth the contract tests, one code path each), ``starts`` (reset options worth
-    them); ``state_keys`` and ``option_keys`` (the reset state's keys and the other reset options' keys, each with its
-    number of entries, 0 for a number: the bad-input audit); ``rotations`` (reset arguments that take a rotation
-    matrix: (path in the options, name in the error message)); ``fast_start`` (the fastest reset allowed, where a
+    them); ``option_keys`` (the reset options' keys beside "state", each with its number of entries, 0 for a number:
+    the bad-input audit, which reads the reset state's keys off the env's declared ``STATE``, `connenv.core.state`);
+    ``rotations`` (reset options beside "state" that take a rotation matrix: (path in the options, name in the error
+    message)); ``fast_start`` (the fastest reset allowed, where a
     step of dt_max costs the stepper most); ``golden`` (golden trajectories: (name, make kwargs with
     max_episode_steps, reset options)).
 
@@ -81,7 +82,6 @@ class Spec:
     space_action: float = 1.0
     variants: tuple[KwargsOrMaker, ...] = ({},)
     starts: tuple[dict | None, ...] = (None,)
-    state_keys: dict[str, int] = field(default_factory=dict)
     option_keys: dict[str, int] = field(default_factory=dict)
     rotations: tuple[tuple[tuple[str, ...], str], ...] = ()
     fast_start: dict | None = None

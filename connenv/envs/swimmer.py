@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from connenv.core.params import Bound
 from connenv.core.segments import check_drift, run_segments
+from connenv.core.state import Field, Fields, angle, number, vector
 from connenv.envs.base import SCALAR
 from connenv.systems import ideal_fluid
 from connenv.systems.backend import components
@@ -16,6 +18,25 @@ MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that 
 TARGET_BOUND = 3.0  # the observed target, in units of target_unit, is clipped here
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 INTEGRATORS = ("magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau")  # a swimmer's
+POSITION_BOUND = 100.0  # m: |x|, |y| of a swimmer and of its target given at reset
+
+
+def momentum_bound(env, values):
+    """|P_k| given at reset: the momentum the observation holds, MOMENTUM_BOUND times the locked inertia's k-th."""
+    return MOMENTUM_BOUND * env.momentum_scale
+
+
+def swimmer_state(*shape: Field) -> Fields:
+    """A swimmer's declared reset state (`connenv.core.state`): its pose x, y, θ, its shape's keys, and its body
+    momentum (nonzero: the full model)."""
+    return Fields(
+        number("x", "m", bound=POSITION_BOUND),
+        number("y", "m", bound=POSITION_BOUND),
+        angle("theta"),
+        *shape,
+        vector("momentum", 3, "kg m/s, kg m²/s", "P₁, P₂, Π in the body frame; the observed bounds",
+               bound=Bound(momentum_bound, "10 𝕀_loc(0)_kk")),
+    )
 
 
 class PlanarSwimmer:

@@ -9,9 +9,10 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.integrators import make_stepper
-from connenv.core.params import Args, integrator, interval, options, scale, step
+from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import check_drift, run_segments
-from connenv.core.validation import check_angle, check_keys, check_number
+from connenv.core.state import Fields, angle, number
+from connenv.core.validation import check_keys
 from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
@@ -21,6 +22,16 @@ DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up f
 LIFT_FLOOR = 1e-4  # floor of h in the reward's logarithm: amplitude ≈ 0.014 rad
 TIME_COST = 0.01  # reward paid per step until success
 ENERGY_ERROR_BOUND = 0.1  # |the stepper's energy error| / (m g r_max) past which it has diverged: StepperError
+
+
+def speed_bound(env, values):
+    """|θ̇| given at reset, rad/s: the observed bound."""
+    return env.obs_high[2] * env.theta_dot_scale
+
+
+def momentum_bound(env, values):
+    """|p| given at reset: m r² times the bound of |θ̇|, at the state's r."""
+    return env.system.mass * values["r"] ** 2 * speed_bound(env, values)
 
 
 @dataclass
@@ -82,8 +93,7 @@ class SwingEnv(TaskEnv):
     ## Starting State
 
     θ₀ uniform on ±[0.05, 0.1] rad (np_random; a swing at rest at the bottom cannot be pumped), θ̇₀ = 0, r = r_max,
-    t = 0. `reset(options={"state": {...}})` sets any of `theta` (in [−2π, 2π]), `theta_dot` (|θ̇| ≤ 2ρ² √(g/r_min), the
-    observed bound) or `p` (that bound times m r²) and `r` (in [r_min, r_max]) exactly.
+    t = 0. `reset(options={"state": {...}})` sets any of these exactly:
 
     ## Episode End
 
@@ -113,6 +123,15 @@ class SwingEnv(TaskEnv):
         scale("max_radial_speed", None, "m/s", optional=True, typical=1.0),
         integrator("exact", "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau"),
         options(),
+    )
+
+    STATE = Fields(
+        angle("theta"),
+        number("r", "m", low="r_min", high="r_max"),
+        number("theta_dot", "rad/s", "the observed bound", bound=Bound(speed_bound, "2ρ² √(g/r_min)")),
+        number("p", "kg m²/s", bound=Bound(momentum_bound, "m r² · 2ρ² √(g/r_min)"),
+               range_text="that of θ̇ times m r²"),
+        either=(("theta_dot", "p"),),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
@@ -148,9 +167,10 @@ class SwingEnv(TaskEnv):
     def start(self, options):
         check_keys("reset options", options, {"state"})
         theta = self.np_random.uniform(0.05, 0.1) * self.np_random.choice([-1.0, 1.0])
-        y, r = np.array([theta, 0.0]), self.r_max
-        if "state" in options:
-            y, r = self._check_state(options["state"], theta)
+        state = self.STATE.check(self, options.get("state", {}), {"theta": theta, "r": self.r_max})
+        r = state["r"]
+        p = state["p"] if "p" in state else self.system.mass * r**2 * state["theta_dot"]
+        y = np.array([state["theta"], p])
         return self.at(y, r, 0.0, 0.0)
 
     def advance(self, s, r_cmd, stepper, ops=SCALAR):
@@ -172,20 +192,6 @@ class SwingEnv(TaskEnv):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
         bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.r_max
         check_drift(self.stepper, "energy error", energy_error, bound, " J")
-
-    def _check_state(self, state, theta):
-        check_keys("options['state']", state, {"theta", "theta_dot", "p", "r"})
-        if "theta_dot" in state and "p" in state:
-            raise ValueError("options['state'] gives both theta_dot and p; give one of them")
-        r = check_number("state r", state.get("r", self.r_max), self.r_min, self.r_max)
-        theta = check_angle("state theta", state.get("theta", theta))
-        bound = self.obs_high[2] * self.theta_dot_scale  # |θ̇| the observation holds
-        if "p" in state:
-            p_bound = self.system.mass * r**2 * bound
-            p = check_number("state p", state["p"], -p_bound, p_bound)
-        else:
-            p = self.system.mass * r**2 * check_number("state theta_dot", state.get("theta_dot", 0.0), -bound, bound)
-        return np.array([theta, p]), r
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
@@ -225,7 +231,6 @@ SPECS = (
         measure=Measure("time to target", "s", "time_to_success"), controllers=("pumping",),
         play="space", space_action=-1.0,  # held: the child stands (r_min)
         variants=({}, {"integrator": "rk4", "substeps": 4}),
-        state_keys={"theta": 0, "theta_dot": 0, "p": 0, "r": 0},
         fast_start={"state": {"theta": 3.0, "theta_dot": 7.7, "r": 1.6}},
         golden=(
             ("swing", {"max_episode_steps": 60, "target_amplitude": 0.3}, None),

@@ -10,11 +10,11 @@ from gymnasium import spaces
 
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import run_segments
+from connenv.core.state import Fields, rotation
 from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_keys,
     check_number,
-    check_rotation,
 )
 from connenv.envs.base import SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
@@ -86,8 +86,8 @@ class TubeTwistEnv(ConnectionEnv):
 
     ## Starting State
 
-    R = R₀ = I, s = 0, t = 0, and ψ* uniform in [0.3, 3] rad. `reset(options={"state": {"R": R₀}, "target": ψ*})` sets
-    either: R₀ a rotation matrix to 1e-9 (‖RᵀR − I‖, |det R − 1|; never re-orthonormalized), ψ* in [−π, π].
+    R = R₀ = I, s = 0, t = 0, and ψ* uniform in [0.3, 3] rad. `reset(options={"state": {...}, "target": ψ*})` sets
+    either (ψ* in [−π, π]):
 
     ## Episode End
 
@@ -117,6 +117,8 @@ class TubeTwistEnv(ConnectionEnv):
                    about='"exact" is Rodrigues\''),
         options(),
     )
+
+    STATE = Fields(rotation("R", "R₀, the tube's frame"))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -155,11 +157,10 @@ class TubeTwistEnv(ConnectionEnv):
 
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
-        check_keys("options['state']", options.get("state", {}), {"R"})
+        R0 = self.STATE.check(self, options.get("state", {}))["R"]
         target = float(self.np_random.uniform(*TARGET_RANGE))
         if "target" in options:
             target = check_number("target", options["target"], -math.pi, math.pi)
-        R0 = check_rotation("state R", options["state"]["R"]) if "R" in options.get("state", {}) else np.eye(3)
         g = R0.ravel().copy()
         return self.at(g, np.zeros(2), 0.0, g.copy(), target, 0.0)
 
@@ -234,7 +235,6 @@ SPECS = (
         "connenv/TubeTwist-v0", TubeTwistEnv, TubeTwistVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="TubeTwist.md", measure=Measure("bend / shortest loop", "", "path_ratio"), controllers=("cap", "square"),
         play="mouse", variants=({}, {"integrator": "magnus"}), option_keys={"target": 0},
-        rotations=((("state", "R"), "state R"),),
         golden=(("tube", {"max_episode_steps": 40, "tolerance": 0.6}, None),),
         bench="tube",
     ),
