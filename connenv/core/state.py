@@ -1,8 +1,8 @@
 """Declared reset state: the keys of an env's ``reset(options={"state": {...}})`` written once, as data, each with
 its name, size, unit, valid range and meaning. One declaration, `Fields`, checks the given state (a ValueError
 naming the key, its value and its range, as `connenv.core.validation` words it, before anything is set), writes the
-table of the docstring's "## Starting State" (`document_state`) and names the keys with their shapes in one fixed order,
-the order they are checked in (`names`, `shapes`).
+table of the docstring's "## Starting State" (`document_state`) and names the keys with their shapes in one fixed
+order, the order they are checked in (`names`, `shapes`).
 
 A field is a number (`number`, `angle`), a vector (`vector`: n entries, n a number or the name of an env attribute),
 a rotation matrix (`rotation`) or a key its env checks (`given`: a method of the env). A range is an interval (its
@@ -152,33 +152,36 @@ class Fields:
         """Each key's shape for this env (a builder's sizes are its own), in the declared order."""
         return {name: f.shape(env) for name, f in self.fields.items()}
 
-    def check(self, env, given, defaults: dict | None = None, name: str = "options['state']") -> dict:
+    def check(self, env, state, defaults: dict | None = None, name: str = "options['state']") -> dict:
         """The state's values, in the declared order: the given keys checked, the others their defaults (those the
         env passes, else the fields'); of alternatives only the one given, or the first. A bad key or value (and
         two alternatives given) is a ValueError naming it, before anything is set."""
-        check_keys(name, given, self.fields)
+        check_keys(name, state, self.fields)
         for group in self.either:
-            both = [key for key in group if key in given]
+            both = [key for key in group if key in state]
             if len(both) > 1:
                 raise ValueError(f"{name} gives both {both[0]} and {both[1]}; give one of them")
         defaults, values = defaults or {}, {}
         for key, field in self.fields.items():
-            if key in given:
-                values[key] = field.check(given[key], env, values)
-            elif not self.left_out(key, given):
+            if key in state:
+                values[key] = field.check(state[key], env, values)
+            elif not self.left_out(key, state):
                 default = defaults[key] if key in defaults else field.default(env)
                 if default is not None:
                     values[key] = default
         return values
 
-    def left_out(self, key: str, given) -> bool:
+    def left_out(self, key: str, state) -> bool:
         """Whether an alternative key takes no default: another of its group is given, or it is not the first."""
         group = next((g for g in self.either if key in g), None)
-        return group is not None and (key != group[0] or any(k in given for k in group))
+        return group is not None and (key != group[0] or any(k in state for k in group))
 
     def table(self) -> list[str]:
+        """The Starting State's table of the keys, then a line per group of alternatives."""
         rows = ["| key | shape | unit | range |", "|---|---|---|---|", *(f.row() for f in self.fields.values())]
-        return rows + [f"\n{' or '.join(f'`{k}`' for k in group)}, not both." for group in self.either]
+        for group in self.either:
+            rows += ["", f"{' or '.join(f'`{k}`' for k in group)}, not both."]
+        return rows
 
 
 def document_state(cls: type) -> None:
@@ -192,5 +195,5 @@ def document_state(cls: type) -> None:
     indent = lines[heading][: len(lines[heading]) - len(lines[heading].lstrip())]
     after = next((i for i in range(heading + 1, len(lines)) if lines[i].strip().startswith("## ")), len(lines))
     last = max(i for i in range(heading, after) if lines[i].strip())
-    table = [indent + row if row.strip() else "" for line in state.table() for row in line.split("\n")]
+    table = [indent + row if row else "" for row in state.table()]
     cls.__doc__ = "\n".join([*lines[: last + 1], "", *table, *lines[last + 1:]])
