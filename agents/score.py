@@ -169,24 +169,28 @@ def release_table(data: dict) -> list[str]:
     return lines
 
 
-def pooled_scores(data: dict, key: str = "runs") -> dict[str, dict[str, list[float]]]:
-    """{algo: {env: [normalized score per run]}} over the envs that have runs of the algorithm, each task in its
-    latest version that has them."""
+def pooled_scores(data: dict, key: str = "runs", shipped: bool = False) -> dict[str, dict[str, list[float]]]:
+    """{algo: {env: [normalized score per run]}} over the envs that have runs of the algorithm (with shipped, only
+    the run whose model is shipped), each task in its latest version that has them."""
     scores = {}
     for env_id, entry in data["envs"].items():
         for algo, runs in env_scores(entry, key).items():
-            scores.setdefault(algo, {})[env_id] = [run["score"] for run in runs]
+            scores.setdefault(algo, {})[env_id] = [run["score"] for run in runs if run.get("shipped") or not shipped]
     return {algo: {env_id: by_env[env_id] for env_id in latest(by_env)} for algo, by_env in scores.items()}
 
 
 def sets(data: dict) -> dict[str, dict]:
-    """The run sets of unseen.json: this round's runs (all seeds) and each earlier release's shipped models."""
+    """The run sets of unseen.json: this round's runs (all seeds), the models it ships (the best seed of each, beside
+    which an earlier release's stand), and each earlier release's shipped models."""
     keys = sorted({key for entry in data["envs"].values() for key in entry if key.startswith("pretrained")})
-    return {"runs": pooled_scores(data)} | {key: pooled_scores(data, key) for key in keys}
+    shipped = {"shipped": pooled_scores(data, shipped=True)}
+    return {"runs": pooled_scores(data)} | shipped | {key: pooled_scores(data, key) for key in keys}
 
 
 def set_label(key: str) -> str:
-    return "all seeds" if key == "runs" else f"{key.removeprefix('pretrained ')} shipped models (best seed each)"
+    if key in ("runs", "shipped"):
+        return {"runs": "all seeds", "shipped": "this round's shipped models (best seed each)"}[key]
+    return f"{key.removeprefix('pretrained ')} shipped models (best seed each)"
 
 
 def aggregate_table(run_sets: dict[str, dict]) -> tuple[list[str], dict]:
