@@ -5,6 +5,7 @@ process through its main and connenv.cli.run, the path `python -m` takes; a few 
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import re
@@ -300,3 +301,14 @@ def test_the_helper_reports_only_errors_of_input(capsys):
     with pytest.raises(KeyError):
         cli.run(bug, "prog", [])
     assert json.dumps(cli.run(lambda argv: {"argv": argv}, "prog", ["a"])) == '{"argv": ["a"]}'
+
+
+def test_an_existing_page_is_overwritten_when_its_command_regenerates_it(tmp_path):
+    page = tmp_path / "throughput.md"
+    page.write_text("the last run's tables")
+    assert cli.writable_file(str(page)) == str(page)
+    assert cli.writable_dir(str(tmp_path)) == str(tmp_path)
+    with pytest.raises(argparse.ArgumentTypeError, match="is a file"):
+        cli.writable_dir(str(page))
+    with pytest.raises(argparse.ArgumentTypeError, match="is a directory"):
+        cli.writable_file(str(tmp_path))
