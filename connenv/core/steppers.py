@@ -156,9 +156,7 @@ class ExplicitRungeKutta:
         if one and (self.floats_for_one_state or conforms(system, OneStateField)):
             substeps = compiled_substeps(self.tableau, floats=True)
             y = substeps(_one_state_field(system), y.tolist(), u, u_dot, h, h_b, held, self.substeps)
-            if not all(map(math.isfinite, y)):
-                raise StepperError(f"{self} produced a non-finite value {y}")
-            return np.array(y)
+            return check_finite(np.array(y), self)
         substeps = compiled_substeps(self.tableau, floats=False)
         return check_finite(substeps(system.vector_field, y, u, u_dot, h, h_b, held, self.substeps), self)
 
