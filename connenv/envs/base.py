@@ -30,7 +30,7 @@ from connenv.core.segments import control_segments, control_segments_batch
 from connenv.core.state import Fields, document_state
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
-from connenv.systems.backend import FLOATS, NAMES, operations
+from connenv.systems.backend import ARRAYS, FLOATS, NAMES, operations
 
 SCALAR = operations(
     "SCALAR",
@@ -48,17 +48,17 @@ and the task's. Several times faster than numpy on one state."""
 
 BATCH = operations(
     "BATCH",
-    **{name: getattr(np, name) for name in NAMES},
-    clip=lambda x, low, high: np.minimum(np.maximum(x, low), high),
+    **{name: getattr(ARRAYS, name) for name in NAMES},
+    clip=lambda x, low, high: ARRAYS.minimum(ARRAYS.maximum(x, low), high),
     column=lambda x: x[..., None],
     pack=lambda parts: np.stack(np.broadcast_arrays(*parts), axis=-1).astype(np.float32),
-    real=lambda x: np.asarray(x, float),
-    flag=lambda x: np.asarray(x, bool),
-    vector=lambda a: np.array(a, float),
+    real=lambda x: np.asarray(x, np.result_type(x, 1.0)),  # float, or complex on a Jacobian's rows
+    flag=lambda x: np.asarray(np.real(x), bool),
+    vector=lambda a: BATCH.real(np.array(a)),
     components=lambda a: [a[..., i] for i in range(a.shape[-1])],
 )
-"""The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names, and the
-task's. ``components`` splits the last axis: Python floats of one state, arrays over the rows of a batch."""
+"""The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names (``ARRAYS``,
+safe on the complex rows of the model's Jacobians), and the task's. ``components`` splits the last axis: Python floats of one state, arrays over the rows of a batch."""
 
 
 @dataclasses.dataclass
@@ -109,7 +109,7 @@ class RenderedEnv(gym.Env):
         """(ARGS checked on the make kwargs, with their defaults, as attributes, kept as ``self.args``; the
         stepper's options). A bad one is a ValueError before anything is set."""
         args, options = self.ARGS.check(self.name, type(self), kwargs)
-        self.args = SimpleNamespace(**args)
+        self.args, self.kwargs = SimpleNamespace(**args), dict(kwargs)
         return self.args, options
 
     def parameters(self) -> dict:
@@ -136,7 +136,7 @@ class RenderedEnv(gym.Env):
     def __getstate__(self):
         """The env without its renderer (a pygame window or surface, which cannot be pickled or copied): a copy
         or an unpickled env makes its own on its first render."""
-        return {**self.__dict__, "_renderer": None}
+        return {**self.__dict__, "_renderer": None, "_model": None}
 
     def close(self):
         if self._renderer is not None:
@@ -182,6 +182,16 @@ class TaskEnv(RenderedEnv):
     def check_action(self, action):
         """The action as a finite float array of the space's shape, clipped into the space (else ValueError)."""
         return check_action(action, self.action_space)
+
+    @property
+    def model(self):
+        """The env's step as a pure function of a flat state, with its Jacobians (`connenv.envs.model.Model`),
+        for the env's current parameters."""
+        if self.__dict__.get("_model") is None:
+            from connenv.envs.model import Model
+
+            self._model = Model(self)
+        return self._model
 
     def terminated(self, state, info, ops=SCALAR):
         """Whether the task ends the episode: on success, unless the task says otherwise."""

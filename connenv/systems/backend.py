@@ -6,12 +6,15 @@ on them:
 
 - ``FLOATS``: Python's math, for one state. numpy's per-call overhead on one state's few numbers costs several times
   the arithmetic, and the single env steps one state.
-- ``numpy`` itself, for arrays over rows (the vector env). numpy ≥ 2's main namespace follows the Array API
+- ``ARRAYS``, numpy for arrays over rows (the vector env). numpy ≥ 2's main namespace follows the Array API
   standard, and the names here are the standard's (``atan2``, ``acos``, ``copysign``, ``maximum``, ``where``,
   ``round``, ``any``, ``isnan``), so an Array API namespace of another library (array_api_compat's torch or
   jax.numpy) fits the same slot.
 
-``FLOATS`` gives those names their meaning on floats. The env's task namespaces (``connenv.envs.base``: SCALAR,
+``FLOATS`` gives those names their meaning on floats. ``ARRAYS`` is numpy's, but for the functions that are not
+complex-analytic (atan2, hypot, maximum, …): on complex rows, those of the model's complex-step Jacobians
+(`connenv.envs.model`), each returns its value at the real parts, exactly as on real rows, with the imaginary part
+carried by its derivative there (the one-sided one at a kink), so that Im f(x + ih)/h is f′(x). The env's task namespaces (``connenv.envs.base``: SCALAR,
 BATCH) are these with the task's operations added, and serve the systems' functions as well. Special functions
 outside the standard (scipy.special's Jacobi elliptic functions) are chosen by the system beside ``ops``.
 """
@@ -55,9 +58,60 @@ FLOATS = operations(
 NAMES = tuple(name for name in vars(FLOATS) if not name.startswith("__"))  # a module's own: __name__, …
 
 
+def complex_step(real_function, derivative):
+    """real_function on real arrays; on complex ones (x + ih), its value at the real parts plus i times the
+    directional derivative ``derivative(real parts, imaginary parts)``."""
+
+    def function(*args):
+        if not any(np.iscomplexobj(a) for a in args):
+            return real_function(*args)
+        re, im = [np.real(a) for a in args], [np.imag(a) for a in args]
+        return real_function(*re) + 1j * derivative(re, im)
+
+    function.__name__ = real_function.__name__
+    return function
+
+
+def selected(choose):
+    """maximum or minimum over complex rows: the argument whose real part choose(a, b) picks, imaginary part and all."""
+
+    def function(a, b):
+        if not (np.iscomplexobj(a) or np.iscomplexobj(b)):
+            return choose(a, b)
+        return np.where(choose(np.real(a), np.real(b)) == np.real(a), a, b)
+
+    function.__name__ = choose.__name__
+    return function
+
+
+def _copysign(a, b):
+    """|a| with b's sign: a itself, or −a, whole, by the signs of the real parts."""
+    if not (np.iscomplexobj(a) or np.iscomplexobj(b)):
+        return np.copysign(a, b)
+    return np.where(np.signbit(np.real(a)) == np.signbit(np.real(b)), a, -a)
+
+
+ARRAYS = operations(
+    "ARRAYS",
+    **{name: getattr(np, name) for name in NAMES},
+)
+vars(ARRAYS).update(
+    atan2=complex_step(np.atan2, lambda re, im: (re[1] * im[0] - re[0] * im[1]) / (re[0] ** 2 + re[1] ** 2)),
+    hypot=complex_step(np.hypot, lambda re, im: (re[0] * im[0] + re[1] * im[1]) / np.hypot(re[0], re[1])),
+    copysign=_copysign,
+    maximum=selected(np.maximum),
+    minimum=selected(np.minimum),
+    round=complex_step(np.round, lambda re, im: 0.0 * re[0]),
+    isnan=lambda x: np.isnan(np.real(x)),
+    abs=complex_step(np.abs, lambda re, im: np.sign(re[0]) * im[0]),
+)
+"""numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module),
+and ``abs``."""
+
+
 def namespace(x):
     """The operations for x: FLOATS for a Python float (one state), numpy for an array over rows."""
-    return FLOATS if isinstance(x, float) else np
+    return FLOATS if isinstance(x, float) else ARRAYS
 
 
 def components(a):

@@ -1,0 +1,294 @@
+"""The model behind an env: its step as a pure function of a flat state vector, with exact Jacobians, for
+planners, system identification and learned models. ``env.unwrapped.model`` is one (`Model`).
+
+The state vector x is the env's task state (``env.unwrapped.state``, a `connenv.envs.base.State`) flattened: its
+fields in the dataclass's order, every entry a float64 (a flag as 0 or 1, a counter as its count), named by
+``model.state_names``. It holds everything the step reads: the coordinates and momenta, the assigned coordinates,
+the time, and the task's own state (a target, the side the episode started on, a hold counter), so that the next
+state is a function of x and the action alone. It is more than ``info["state"]``, which reports the physical
+coordinates in SI, and is read back from x by ``model.info(x)``.
+
+``model.step`` runs the env's own ``advance``: on one state (x of shape (n,)) the single env's path on Python
+floats, on rows ((N, n)) the native vector env's on numpy arrays. From the same state and action it gives the next
+state of ``env.step`` (single) and of the vector env's step (rows) to the bit.
+
+Jacobians are by complex step (Squire & Trapp, SIAM Rev. 1998; Martins, Sturdza & Alonso, ACM TOMS 2003): an input
+entry moved by i·h (h = 1e-20) through the rows' path gives Im(x_next)/h, its column, exact to rounding since no
+difference cancels. It differentiates the step's own arithmetic: substeps, closed-form flows, projections and all.
+Where the step is not differentiable (a clip, an end stop, a switching surface), the branch the real part takes
+is followed, which is the one-sided derivative; a flag or counter does not move under a small change, so its
+column and row are 0, and so is the column of an action entry the action space clips.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from types import SimpleNamespace
+
+import numpy as np
+from gymnasium.vector.utils import batch_space
+
+from connenv.core.batched import batched
+from connenv.core.steppers import StepperError
+from connenv.envs.base import BATCH, SCALAR
+
+STEP = 1e-20  # the complex step: far below rounding of any entry, far above the smallest float
+
+
+@dataclasses.dataclass(frozen=True)
+class Entry:
+    """A field of the task state in x: its name, shape, where it lies (offset), how the single env holds it
+    (``container``: ndarray, tuple, list or a number type) and its dtype."""
+
+    name: str
+    shape: tuple[int, ...]
+    offset: int
+    container: type
+    dtype: np.dtype
+
+    @property
+    def size(self) -> int:
+        return math.prod(self.shape)
+
+    @property
+    def columns(self) -> slice:
+        return slice(self.offset, self.offset + self.size)
+
+    @property
+    def real(self) -> bool:
+        """Whether the entry is a real number that moves continuously (not a flag or a counter)."""
+        return self.dtype.kind == "f"
+
+    def names(self) -> list[str]:
+        if not self.shape:
+            return [self.name]
+        return [f"{self.name}[{','.join(map(str, i))}]" for i in np.ndindex(*self.shape)]
+
+    def single(self, x: np.ndarray):
+        """The entry of one state, as the single env holds it."""
+        values = x[self.columns]
+        if self.container is np.ndarray:
+            return values.reshape(self.shape).astype(self.dtype)
+        if self.container in (tuple, list):
+            return self.container(values.tolist())
+        return self.container(values[0])
+
+    def rows(self, x: np.ndarray) -> np.ndarray:
+        """The entry over rows x (N, n), as the vector env holds it: complex rows stay complex."""
+        values = x[:, self.columns].reshape(len(x), *self.shape)
+        return values if self.real else values.real.astype(self.dtype)
+
+
+def layout(state) -> list[Entry]:
+    """The entries of a task state, in the order of its fields."""
+    entries, offset = [], 0
+    for name, value in state.fields().items():
+        array = np.asarray(value)
+        container = type(value) if isinstance(value, (np.ndarray, tuple, list)) else type(value)
+        if isinstance(value, (np.floating, np.integer, np.bool_)):
+            container = {"f": float, "i": int, "u": int, "b": bool}[array.dtype.kind]
+        dtype = np.dtype(float) if array.dtype.kind == "f" else array.dtype
+        entries.append(Entry(name, array.shape, offset, container, dtype))
+        offset += array.size
+    return entries
+
+
+def params_type(env) -> type:
+    """A frozen dataclass of the env's physical parameters (its ARGS' numbers marked physical), named after it."""
+    args = getattr(env, "ARGS", None)
+    declared = [] if args is None or not hasattr(env, "args") else [
+        p for p in args.params.values() if p.physical and p.kind in ("scale", "interval")
+    ]
+    rows = "\n".join(f"    {p.row()}" for p in declared)
+    fields = [(p.name, float | None if p.optional else float) for p in declared]
+    cls = dataclasses.make_dataclass(type(env).__name__.removesuffix("Env") + "Params", fields, frozen=True)
+    cls.__doc__ = f"The physical parameters of {env.name}: name, default, valid range and unit.\n\n{rows}"
+    return cls
+
+
+class Model:
+    """The pure step of an env (see the module): ``state_names``, ``params``, ``pack``/``unpack``, ``step``,
+    ``jacobians``, ``reward``, ``terminated`` and ``info``, on one state (n,) or rows (N, n).
+
+    Built on a private copy of the env, so that nothing the user's env does later (a reset with other parameters)
+    changes it; ``with_params`` gives the model of other parameter values."""
+
+    def __init__(self, env):
+        import copy
+
+        self.env = copy.deepcopy(env)
+        self.env.close()
+        self.row_stepper = batched(self.env.stepper)
+        self.entries = layout(self.env.state)
+        self.state_names = tuple(name for entry in self.entries for name in entry.names())
+        self.n = len(self.state_names)
+        self.m = int(np.prod(self.env.action_space.shape))
+        Params = params_type(self.env)
+        self.params = Params(**{f.name: getattr(self.env.args, f.name) for f in dataclasses.fields(Params)})
+        self._models = {self.key(self.params): self}
+
+    def __repr__(self):
+        return f"Model({self.env.name}, n={self.n}, m={self.m}, {self.params})"
+
+    # -- state vector ----------------------------------------------------------
+
+    def pack(self, state) -> np.ndarray:
+        """x of a task state (a State, or a dict of its fields as ``unpack`` gives): (n,) for one state, (N, n)
+        for rows (the vector env's ``state``)."""
+        fields = state if isinstance(state, dict) else state.fields()
+        values = [fields[e.name] for e in self.entries]
+        if np.ndim(fields["t"]) == 1:  # rows: the time of each
+            return np.concatenate([np.asarray(v).reshape(len(v), -1) for v in values], axis=1).astype(
+                np.result_type(float, *values)
+            )
+        return np.concatenate([np.asarray(v, float).ravel() for v in values])
+
+    def unpack(self, x) -> dict:
+        """The task state's fields of x: as the single env holds them for (n,), arrays over rows for (N, n)."""
+        x = self._check_state(x)
+        if x.ndim == 1:
+            return {e.name: e.single(x) for e in self.entries}
+        return {e.name: e.rows(x) for e in self.entries}
+
+    def state(self, x):
+        """The env's State of x (one state or rows)."""
+        return type(self.env.state)(**self.unpack(x))
+
+    def info(self, x) -> dict:
+        """The env's info at x (``info["state"]`` among it): one state, or rows as the vector env reports them."""
+        x = self._check_state(x)
+        return self.env.describe(self.state(x), SCALAR if x.ndim == 1 else BATCH)
+
+    # -- dynamics --------------------------------------------------------------
+
+    def step(self, x, a, params=None) -> np.ndarray:
+        """x_next: the env's step from x under action a (the policy's units, clipped as the env clips it); x (n,)
+        with a of the action space's shape, or rows (N, n) with a (N, *shape). ``params``: a dict (or Params) of
+        parameter values for all rows, or a sequence of them, one per row."""
+        if params is not None:
+            return self._per_params(params, x, a, lambda model, x, a: model.step(x, a))
+        x = self._check_state(x)
+        if x.ndim == 1:
+            command = self.env.command(self.env.check_action(a))
+            return self.pack(self._advance(self.state(x), command, self.env.stepper, SCALAR, x))
+        command = self.env.command(self._check_actions(a, len(x)))
+        return self.pack(self._advance(self.state(x), command, self.row_stepper, BATCH, x))
+
+    def jacobians(self, x, a, params=None) -> tuple[np.ndarray, np.ndarray]:
+        """(A, B) = (∂x_next/∂x, ∂x_next/∂a) at (x, a), by complex step (see the module): (n, n) and (n, m) for one
+        state, (N, n, n) and (N, n, m) for rows."""
+        if params is not None:
+            return self._per_params(params, x, a, lambda model, x, a: model.jacobians(x, a), pair=True)
+        x = self._check_state(x)
+        X = np.atleast_2d(x)
+        N = len(X)
+        raw = np.asarray(a, float).reshape(N, *self.env.action_space.shape)
+        actions = self._check_actions(raw, N).reshape(N, self.m)
+        free = actions == raw.reshape(N, self.m)  # entries the space does not clip
+        moving = [i for e in self.entries if e.real for i in range(e.columns.start, e.columns.stop)]
+        k = len(moving) + self.m
+        Xc = np.repeat(X, k, axis=0).astype(complex)
+        Ac = np.repeat(actions, k, axis=0).astype(complex)
+        rows = np.arange(N * k).reshape(N, k)
+        Xc[rows[:, : len(moving)], moving] += 1j * STEP
+        Ac[rows[:, len(moving):], np.arange(self.m)] += 1j * STEP
+        command = self.env.command(Ac.reshape(N * k, *self.env.action_space.shape))
+        after = self.pack(self._advance(self.state(Xc), command, self.row_stepper, BATCH, Xc))
+        D = (np.asarray(after).imag / STEP).reshape(N, k, self.n).transpose(0, 2, 1)
+        A = np.zeros((N, self.n, self.n))
+        A[:, :, moving] = D[:, :, : len(moving)]
+        B = D[:, :, len(moving):] * free[:, None, :]
+        real = np.array([e.real for e in self.entries for _ in range(e.size)])
+        A[:, ~real], B[:, ~real] = 0.0, 0.0
+        return (A[0], B[0]) if x.ndim == 1 else (A, B)
+
+    # -- task ------------------------------------------------------------------
+
+    def reward(self, x, a, x_next):
+        """The env's reward of the step from x to x_next (a, the action, as the env's reward does not read it
+        beyond what x_next holds)."""
+        x, x_next = self._check_state(x), self._check_state(x_next)
+        ops = SCALAR if x.ndim == 1 else BATCH
+        after = self.state(x_next)
+        return self.env.reward(self.state(x), after, self.env.describe(after, ops), ops)
+
+    def terminated(self, x):
+        """Whether the task ends the episode at x (success, or a failure the task ends on)."""
+        x = self._check_state(x)
+        ops = SCALAR if x.ndim == 1 else BATCH
+        s = self.state(x)
+        return self.env.terminated(s, self.env.describe(s, ops), ops)
+
+    # -- parameters ------------------------------------------------------------
+
+    def with_params(self, params) -> Model:
+        """The model of the same env with other parameter values (a dict or Params; unnamed ones kept)."""
+        values = {**dataclasses.asdict(self.params), **(dataclasses.asdict(params) if dataclasses.is_dataclass(
+            params) else dict(params))}
+        key = self.key(values)
+        if key not in self._models:
+            unknown = set(values) - {f.name for f in dataclasses.fields(self.params)}
+            if unknown:
+                raise ValueError(f"params {sorted(unknown)} are not physical parameters of {self.env.name}; "
+                                 f"known: {[f.name for f in dataclasses.fields(self.params)]}")
+            env = type(self.env)(**{**self.env.kwargs, **values})
+            env.state = self.env.state
+            model = Model(env)
+            model._models = self._models
+            self._models[key] = model
+        return self._models[key]
+
+    @staticmethod
+    def key(params) -> tuple:
+        values = dataclasses.asdict(params) if dataclasses.is_dataclass(params) else params
+        return tuple(sorted(values.items()))
+
+    def _per_params(self, params, x, a, function, pair=False):
+        """function(model, x, a) with the model of params: one set for all, or grouped by row where they differ."""
+        if isinstance(params, dict) or dataclasses.is_dataclass(params):
+            return function(self.with_params(params), x, a)
+        x, a = np.asarray(x, float), np.asarray(a, float)
+        if x.ndim != 2 or len(params) != len(x):
+            raise ValueError(f"per-row params ({len(params)} of them) need rows x of shape (N, {self.n}) with N "
+                             f"equal to it; x has shape {x.shape}")
+        models = [self.with_params(p) for p in params]
+        groups = {}
+        for i, model in enumerate(models):
+            groups.setdefault(id(model), (model, []))[1].append(i)
+        out = None
+        for model, rows in groups.values():
+            result = function(model, x[rows], a[rows])
+            parts = result if pair else (result,)
+            if out is None:
+                out = tuple(np.empty((len(x), *p.shape[1:]), p.dtype) for p in parts)
+            for o, p in zip(out, parts):
+                o[rows] = p
+        return out if pair else out[0]
+
+    # -- checks ----------------------------------------------------------------
+
+    def _advance(self, state, command, stepper, ops, x):
+        try:
+            return self.env.advance(state, command, stepper, ops)
+        except StepperError as error:
+            raise self.env._stepper_error(error, float(np.min(np.real(x[..., self.t_column])))) from error
+
+    @property
+    def t_column(self) -> int:
+        return next(e.offset for e in self.entries if e.name == "t")
+
+    def _check_state(self, x) -> np.ndarray:
+        x = np.asarray(x)
+        if x.dtype.kind not in "fc" or x.ndim not in (1, 2) or x.shape[-1] != self.n:
+            raise ValueError(f"state x of shape {x.shape}, dtype {x.dtype}: expected floats of shape ({self.n},) or "
+                             f"(N, {self.n}), the entries {self.state_names} of {self.env.name}")
+        if np.isinf(x).any():  # NaN is a task's "not measured" (the ball's distance)
+            raise ValueError(f"state x of {self.env.name} has an infinite entry: {x.tolist()}")
+        return x
+
+    def _check_actions(self, a, N) -> np.ndarray:
+        """Rows of actions checked (and clipped) as the vector env checks them."""
+        space = SimpleNamespace(action_space=batch_space(self.env.action_space, N))
+        return type(self.env).check_action(space, np.asarray(a))
+
