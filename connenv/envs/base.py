@@ -30,6 +30,7 @@ from connenv.core.segments import control_segments, control_segments_batch
 from connenv.core.state import Fields, document_state
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
+from connenv.envs.context import Context
 from connenv.systems.backend import ARRAYS, FLOATS, NAMES, operations
 
 SCALAR = operations(
@@ -78,6 +79,10 @@ class State:
     def fields(self) -> dict:
         return {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
 
+    def take(self, rows) -> State:
+        """The state of these rows of a batch."""
+        return type(self)(**{k: v[rows] for k, v in self.fields().items()})
+
     def replace(self, **changes) -> State:
         return dataclasses.replace(self, **changes)
 
@@ -108,8 +113,10 @@ class RenderedEnv(gym.Env):
     def check_args(self, kwargs: dict) -> tuple[SimpleNamespace, dict]:
         """(ARGS checked on the make kwargs, with their defaults, as attributes, kept as ``self.args``; the
         stepper's options). A bad one is a ValueError before anything is set."""
+        randomize, observe_params = kwargs.pop("randomize", None), kwargs.pop("observe_params", False)
         args, options = self.ARGS.check(self.name, type(self), kwargs)
         self.args, self.kwargs = SimpleNamespace(**args), dict(kwargs)
+        self.context = Context(self, randomize, observe_params)
         return self.args, options
 
     def parameters(self) -> dict:
@@ -159,11 +166,22 @@ class TaskEnv(RenderedEnv):
     STATE: ClassVar[Fields] = Fields()
     """The reset state's keys (`connenv.core.state`): their checks in ``start``, the docstring's table of them."""
 
+    context: Context | None = None
+    """The episodes' physical parameters (`connenv.envs.context`); None for an env without declared ones."""
+    reports_params = False  # whether info carries "params": where they vary, or a reset set them
+
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
         check_mapping("reset options", options or {})
-        self.state = self.start(dict(options or {}))
-        return self.observe(self.state), self.describe(self.state)
+        options = dict(options or {})
+        given = options.pop("params", None)
+        if given is not None and self.context is None:
+            raise ValueError(f'reset option "params": {self.name} declares no physical parameters')
+        if self.context is not None and (given is not None or self.context.varies):
+            self.set_params(self.context.draw(self.np_random, given))
+        self.reports_params = given is not None or (self.context is not None and self.context.varies)
+        self.state = self.start(options)
+        return self.observation(self.state), self.report(self.describe(self.state))
 
     def step(self, action):
         command = self.command(self.check_action(action))
@@ -177,7 +195,45 @@ class TaskEnv(RenderedEnv):
         terminated = self.terminated(self.state, info)
         if self.render_mode == "human":
             self.render()
-        return self.observe(self.state), reward, terminated, False, info
+        return self.observation(self.state), reward, terminated, False, self.report(info)
+
+    @property
+    def observation_space(self):
+        """The task's observation space, with the observed parameters' appended (``observe_params``)."""
+        space = self.__dict__["_observation_space"]
+        return self.context.observation_space(space) if self.context is not None and self.context.observe else space
+
+    @observation_space.setter
+    def observation_space(self, space):
+        self._observation_space = space
+
+    def observation(self, state, ops=SCALAR):
+        """observe(state), with the observed parameters appended (of each row, over a batch)."""
+        obs = self.observe(state, ops)
+        if self.context is None or not self.context.observe:
+            return obs
+        params = np.asarray(self.context.observed(self.context.current), np.float32)
+        return np.concatenate([obs, np.broadcast_to(params, (*obs.shape[:-1], params.size))], axis=-1)
+
+    def report(self, info: dict) -> dict:
+        """info, with this episode's physical parameters as "params" where they may differ from the make kwargs."""
+        if self.reports_params:
+            info["params"] = dict(self.context.current)
+        return info
+
+    def set_params(self, values: dict):
+        """Take these physical parameter values: the env's make kwargs with them, checked (ValueError naming one
+        out of range) and built anew before anything of this env changes; its generator, context and spec kept."""
+        if values == self.context.current:
+            return
+        fresh = type(self)(**{**self.context.kwargs, **values})
+        if fresh._observation_space != self._observation_space:
+            raise ValueError(f"params {values} change {self.name}'s observation space, which must stay fixed")
+        self.close()
+        keep = ("_np_random", "_np_random_seed", "context", "spec", "render_mode", "_renderer")
+        vars(self).update({k: v for k, v in vars(fresh).items() if k not in keep})
+        self._model = None
+        self.context.current = values
 
     def check_action(self, action):
         """The action as a finite float array of the space's shape, clipped into the space (else ValueError)."""
@@ -192,6 +248,11 @@ class TaskEnv(RenderedEnv):
 
             self._model = Model(self)
         return self._model
+
+    def advance_rows(self, state, command, stepper) -> State:
+        """advance over rows (arrays over them, ops=BATCH) with the batched stepper: the native vector env's and the
+        model's step."""
+        return self.advance(state, command, stepper, BATCH)
 
     def terminated(self, state, info, ops=SCALAR):
         """Whether the task ends the episode: on success, unless the task says otherwise."""

@@ -270,7 +270,9 @@ class Model:
 
     def _advance(self, state, command, stepper, ops, x):
         try:
-            return self.env.advance(state, command, stepper, ops)
+            if ops is SCALAR:
+                return self.env.advance(state, command, stepper)
+            return self.env.advance_rows(state, command, stepper)
         except StepperError as error:
             raise self.env._stepper_error(error, float(np.min(np.real(x[..., self.t_column])))) from error
 

@@ -32,6 +32,7 @@ with its mask ``"_k"`` (the rows it is about: all of them, but for a partial res
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import ClassVar
 
@@ -43,7 +44,7 @@ from gymnasium.vector.utils import batch_space
 from connenv.core.batched import batched
 from connenv.core.mechanics import JUMP_STEPPER
 from connenv.core.steppers import StepperError
-from connenv.envs.base import BATCH
+from connenv.envs.base import BATCH, State
 
 
 class TaskVectorEnv(VectorEnv):
@@ -75,6 +76,8 @@ class TaskVectorEnv(VectorEnv):
         self.prev_done = np.zeros(self.num_envs, bool)
         self.all_rows = np.ones(self.num_envs, bool)  # the "_key" mask of every info key
         self.state = self.env.state.rows(self.num_envs)
+        self.row_params = None  # each row's physical parameters, once they may differ (connenv.envs.context)
+        self.group_envs = {}  # an env and its batched stepper per parameter values of rows
 
     def reset(self, *, seed=None, options=None):
         """Reset every row, or with ``options={"reset_mask": mask}`` (Gymnasium's partial reset, a bool array over
@@ -94,32 +97,79 @@ class TaskVectorEnv(VectorEnv):
             self._reset_row(i, seeds[i], options or None)
         self.steps[mask] = 0
         self.prev_done[mask] = False
-        return self.env.observe(self.state, BATCH), self._with_masks(self.env.describe(self.state, BATCH), mask)
+        return self._observe(self.state), self._with_masks(self._describe(self.state), mask)
 
     def step(self, actions):
-        env, before = self.env, self.state
-        command = env.command(self.check_action(actions))
-        try:
-            self.state = self.advance(before, command)
-        except StepperError as error:
-            values = ", ".join(f"{key} = {value!r}" for key, value in env.parameters().items())
-            where = f"{type(self).__name__} in the step from t = {np.min(before.t):.6g}..{np.max(before.t):.6g} s"
-            raise StepperError(f"{error} [{where}, dt = {env.dt}, {values}]") from error
-        info = env.describe(self.state, BATCH)
-        reward = np.asarray(env.reward(before, self.state, info, BATCH), float)
-        terminated = np.array(env.terminated(self.state, info, BATCH), bool)
+        actions = self.check_action(actions)
+        if self.row_params is None:
+            state, info, reward, terminated = self._transition(self.env, self.advance, self.state, actions)
+        else:
+            state, info, reward, terminated = self._by_params(self._transition_of, self.state, actions)
+        self.state = state
+        reward, terminated = np.asarray(reward, float), np.array(terminated, bool)
         self.steps += 1
         restart = np.flatnonzero(self.prev_done)
         for i in restart:
             self._reset_row(i)
         self.steps[restart] = 0
         if restart.size:
-            info = env.describe(self.state, BATCH)
+            info = self._describe(self.state)
         limit = math.inf if self.max_episode_steps is None else self.max_episode_steps
         truncated = self.steps >= limit
         reward[restart], terminated[restart], truncated[restart] = 0.0, False, False
         self.prev_done = terminated | truncated
-        return env.observe(self.state, BATCH), reward, terminated, truncated, self._with_masks(info)
+        return self._observe(self.state), reward, terminated, truncated, self._with_masks(info)
+
+    def _transition(self, env, advance, before, actions):
+        """(state, info, reward, terminated) of rows stepped by env's task with advance(state, command)."""
+        command = env.command(actions)
+        try:
+            state = advance(before, command)
+        except StepperError as error:
+            values = ", ".join(f"{key} = {value!r}" for key, value in env.parameters().items())
+            where = f"{type(self).__name__} in the step from t = {np.min(before.t):.6g}..{np.max(before.t):.6g} s"
+            raise StepperError(f"{error} [{where}, dt = {env.dt}, {values}]") from error
+        info = env.report(env.describe(state, BATCH))
+        return state, info, env.reward(before, state, info, BATCH), env.terminated(state, info, BATCH)
+
+    def _transition_of(self, env, before, actions):
+        """_transition with the rows' own env (that of their parameters) and its batched stepper."""
+        stepper = self.group_envs[tuple(sorted(env.context.current.items()))][1]
+        return self._transition(env, lambda s, c: env.advance_rows(s, c, stepper), before, actions)
+
+    # -- rows with their own parameters ------------------------------------------------
+
+    def _by_params(self, function, state, *arrays):
+        """function(env, rows' state, rows' arrays) for each group of rows of equal parameters, with that
+        group's env, put back together over the batch (a state, dicts of arrays, arrays)."""
+        groups = {}
+        for i, params in enumerate(self.row_params):
+            groups.setdefault(tuple(sorted(params.items())), []).append(i)
+        parts = []
+        for key, rows in groups.items():
+            env = self._group_env(key)
+            rows = np.array(rows)
+            parts.append((rows, function(env, state.take(rows), *(a[rows] for a in arrays))))
+        return gather(parts, self.num_envs)
+
+    def _group_env(self, key):
+        """The env of parameters key (sorted items), made once, with the prototype's context at those values."""
+        if key not in self.group_envs:
+            context = copy.copy(self.env.context)
+            env = type(self.env)(**{**context.kwargs, **dict(key)})
+            context.current, env.context, env.reports_params = dict(key), context, True
+            self.group_envs[key] = env, batched(env.stepper)
+        return self.group_envs[key][0]
+
+    def _describe(self, state):
+        if self.row_params is None:
+            return self.env.report(self.env.describe(state, BATCH))
+        return self._by_params(lambda env, s: env.report(env.describe(s, BATCH)), state)
+
+    def _observe(self, state):
+        if self.row_params is None:
+            return self.env.observation(state, BATCH)
+        return self._by_params(lambda env, s: env.observation(s, BATCH), state)
 
     def check_action(self, actions):
         """The actions as the single env checks one: a finite array (N, *shape), clipped or projected into the
@@ -133,6 +183,10 @@ class TaskVectorEnv(VectorEnv):
         self.env.np_random = self.generators[i]
         self.env.reset(options=options)
         self.state.set_row(i, self.env.state)
+        if self.env.reports_params:  # this row's parameters may differ from the others': its own from now on
+            if self.row_params is None:
+                self.row_params = [dict(self.env.context.base) for _ in range(self.num_envs)]
+            self.row_params[i] = dict(self.env.context.current)
 
     def _with_masks(self, info, mask=None):
         """Gymnasium's vector info: each key k with the mask "_k" of the rows it is about (default: all)."""
@@ -144,7 +198,7 @@ class TaskVectorEnv(VectorEnv):
         return masked
 
     def advance(self, state, command):
-        return self.env.advance(state, command, self.stepper, BATCH)
+        return self.env.advance_rows(state, command, self.stepper)
 
 
 class JumpVectorEnv(TaskVectorEnv):
@@ -157,6 +211,22 @@ class JumpVectorEnv(TaskVectorEnv):
 
     def advance(self, state, command):
         return self.env.advance(state, command, self.stepper, BATCH, self.jump_stepper)
+
+
+def gather(parts, n: int):
+    """Results of groups of rows [(rows, result)] put together over n rows: a State, a dict (of results), an array."""
+    first = parts[0][1]
+    if isinstance(first, tuple):
+        return tuple(gather([(rows, r[k]) for rows, r in parts], n) for k in range(len(first)))
+    if isinstance(first, dict):
+        return {key: gather([(rows, r[key]) for rows, r in parts], n) for key in first}
+    if isinstance(first, State):
+        return type(first)(**gather([(rows, r.fields()) for rows, r in parts], n))
+    first = np.asarray(first)
+    out = np.empty((n, *first.shape[1:]), first.dtype)
+    for rows, result in parts:
+        out[rows] = result
+    return out
 
 
 def vector_env(single_env: type, base: type = TaskVectorEnv) -> type:
