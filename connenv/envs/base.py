@@ -177,7 +177,7 @@ class TaskEnv(RenderedEnv):
         given = options.pop("params", None)
         if given is not None and self.context is None:
             raise ValueError(f'reset option "params": {self.name} declares no physical parameters')
-        if self.context is not None and (given is not None or self.context.varies):
+        if self.context is not None and (given is not None or self.context.varies or self.context.moved):
             self.set_params(self.context.draw(self.np_random, given))
         self.reports_params = given is not None or (self.context is not None and self.context.varies)
         self.state = self.start(options)

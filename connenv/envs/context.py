@@ -90,6 +90,11 @@ class Context:
             ranges[name] = Range(low, high, self.declared[name].kind == "scale" and low > 0.0)
         return ranges
 
+    @property
+    def moved(self) -> bool:
+        """Whether the current values differ from the make-time ones (a reset set them)."""
+        return self.current != self.base
+
     def draw(self, rng, given) -> dict:
         """This episode's values: the make-time ones, the randomized ones drawn (in the order of ``randomize``),
         then those ``given`` by the reset options."""

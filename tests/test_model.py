@@ -1,0 +1,145 @@
+"""env.unwrapped.model for every registered id: its step is the env's to the bit (single and rows), its Jacobians
+are the derivatives of that step, its state, reward and termination are the env's."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import connenv  # noqa: F401  (registers the envs)
+from connenv.envs.spec import registry
+
+IDS = sorted(registry)
+ROWS = 3
+RELATIVE = 1e-6  # the Jacobians' agreement with central differences, relative to each column's largest entry
+
+
+def make(env_id, **kwargs):
+    return gym.make(env_id, **registry[env_id].make_kwargs(), **kwargs).unwrapped
+
+
+def vector(env_id):
+    return gym.make_vec(env_id, num_envs=ROWS, vectorization_mode="vector_entry_point",
+                        **registry[env_id].make_kwargs())  # fmt: skip
+
+
+def walked(env_id, steps=3):
+    """A single env a few random steps from a seeded reset, and the actions' generator."""
+    env = make(env_id)
+    env.reset(seed=11)
+    env.action_space.seed(11)
+    for _ in range(steps):
+        env.step(0.8 * env.action_space.sample())
+    return env
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_model_steps_one_state_as_the_env_to_the_bit(env_id):
+    env = walked(env_id, steps=0)
+    model = env.model
+    for _ in range(5):
+        a = 0.8 * env.action_space.sample()
+        x = model.pack(env.state)
+        _, reward, terminated, _, _ = env.step(a)
+        x_next = model.step(x, a)
+        assert np.array_equal(x_next, model.pack(env.state), equal_nan=True)
+        assert model.reward(x, a, x_next) == reward and model.terminated(x_next) == terminated
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_model_steps_rows_as_the_vector_env_to_the_bit(env_id):
+    envs = vector(env_id)
+    envs.reset(seed=3)
+    model = make(env_id).model
+    actions = 0.8 * envs.action_space.sample()
+    x = model.pack(envs.state)
+    _, reward, terminated, _, _ = envs.step(actions)
+    x_next = model.step(x, actions)
+    assert x.shape == (ROWS, model.n) and np.array_equal(x_next, model.pack(envs.state), equal_nan=True)
+    assert np.array_equal(model.reward(x, actions, x_next), reward)
+    assert np.array_equal(model.terminated(x_next), terminated)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_jacobians_are_the_steps_derivatives(env_id):
+    """Complex step against central differences, h = 1e-6 max(1, |x_j|), on rows after a few random steps."""
+    envs = vector(env_id)
+    envs.reset(seed=5)
+    for _ in range(3):
+        envs.step(0.8 * envs.action_space.sample())
+    model = make(env_id).model
+    x, a = model.pack(envs.state), (0.8 * envs.action_space.sample()).astype(float)
+    A, B = model.jacobians(x, a)
+    assert A.shape == (ROWS, model.n, model.n) and B.shape == (ROWS, model.n, model.m)
+    real = np.array([e.real for e in model.entries for _ in range(e.size)])
+    for j in np.flatnonzero(real):
+        h = 1e-6 * max(1.0, np.max(np.abs(x[:, j])))
+        up, down = x.copy(), x.copy()
+        up[:, j] += h
+        down[:, j] -= h
+        assert_close(A[:, real, j], (model.step(up, a) - model.step(down, a))[:, real] / (2 * h), model.state_names[j])
+    for j in range(model.m):
+        up, down = a.copy().reshape(ROWS, -1), a.copy().reshape(ROWS, -1)
+        up[:, j] += 1e-6
+        down[:, j] -= 1e-6
+        central = (model.step(x, up.reshape(a.shape)) - model.step(x, down.reshape(a.shape)))[:, real] / 2e-6
+        assert_close(B[:, real, j], central, f"action {j}")
+
+
+def assert_close(exact, central, name):
+    scale = np.max(np.abs(central))
+    assert np.max(np.abs(exact - central)) <= RELATIVE * scale + 1e-9, f"∂x_next/∂{name}"
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_state_vector_holds_the_task_state_and_reads_back_the_info(env_id):
+    env = walked(env_id)
+    model = env.model
+    x = model.pack(env.state)
+    assert x.dtype == np.float64 and x.shape == (model.n,) == (len(model.state_names),)
+    assert np.array_equal(model.pack(model.unpack(x)), x, equal_nan=True)
+    read, reported = model.info(x)["state"], env.describe(env.state)["state"]
+    assert read.keys() == reported.keys()
+    assert all(np.array_equal(read[k], reported[k], equal_nan=True) for k in read)
+
+
+def test_the_swing_step_is_symplectic_where_the_radius_is_held():
+    """At held r the exact flow of (θ, p) is Hamiltonian: det ∂(θ′, p′)/∂(θ, p) = 1."""
+    env = walked("connenv/Swing-v0")
+    model = env.model
+    x = model.pack(env.state)
+    r = model.unpack(x)["r"]
+    a = np.array([2.0 * (r - env.r_min) / (env.r_max - env.r_min) - 1.0])  # the action that holds r
+    A, _ = model.jacobians(x, a)
+    y = [model.state_names.index(name) for name in ("y[0]", "y[1]")]
+    assert np.linalg.det(A[np.ix_(y, y)]) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_rows_with_their_own_params_step_as_the_models_of_those_params():
+    env = walked("connenv/Swing-v0")
+    model = env.model
+    x = np.repeat(model.pack(env.state)[None], 3, axis=0)
+    a = np.zeros((3, 1))
+    params = [{"g": 9.81}, {"g": 3.7}, {"g": 3.7, "mass": 2.0}]
+    x_next = model.step(x, a, params=params)
+    for i, p in enumerate(params):
+        assert np.array_equal(x_next[i], model.with_params(p).step(x[i:i + 1], a[i:i + 1])[0])
+    assert not np.array_equal(x_next[0], x_next[1])
+    assert model.with_params({"g": 3.7}).params.g == 3.7 and model.params.g == 9.81
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda m: m.step(np.zeros(m.n + 1), np.zeros(1)), "state x of shape"),
+        (lambda m: m.step(np.full(m.n, math.inf), np.zeros(1)), "infinite"),
+        (lambda m: m.with_params({"radius": 1.0}), "not physical parameters"),
+        (lambda m: m.step(np.zeros((2, m.n)), np.zeros((2, 1)), params=[{}]), "per-row params"),
+    ],
+)
+def test_bad_input_is_named(call, message):
+    with pytest.raises(ValueError, match=message):
+        call(make("connenv/Swing-v0").model)
