@@ -34,6 +34,7 @@ from connenv.core.steppers import StepperError
 from connenv.envs.base import BATCH, SCALAR
 
 STEP = 1e-20  # the complex step: far below rounding of any entry, far above the smallest float
+CACHED_MODELS = 64  # models of other parameter values kept by with_params
 
 
 @dataclasses.dataclass(frozen=True)
@@ -236,6 +237,8 @@ class Model:
             env.state = self.env.state
             model = Model(env)
             model._models = self._models
+            if len(self._models) >= CACHED_MODELS:  # a fit tries many values: keep the latest
+                del self._models[next(k for k in self._models if self._models[k] is not self)]
             self._models[key] = model
         return self._models[key]
 
