@@ -187,11 +187,35 @@ def page(env_id: str) -> str:
     for title, body in merged_sections(cls).items():
         lines += [f"## {title}", "", body, ""]
         if title == "Arguments":
-            lines += steppers_section(env_id)
+            lines += model_section(env_id) + steppers_section(env_id)
     lines += reference_results(env_id)
     if "Version History" not in merged_sections(cls):  # a class with later versions has its own
         lines += ["## Version History", "", VERSION_HISTORY, ""]
     return "\n".join(lines)
+
+
+def model_section(env_id: str) -> list[str]:
+    """The env's physical parameters as an episode's context, and its model's state vector (connenv.envs.model)."""
+    from connenv.envs.context import physical_params
+
+    env = make(env_id).unwrapped
+    declared, model = physical_params(env), env.model
+    lines = ["## Parameters and model", ""]
+    if declared:
+        lines += [
+            "The physical parameters, which `reset(options={\"params\": {...}})` sets for an episode and "
+            "`gym.make(id, randomize={name: (low, high)})` draws per episode (uniform, or log-uniform for a scale), "
+            "within the Arguments' ranges ([the model guide](../guides/model.md)):", "",
+            "| parameter | default | draw |", "|---|---|---|",
+            *(f"| `{n}` | {getattr(env.args, n)} {p.unit} | {'log-uniform' if p.kind == 'scale' else 'uniform'} |"
+              for n, p in declared.items()), "",
+        ]  # fmt: skip
+    else:
+        lines += ["No declared physical parameters: the system's are the user's.", ""]
+    names = ", ".join(f"`{n}`" for n in model.state_names)
+    lines += [f"`env.unwrapped.model` steps a state vector of {model.n} entries: {names}.", ""]
+    env.close()
+    return lines
 
 
 def steppers_section(env_id: str) -> list[str]:
