@@ -195,8 +195,8 @@ def page(env_id: str) -> str:
 
 
 def model_section(env_id: str) -> list[str]:
-    """The env's physical parameters as an episode's context, and its model's state vector (connenv.envs.model)."""
-    from connenv.envs.context import physical_params
+    """The env's physical parameters as an episode's context, and its model's state vector (connenv.model)."""
+    from connenv.core.context import physical_params
 
     env = make(env_id).unwrapped
     declared, model = physical_params(env), env.model

@@ -30,7 +30,7 @@ from connenv.core.segments import control_segments, control_segments_batch
 from connenv.core.state import Fields, document_state
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
-from connenv.envs.context import Context
+from connenv.core.context import Context
 from connenv.systems.backend import ARRAYS, FLOATS, NAMES, operations
 
 SCALAR = operations(
@@ -167,7 +167,7 @@ class TaskEnv(RenderedEnv):
     """The reset state's keys (`connenv.core.state`): their checks in ``start``, the docstring's table of them."""
 
     context: Context | None = None
-    """The episodes' physical parameters (`connenv.envs.context`); None for an env without declared ones."""
+    """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
     reports_params = False  # whether info carries "params": where they vary, or a reset set them
 
     def reset(self, *, seed=None, options=None):
@@ -241,10 +241,10 @@ class TaskEnv(RenderedEnv):
 
     @property
     def model(self):
-        """The env's step as a pure function of a flat state, with its Jacobians (`connenv.envs.model.Model`),
+        """The env's step as a pure function of a flat state, with its Jacobians (`connenv.model.Model`),
         for the env's current parameters."""
         if self.__dict__.get("_model") is None:
-            from connenv.envs.model import Model
+            from connenv.model import Model
 
             self._model = Model(self)
         return self._model

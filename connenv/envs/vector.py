@@ -76,7 +76,7 @@ class TaskVectorEnv(VectorEnv):
         self.prev_done = np.zeros(self.num_envs, bool)
         self.all_rows = np.ones(self.num_envs, bool)  # the "_key" mask of every info key
         self.state = self.env.state.rows(self.num_envs)
-        self.row_params = None  # each row's physical parameters, once they may differ (connenv.envs.context)
+        self.row_params = None  # each row's physical parameters, once they may differ (connenv.core.context)
         self.group_envs = {}  # an env and its batched stepper per parameter values of rows
 
     def reset(self, *, seed=None, options=None):

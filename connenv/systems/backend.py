@@ -13,7 +13,7 @@ on them:
 
 ``FLOATS`` gives those names their meaning on floats. ``ARRAYS`` is numpy's, but for the functions that are not
 complex-analytic (atan2, hypot, maximum, …): on complex rows, those of the model's complex-step Jacobians
-(`connenv.envs.model`), each returns its value at the real parts, exactly as on real rows, with the imaginary part
+(`connenv.model`), each returns its value at the real parts, exactly as on real rows, with the imaginary part
 carried by its derivative there (the one-sided one at a kink), so that Im f(x + ih)/h is f′(x). The env's task namespaces (``connenv.envs.base``: SCALAR,
 BATCH) are these with the task's operations added, and serve the systems' functions as well. Special functions
 outside the standard (scipy.special's Jacobi elliptic functions) are chosen by the system beside ``ops``.
