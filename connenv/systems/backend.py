@@ -45,6 +45,7 @@ FLOATS = operations(
     log=math.log,
     acos=math.acos,
     hypot=math.hypot,
+    abs=abs,
     copysign=math.copysign,
     isnan=math.isnan,
     maximum=max,
@@ -105,8 +106,13 @@ vars(ARRAYS).update(
     isnan=lambda x: np.isnan(np.real(x)),
     abs=complex_step(np.abs, lambda re, im: np.sign(re[0]) * im[0]),
 )
-"""numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module),
-and ``abs``."""
+"""numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module)."""
+
+
+def floats(a) -> np.ndarray:
+    """a as an array of floats, or of complex numbers on the complex rows of a Jacobian (which a cast to float would
+    strip of their derivatives)."""
+    return np.asarray(a, complex if np.iscomplexobj(a) else float)
 
 
 def namespace(x):
