@@ -418,7 +418,11 @@ class Exact:
             return self.fallback(system, y, u, u_dot, tau)
         else:
             flow = system.exact_flow(y, u, tau)
-        if type(flow) is not np.ndarray or flow.dtype.kind != "f" and not _complex_rows(flow, y) or flow.shape != y.shape:
+        if (
+            type(flow) is not np.ndarray
+            or flow.dtype.kind != "f" and not _complex_rows(flow, y)
+            or flow.shape != y.shape
+        ):
             _wrong_flow(system, flow, y)
         if _all_finite(flow):  # the common case: no NaN (nor ±inf) anywhere
             return flow
@@ -426,7 +430,7 @@ class Exact:
         if np.any(outside):
             y = floats(y)
             u, u_dot = (np.broadcast_to(a, (*y.shape[:-1], np.shape(a)[-1])) for a in (u, u_dot))
-            flow = np.array(flow)
+            flow = np.array(flow, np.result_type(flow, y))  # complex where y is (a Jacobian's rows)
             tau = tau if np.ndim(tau) == 0 else np.broadcast_to(tau, outside.shape)[outside]  # one per row
             flow[outside] = self.fallback(system, y[outside], u[outside], u_dot[outside], tau)
         return check_finite(flow, self)
