@@ -11,6 +11,12 @@ rounding (tests). Like the Scipy stepper, it raises StepperError for a row whose
 spacing of floats or that exceeds MAX_EVALUATIONS evaluations of the vector field in one segment. The implicit
 and multistep methods (LSODA, Radau) are not rewritten; ``batched`` runs them one row at a time.
 
+On the complex rows of a complex-step Jacobian (`connenv.envs.model`), EmbeddedRK's decisions (the initial step, the
+error norm, acceptance, the next step size, the end of the segment) read the real parts alone: a complex row takes
+exactly the steps of its real row, so that its imaginary part is the derivative of that same discrete map, and a
+segment's length that carries a derivative (a stop's time) carries it through the last step, which ends there.
+RowByRow (LSODA, Radau) refuses complex rows.
+
 A batch may take one segment length tau per row (shape of the batch), where the rows' control segments differ
 (ramps, the Kapitza pivot's end stops); the steppers here take it, and ``batched`` hands it to the others (RK4,
 the Euler steppers) as a column.
@@ -26,6 +32,7 @@ from scipy.integrate import DOP853, RK45
 
 from connenv.core.lie import Magnus
 from connenv.core.steppers import MAX_EVALUATIONS, Exact, Scipy, StepperError
+from connenv.systems.backend import ARRAYS, floats
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # scipy.integrate._ivp.rk's step-size control
 TABLEAUS = {"DOP853": DOP853, "RK45": RK45}
@@ -40,7 +47,7 @@ class EmbeddedRK:
     atol: float = 1e-12
 
     def __call__(self, system, y, u, u_dot, tau):
-        y = np.asarray(y, float)
+        y = floats(y)
         n = y.shape[-1]
         rows = y.reshape(-1, n).copy()
         lead = y.shape[:-1]
@@ -61,15 +68,15 @@ class EmbeddedRK:
                 )
             u_rows, u_dot_rows = u[idx], u_dot[idx]
             f = system.vector_field(states, u_rows + s[:, None] * u_dot_rows, u_dot_rows)
-            if not np.all(np.isfinite(f)):
-                raise StepperError(f"{self} produced a non-finite derivative {f[~np.isfinite(f).all(-1)]}")
+            if not np.all(np.isfinite(f.real)):
+                raise StepperError(f"{self} produced a non-finite derivative {f[~np.isfinite(f.real).all(-1)]}")
             return f
 
         everyone = slice(None)
         tau = np.broadcast_to(np.reshape(tau, (-1,) if np.ndim(tau) else ()), (len(rows),))  # one per row
-        t = np.zeros(len(rows))
+        t = np.zeros(len(rows), tau.dtype if tau.dtype.kind == "c" else float)
         f = rhs(t, rows, everyone)
-        h_abs = self._initial_step(rhs, rows, f, tau, everyone)
+        h_abs = self._initial_step(rhs, rows, f, tau.real, everyone)
         rejected = np.zeros(len(rows), bool)
         active = np.arange(len(rows))
         while active.size:
@@ -80,13 +87,14 @@ class EmbeddedRK:
     def _initial_step(self, rhs, y0, f0, tau, idx):
         """scipy.integrate._ivp.common.select_initial_step, per row."""
         order = TABLEAUS[self.method].error_estimator_order
+        y0, f0 = y0.real, f0.real
         scale = self.atol + np.abs(y0) * self.rtol
         d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
         with np.errstate(divide="ignore", invalid="ignore"):
             h0 = np.where((d0 < 1e-5) | (d1 < 1e-5), 1e-6, 0.01 * d0 / d1)
         h0 = np.minimum(h0, tau)
         f1 = rhs(h0, y0 + h0[:, None] * f0, idx)
-        d2 = _rms((f1 - f0) / scale) / h0
+        d2 = _rms((f1.real - f0) / scale) / h0
         with np.errstate(divide="ignore"):
             h1 = np.where(
                 (d1 <= 1e-15) & (d2 <= 1e-15),
@@ -100,7 +108,7 @@ class EmbeddedRK:
         per-row arrays in place and returns the mask, over idx, of the rows that have not reached tau."""
         tableau = TABLEAUS[self.method]
         t0, y0, f0, tau = t[idx], y[idx], f[idx], tau[idx]
-        min_step = 10 * np.abs(np.nextafter(t0, np.inf) - t0)
+        min_step = 10 * np.abs(np.nextafter(t0.real, np.inf) - t0.real)
         h = np.where(rejected[idx], h_abs[idx], np.maximum(h_abs[idx], min_step))
         if np.any(h < min_step):
             bad = np.arange(len(t))[idx][h < min_step]
@@ -108,7 +116,7 @@ class EmbeddedRK:
                 f"{self}: required step size is less than spacing between numbers at rows {bad.tolist()} "
                 f"(t = {t[bad].tolist()} of segments of {tau[h < min_step].tolist()} s)"
             )
-        t_new = np.minimum(t0 + h, tau)
+        t_new = ARRAYS.minimum(t0 + h, tau)
         h = t_new - t0
         K = [f0]
         for s in range(1, tableau.n_stages):
@@ -116,26 +124,27 @@ class EmbeddedRK:
         y_new = y0 + h[:, None] * _combine(tableau.B, K)
         f_new = rhs(t0 + h, y_new, idx)
         K.append(f_new)
-        scale = self.atol + np.maximum(np.abs(y0), np.abs(y_new)) * self.rtol
-        error = self._error_norm(tableau, K, h, scale)
+        scale = self.atol + np.maximum(np.abs(y0.real), np.abs(y_new.real)) * self.rtol
+        error = self._error_norm(tableau, K, h.real, scale)
         with np.errstate(divide="ignore"):
             growth = SAFETY * error ** (-1.0 / (tableau.error_estimator_order + 1))
         accept = error < 1
         factor = np.where(error == 0, MAX_FACTOR, np.minimum(MAX_FACTOR, growth))
         factor = np.where(rejected[idx], np.minimum(1.0, factor), factor)
-        h_abs[idx] = np.where(accept, h * factor, h * np.maximum(MIN_FACTOR, growth))
+        h_abs[idx] = np.where(accept, h.real * factor, h.real * np.maximum(MIN_FACTOR, growth))
         rejected[idx] = ~accept
         t[idx] = np.where(accept, t_new, t0)
         y[idx] = np.where(accept[:, None], y_new, y0)
         f[idx] = np.where(accept[:, None], f_new, f0)
-        return ~accept | (t_new < tau)
+        return ~accept | (t_new.real < tau.real)
 
     def _error_norm(self, tableau, K, h, scale):
+        """scipy's error norm of the step, on the real parts."""
         n = scale.shape[-1]
         if self.method == "RK45":
-            return np.sqrt(np.sum((_combine(tableau.E, K) * h[:, None] / scale) ** 2, axis=-1) / n)
-        err5 = np.sum((_combine(tableau.E5, K) / scale) ** 2, axis=-1)
-        err3 = np.sum((_combine(tableau.E3, K) / scale) ** 2, axis=-1)
+            return np.sqrt(np.sum((_combine(tableau.E, K).real * h[:, None] / scale) ** 2, axis=-1) / n)
+        err5 = np.sum((_combine(tableau.E5, K).real / scale) ** 2, axis=-1)
+        err3 = np.sum((_combine(tableau.E3, K).real / scale) ** 2, axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):
             error = np.abs(h) * err5 / np.sqrt((err5 + 0.01 * err3) * n)
         return np.where((err5 == 0) & (err3 == 0), 0.0, error)
@@ -163,6 +172,11 @@ class RowByRow:
     stepper: Scipy
 
     def __call__(self, system, y, u, u_dot, tau):
+        if any(np.iscomplexobj(a) for a in (y, u, u_dot, tau)):
+            raise TypeError(
+                f"{self.stepper} cannot step complex rows (a complex-step Jacobian's): scipy's {self.stepper.method} "
+                "is not rewritten over rows; use an explicit method (dop853, rk45, rk4, rk8) or the exact step"
+            )
         y = np.asarray(y, float)
         u = np.broadcast_to(u, (*y.shape[:-1], np.shape(u)[-1]))
         u_dot = np.broadcast_to(u_dot, u.shape)

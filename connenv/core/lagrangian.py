@@ -22,6 +22,7 @@ import numpy as np
 import sympy as sp
 
 from connenv.core.mechanics import JumpClass
+from connenv.systems.backend import floats
 
 
 class LagrangianSystem:
@@ -169,7 +170,7 @@ def _lambdify(groups, outputs):
                 return [out] if len(bounds) == 1 else [out[start:end] for start, end in bounds]
             except (NameError, TypeError, ValueError, OverflowError, ZeroDivisionError):
                 scalar[0] = None  # a function math lacks, or a domain error: numpy's, which answers nan or inf
-        arrays = [np.asarray(a, float) for a in arrays]
+        arrays = [floats(a) for a in arrays]  # complex on a Jacobian's rows
         shape = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
         columns = [a[..., j] for a in arrays for j in range(a.shape[-1])]
         out = [np.broadcast_to(v, shape) for v in f(*columns)]

@@ -34,6 +34,7 @@ from scipy.differentiate import derivative
 
 from connenv.core.steppers import MAX_EVALUATIONS, Scipy
 from connenv.core.validation import check_returned, probe
+from connenv.systems.backend import floats
 
 NUMERICAL_EVALUATIONS = 1_000  # per segment, of a vector field that is a numerical gradient (MetricField, JumpFlow
 # without jump_field): each evaluation is a scipy.differentiate gradient, dozens of calls of the metric, so that a
@@ -59,7 +60,7 @@ class JumpClass(enum.Enum):
 
 def bressan_matrices(system: ActiveConstraintSystem, q, u):
     """A = G11⁻¹, K = A G12, B = G22 − G21 A G12, at (q, u)."""
-    G11, G12, G22 = system.metric(np.asarray(q, float), np.asarray(u, float))
+    G11, G12, G22 = system.metric(floats(q), floats(u))
     A = np.linalg.inv(G11)
     K = A @ G12
     B = G22 - np.swapaxes(G12, -1, -2) @ K
@@ -153,7 +154,7 @@ class JumpFlow:
     def vector_field(self, y, u, delta_u):
         if hasattr(self.system, "jump_field"):
             return self.system.jump_field(y, u, delta_u)
-        n, delta_u = self.system.n, np.asarray(delta_u, float)
+        n, delta_u = self.system.n, floats(delta_u)
         q, p = y[..., :n], y[..., n:]
         K_delta = _matvec(bressan_matrices(self.system, q, u)[1], delta_u)
         flux = _gradient(self._momentum_flux, q, p, u, delta_u)

@@ -6,6 +6,10 @@ stopped at the end of its travel) is a short list of segments; `run_segments` st
 stepper and sums the change of a quantity each segment conserves, the stepper's error on it, which
 `check_drift` bounds. The same runner serves one state (τ a float) and a batch of rows (τ one per row, rows
 with τ = 0 skipped).
+
+On the complex rows of a complex-step Jacobian (`connenv.envs.model`) the batch functions decide on the real parts
+(which rows skip a segment, where a coordinate stops, the drift's bound), so that a complex row follows its real
+row's branch and carries the derivative of that branch (a stop's time moves with u and u̇).
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import math
 import numpy as np
 
 from connenv.core.steppers import StepperError
+from connenv.systems.backend import ARRAYS, floats
 
 
 def run_segments(stepper, system, y, segments, conserved=None):
@@ -30,7 +35,7 @@ def run_segments(stepper, system, y, segments, conserved=None):
                 change += conserved(y, u, u_dot) - before
             continue
         change = np.broadcast_to(change, np.shape(tau)) if np.ndim(change) == 0 else change
-        rows = tau > 0.0
+        rows = np.real(tau) > 0.0
         if np.all(rows):
             before = None if conserved is None else conserved(y, u, u_dot)
             y = stepper(system, y, u, u_dot, tau)
@@ -41,17 +46,20 @@ def run_segments(stepper, system, y, segments, conserved=None):
             before = None if conserved is None else conserved(y[rows], u, u_dot)
             y[rows] = stepper(system, y[rows], u, u_dot, tau)
             if conserved is not None:
-                change = np.array(change)
-                change[rows] += conserved(y[rows], u, u_dot) - before
+                increment = conserved(y[rows], u, u_dot) - before
+                change = np.array(change, np.result_type(change, increment))
+                change[rows] += increment
     return y, change
 
 
 def check_drift(stepper, quantity: str, drift, bound: float, unit: str = "", norm=None):
     """StepperError if |drift| (of any row of a batch) passes bound: the stepper has diverged on a quantity the
     flow conserves (the energy at held u, the spatial momentum). With norm (the quantity's norm, per row), the
-    bound is relative: a row fails where |drift| > bound · norm, and the error names the first such row's."""
+    bound is relative: a row fails where |drift| > bound · norm, and the error names the first such row's. A
+    Jacobian's complex rows are checked on their real parts."""
+    drift = np.real(drift)
     if norm is not None:
-        drift, norm = np.atleast_1d(np.abs(drift)), np.atleast_1d(norm)
+        drift, norm = np.atleast_1d(np.abs(drift)), np.atleast_1d(np.real(norm))
         failed = np.flatnonzero(~(drift <= bound * norm))
         if failed.size:
             i = failed[0]
@@ -87,9 +95,9 @@ def control_segments_batch(u, u_cmd, dt: float, max_speed: float | None = None):
     if max_speed is None:
         return [(u_cmd, np.zeros_like(u_cmd), dt)], u_cmd
     distance = u_cmd - u
-    ramp = np.minimum(dt, np.abs(distance) / max_speed)
-    u_dot = np.copysign(max_speed, distance)
-    u_after = np.where(ramp < dt, u_cmd, u + u_dot * ramp)  # where the step ends, the hold or not
+    ramp = ARRAYS.minimum(dt, ARRAYS.abs(distance) / max_speed)
+    u_dot = ARRAYS.copysign(max_speed, distance)
+    u_after = np.where(np.real(ramp) < dt, u_cmd, u + u_dot * ramp)  # where the step ends, the hold or not
     return [(u, u_dot, ramp), (u_after, np.zeros_like(u_dot), dt - ramp)], u_after
 
 
@@ -132,19 +140,19 @@ def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):
     """bounded_segments over a batch (..., m): a list of m + 1 segments (u at the start (..., m), u̇ (..., m),
     durations (...)), a duration 0 where a row has fewer, and (u, u̇) at the end of the step. A segment ends where a
     coordinate reaches its bound or at dt; row i's segments of nonzero length are bounded_segments' for row i."""
-    u, u_dot = np.array(u, float), np.array(u_dot_cmd, float)
+    u, u_dot = np.array(floats(u)), np.array(floats(u_dot_cmd))
     u_end = u + u_dot * dt
-    free = np.all((low <= u_end) & (u_end <= high), axis=-1, keepdims=True)  # no stop within the step
-    stops = np.where(u_dot > 0.0, high, low)
+    free = np.all((np.real(low) <= u_end.real) & (u_end.real <= np.real(high)), axis=-1, keepdims=True)  # no stop
+    stops = np.where(u_dot.real > 0.0, high, low)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a subnormal u̇ never reaches: inf
-        reach = np.where((u_dot != 0.0) & ~free, np.maximum((stops - u) / u_dot, 0.0), math.inf)
-    ends = np.concatenate([np.sort(np.minimum(reach, dt), axis=-1), np.full(free.shape, dt)], axis=-1)
+        reach = np.where((u_dot.real != 0.0) & ~free, ARRAYS.maximum((stops - u) / u_dot, 0.0), math.inf)
+    ends = np.concatenate([np.sort(ARRAYS.minimum(reach, dt), axis=-1), np.full(free.shape, dt)], axis=-1)
     segments, start = [], 0.0
     for end in np.moveaxis(ends, -1, 0):
         duration = end - start
         segments.append((u, u_dot, duration))
-        u = np.where(duration[..., None] > 0.0, u + u_dot * duration[..., None], u)
-        stopped = reach <= end[..., None]
+        u = np.where(duration.real[..., None] > 0.0, u + u_dot * duration[..., None], u)
+        stopped = reach.real <= end.real[..., None]
         u, u_dot = np.where(stopped, stops, u), np.where(stopped, 0.0, u_dot)
         start = end
     return segments, u, u_dot

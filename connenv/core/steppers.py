@@ -33,6 +33,8 @@ from typing import ClassVar, Protocol, runtime_checkable
 import numpy as np
 from scipy.integrate import DOP853, solve_ivp
 
+from connenv.systems.backend import floats
+
 
 @runtime_checkable
 class SteppedSystem(Protocol):
@@ -276,9 +278,9 @@ class Gauss6:
                     system.vector_field(y + h * _weighted(row, K), control, u_dot)
                     for (_, row), control in zip(stages, controls)
                 ]
-                change = max(float(np.max(np.abs(h * (a - b)))) for a, b in zip(new, K))
+                change = max(float(np.max(np.abs(np.real(h * (a - b))))) for a, b in zip(new, K))
                 K = new
-                if change <= 1e-15 * (1.0 + float(np.max(np.abs(y)))):
+                if change <= 1e-15 * (1.0 + float(np.max(np.abs(np.real(y))))):  # the real parts' sweeps
                     break
             else:
                 raise StepperError(f"{self}: the stages did not converge in {self.MAX_ITERATIONS} sweeps (step {h} s)")
@@ -319,7 +321,7 @@ class EnergyProjected:
             norm = sum(v * v for v in gradient)
             shift = float(excess) / norm if norm > 0.0 else 0.0
             return check_finite(np.array([y_k - shift * g_k for y_k, g_k in zip(y_new.tolist(), gradient)]), self)
-        redo = ~(np.abs(excess) <= self.atol) & (substeps < self.substeps << MAX_DOUBLINGS)
+        redo = ~(np.abs(np.real(excess)) <= self.atol) & (substeps < self.substeps << MAX_DOUBLINGS)
         if redo.any():
             rows = lambda a: a[redo] if np.ndim(a) else a
             y_new, excess = y_new.copy(), excess.copy()
@@ -328,7 +330,7 @@ class EnergyProjected:
         f = system.vector_field(y_new, u, u_dot)
         gradient = np.concatenate([-f[..., system.n :], f[..., : system.n]], axis=-1)
         norm = np.sum(gradient * gradient, axis=-1)
-        shift = np.divide(excess, norm, out=np.zeros_like(norm), where=norm > 0.0)
+        shift = np.divide(excess, norm, out=np.zeros_like(norm), where=np.real(norm) > 0.0)
         return check_finite(y_new - shift[..., None] * gradient, self)
 
 
@@ -416,18 +418,27 @@ class Exact:
             return self.fallback(system, y, u, u_dot, tau)
         else:
             flow = system.exact_flow(y, u, tau)
-        if type(flow) is not np.ndarray or flow.dtype.kind != "f" or flow.shape != y.shape:
+        if (
+            type(flow) is not np.ndarray
+            or flow.dtype.kind != "f" and not _complex_rows(flow, y)
+            or flow.shape != y.shape
+        ):
             _wrong_flow(system, flow, y)
         if _all_finite(flow):  # the common case: no NaN (nor ±inf) anywhere
             return flow
-        outside = np.isnan(flow).any(axis=-1)
+        outside = np.isnan(flow.real).any(axis=-1)
         if np.any(outside):
-            y = np.asarray(y, float)
+            y = floats(y)
             u, u_dot = (np.broadcast_to(a, (*y.shape[:-1], np.shape(a)[-1])) for a in (u, u_dot))
-            flow = np.array(flow)
+            flow = np.array(flow, np.result_type(flow, y))  # complex where y is (a Jacobian's rows)
             tau = tau if np.ndim(tau) == 0 else np.broadcast_to(tau, outside.shape)[outside]  # one per row
             flow[outside] = self.fallback(system, y[outside], u[outside], u_dot[outside], tau)
         return check_finite(flow, self)
+
+
+def _complex_rows(flow, y) -> bool:
+    """Whether flow is complex because y is: the rows of a complex-step Jacobian (`connenv.envs.model`)."""
+    return flow.dtype.kind == "c" and np.iscomplexobj(y)
 
 
 def _wrong_flow(system, flow, y):
@@ -465,13 +476,17 @@ def _moving(u_dot) -> bool:
 
 
 def _all_finite(y) -> bool:
-    """No NaN nor ±inf in y: on Python floats for a few numbers, else in one reduction."""
+    """No NaN nor ±inf in y (its real parts, on a Jacobian's complex rows): on Python floats for a few numbers, else
+    in one reduction."""
+    y = y.real
     return all(map(math.isfinite, y.ravel().tolist())) if y.size <= SMALL else math.isfinite(y.sum())
 
 
 def check_finite(y, stepper):
-    """y, unless it holds a non-finite number (state or derivative), which raises StepperError."""
-    if not (all(map(math.isfinite, y.ravel().tolist())) if y.size <= SMALL else np.isfinite(y).all()):
+    """y, unless it holds a non-finite number (state or derivative; the real parts of a Jacobian's complex rows),
+    which raises StepperError."""
+    values = y.real
+    if not (all(map(math.isfinite, values.ravel().tolist())) if values.size <= SMALL else np.isfinite(values).all()):
         raise StepperError(f"{stepper} produced a non-finite value {y}")
     return y
 
@@ -482,6 +497,7 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)  # observations are float32: a sta
 def check_observable(name: str, value):
     """StepperError if an entry of value (a state's array, one state or a batch) lies beyond ±FLOAT32_MAX, where the
     float32 observation of a finite state would be ±inf. A few numbers are compared as Python floats."""
+    value = np.real(value)
     worst = max(map(abs, value.ravel().tolist()), default=0.0) if value.size <= SMALL else np.max(np.abs(value))
     if not worst <= FLOAT32_MAX:
         raise StepperError(

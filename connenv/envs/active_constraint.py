@@ -27,6 +27,7 @@ from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import JumpVectorEnv, vector_env
+from connenv.systems.backend import ARRAYS
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
@@ -274,8 +275,8 @@ class ActiveConstraintEnv(TaskEnv):
         if self.control == "position" and self.max_control_speed is None:
             return command - u, [(command, np.zeros_like(command), self.dt)], command
         if self.control == "position":
-            u_dot = np.copysign(self.max_control_speed, command - u)
-            low, high = np.minimum(u, command), np.maximum(u, command)
+            u_dot = ARRAYS.copysign(self.max_control_speed, command - u)
+            low, high = ARRAYS.minimum(u, command), ARRAYS.maximum(u, command)
         else:
             u_dot, low, high = command, self.u_low, self.u_high
         cut = bounded_segments if ops is SCALAR else bounded_segments_batch
@@ -287,7 +288,7 @@ class ActiveConstraintEnv(TaskEnv):
         the single env's step (ops=SCALAR), and the vector env's over its rows (its batched steppers, ops=BATCH)."""
         delta, segments, u_end = self.segments(s.u, command, ops)
         y = s.y
-        if delta is not None and self.jump_class is JumpClass.FIT and np.any(delta != 0.0):
+        if delta is not None and self.jump_class is JumpClass.FIT and np.any(np.real(delta) != 0.0):
             y = jump_stepper(self.jump, y, s.u, delta, 1.0)
         y, change = run_segments(stepper, self.field, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
@@ -296,8 +297,9 @@ class ActiveConstraintEnv(TaskEnv):
         return self.at(y, u_end, s.t + self.dt, s.energy_error + change)
 
     def held_energy(self, y, u, u_dot):
-        """E = ½ pᵀ A p + V(q, u) on the states whose u is held (u̇ = 0), 0 where u moves."""
-        held = np.all(u_dot == 0.0, axis=-1)
+        """E = ½ pᵀ A p + V(q, u) on the states whose u is held (u̇ = 0, of the real parts on a Jacobian's rows), 0
+        where u moves."""
+        held = np.all(np.real(u_dot) == 0.0, axis=-1)
         if not np.any(held):
             return 0.0 if np.ndim(held) == 0 else np.zeros(held.shape)
         n = self.n
@@ -307,6 +309,7 @@ class ActiveConstraintEnv(TaskEnv):
     def check_energy_error(self, energy_error, y, u):
         n = self.n
         energy = hamiltonian(self.system, y[..., :n], y[..., n:], u, np.zeros_like(u))
+        energy_error, energy = np.real(energy_error), np.real(energy)
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
 
     @staticmethod

@@ -17,6 +17,7 @@ from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import JumpVectorEnv, vector_env
+from connenv.systems.backend import ARRAYS
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -207,8 +208,8 @@ class ChaplyginSleighEnv(TaskEnv):
             zero = np.zeros_like(command)
             return command - u, [(command, zero, self.dt if ops is SCALAR else np.full(len(u), self.dt))], command, zero
         if self.control == "position":
-            u_dot = np.copysign(self.max_mass_speed, command - u)
-            low, high = np.minimum(u, command), np.maximum(u, command)
+            u_dot = ARRAYS.copysign(self.max_mass_speed, command - u)
+            low, high = ARRAYS.minimum(u, command), ARRAYS.maximum(u, command)
         else:
             u_dot, low, high = command, -self.u_high, self.u_high
         bounded = bounded_segments if ops is SCALAR else bounded_segments_batch
@@ -220,20 +221,20 @@ class ChaplyginSleighEnv(TaskEnv):
         the mass has no speed limit: one state, or rows with the vector env's steppers and ops=BATCH."""
         delta, segments, u_end, u_dot_end = self.segments(s.u, command, ops)
         y = s.y
-        if delta is not None and np.any(delta != 0.0):
+        if delta is not None and np.any(np.real(delta) != 0.0):
             y = jump_stepper(self.jump, y, s.u, delta, 1.0 if ops is SCALAR else np.ones(len(y)))
         y, change = run_segments(stepper, self.system, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
         return SleighState(y, u_end, u_dot_end, s.target, s.t + self.dt, s.energy_error + change)
 
     def held_energy(self, y, u, u_dot):
-        """T where the mass is held (u̇ = 0), 0 where it moves."""
-        held = np.all(u_dot == 0.0, axis=-1)
+        """T where the mass is held (u̇ = 0, of the real parts on a Jacobian's rows), 0 where it moves."""
+        held = np.all(np.real(u_dot) == 0.0, axis=-1)
         energy = self.system.energy(y, u, 0.0 * u)
         return np.where(held, energy, 0.0) if np.ndim(held) else (float(energy) if held else 0.0)
 
     def check_energy_error(self, energy_error, y, u):
-        energy = self.system.energy(y, u, 0.0 * u)
+        energy_error, energy = np.real(energy_error), np.real(self.system.energy(y, u, 0.0 * u))
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + energy), ENERGY_ERROR_BOUND)
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------

@@ -259,14 +259,14 @@ class KapitzaPendulumEnv(TaskEnv):
 
     def command(self, a):
         """The commanded pivot velocity u̇ (2) of action a: v_max · a along the actuated axes."""
-        u_dot = np.zeros(a.shape[:-1] + (2,))
+        u_dot = np.zeros(a.shape[:-1] + (2,), np.result_type(a, float))  # complex on a Jacobian's rows
         u_dot[..., self.actuated] = a * self.v_max
         return u_dot
 
     def deviation(self, y, ops=SCALAR):
         """|θ − π| with θ wrapped to (−π, π]: 0 inverted, π hanging."""
         theta = ops.components(y)[0]
-        return math.pi - abs(ops.atan2(ops.sin(theta), ops.cos(theta)))
+        return math.pi - ops.abs(ops.atan2(ops.sin(theta), ops.cos(theta)))
 
     def theta_dot(self, s, ops=SCALAR):
         """θ̇ = (p − m l u̇·n)/(m l²) of the state."""

@@ -45,6 +45,7 @@ FLOATS = operations(
     log=math.log,
     acos=math.acos,
     hypot=math.hypot,
+    abs=abs,
     copysign=math.copysign,
     isnan=math.isnan,
     maximum=max,
@@ -73,12 +74,17 @@ def complex_step(real_function, derivative):
 
 
 def selected(choose):
-    """maximum or minimum over complex rows: the argument whose real part choose(a, b) picks, imaginary part and all."""
+    """maximum or minimum over complex rows: the argument whose real part choose(a, b) picks, imaginary part and all
+    (a NaN propagating, as in numpy's). Where the real parts tie, the one whose imaginary part choose picks: the
+    derivative along the step's direction (+ih), which at a kink of max or min is the larger or the smaller of the
+    two (a ramp toward a command u meets: its stop is the command, its length |u_cmd − u|/speed grows)."""
 
     def function(a, b):
         if not (np.iscomplexobj(a) or np.iscomplexobj(b)):
             return choose(a, b)
-        return np.where(choose(np.real(a), np.real(b)) == np.real(a), a, b)
+        re_a, re_b, im_a = np.real(a), np.real(b), np.imag(a)
+        first = np.where(re_a == re_b, choose(im_a, np.imag(b)) == im_a, choose(re_a, re_b) == re_a)
+        return np.where(first | np.isnan(re_a), a, b)
 
     function.__name__ = choose.__name__
     return function
@@ -105,8 +111,13 @@ vars(ARRAYS).update(
     isnan=lambda x: np.isnan(np.real(x)),
     abs=complex_step(np.abs, lambda re, im: np.sign(re[0]) * im[0]),
 )
-"""numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module),
-and ``abs``."""
+"""numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module)."""
+
+
+def floats(a) -> np.ndarray:
+    """a as an array of floats, or of complex numbers on the complex rows of a Jacobian (which a cast to float would
+    strip of their derivatives)."""
+    return np.asarray(a, complex if np.iscomplexobj(a) else float)
 
 
 def namespace(x):

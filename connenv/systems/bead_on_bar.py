@@ -41,6 +41,7 @@ import math
 import numpy as np
 
 from connenv.core.lagrangian import LagrangianSystem
+from connenv.systems.backend import floats
 
 SERIES_RADIUS = 1.0
 """|x| = |ω t| below which s(x) is summed as its series (the direct difference loses a factor 1/x² in accuracy)."""
@@ -124,18 +125,18 @@ def _segment_scalar(r, p, theta, omega, tau, mass, g):
 
 def segment(y, u, u_dot, tau, mass, g):
     """exact_segment over a batch: y (..., 2), u and u_dot (..., 1), tau a number or one per row."""
-    y = np.asarray(y, float)
+    y = floats(y)  # complex on a Jacobian's rows, whose branches follow the real parts
     r, v = y[..., 0], y[..., 1] / mass
-    theta, omega = np.asarray(u, float)[..., 0], np.asarray(u_dot, float)[..., 0]
-    tau = np.asarray(tau, float)
+    theta, omega = floats(u)[..., 0], floats(u_dot)[..., 0]
+    tau = floats(tau)
     x = omega * tau
-    zero = x == 0.0
+    zero = x.real == 0.0  # s, shc, snc and c are even in x: their derivative there is 0
     safe = np.where(zero, 1.0, x)
     half = 0.5 * safe
     shc = np.where(zero, 1.0, np.sinh(safe) / safe)
     snc = np.where(zero, 1.0, np.sin(safe) / safe)
     c = np.where(zero, 1.0, 0.5 * ((np.sinh(half) / half) ** 2 + (np.sin(half) / half) ** 2))
-    near = np.abs(x) < SERIES_RADIUS
+    near = np.abs(x.real) < SERIES_RADIUS
     far = np.where(near, 1.0, x)
     s = np.where(near, _s_series(x**4), (np.sinh(far) - np.sin(far)) / far**3)
     cosh, sin0, cos0 = np.cosh(x), np.sin(theta), np.cos(theta)

@@ -33,7 +33,7 @@ from functools import cached_property
 
 import numpy as np
 
-from connenv.systems.backend import FLOATS
+from connenv.systems.backend import ARRAYS, FLOATS, floats
 from connenv.systems.swing import Swing
 
 FLOAT = np.dtype(float)  # the dtype of the states numpy makes, one object: `_frame` tells it by identity
@@ -67,13 +67,14 @@ class KapitzaPendulum:
 
     def _frame(self, y, u_dot):
         """(θ, m l² θ̇, u̇₁, u̇₂, ops), m l² θ̇ = p − m l u̇·n the momentum in the frame of the pivot's velocity:
-        Python floats and FLOATS for one state (a float array is taken as it is), arrays and numpy for rows."""
+        Python floats and FLOATS for one state (a float array is taken as it is), arrays and ARRAYS for rows (complex
+        on a Jacobian's)."""
         if not (type(y) is np.ndarray and y.dtype is FLOAT and type(u_dot) is np.ndarray and u_dot.dtype is FLOAT):
-            y, u_dot = np.asarray(y, float), np.asarray(u_dot, float)
+            y, u_dot = floats(y), floats(u_dot)
         if y.ndim == 1 and u_dot.ndim == 1:
             (theta, p), (v1, v2), ops = y.tolist(), u_dot.tolist(), FLOATS
         else:
-            (theta, p), (v1, v2), ops = (y[..., 0], y[..., 1]), (u_dot[..., 0], u_dot[..., 1]), np
+            (theta, p), (v1, v2), ops = (y[..., 0], y[..., 1]), (u_dot[..., 0], u_dot[..., 1]), ARRAYS
         return theta, p - self.mass * self.length * (v1 * ops.cos(theta) + v2 * ops.sin(theta)), v1, v2, ops
 
     def momentum(self, theta, theta_dot, u_dot):
@@ -112,15 +113,15 @@ class KapitzaPendulum:
         if self.damping != 0.0:
             return np.full(np.broadcast_shapes(np.shape(y), np.shape(u_dot)[:-1] + (2,)), math.nan)
         theta, spin, v1, v2, ops = self._frame(y, u_dot)
-        if ops is np:
+        if ops is ARRAYS:
             theta, spin, v1, v2 = np.broadcast_arrays(theta, spin, v1, v2)
         flowed, flowed_spin = self._pendulum.pendulum_flow(theta, spin, self.length, tau, ops)
         near = ops.isnan(flowed)
         if ops.any(near):  # the state (or those rows) by RK4
-            if ops is np:
+            if ops is ARRAYS:
                 flowed, flowed_spin = flowed.copy(), flowed_spin.copy()
                 rows = (theta[near], spin[near], np.broadcast_to(tau, near.shape)[near])
-                flowed[near], flowed_spin[near] = self._near_separatrix(*rows, np)
+                flowed[near], flowed_spin[near] = self._near_separatrix(*rows, ARRAYS)
             else:
                 flowed, flowed_spin = self._near_separatrix(theta, spin, tau, ops)
         p = flowed_spin + self.mass * self.length * (v1 * ops.cos(flowed) + v2 * ops.sin(flowed))
@@ -130,7 +131,7 @@ class KapitzaPendulum:
         """The plain pendulum (θ, m l² θ̇) after tau by RK4 with steps h, ω₀h ≤ SEPARATRIX_STEP, ω₀ = √(g/l): a
         local error of (ω₀h)⁵/120 ≈ 1e-12 of the state (tests/test_kapitza_physics.py)."""
         inertia, weight, sin = self.mass * self.length**2, self.mass * self.g * self.length, ops.sin
-        substeps = max(1, math.ceil(math.sqrt(self.g / self.length) * float(np.max(tau)) / SEPARATRIX_STEP))
+        substeps = max(1, math.ceil(math.sqrt(self.g / self.length) * float(np.max(np.real(tau))) / SEPARATRIX_STEP))
         h = tau / substeps
         for _ in range(substeps):
             k1, l1 = spin / inertia, -weight * sin(theta)

@@ -19,10 +19,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ellipj, ellipk
+from scipy.special import ellipeinc, ellipj, ellipk
 
 from connenv.core.validation import ndim
-from connenv.systems.backend import FLOATS
+from connenv.systems.backend import ARRAYS, FLOATS, floats
 
 try:  # scipy's ellipj on one float without the ufunc's per-call machinery: the same function, the same bits
     from scipy.special.cython_special import _ellipj_pywrap as ellipj_one
@@ -92,17 +92,18 @@ class Swing:
         if ndim(y) == 1 and ndim(r) == 1:  # one state (the env's case)
             theta, p = y.tolist() if type(y) is np.ndarray else map(float, y)
             return np.array(self.pendulum_flow(theta, p, float(r[0]), tau, FLOATS))
-        return np.stack(self.pendulum_flow(y[..., 0], y[..., 1], np.asarray(r, float)[..., 0], tau, np), axis=-1)
+        return np.stack(self.pendulum_flow(y[..., 0], y[..., 1], floats(r)[..., 0], tau, ARRAYS), axis=-1)
 
     def pendulum_flow(self, theta, p, r, tau, ops):
         """exact_flow's (θ, p) of the state (θ, p) at radius r, as components: Python floats for one state with
-        ops=FLOATS, or arrays over rows with ops=numpy (`connenv.systems.backend`)."""
+        ops=FLOATS, or arrays over rows with ops=ARRAYS (`connenv.systems.backend`); the branches (libration or
+        rotation, the separatrix band) are taken on the real parts, as on a Jacobian's complex rows they must be."""
         one = isinstance(theta, float)
         omega = ops.sqrt(self.g / r)
         v = p / (2 * omega * self.mass * r**2)  # θ̇/(2ω)
         wrapped = ops.atan2(ops.sin(theta), ops.cos(theta))  # θ in (−π, π]
         k2 = ops.sin(wrapped / 2) ** 2 + v**2
-        rotating = k2 > 1.0
+        rotating = k2.real > 1.0
         s = ops.copysign(1.0, v)  # rotation is mirrored so that θ̇ > 0
         # amplitude angle φ at t₀: libration sin φ = sin(θ/2)/k, cos φ = θ̇/(2kω); rotation φ = ±θ/2
         phi = ops.where(rotating, s * wrapped / 2, ops.atan2(ops.sin(wrapped / 2), v))
@@ -111,10 +112,10 @@ class Swing:
         w = ops.sqrt(stretch) * omega * tau
         sn1, cn1 = ops.sin(phi), ops.cos(phi)
         dn1 = ops.sqrt(1.0 - m * sn1 * sn1)
-        sn2, cn2, dn2, _ = ellipj_one(w, m) if one else ellipj(w, m)  # outside the Array API: scipy's
+        sn2, cn2, dn2, _ = ellipj_one(w, m) if one else jacobi_elliptic(w, m)  # outside the Array API: scipy's
         if one:
             sn2, cn2, dn2 = float(sn2), float(cn2), float(dn2)
-        outside = abs(k2 - 1.0) < SEPARATRIX_BAND
+        outside = abs(k2.real - 1.0) < SEPARATRIX_BAND
         denominator = ops.where(outside, 1.0, 1.0 - m * (sn1 * sn2) ** 2)  # 0 at the separatrix
         sn = (sn1 * cn2 * dn2 + sn2 * cn1 * dn1) / denominator
         cn = (cn1 * cn2 - sn1 * dn1 * sn2 * dn2) / denominator
@@ -123,7 +124,7 @@ class Swing:
         half = ops.atan2(k * sn, dn)  # libration: θ/2
         if ops.any(rotating):  # am = atan2(sn, cn) plus the whole turns
             wrapped_am = ops.atan2(sn, cn)
-            mean_am = phi + math.pi / 2 * w / ellipk(ops.where(rotating, m, 0.0))  # float(ellipk) on one state
+            mean_am = phi + math.pi / 2 * w / ellipk(ops.where(rotating, m.real, 0.0))  # only rounded: its real part
             turns = ops.round((mean_am - wrapped_am) / (2 * math.pi))
             half = ops.where(rotating, s * (wrapped_am + 2 * math.pi * turns), half)
         theta_dot = 2 * k * omega * ops.where(rotating, s * dn, cn)
@@ -134,3 +135,21 @@ class Swing:
     def quarter_period(self, r, amplitude):
         """Time from the bottom to the extreme at amplitude A: K(sin²(A/2)) √(r/g)."""
         return ellipk(np.sin(np.asarray(amplitude) / 2) ** 2) * np.sqrt(np.asarray(r) / self.g)
+
+
+def jacobi_elliptic(w, m):
+    """scipy's ellipj(w, m) = (sn, cn, dn, φ) over rows. On complex rows (a Jacobian's), its value at the real parts
+    with the derivatives carried in the imaginary parts: φ = am(w|m) moves by dn along w and, from F(φ|m) = w, by
+    −dn ∂F/∂m along m, with ∂F/∂m = (E(φ|m) − (1 − m) w)/(2m(1 − m)) − sn cn/(2(1 − m) dn) (Byrd & Friedman 710.00;
+    DLMF 19.4.2), its limit (2φ − sin 2φ)/8 at m = 0; then sn, cn and dn move with φ, and dn with m (dn² = 1 − m sn²).
+    Near m = 0 the difference loses about ε/m of its value, far below the Jacobian's tolerances at a swing's m."""
+    if not (np.iscomplexobj(w) or np.iscomplexobj(m)):
+        return ellipj(w, m)
+    w, dw, m, dm = np.real(w), np.imag(w), np.real(m), np.imag(m)
+    sn, cn, dn, phi = ellipj(w, m)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dF = (ellipeinc(phi, m) - (1.0 - m) * w) / (2.0 * m * (1.0 - m)) - sn * cn / (2.0 * (1.0 - m) * dn)
+    dF = np.where(m == 0.0, (2.0 * phi - np.sin(2.0 * phi)) / 8.0, dF)
+    d_phi = dn * (dw - dF * dm)
+    d_dn = -(m * sn * cn * d_phi + 0.5 * sn * sn * dm) / dn
+    return sn + 1j * cn * d_phi, cn - 1j * sn * d_phi, dn + 1j * d_dn, phi + 1j * d_phi
