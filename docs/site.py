@@ -195,7 +195,7 @@ def page(env_id: str) -> str:
 
 
 def model_section(env_id: str) -> list[str]:
-    """The env's physical parameters as an episode's context, and its model's state vector (connenv.model)."""
+    """The env's physical parameters as an episode's context, and its model's state vector (connenv.core.model)."""
     from connenv.core.context import physical_params
 
     env = make(env_id).unwrapped

@@ -10,8 +10,8 @@ from scipy.integrate import solve_ivp
 import connenv  # noqa: F401
 from agents.controllers.kapitza import KapitzaVibration
 from connenv.core import JumpClass, classify, make_stepper, vector_field
-from connenv.systems.kapitza import KapitzaPendulum
 from connenv.core.segments import bounded_segments
+from connenv.systems.kapitza import KapitzaPendulum
 
 rng = np.random.default_rng(2026)
 SYSTEM = KapitzaPendulum(length=0.8, mass=1.3)

@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import DOP853, RK45
 
+from connenv.core.backend import ARRAYS, floats
 from connenv.core.lie import Magnus
 from connenv.core.steppers import MAX_EVALUATIONS, Exact, Scipy, StepperError
-from connenv.systems.backend import ARRAYS, floats
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # scipy.integrate._ivp.rk's step-size control
 TABLEAUS = {"DOP853": DOP853, "RK45": RK45}

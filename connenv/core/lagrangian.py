@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from connenv.core.backend import floats
 from connenv.core.mechanics import JumpClass
-from connenv.systems.backend import floats
 
 
 class LagrangianSystem:

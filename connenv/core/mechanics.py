@@ -32,9 +32,10 @@ from typing import Protocol
 import numpy as np
 from scipy.differentiate import derivative
 
+from connenv.core.backend import floats
+from connenv.core.batched import batched
 from connenv.core.steppers import MAX_EVALUATIONS, Scipy
 from connenv.core.validation import check_returned, probe
-from connenv.systems.backend import floats
 
 NUMERICAL_EVALUATIONS = 1_000  # per segment, of a vector field that is a numerical gradient (MetricField, JumpFlow
 # without jump_field): each evaluation is a scipy.differentiate gradient, dozens of calls of the metric, so that a
@@ -136,6 +137,8 @@ class MetricField:
 JUMP_STEPPER = Scipy("DOP853", rtol=1e-13, atol=1e-13)
 """The stepper of a `JumpFlow` over s ∈ [0, 1]: tolerances at rounding, since the jump is a map, not a step to
 be refined."""
+JUMP_ROWS = batched(JUMP_STEPPER)
+"""JUMP_STEPPER over rows, each row stepped as the single state (`connenv.core.batched`)."""
 
 
 @dataclass(frozen=True)

@@ -18,8 +18,8 @@ import math
 
 import numpy as np
 
+from connenv.core.backend import ARRAYS, floats
 from connenv.core.steppers import StepperError
-from connenv.systems.backend import ARRAYS, floats
 
 
 def run_segments(stepper, system, y, segments, conserved=None):

@@ -33,7 +33,7 @@ from typing import ClassVar, Protocol, runtime_checkable
 import numpy as np
 from scipy.integrate import DOP853, solve_ivp
 
-from connenv.systems.backend import floats
+from connenv.core.backend import floats
 
 
 @runtime_checkable

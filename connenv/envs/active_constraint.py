@@ -8,8 +8,18 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv import examples
+from connenv.core.backend import ARRAYS
 from connenv.core.integrators import make_stepper
-from connenv.core.mechanics import JUMP_STEPPER, JumpClass, JumpFlow, MetricField, check_metric, classify, hamiltonian
+from connenv.core.mechanics import (
+    JUMP_ROWS,
+    JUMP_STEPPER,
+    JumpClass,
+    JumpFlow,
+    MetricField,
+    check_metric,
+    classify,
+    hamiltonian,
+)
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.state import Fields, vector, within
 from connenv.core.steppers import ExactFlow, ExactSegment, check_observable
@@ -26,8 +36,7 @@ from connenv.core.validation import (
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
-from connenv.envs.vector import JumpVectorEnv, vector_env
-from connenv.systems.backend import ARRAYS
+from connenv.envs.vector import vector_env
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
@@ -283,13 +292,13 @@ class ActiveConstraintEnv(TaskEnv):
         segments, u_end, _ = cut(u, u_dot, low, high, self.dt)
         return None, segments, u_end
 
-    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
+    def advance(self, s, command, stepper, ops=SCALAR):
         """The state after a step under the command, by these steppers of the segments and of a fit system's jump:
         the single env's step (ops=SCALAR), and the vector env's over its rows (its batched steppers, ops=BATCH)."""
         delta, segments, u_end = self.segments(s.u, command, ops)
         y = s.y
         if delta is not None and self.jump_class is JumpClass.FIT and np.any(np.real(delta) != 0.0):
-            y = jump_stepper(self.jump, y, s.u, delta, 1.0)
+            y = (JUMP_STEPPER if ops is SCALAR else JUMP_ROWS)(self.jump, y, s.u, delta, 1.0)
         y, change = run_segments(stepper, self.field, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
         if self.observes_state:
@@ -393,7 +402,7 @@ def check_fields(system, q, u):
             check_returned(name, value, y[point].shape, f"real finite arrays of y's shape {y[point].shape}")
 
 
-ActiveConstraintVectorEnv = vector_env(ActiveConstraintEnv, JumpVectorEnv)
+ActiveConstraintVectorEnv = vector_env(ActiveConstraintEnv)
 
 
 SPECS = (

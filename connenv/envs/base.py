@@ -25,41 +25,14 @@ from typing import ClassVar
 import gymnasium as gym
 import numpy as np
 
+from connenv.core.backend import BATCH, SCALAR
+from connenv.core.context import Context
+from connenv.core.model import Model
 from connenv.core.params import Args, document
 from connenv.core.segments import control_segments, control_segments_batch
 from connenv.core.state import Fields, document_state
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
-from connenv.core.context import Context
-from connenv.systems.backend import ARRAYS, FLOATS, NAMES, operations
-
-SCALAR = operations(
-    "SCALAR",
-    **{name: getattr(FLOATS, name) for name in NAMES},
-    clip=lambda x, low, high: min(max(x, low), high),
-    column=lambda x: x,
-    pack=lambda parts: np.array(parts, np.float32),
-    real=float,
-    flag=bool,
-    vector=lambda a: tuple(np.asarray(a, float).tolist()),
-    components=lambda a: a.tolist(),
-)
-"""Operations on one state, as Python floats (the single env's): the physics' (``connenv.systems.backend.FLOATS``)
-and the task's. Several times faster than numpy on one state."""
-
-BATCH = operations(
-    "BATCH",
-    **{name: getattr(ARRAYS, name) for name in NAMES},
-    clip=lambda x, low, high: ARRAYS.minimum(ARRAYS.maximum(x, low), high),
-    column=lambda x: x[..., None],
-    pack=lambda parts: np.stack(np.broadcast_arrays(*parts), axis=-1).astype(np.float32),
-    real=lambda x: np.asarray(x, np.result_type(x, 1.0)),  # float, or complex on a Jacobian's rows
-    flag=lambda x: np.asarray(np.real(x), bool),
-    vector=lambda a: BATCH.real(np.array(a)),
-    components=lambda a: [a[..., i] for i in range(a.shape[-1])],
-)
-"""The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names (``ARRAYS``,
-safe on the complex rows of the model's Jacobians), and the task's. ``components`` splits the last axis: Python floats of one state, arrays over the rows of a batch."""
 
 
 @dataclasses.dataclass
@@ -241,11 +214,9 @@ class TaskEnv(RenderedEnv):
 
     @property
     def model(self):
-        """The env's step as a pure function of a flat state, with its Jacobians (`connenv.model.Model`),
+        """The env's step as a pure function of a flat state, with its Jacobians (`connenv.core.model.Model`),
         for the env's current parameters."""
         if self.__dict__.get("_model") is None:
-            from connenv.model import Model
-
             self._model = Model(self)
         return self._model
 

@@ -8,7 +8,6 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.mechanics import JUMP_STEPPER
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import check_drift
 from connenv.core.state import Fields, angle, number
@@ -20,7 +19,7 @@ from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env'
 )
 from connenv.envs.base import SCALAR
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import JumpVectorEnv, vector_env
+from connenv.envs.vector import vector_env
 
 OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
 START_REACH = 0.8  # |r₀| ≤ 0.8 L, and so |r*| (g > 0)
@@ -183,8 +182,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         r = rng.uniform(*OUTWARD_START)
         return L * side * r, L * side * (r + rng.uniform(*OUTWARD_DISTANCE))
 
-    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
-        return self.track(super().advance(s, command, stepper, ops, jump_stepper), s.target, s, ops)
+    def advance(self, s, command, stepper, ops=SCALAR):
+        return self.track(super().advance(s, command, stepper, ops), s.target, s, ops)
 
     def track(self, s, target, before, ops=SCALAR):
         """The BeadState of the physical state s (an ActiveConstraintState) with target r*: inside the
@@ -268,7 +267,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         return renderer.draw(float(s.y[0]), float(s.u[0]), float(s.target), s.t, bool(s.inside))
 
 
-BeadOnBarVectorEnv = vector_env(BeadOnBarEnv, JumpVectorEnv)
+BeadOnBarVectorEnv = vector_env(BeadOnBarEnv)
 
 
 BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,

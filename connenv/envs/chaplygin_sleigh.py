@@ -8,16 +8,16 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import ARRAYS
 from connenv.core.integrators import make_stepper
-from connenv.core.mechanics import JUMP_STEPPER, JumpClass, JumpFlow
+from connenv.core.mechanics import JUMP_ROWS, JUMP_STEPPER, JumpClass, JumpFlow
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.state import Fields, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import SCALAR, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import JumpVectorEnv, vector_env
-from connenv.systems.backend import ARRAYS
+from connenv.envs.vector import vector_env
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -216,13 +216,14 @@ class ChaplyginSleighEnv(TaskEnv):
         segments, u_end, u_dot_end = bounded(u, u_dot, low, high, self.dt)
         return None, segments, u_end, u_dot_end
 
-    def advance(self, s, command, stepper, ops=SCALAR, jump_stepper=JUMP_STEPPER):
+    def advance(self, s, command, stepper, ops=SCALAR):
         """The state after a step under the command, a jump of the mass first where the sleigh is fit for jumps and
         the mass has no speed limit: one state, or rows with the vector env's steppers and ops=BATCH."""
         delta, segments, u_end, u_dot_end = self.segments(s.u, command, ops)
         y = s.y
         if delta is not None and np.any(np.real(delta) != 0.0):
-            y = jump_stepper(self.jump, y, s.u, delta, 1.0 if ops is SCALAR else np.ones(len(y)))
+            jump = JUMP_STEPPER if ops is SCALAR else JUMP_ROWS
+            y = jump(self.jump, y, s.u, delta, 1.0 if ops is SCALAR else np.ones(len(y)))
         y, change = run_segments(stepper, self.system, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
         return SleighState(y, u_end, u_dot_end, s.target, s.t + self.dt, s.energy_error + change)
@@ -284,7 +285,7 @@ class ChaplyginSleighEnv(TaskEnv):
         return renderer.draw(s.y[:3].copy(), s.u.copy(), s.target.copy(), s.t)
 
 
-ChaplyginSleighVectorEnv = vector_env(ChaplyginSleighEnv, JumpVectorEnv)
+ChaplyginSleighVectorEnv = vector_env(ChaplyginSleighEnv)
 
 
 SPECS = (

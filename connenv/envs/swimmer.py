@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from connenv.core.backend import components
 from connenv.core.params import Bound
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.state import Field, Fields, angle, number, vector
 from connenv.envs.base import SCALAR
 from connenv.systems import ideal_fluid
-from connenv.systems.backend import components
 
 TIME_COST = 0.01  # reward paid per step until success
 MOMENTUM_ERROR_BOUND = 0.1  # |spatial momentum − its value at reset| / |that value| past which a stepper diverged

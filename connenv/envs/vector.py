@@ -4,8 +4,9 @@ Each vector env keeps one single env, its *prototype*: it checks the make kwargs
 and the constants, and its task functions (``connenv.envs.base``: command, observe, describe, reward,
 terminated) are the ones the vector env calls, on its state of arrays over the rows, with the array operations of
 ``BATCH`` in place of the scalar ones of ``SCALAR``. `vector_env` makes the vector env of a task, whose
-``advance(state, command, stepper, ops)`` then runs with the batched stepper and ``BATCH``; a subclass overrides
-``advance`` only where the rows need more (a second batched stepper).
+``advance_rows(state, command, stepper)`` then runs with the batched stepper and ``BATCH``. Rows whose physical
+parameters differ (``randomize``, `connenv.core.context`) are stepped in groups of equal values, each by an env
+made with them.
 
 Seeding, resets and autoreset are Gymnasium's SyncVectorEnv's, so that row i of a vector env and env i of a
 SyncVectorEnv made from the same id and kwargs follow the same episodes (to rounding; tests):
@@ -42,7 +43,6 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from connenv.core.batched import batched
-from connenv.core.mechanics import JUMP_STEPPER
 from connenv.core.steppers import StepperError
 from connenv.envs.base import BATCH, State
 
@@ -199,18 +199,6 @@ class TaskVectorEnv(VectorEnv):
 
     def advance(self, state, command):
         return self.env.advance_rows(state, command, self.stepper)
-
-
-class JumpVectorEnv(TaskVectorEnv):
-    """The vector env of a task whose step may begin with a fit system's jump (`connenv.core.mechanics.JumpFlow`):
-    its advance takes the jump's stepper, batched, too."""
-
-    def __init__(self, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs):
-        super().__init__(num_envs, max_episode_steps, **kwargs)
-        self.jump_stepper = batched(JUMP_STEPPER)
-
-    def advance(self, state, command):
-        return self.env.advance(state, command, self.stepper, BATCH, self.jump_stepper)
 
 
 def gather(parts, n: int):

@@ -40,8 +40,8 @@ import math
 
 import numpy as np
 
+from connenv.core.backend import floats
 from connenv.core.lagrangian import LagrangianSystem
-from connenv.systems.backend import floats
 
 SERIES_RADIUS = 1.0
 """|x| = |ω t| below which s(x) is summed as its series (the direct difference loses a factor 1/x² in accuracy)."""

@@ -65,8 +65,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from connenv.core.backend import FLOATS
 from connenv.core.mechanics import JumpClass
-from connenv.systems.backend import FLOATS
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ L(θ) = R(θ) ⊕ 1. The fluid acts only through added masses, which for an elli
 ellipse, in closed form). The body momentum μ = (P₁, P₂, Π) obeys Kirchhoff's equations, and the spatial momentum
 (R(θ) P, Π + x P_y − y P_x) is conserved.
 
-The functions take components (``connenv.systems.backend``: floats of one state, arrays over rows) and ``ops``.
+The functions take components (``connenv.core.backend``: floats of one state, arrays over rows) and ``ops``.
 """
 
 from __future__ import annotations

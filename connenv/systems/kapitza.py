@@ -33,7 +33,7 @@ from functools import cached_property
 
 import numpy as np
 
-from connenv.systems.backend import ARRAYS, FLOATS, floats
+from connenv.core.backend import ARRAYS, FLOATS, floats
 from connenv.systems.swing import Swing
 
 FLOAT = np.dtype(float)  # the dtype of the states numpy makes, one object: `_frame` tells it by identity

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.systems.backend import components
+from connenv.core.backend import components
 from connenv.systems.ideal_fluid import added_masses, kirchhoff, reconstruct, space_frame, spatial_momentum
 
 

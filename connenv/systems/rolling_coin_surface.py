@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.systems.backend import FLOATS
+from connenv.core.backend import FLOATS
 from connenv.systems.surfaces import Surface
 
 SERIES_BELOW = 0.3  # |Ωτ| under which (Ωτ − sin Ωτ)/(Ωτ)² is summed as its series (no cancellation)

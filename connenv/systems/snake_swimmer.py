@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.systems.backend import components, namespace
+from connenv.core.backend import components, namespace
 from connenv.systems.ideal_fluid import added_masses, kirchhoff, reconstruct, space_frame, spatial_momentum
 
 JOINT_LIMIT = 2.0 * math.pi / 3.0  # |α|, |β| ≤ 2π/3: the links' tips stay apart

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipeinc, ellipj, ellipk
 
+from connenv.core.backend import ARRAYS, FLOATS, floats
 from connenv.core.validation import ndim
-from connenv.systems.backend import ARRAYS, FLOATS, floats
 
 try:  # scipy's ellipj on one float without the ufunc's per-call machinery: the same function, the same bits
     from scipy.special.cython_special import _ellipj_pywrap as ellipj_one
@@ -96,7 +96,7 @@ class Swing:
 
     def pendulum_flow(self, theta, p, r, tau, ops):
         """exact_flow's (θ, p) of the state (θ, p) at radius r, as components: Python floats for one state with
-        ops=FLOATS, or arrays over rows with ops=ARRAYS (`connenv.systems.backend`); the branches (libration or
+        ops=FLOATS, or arrays over rows with ops=ARRAYS (`connenv.core.backend`); the branches (libration or
         rotation, the separatrix band) are taken on the real parts, as on a Jacobian's complex rows they must be."""
         one = isinstance(theta, float)
         omega = ops.sqrt(self.g / r)

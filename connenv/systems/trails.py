@@ -22,8 +22,8 @@ from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicSpline
 from scipy.special import ellipeinc
 
+from connenv.core.backend import namespace
 from connenv.core.validation import check_keys, check_number
-from connenv.systems.backend import namespace
 
 GRID = 4001  # samples of the domain for the checks and the tabulated arc length
 

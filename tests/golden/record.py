@@ -22,7 +22,6 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-import scipy
 import threadpoolctl
 
 import connenv  # noqa: F401  (registers the envs)

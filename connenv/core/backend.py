@@ -13,10 +13,10 @@ on them:
 
 ``FLOATS`` gives those names their meaning on floats. ``ARRAYS`` is numpy's, but for the functions that are not
 complex-analytic (atan2, hypot, maximum, …): on complex rows, those of the model's complex-step Jacobians
-(`connenv.model`), each returns its value at the real parts, exactly as on real rows, with the imaginary part
-carried by its derivative there (the one-sided one at a kink), so that Im f(x + ih)/h is f′(x). The env's task namespaces (``connenv.envs.base``: SCALAR,
-BATCH) are these with the task's operations added, and serve the systems' functions as well. Special functions
-outside the standard (scipy.special's Jacobi elliptic functions) are chosen by the system beside ``ops``.
+(`connenv.core.model`), each returns its value at the real parts, exactly as on real rows, with the imaginary part
+carried by its derivative there (the one-sided one at a kink), so that Im f(x + ih)/h is f′(x). The task
+namespaces SCALAR and BATCH (below; ``connenv.envs.base`` writes tasks on them) are these with the task's operations
+added, and serve the systems' functions as well. Special functions outside the standard (scipy.special's Jacobi elliptic functions) are chosen by the system beside ``ops``.
 """
 
 from __future__ import annotations
@@ -134,3 +134,32 @@ def components(a):
         a = np.asarray(a, float)
         one = a.ndim == 1
     return a.tolist() if one else [a[..., i] for i in range(a.shape[-1])]
+
+
+SCALAR = operations(
+    "SCALAR",
+    **{name: getattr(FLOATS, name) for name in NAMES},
+    clip=lambda x, low, high: min(max(x, low), high),
+    column=lambda x: x,
+    pack=lambda parts: np.array(parts, np.float32),
+    real=float,
+    flag=bool,
+    vector=lambda a: tuple(np.asarray(a, float).tolist()),
+    components=lambda a: a.tolist(),
+)
+"""Operations on one state, as Python floats (the single env's): the physics' (``connenv.core.backend.FLOATS``)
+and the task's. Several times faster than numpy on one state."""
+
+BATCH = operations(
+    "BATCH",
+    **{name: getattr(ARRAYS, name) for name in NAMES},
+    clip=lambda x, low, high: ARRAYS.minimum(ARRAYS.maximum(x, low), high),
+    column=lambda x: x[..., None],
+    pack=lambda parts: np.stack(np.broadcast_arrays(*parts), axis=-1).astype(np.float32),
+    real=lambda x: np.asarray(x, np.result_type(x, np.float64)),  # float64, or complex on a Jacobian's rows
+    flag=lambda x: np.asarray(np.real(x), bool),
+    vector=lambda a: BATCH.real(np.array(a)),
+    components=lambda a: [a[..., i] for i in range(a.shape[-1])],
+)
+"""The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names (``ARRAYS``,
+safe on the complex rows of the model's Jacobians), and the task's. ``components`` splits the last axis: Python floats of one state, arrays over the rows of a batch."""

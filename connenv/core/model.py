@@ -29,9 +29,9 @@ from types import SimpleNamespace
 import numpy as np
 from gymnasium.vector.utils import batch_space
 
+from connenv.core.backend import BATCH, SCALAR
 from connenv.core.batched import batched
 from connenv.core.steppers import StepperError
-from connenv.envs.base import BATCH, SCALAR
 
 STEP = 1e-20  # the complex step: far below rounding of any entry, far above the smallest float
 CACHED_MODELS = 64  # models of other parameter values kept by with_params

@@ -1,0 +1,86 @@
+"""Agents trained on randomized physical parameters against agents trained on fixed ones, on both kinds of episode.
+
+    python -m agents.randomized --env connenv/Swing-v0 --randomize '{"g": [7, 12]}' --runs runs/randomized \\
+        --write docs/baselines/randomized.md
+
+Every seed's best model in --runs (trained by ``train.py --env-kwargs '{"randomize": ...}'``) and the shipped
+pretrained models (trained on the make kwargs' values) are evaluated on the score's unseen episodes (reset seeds
+from agents.baselines.UNSEEN_SEED), once with the parameters fixed at their defaults and once drawn per episode
+from the ranges. Success is the mean over seeds, with a 95% bootstrap interval over them (one seed: its own).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from agents.baselines import EPISODES, PRETRAINED, UNSEEN_SEED, run_seeds, short
+from agents.evaluate import ENV_IDS, evaluate, make_policy
+from connenv import cli
+
+PROG = "python -m agents.randomized"
+
+
+def success(env_id: str, model: Path, algo: str, env_kwargs: dict) -> float:
+    _, policy = make_policy(str(model), env_id, UNSEEN_SEED, algo, env_kwargs)
+    return float(np.mean([e.success for e in evaluate(env_id, policy, EPISODES, UNSEEN_SEED, env_kwargs=env_kwargs)]))
+
+
+def interval(values: list[float], rng=None) -> tuple[float, float]:
+    """The 95% bootstrap interval of the mean over seeds (percentile, 10,000 resamples)."""
+    rng = rng or np.random.default_rng(0)
+    means = rng.choice(values, (10_000, len(values))).mean(axis=1)
+    return float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))
+
+
+def rows(env_id: str, algo: str, randomize: dict, runs: Path) -> list[dict]:
+    """Per policy (the runs' seeds, the shipped model): success on fixed and on randomized parameters."""
+    groups = {
+        f"{algo}, trained on randomized {', '.join(randomize)}": [
+            runs / f"{short(env_id)}_{algo}_s{seed}" / "best_model.zip" for seed in run_seeds(env_id, algo, runs)
+        ],
+        f"{algo}, trained on fixed (shipped model)": [PRETRAINED / f"{short(env_id)}_{algo}" / "best_model.zip"],
+    }
+    table = []
+    for label, models in groups.items():
+        fixed = [success(env_id, m, algo, {}) for m in models]
+        drawn = [success(env_id, m, algo, {"randomize": randomize}) for m in models]
+        table.append({"policy": label, "seeds": len(models), "fixed": fixed, "randomized": drawn})
+    return table
+
+
+def markdown(env_id: str, randomize: dict, table: list[dict]) -> str:
+    def cell(values):
+        low, high = interval(values)
+        return f"{100 * np.mean(values):.0f}% [{100 * low:.0f}, {100 * high:.0f}]"
+
+    lines = [
+        f"# Randomized parameters: {short(env_id)}", "",
+        f"Written by `{PROG} --env {env_id} --randomize '{json.dumps(randomize)}'`. Success on {EPISODES} unseen "
+        f"episodes (reset seeds {UNSEEN_SEED} and up), mean over seeds with a 95% bootstrap interval; fixed: the "
+        f"make kwargs' values, randomized: each episode draws {json.dumps(randomize)} (log-uniform for a scale).", "",
+        "| policy | seeds | fixed parameters | randomized parameters |", "|---|---|---|---|",
+        *(f"| {r['policy']} | {r['seeds']} | {cell(r['fixed'])} | {cell(r['randomized'])} |" for r in table), "",
+    ]  # fmt: skip
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> str:
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
+    parser.add_argument("--env", required=True, choices=ENV_IDS)
+    parser.add_argument("--algo", default="ppo")
+    parser.add_argument("--randomize", required=True, type=json.loads, help="a JSON object {name: [low, high]}")
+    parser.add_argument("--runs", required=True, type=Path, help="the folder of the randomized runs")
+    parser.add_argument("--write", type=cli.writable_file, help="the markdown page to write")
+    args = parser.parse_args(argv)
+    text = markdown(args.env, args.randomize, rows(args.env, args.algo, args.randomize, args.runs))
+    if args.write:
+        Path(args.write).write_text(text)
+    print(text)
+    return text
+
+
+if __name__ == "__main__":
+    cli.run(main, PROG)
