@@ -253,25 +253,21 @@ def disc_segment(s, s_dot, max_bend: float, dt: float):
     s, v = floating(s), floating(s_dot)
     if s.ndim == 1:
         return _disc_segment_one(s, v, max_bend, dt)
+    ops = ARRAYS if np.iscomplexobj(s) or np.iscomplexobj(v) else np  # numpy's own on real rows: no dispatch per call
     a, b = np.sum(v * v, -1), 2 * np.sum(s * v, -1)
-    c = ARRAYS.minimum(np.sum(s * s, -1) - max_bend**2, 0.0)  # ≤ 0: s is in the disc
+    c = ops.minimum(np.sum(s * s, -1) - max_bend**2, 0.0)  # ≤ 0: s is in the disc
     end = s + v * dt
     inside = np.real(np.sum(end * end, -1)) <= max_bend**2
     root = np.sqrt(b * b - 4 * a * np.where(inside, 0.0, c))
     with np.errstate(divide="ignore", invalid="ignore"):
         reach = np.where(np.real(b) >= 0, -2 * c / (b + root), (root - b) / (2 * a))
-    tau = np.where(inside, dt, _clip(np.nan_to_num(reach), 0.0, dt))
+    reach = np.nan_to_num(reach)
+    tau = np.where(inside, dt, np.clip(reach, 0.0, dt) if ops is np else ops.minimum(ops.maximum(reach, 0.0), dt))
     edge = s + v * tau[..., None]
-    radius = ARRAYS.maximum(ARRAYS.hypot(edge[..., 0], edge[..., 1]), 1e-300)
-    edge = edge * ARRAYS.minimum(1.0, max_bend / radius)[..., None]
+    edge = edge * ops.minimum(1.0, max_bend / ops.maximum(ops.hypot(edge[..., 0], edge[..., 1]), 1e-300))[..., None]
     s_end = np.where(inside[..., None], end, edge)
     v_end = np.where(inside[..., None], v, 0.0)
     return (float(tau) if np.ndim(tau) == 0 else tau), s_end, v_end
-
-
-def _clip(x, low, high):
-    """np.clip; on complex rows (a complex-step Jacobian's), the branch of the real parts."""
-    return ARRAYS.minimum(ARRAYS.maximum(x, low), high) if np.iscomplexobj(x) else np.clip(x, low, high)
 
 
 def _disc_segment_one(s, v, max_bend: float, dt: float):

@@ -54,7 +54,9 @@ def floating(a):
     """a as an array of floats, or of complex numbers on the complex rows of a complex-step Jacobian
     (``connenv.envs.model``), whose derivatives a cast to float would drop."""
     a = np.asarray(a)
-    return a.astype(np.result_type(a, np.float64), copy=False)
+    if a.dtype.char in "dD":  # float64 or complex128 already: no conversion (the common case, kept cheap)
+        return a
+    return a.astype(complex if a.dtype.kind == "c" else float)
 
 
 def ops_of(component):
