@@ -117,7 +117,10 @@ vars(ARRAYS).update(
 def floats(a) -> np.ndarray:
     """a as an array of floats, or of complex numbers on the complex rows of a Jacobian (which a cast to float would
     strip of their derivatives)."""
-    return np.asarray(a, complex if np.iscomplexobj(a) else float)
+    a = np.asarray(a)
+    if a.dtype.char in "dD":  # float64 or complex128 already: no conversion (the common case, kept cheap)
+        return a
+    return a.astype(complex if a.dtype.kind == "c" else float)
 
 
 def namespace(x):

@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 from scipy.spatial.transform import Rotation
 
+from connenv.core.backend import ARRAYS
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.segments import run_segments
@@ -53,7 +54,7 @@ def check_so3(stepper, R):
         gram = [dot3(u, v) - (u is v) for u in columns for v in columns]
         drift = math.sqrt(sum(map(operator.mul, gram, gram)))
     else:  # the six distinct entries of RᵀR − I elementwise over the rows: cheaper than a stacked matmul
-        c = [R[..., :, k] for k in range(3)]
+        c = [np.real(R[..., :, k]) for k in range(3)]  # a check: of the real parts on complex rows
         dot = [c[i][..., 0] * c[j][..., 0] + c[i][..., 1] * c[j][..., 1] + c[i][..., 2] * c[j][..., 2] for i, j in PAIRS]
         square = sum((d - (i == j)) ** 2 * (1 if i == j else 2) for d, (i, j) in zip(dot, PAIRS))
         drift = math.sqrt(float(np.max(square)))
@@ -242,12 +243,12 @@ class RollingBallEnv(TaskEnv):
                 length = math.hypot(a[0], a[1])
             return self.v_max * a / max(1.0, length)
         with np.errstate(over="ignore"):
-            length = np.hypot(a[:, 0], a[:, 1])
-        huge = length == math.inf
+            length = ARRAYS.hypot(a[:, 0], a[:, 1])
+        huge = np.real(length) == math.inf
         if huge.any():
-            a = np.where(huge[:, None], a / np.max(np.abs(a), axis=1, keepdims=True), a)
-            length = np.hypot(a[:, 0], a[:, 1])
-        return self.v_max * a / np.maximum(1.0, length)[:, None]
+            a = np.where(huge[:, None], a / np.max(np.abs(np.real(a)), axis=1, keepdims=True), a)
+            length = ARRAYS.hypot(a[:, 0], a[:, 1])
+        return self.v_max * a / ARRAYS.maximum(1.0, length)[:, None]
 
     def observe(self, s, ops=SCALAR):
         return six_d(s.error).astype(np.float32)
@@ -389,7 +390,7 @@ class RollingBallGoalEnv(RollingBallEnv):
     def at(self, R, R_target, position, t, path_length, distance, ops=SCALAR):
         """RollingBall-v0's state, with the achieved and the desired goal."""
         state = super().at(R, R_target, position, t, path_length, distance, ops)
-        achieved, desired = six_d(R).astype(np.float32), six_d(R_target).astype(np.float32)
+        achieved, desired = single_precision(six_d(R)), single_precision(six_d(R_target))
         error = ops.real(self.goal_angle(achieved, desired))
         return GoalBallState(**vars(state), achieved_goal=achieved, desired_goal=desired, goal_error=error)
 
@@ -419,6 +420,11 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     def compute_truncated(self, achieved_goal, desired_goal, info):
         return np.zeros(np.shape(self.goal_angle(achieved_goal, desired_goal)), bool)
+
+
+def single_precision(x):
+    """x in float32, as the goals are observed; complex64 on the complex rows of a Jacobian, to keep the derivative."""
+    return x.astype(np.complex64 if np.iscomplexobj(x) else np.float32)
 
 
 class RollingBallVectorEnv(TaskVectorEnv):

@@ -11,6 +11,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import ARRAYS
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
@@ -61,15 +62,24 @@ def joint_path(s, s_cmd, dt: float, max_speed: float):
     if np.ndim(s) == 1:  # one state on floats, the same arithmetic: several times faster than numpy on two numbers
         return _joint_path_floats(s.tolist(), s_cmd.tolist(), dt, max_speed)
     delta = s_cmd - s
-    largest = np.max(np.abs(delta), axis=-1)
+    largest = _largest(delta)
     reach = largest / max_speed
     with np.errstate(divide="ignore", over="ignore"):
         scale = max_speed / largest
-    moves = scale < math.inf  # a move, resolved: largest > 0 and max_speed / largest finite
+    moves = np.real(scale) < math.inf  # a move, resolved: largest > 0 and max_speed / largest finite
     s_dot = np.where(moves[..., None], delta * np.where(moves, scale, 0.0)[..., None], 0.0)
-    ramp = np.where(moves, np.minimum(reach, dt), 0.0)
-    end = np.where((reach <= dt)[..., None], s_cmd, s + s_dot * dt)
+    ramp = np.where(moves, ARRAYS.minimum(reach, dt), 0.0)
+    end = np.where((np.real(reach) <= dt)[..., None], s_cmd, s + s_dot * dt)
     return s_dot, ramp, end
+
+
+def _largest(delta):
+    """max |δ_k| over the last axis; on complex rows (a Jacobian's), the entry the real parts pick, with its
+    derivative."""
+    if not np.iscomplexobj(delta):
+        return np.max(np.abs(delta), axis=-1)
+    magnitude = ARRAYS.abs(delta)
+    return np.take_along_axis(magnitude, np.argmax(np.real(magnitude), axis=-1)[..., None], axis=-1)[..., 0]
 
 
 def _joint_path_floats(s, s_cmd, dt, max_speed):

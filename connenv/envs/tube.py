@@ -146,10 +146,7 @@ class TubeTwistEnv(ConnectionEnv):
         """The state at R (g) from R₀, with its error from the target frame, its twist and its tangent angle."""
         lead = np.shape(g)[:-1]
         Q = np.swapaxes(R0.reshape(*lead, 3, 3), -1, -2) @ g.reshape(*lead, 3, 3)
-        if ops is SCALAR:
-            psi, theta = twist(Q, math.atan2), tangent_angle(Q, math.atan2, math.hypot)
-        else:
-            psi, theta = twist(Q), tangent_angle(Q)
+        psi, theta = twist(Q, ops.atan2), tangent_angle(Q, ops.atan2, ops.hypot)
         c, n = ops.column(np.cos(target)), ops.column(np.sin(target))
         rows = [c * Q[..., 0, :] + n * Q[..., 1, :], c * Q[..., 1, :] - n * Q[..., 0, :], Q[..., 2, :]]
         error = np.concatenate(rows, -1)

@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from connenv.core.backend import floats
+
 
 def coupling(body_inertia: float, beanie_inertia: float) -> float:
     """A = I₂/(I₁ + I₂)."""
@@ -36,10 +38,11 @@ def connection(s, body_inertia: float, beanie_inertia: float):
 
 
 def exact_segment(g, s, s_dot, tau, body_inertia: float, beanie_inertia: float):
-    """θ after a segment of length tau at constant ψ̇, at zero momentum (the geometric part): g (..., 1)."""
-    tau = np.asarray(tau, float)
-    turn = coupling(body_inertia, beanie_inertia) * np.asarray(s_dot, float) * tau[..., None]
-    return np.asarray(g, float) - turn
+    """θ after a segment of length tau at constant ψ̇, at zero momentum (the geometric part): g (..., 1); complex
+    on the rows of a complex-step Jacobian."""
+    tau = floats(tau)
+    turn = coupling(body_inertia, beanie_inertia) * floats(s_dot) * tau[..., None]
+    return floats(g) - turn
 
 
 def dynamic_phase(momentum, tau, body_inertia: float, beanie_inertia: float):

@@ -67,6 +67,8 @@ import math
 
 import numpy as np
 
+from connenv.core.backend import ARRAYS, floats
+
 GAUSS_NODES = 8  # Gauss–Legendre nodes per piece of a segment
 PIECE_FRACTION = 0.25  # a piece's length at most this fraction of the distance to the integrand's singularity
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(GAUSS_NODES)
@@ -74,7 +76,7 @@ _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(GAUSS_NODES)
 
 def roll_fraction(beta, transverse_inertia: float, axial_inertia: float):
     """f(β) = [I σ² − J c (1 − c)] / (I σ² + J c²): the roll per radian of sweep (the cat rolls by −f dγ)."""
-    half = 0.5 * np.asarray(beta, float)
+    half = 0.5 * floats(beta)
     c, s2 = np.cos(half), np.sin(half) ** 2
     return (transverse_inertia * s2 - axial_inertia * c * (1 - c)) / (transverse_inertia * s2 + axial_inertia * c * c)
 
@@ -82,7 +84,7 @@ def roll_fraction(beta, transverse_inertia: float, axial_inertia: float):
 def roll_density(beta_squared, transverse_inertia: float, axial_inertia: float):
     """f(β)/β² as a function of β² ≥ 0, without cancellation at β = 0: sin(β/2)/β and (1 − c)/β² = 2 sin²(β/4)/β²
     through np.sinc."""
-    beta = np.sqrt(np.asarray(beta_squared, float))
+    beta = np.sqrt(floats(beta_squared))
     c = np.cos(0.5 * beta)
     half_sinc = 0.5 * np.sinc(beta / (2 * math.pi))  # sin(β/2)/β
     quarter_sinc = 0.25 * np.sinc(beta / (4 * math.pi))  # sin(β/4)/β
@@ -92,9 +94,9 @@ def roll_density(beta_squared, transverse_inertia: float, axial_inertia: float):
 
 def connection(s, transverse_inertia: float, axial_inertia: float):
     """A(s) (…, 3, 2) at bend vectors s (…, 2): f(β)/β² · (−y, x) in the spine's row, zero in the others."""
-    s = np.asarray(s, float)
+    s = floats(s)
     density = roll_density(np.sum(s * s, axis=-1), transverse_inertia, axial_inertia)
-    A = np.zeros((*s.shape[:-1], 3, 2))
+    A = np.zeros((*s.shape[:-1], 3, 2), density.dtype)
     A[..., 0, 0], A[..., 0, 1] = -density * s[..., 1], density * s[..., 0]
     return A
 
@@ -102,7 +104,7 @@ def connection(s, transverse_inertia: float, axial_inertia: float):
 def curvature(beta, transverse_inertia: float, axial_inertia: float):
     """F(β) = f′(β)/β, the curvature dA = F dx ∧ dy: a small loop of area a (counterclockwise) at s rolls the cat
     by −F a."""
-    beta = np.asarray(beta, float)
+    beta = floats(beta)
     I, J = transverse_inertia, axial_inertia  # noqa: E741  (the literature's I)
     c, s = np.cos(0.5 * beta), np.sin(0.5 * beta)
     numerator, denominator = I * s * s - J * c * (1 - c), I * s * s + J * c * c
@@ -139,7 +141,7 @@ def _rule(pieces: int):
 def segment_roll(s, s_dot, tau, transverse_inertia: float, axial_inertia: float, pieces: int = 1):
     """Δφ = −(s₀ × v) ∫₀^τ f/β² dτ′ over segments s₀ + τ′ v (s, s_dot (…, 2), tau a float or (…)): Gauss–Legendre
     with GAUSS_NODES nodes on each of `pieces` equal pieces."""
-    s, v, tau = np.asarray(s, float), np.asarray(s_dot, float), np.asarray(tau, float)
+    s, v, tau = floats(s), floats(s_dot), floats(tau)
     fractions, weights = _rule(pieces)
     points = s[..., None, :] + (tau[..., None] * fractions)[..., None] * v[..., None, :]
     density = roll_density(np.sum(points * points, axis=-1), transverse_inertia, axial_inertia)
@@ -151,14 +153,14 @@ def exact_segment(g, s, s_dot, tau, transverse_inertia: float, axial_inertia: fl
     """The cat frame's 9 coordinates (row by row, …, 9) after a segment at constant ṡ: g Rx(Δφ)."""
     phi = segment_roll(s, s_dot, tau, transverse_inertia, axial_inertia, pieces)
     c, n = np.cos(phi)[..., None], np.sin(phi)[..., None]
-    g = np.asarray(g, float).reshape(*np.shape(phi), 3, 3)
+    g = floats(g).reshape(*np.shape(phi), 3, 3)
     columns = [g[..., 0], c * g[..., 1] + n * g[..., 2], c * g[..., 2] - n * g[..., 1]]
     return np.stack(columns, -1).reshape(*np.shape(phi), 9)
 
 
 def roll(g):
     """The roll about the spine (rad, (−π, π]): atan2(Z · g e₂, Z · g e₃), 0 feet down (g (…, 3, 3))."""
-    return np.arctan2(g[..., 2, 1], g[..., 2, 2])
+    return ARRAYS.atan2(g[..., 2, 1], g[..., 2, 2])
 
 
 # -- the two bodies ------------------------------------------------------------
@@ -177,12 +179,12 @@ def front_half(s):
     """Q_A = exp(v̂) and the left Jacobian J(v), (Q̇_A Q_Aᵀ) = (J(v) v̇)^, at v = (0, −y, x)/2 (…, 3, 3); the rear
     half's are their transposes (v ↦ −v): Q_B = Q_Aᵀ, J(−v) = J(v)ᵀ. With θ = β/2 and V = v̂:
     Q = I + sin θ/θ V + (1 − cos θ)/θ² V², J = I + (1 − cos θ)/θ² V + (θ − sin θ)/θ³ V², by series below 1e-3."""
-    s = np.asarray(s, float)
+    s = floats(s)
     if s.ndim == 1:
         return _front_half_one(*(0.5 * s).tolist())
     x, y = 0.5 * s[..., 0], 0.5 * s[..., 1]
-    theta = np.hypot(x, y)[..., None, None]
-    small = theta < 1e-3
+    theta = ARRAYS.hypot(x, y)[..., None, None]
+    small = np.real(theta) < 1e-3
     safe = np.where(small, 1.0, theta)
     sin_part = np.where(small, 1 - theta**2 / 6, np.sin(safe) / safe)
     cos_part = np.where(small, 0.5 - theta**2 / 24, (1 - np.cos(safe)) / safe**2)
@@ -221,7 +223,7 @@ def angular_momentum(g, s, s_dot, omega, transverse_inertia: float, axial_inerti
     """The angular momentum in space about the centre of mass (…, 3), summed over the two bodies: their spins
     𝕀_i ω_i and their centres' m r_i × ṙ_i, from the cat frame g (…, 3, 3), its angular velocity Ω (…, 3, in the
     cat frame), the shape s and ṡ (front: `front_half(s)` if at hand)."""
-    s_dot, omega = np.asarray(s_dot, float), np.asarray(omega, float)
+    s_dot, omega = floats(s_dot), floats(omega)
     Q, jacobian = front_half(s) if front is None else front
     if s_dot.ndim == 1:  # one shape velocity: np.stack of 0-d arrays costs more than the rest of the line
         v_dot = 0.5 * np.array([0.0, -s_dot[1], s_dot[0]])
@@ -247,19 +249,21 @@ def disc_segment(s, s_dot, max_bend: float, dt: float):
     """The bend's segment over a step of length dt at the velocity ṡ, stopped where β reaches max_bend (the disc's
     edge; it rests there for the rest of the step): its duration τ (a float, or one per row), and s and ṡ at the
     end of the step. τ is the positive root of |s + τ ṡ|² = max_bend², without cancellation."""
-    s, v = np.asarray(s, float), np.asarray(s_dot, float)
+    s, v = floats(s), floats(s_dot)
     if s.ndim == 1:
         return _disc_segment_one(s, v, max_bend, dt)
+    ops = ARRAYS if np.iscomplexobj(s) or np.iscomplexobj(v) else np  # numpy's own on real rows: no dispatch per call
     a, b = np.sum(v * v, -1), 2 * np.sum(s * v, -1)
-    c = np.minimum(np.sum(s * s, -1) - max_bend**2, 0.0)  # ≤ 0: s is in the disc
+    c = ops.minimum(np.sum(s * s, -1) - max_bend**2, 0.0)  # ≤ 0: s is in the disc
     end = s + v * dt
-    inside = np.sum(end * end, -1) <= max_bend**2
+    inside = np.real(np.sum(end * end, -1)) <= max_bend**2
     root = np.sqrt(b * b - 4 * a * np.where(inside, 0.0, c))
     with np.errstate(divide="ignore", invalid="ignore"):
-        reach = np.where(b >= 0, -2 * c / (b + root), (root - b) / (2 * a))
-    tau = np.where(inside, dt, np.clip(np.nan_to_num(reach), 0.0, dt))
+        reach = np.where(np.real(b) >= 0, -2 * c / (b + root), (root - b) / (2 * a))
+    reach = np.nan_to_num(reach)
+    tau = np.where(inside, dt, np.clip(reach, 0.0, dt) if ops is np else ops.minimum(ops.maximum(reach, 0.0), dt))
     edge = s + v * tau[..., None]
-    edge = edge * np.minimum(1.0, max_bend / np.maximum(np.hypot(edge[..., 0], edge[..., 1]), 1e-300))[..., None]
+    edge = edge * ops.minimum(1.0, max_bend / ops.maximum(ops.hypot(edge[..., 0], edge[..., 1]), 1e-300))[..., None]
     s_end = np.where(inside[..., None], end, edge)
     v_end = np.where(inside[..., None], v, 0.0)
     return (float(tau) if np.ndim(tau) == 0 else tau), s_end, v_end

@@ -34,6 +34,8 @@ import numpy as np
 from scipy.optimize import brentq, root
 from scipy.spatial.transform import Rotation
 
+from connenv.core.backend import ARRAYS, floats
+from connenv.core.lie.groups import GROUPS
 from connenv.core.validation import ndim
 
 E_Z = np.array([0.0, 0.0, 1.0])
@@ -77,7 +79,7 @@ class RollingBall:
 
     def spin(self, v):
         """e_z × v / ρ: the angular velocity of rolling at v, and the rotation vector of a straight roll by v."""
-        v = np.asarray(v, float)
+        v = floats(v)
         if v.ndim == 1:  # one velocity: Python floats (np.stack costs more than a whole step of the ball)
             vx, vy = v.tolist()
             return np.array([-vy / self.radius, vx / self.radius, 0.0])
@@ -87,17 +89,19 @@ class RollingBall:
         """Ṙ = ω̂ R, flattened; u (the centre) does not enter."""
         w = self.spin(u_dot)
         R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))
-        hat = np.zeros((*w.shape[:-1], 3, 3))
+        hat = np.zeros((*w.shape[:-1], 3, 3), w.dtype)
         hat[..., 0, 2], hat[..., 1, 2], hat[..., 2, 0], hat[..., 2, 1] = w[..., 1], -w[..., 0], -w[..., 1], w[..., 0]
         return (hat @ R).reshape(np.shape(y))
 
     def exact_segment(self, y, u, u_dot, tau):
         """R ← exp(τ ω̂) R, exact for v held over the segment: scipy's Rotation over a batch; for one state,
-        Rodrigues' formula on Python floats (scipy's Rotation costs more than a whole Pendulum-v1 step on one)."""
+        Rodrigues' formula on Python floats (scipy's Rotation costs more than a whole Pendulum-v1 step on one), and on
+        the complex rows of a Jacobian, which scipy's Rotation does not take."""
         if type(y) is np.ndarray and y.ndim == 1 and ndim(tau) == 0:
             return np.array(_rodrigues_times(self.spin(u_dot).tolist(), float(tau), y.tolist()))
-        R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))
-        return (Rotation.from_rotvec(tau * self.spin(u_dot)).as_matrix() @ R).reshape(np.shape(y))
+        R, rotvec = np.reshape(y, (*np.shape(y)[:-1], 3, 3)), tau * self.spin(u_dot)
+        step = _exp(rotvec) if np.iscomplexobj(rotvec) else Rotation.from_rotvec(rotvec).as_matrix()
+        return (step @ R).reshape(np.shape(y))
 
     def roll(self, displacements) -> Rotation:
         """The rotation of rolling the straight legs `displacements` (k, 2) one after the other."""
@@ -289,7 +293,20 @@ def rotation_angle(P):
         (a, b, c), (d, e, f), (g, h, i) = P.tolist()
         return math.atan2(0.5 * math.sqrt((h - f) ** 2 + (c - g) ** 2 + (d - b) ** 2), 0.5 * (a + e + i - 1.0))
     skew = np.stack([P[..., 2, 1] - P[..., 1, 2], P[..., 0, 2] - P[..., 2, 0], P[..., 1, 0] - P[..., 0, 1]], -1)
-    return np.arctan2(0.5 * np.linalg.norm(skew, axis=-1), 0.5 * (np.trace(P, axis1=-2, axis2=-1) - 1.0))
+    return ARRAYS.atan2(0.5 * norm(skew), 0.5 * (np.trace(P, axis1=-2, axis2=-1) - 1.0))
+
+
+def norm(x, keepdims=False):
+    """√(x·x) over the last axis: np.linalg.norm's arithmetic on real rows; on the complex rows of a Jacobian, the
+    analytic continuation (the norm's would be the modulus, dropping the derivative's sign)."""
+    return np.sqrt(np.sum(x * x, axis=-1, keepdims=keepdims))
+
+
+def _exp(rotvec):
+    """The rotation matrices exp(r̂) (..., 3, 3) of rotation vectors r (..., 3) by Rodrigues' formula
+    (`connenv.core.lie.groups`), analytic in r."""
+    entries = GROUPS["SO3"].exp(tuple(np.moveaxis(rotvec, -1, 0)))
+    return np.stack(np.broadcast_arrays(*entries), -1).reshape(*np.shape(rotvec)[:-1], 3, 3)
 
 
 def six_d(R):
@@ -343,9 +360,9 @@ def _frame(x):
 
 def from_six_d(x):
     """Rotation matrices from the 6-D form, by Gram–Schmidt (exact for the columns of a rotation)."""
-    x = np.asarray(x, float)
+    x = floats(x)
     a, b = x[..., :3], x[..., 3:]
-    c1 = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    c1 = a / norm(a, keepdims=True)
     b = b - np.sum(c1 * b, axis=-1, keepdims=True) * c1
-    c2 = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    c2 = b / norm(b, keepdims=True)
     return np.stack([c1, c2, np.cross(c1, c2)], axis=-1)

@@ -37,11 +37,13 @@ import math
 
 import numpy as np
 
+from connenv.core.backend import floats
+
 
 def connection(s, radius: float):
     """A(θ, φ) of shape (..., 2, 2) for shapes s of shape (..., 2)."""
-    theta = np.asarray(s, float)[..., 0]
-    A = np.zeros((*theta.shape, 2, 2))
+    theta = floats(s)[..., 0]
+    A = np.zeros((*theta.shape, 2, 2), theta.dtype)
     A[..., 0, 1] = -radius * np.sin(theta)
     A[..., 1, 1] = -radius * np.cos(theta)
     return A
@@ -49,18 +51,20 @@ def connection(s, radius: float):
 
 def exact_segment(g, s, s_dot, tau, radius: float):
     """(x, y) after a segment of length tau at constant (θ̇, φ̇) from the shape s = (θ, φ): one state (arrays (2,),
-    a float tau) or a batch of rows (arrays (N, 2), tau a float or one per row)."""
-    g = np.asarray(g, float)
+    a float tau) or a batch of rows (arrays (N, 2), tau a float or one per row; complex on a Jacobian's, the sinc's
+    branch at 0 taken by the real parts)."""
+    g = floats(g)
     if g.ndim == 1:
         theta, (omega, nu), tau = float(s[0]), map(float, s_dot), float(tau)
         half = 0.5 * omega * tau
         chord = radius * nu * tau * (math.sin(half) / half if half != 0.0 else 1.0)
         mid = theta + half
         return np.array([g[0] + chord * math.sin(mid), g[1] + chord * math.cos(mid)])
-    s, s_dot = np.asarray(s, float), np.asarray(s_dot, float)
+    s, s_dot = floats(s), floats(s_dot)
     half = 0.5 * s_dot[..., 0] * tau
-    safe = np.where(half == 0.0, 1.0, half)
-    chord = radius * s_dot[..., 1] * tau * np.where(half == 0.0, 1.0, np.sin(safe) / safe)
+    zero = np.real(half) == 0.0
+    safe = np.where(zero, 1.0, half)
+    chord = radius * s_dot[..., 1] * tau * np.where(zero, 1.0, np.sin(safe) / safe)
     mid = s[..., 0] + half
     return np.stack([g[..., 0] + chord * np.sin(mid), g[..., 1] + chord * np.cos(mid)], axis=-1)
 

@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.core.backend import components, namespace
+from connenv.core.backend import components, floats, namespace
 from connenv.systems.ideal_fluid import added_masses, kirchhoff, reconstruct, space_frame, spatial_momentum
 
 JOINT_LIMIT = 2.0 * math.pi / 3.0  # |α|, |β| ≤ 2π/3: the links' tips stay apart
@@ -128,17 +128,17 @@ class SnakeSwimmer:
 
     def locked_inertia(self, s):
         """𝕀_loc(α, β), shape (..., 3, 3)."""
-        I11, I12, I13, I22, I23, I33 = np.broadcast_arrays(*self._metric(components(np.asarray(s, float)))[0])
+        I11, I12, I13, I22, I23, I33 = np.broadcast_arrays(*self._metric(components(floats(s)))[0])
         return np.stack([np.stack(row, -1) for row in [[I11, I12, I13], [I12, I22, I23], [I13, I23, I33]]], -2)
 
     def coupling(self, s):
         """𝕀_c(α, β), shape (..., 3, 2): column k the coupling to the k-th joint's rate."""
-        rear, front = self._metric(components(np.asarray(s, float)))[1]
+        rear, front = self._metric(components(floats(s)))[1]
         return np.stack([np.stack(np.broadcast_arrays(*rear), -1), np.stack(np.broadcast_arrays(*front), -1)], -1)
 
     def shape_inertia(self, s):
         """𝕀_s(α, β), shape (..., 2, 2): diagonal (each joint's rate moves one link)."""
-        s_alpha, s_beta = np.broadcast_arrays(*self._metric(components(np.asarray(s, float)))[2])
+        s_alpha, s_beta = np.broadcast_arrays(*self._metric(components(floats(s)))[2])
         zero = np.zeros_like(s_alpha)
         return np.stack([np.stack([s_alpha, zero], -1), np.stack([zero, s_beta], -1)], -2)
 
@@ -186,7 +186,7 @@ class SnakeSwimmer:
 
     def link_poses(self, y, s):
         """The three links' poses (x, y, φ) in space, rear, middle, front: shape (..., 3, 3)."""
-        y, s = np.asarray(y, float), np.asarray(s, float)
+        y, s = floats(y), floats(s)
         a, (x, y_, theta), (alpha, beta) = self.a, (y[..., i] for i in range(3)), (s[..., 0], s[..., 1])
         c, sn = np.cos(theta), np.sin(theta)
         poses = []

@@ -58,33 +58,37 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from connenv.core.backend import floats
+
 BEND_CONNECTION = -np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])
 """A of the tube as a connection over the accumulated bend s: ξ = −A ṡ = (ṡ₁, ṡ₂, 0), in the tip's frame."""
 
 
 def hat(omega):
     """ω̂ (…, 3, 3): ω̂ v = ω × v."""
-    w = np.asarray(omega, float)
+    w = floats(omega)
     zero = np.zeros_like(w[..., 0])
     rows = [[zero, -w[..., 2], w[..., 1]], [w[..., 2], zero, -w[..., 0]], [-w[..., 1], w[..., 0], zero]]
     return np.stack([np.stack(r, -1) for r in rows], -2)
 
 
 def rodrigues(omega):
-    """exp(ω̂) (…, 3, 3), closed form: I + sin θ/θ ω̂ + (1 − cos θ)/θ² ω̂², θ = |ω|."""
-    w = np.asarray(omega, float)
-    angle = np.linalg.norm(w, axis=-1)[..., None, None]
-    safe = np.where(angle == 0.0, 1.0, angle)
-    a = np.where(angle == 0.0, 1.0, np.sin(safe) / safe)
-    b = np.where(angle == 0.0, 0.5, 0.5 * (np.sin(0.5 * safe) / (0.5 * safe)) ** 2)
+    """exp(ω̂) (…, 3, 3), closed form: I + sin θ/θ ω̂ + (1 − cos θ)/θ² ω̂², θ = √(ω·ω) (analytic on the complex rows
+    of a Jacobian, where the norm would be the modulus; θ = 0 decided by the real part)."""
+    w = floats(omega)
+    angle = np.sqrt(np.sum(w * w, axis=-1))[..., None, None]
+    zero = np.real(angle) == 0.0
+    safe = np.where(zero, 1.0, angle)
+    a = np.where(zero, 1.0, np.sin(safe) / safe)
+    b = np.where(zero, 0.5, 0.5 * (np.sin(0.5 * safe) / (0.5 * safe)) ** 2)
     W = hat(w)
     return np.eye(3) + a * W + b * (W @ W)
 
 
 def bent(R, bend):
     """R after a bend by the vector bend = (b₁, b₂) (rad) in the tip's frame: R exp((b₁, b₂, 0)^)."""
-    b = np.asarray(bend, float)
-    return np.asarray(R, float) @ rodrigues(np.concatenate([b, np.zeros_like(b[..., :1])], -1))
+    b = floats(bend)
+    return floats(R) @ rodrigues(np.concatenate([b, np.zeros_like(b[..., :1])], -1))
 
 
 def twist(Q, atan2=np.arctan2):

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from connenv.core.backend import floats
 from connenv.core.lie.groups import GROUPS
 from connenv.core.validation import check_returned, probe, real_array
 
@@ -32,19 +33,19 @@ class Connection:
 
     def group_velocity(self, s, s_dot):
         """ξ = −A(s) ṡ, as components (floats for one shape, arrays over the rows of a batch)."""
-        s = np.asarray(s, float)
+        s = floats(s)
         if s.ndim == 1 or self.vectorized:
             A = self.connection(s)
         else:
             rows = s.reshape(-1, s.shape[-1])
             A = np.stack([self.connection(r) for r in rows]).reshape(*s.shape[:-1], -1, s.shape[-1])
-        xi = -np.sum(np.asarray(A, float) * np.asarray(s_dot)[..., None, :], axis=-1)
+        xi = -np.sum(floats(A) * np.asarray(s_dot)[..., None, :], axis=-1)
         return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
 
     def vector_field(self, y, s, s_dot):
         """ẏ of the coordinates of g (for the generic steppers: RK4, scipy's): θ̇ = ω on SO2; on SE2 (ẋ, ẏ) = R(θ) v
         (body) or v + ω (−y, x) (space), θ̇ = ω; Ṙ = R ω̂ (body) or ω̂ R (space) on SO3; ẋ = v on R2."""
-        y = np.asarray(y, float)
+        y = floats(y)
         xi = np.stack(np.broadcast_arrays(*self.group_velocity(s, s_dot)), -1)
         if self.group in ("SO2", "R2"):
             return np.broadcast_to(xi, y.shape).copy()
@@ -55,7 +56,7 @@ class Connection:
                 c, s_ = np.cos(theta), np.sin(theta)
                 return np.stack([c * v1 - s_ * v2, s_ * v1 + c * v2, w + 0 * theta], -1)
             return np.stack([v1 - w * y_, v2 + w * x, w + 0 * theta], -1)
-        R, W = y.reshape(*y.shape[:-1], 3, 3), np.zeros((*xi.shape[:-1], 3, 3))
+        R, W = y.reshape(*y.shape[:-1], 3, 3), np.zeros((*xi.shape[:-1], 3, 3), xi.dtype)
         W[..., 0, 1], W[..., 0, 2], W[..., 1, 2] = -xi[..., 2], xi[..., 1], -xi[..., 0]
         W = W - np.swapaxes(W, -1, -2)
         return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
@@ -91,7 +92,7 @@ class ConstantConnection(Connection):
 
     def group_velocity(self, s, s_dot):
         """ξ = −A ṡ as components: floats for one shape, arrays over the rows of a batch."""
-        xi = np.asarray(s_dot, float) @ -self.A.T
+        xi = floats(s_dot) @ -self.A.T
         return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
 
     def exact_segment(self, y, s, s_dot, tau):
@@ -100,7 +101,7 @@ class ConstantConnection(Connection):
         if single:
             g, tau = tuple(np.asarray(y, float).tolist()), float(tau)
         else:
-            g, tau = tuple(np.moveaxis(np.asarray(y, float), -1, 0)), np.asarray(tau, float)
+            g, tau = tuple(np.moveaxis(floats(y), -1, 0)), floats(tau)
         step = group.exp([tau * c for c in xi])
         g = group.product(g, step) if self.frame == "body" else group.product(step, g)
         return np.array(g) if single else np.stack(np.broadcast_arrays(*g), -1)

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from connenv.core.backend import ARRAYS, floats
+
 
 class _Floats:
     sin, cos, sqrt, atan2 = math.sin, math.cos, math.sqrt, math.atan2
@@ -35,7 +37,7 @@ class _Floats:
 
 
 class _Arrays:
-    sin, cos, sqrt, atan2 = np.sin, np.cos, np.sqrt, np.arctan2
+    sin, cos, sqrt, atan2 = np.sin, np.cos, np.sqrt, ARRAYS.atan2  # atan2 safe on complex rows
 
     @staticmethod
     def sinc(x):
@@ -46,6 +48,8 @@ class _Arrays:
     def sinc_half_squared(x):
         half = np.where(x == 0.0, 1.0, 0.5 * x)
         return np.where(x == 0.0, 0.5, 0.5 * (np.sin(half) / half) ** 2)
+
+
 
 
 def ops_of(component):
@@ -106,7 +110,7 @@ class Group:
 
     def matrix(self, g):
         """g as a matrix (a vector for R2), from its coordinates (..., size)."""
-        g = np.asarray(g, float)
+        g = floats(g)
         if self.name == "R2":
             return g.copy()
         if self.name == "SO3":
@@ -120,18 +124,19 @@ class Group:
 
     def coordinates(self, matrix):
         """The coordinates of g given as a matrix (a vector for R2); the inverse of ``matrix`` on the group."""
-        m = np.asarray(matrix, float)
+        m = floats(matrix)
         if self.name == "R2":
             return m.copy()
         if self.name == "SO3":
             return m.reshape(*m.shape[:-2], 9)
-        angle = np.arctan2(m[..., 1, 0], m[..., 0, 0])[..., None]
+        angle = ARRAYS.atan2(m[..., 1, 0], m[..., 0, 0])[..., None]
         return angle if self.name == "SO2" else np.concatenate([m[..., :2, 2], angle], -1)
 
     def off_group(self, matrix):
         """How far a matrix is from the group (0 on it): max of ‖RᵀR − I‖ (Frobenius), |det R − 1| and, for SE2,
-        the last row's distance from (0, 0, 1). Coordinates of SO2, SE2 and R2 are on their group by construction."""
-        m = np.asarray(matrix, float)
+        the last row's distance from (0, 0, 1). Coordinates of SO2, SE2 and R2 are on their group by construction.
+        A check: of the real parts on complex rows."""
+        m = np.real(floats(matrix))
         if self.name == "R2":
             return np.zeros(m.shape[:-1])
         k = 3 if self.name == "SO3" else 2

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from connenv.core.backend import floats
 from connenv.core.lie.connections import group_velocity
 from connenv.core.lie.groups import GROUPS, Group, ops_of
 from connenv.core.steppers import ConnectionSystem, Scipy, StepperError, check_finite, conforms
@@ -179,7 +180,7 @@ def se2_body_flow(velocity, g, s, s_dot, tau, pieces: int, points: int = QUADRAT
         return _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points)
     block = max(1, BLOCK_BYTES // (8 * pieces * points))
     if len(s) > block:
-        increments = np.empty((3, len(s)))
+        increments = np.empty((3, len(s)), np.result_type(s, s_dot, tau))
         for i in range(0, len(s), block):
             rows = slice(i, i + block)
             increments[:, rows] = _se2_body_increment(velocity, s[rows], s_dot[rows], tau[rows] if np.ndim(tau) else
@@ -191,7 +192,7 @@ def se2_body_flow(velocity, g, s, s_dot, tau, pieces: int, points: int = QUADRAT
 def _se2_body_increment(velocity, s, s_dot, tau, pieces, points):
     """The body-frame increment (dx, dy, turn) of se2_body_flow over a batch of rows."""
     nodes, weights, Q = gauss_rule(points)[:3]
-    h = np.asarray(tau / pieces, float)
+    h = floats(tau / pieces)
     t = (np.arange(pieces)[:, None] + nodes).reshape(-1, 1) * h  # (pieces · points, N) or (pieces · points, 1)
     shape = (len(t), len(s))
     v1, v2, omega = (c if np.shape(c) == shape else np.broadcast_to(c, shape) for c in velocity(s, s_dot, t))
@@ -284,7 +285,7 @@ class Magnus:
             return self.fallback(system, y, u, u_dot, tau)
         if self.pieces is not None:
             return self._fixed(system, y, u, u_dot, tau)
-        y = np.asarray(y, float)
+        y = floats(y)
         if not np.any(u_dot):
             return y.copy()
         group, frame, order = GROUPS[system.group], system.frame, self.order
@@ -333,7 +334,7 @@ class Magnus:
                 return check_finite(np.array(two), self)
             checked = self._checked(flow, g, u, u_dot, tau, self._substeps(error, order), order)
             return check_finite(np.array(checked), self)
-        error = np.max(np.abs(np.subtract(one, two)), axis=0) / (2**order - 1)
+        error = np.max(np.abs(np.real(np.subtract(one, two))), axis=0) / (2**order - 1)  # the real parts' choice
         out = np.stack(two, -1)
         if np.any(constant):
             out = np.where(constant[:, None], np.stack(exact, -1), out)
@@ -366,7 +367,7 @@ class Magnus:
         while rows.size:
             rows_tau = tau[rows] if np.ndim(tau) else tau
             fine = flow(tuple(c[rows] for c in g), s[rows], s_dot[rows], rows_tau, 2 * n[rows])[0]
-            error = np.max(np.abs(np.subtract([o[rows] for o in out], fine)), axis=0) * scale
+            error = np.max(np.abs(np.real(np.subtract([o[rows] for o in out], fine))), axis=0) * scale
             failed = ~(error <= self.atol)
             if np.any(2 * n[rows[failed]] > MAX_SUBSTEPS):
                 raise self._diverging(np.max(error[failed]), np.max(n[rows[failed]]))
@@ -390,8 +391,8 @@ class Magnus:
             g, u, u_dot = (tuple(np.asarray(a, float).tolist()) for a in (y, u, u_dot))
             tau = float(tau)
         else:
-            g = tuple(np.moveaxis(np.asarray(y, float), -1, 0))
-            u, u_dot = np.asarray(u, float), np.asarray(u_dot, float)
+            g = tuple(np.moveaxis(floats(y), -1, 0))
+            u, u_dot = floats(u), floats(u_dot)
             tau = np.reshape(tau, -1) if np.ndim(tau) else tau
 
         def velocity(s, s_dot):
