@@ -40,7 +40,8 @@ CACHED_MODELS = 64  # models of other parameter values kept by with_params
 @dataclasses.dataclass(frozen=True)
 class Entry:
     """A field of the task state in x: its name, shape, where it lies (offset), how the single env holds it
-    (``container``: ndarray, tuple, list or a number type) and its dtype."""
+    (``container``: ndarray, tuple, list or a number type) and its dtype (float32 where the env rounds to it: a goal
+    env's goals)."""
 
     name: str
     shape: tuple[int, ...]
@@ -78,7 +79,7 @@ class Entry:
     def rows(self, x: np.ndarray) -> np.ndarray:
         """The entry over rows x (N, n), as the vector env holds it: complex rows stay complex."""
         values = x[:, self.columns].reshape(len(x), *self.shape)
-        return values if self.real else values.real.astype(self.dtype)
+        return values if self.real and np.iscomplexobj(values) else values.real.astype(self.dtype)
 
 
 def layout(state) -> list[Entry]:
@@ -89,7 +90,7 @@ def layout(state) -> list[Entry]:
         container = type(value) if isinstance(value, (np.ndarray, tuple, list)) else type(value)
         if isinstance(value, (np.floating, np.integer, np.bool_)):
             container = {"f": float, "i": int, "u": int, "b": bool}[array.dtype.kind]
-        dtype = np.dtype(float) if array.dtype.kind == "f" else array.dtype
+        dtype = array.dtype
         entries.append(Entry(name, array.shape, offset, container, dtype))
         offset += array.size
     return entries
