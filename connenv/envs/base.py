@@ -141,7 +141,8 @@ class TaskEnv(RenderedEnv):
 
     context: Context | None = None
     """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
-    reports_params = False  # whether info carries "params": where they vary, or a reset set them
+    reports_params = False  # whether info carries "params" (and the observation them, if observed): where they vary,
+    # or a reset set them
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
@@ -152,7 +153,8 @@ class TaskEnv(RenderedEnv):
             raise ValueError(f'reset option "params": {self.name} declares no physical parameters')
         if self.context is not None and (given is not None or self.context.varies or self.context.moved):
             self.set_params(self.context.draw(self.np_random, given))
-        self.reports_params = given is not None or (self.context is not None and self.context.varies)
+        self.reports_params = given is not None or (self.context is not None and (self.context.varies or
+                                                                                   self.context.observe))
         self.state = self.start(options)
         return self.observation(self.state), self.report(self.describe(self.state))
 
@@ -168,7 +170,9 @@ class TaskEnv(RenderedEnv):
         terminated = self.terminated(self.state, info)
         if self.render_mode == "human":
             self.render()
-        return self.observation(self.state), reward, terminated, False, self.report(info)
+        if self.reports_params:  # checked here, not in calls, as the step of fixed parameters is the common one
+            return self.observation(self.state), reward, terminated, False, self.report(info)
+        return self.observe(self.state), reward, terminated, False, info
 
     @property
     def observation_space(self):
