@@ -64,14 +64,16 @@ class Hyper:
         for f in fields(self):
             low, high = self.RANGES[f.name]
             value = getattr(self, f.name)
-            if not low <= value <= high or (f.type == "int" and value != int(value)):
+            if f.type == "int" and value != int(value):
+                raise ValueError(f"{f.name}={value!r} is not an integer in [{low:g}, {high:g}]")
+            if not low <= value <= high:
                 raise ValueError(f"{f.name}={value!r} is outside [{low:g}, {high:g}]")
 
 
 HYPER = {
     "default": Hyper(),
-    "connenv/BeadOnBar-v0": Hyper(samples=64, horizon=25, repeat=2),
-    "connenv/BeadOnBar-v1": Hyper(samples=64, horizon=25, repeat=2),
+    "connenv/BeadOnBar-v0": Hyper(samples=128, horizon=40, noise=0.1),
+    "connenv/BeadOnBar-v1": Hyper(samples=128, horizon=40, noise=0.1),
     "connenv/ChaplyginSleigh-v0": Hyper(samples=64, horizon=20, repeat=2),
     "connenv/KapitzaPendulum-v0": Hyper(samples=64, horizon=25, repeat=4),
     "connenv/KapitzaSwingUp-v0": Hyper(samples=64, horizon=25, repeat=4),
@@ -79,8 +81,10 @@ HYPER = {
     "connenv/Skier-v0": Hyper(samples=64, horizon=20),
     "connenv/Swing-v0": Hyper(samples=64, horizon=20),
 }
-"""MPPI's and iLQR's budget per env (Hyper; an env not named takes "default"): a horizon of about a second or two of
-the task's dynamics (a pumping half-cycle, a turn of the sleigh), knots of a few env steps where dt is short."""
+"""MPPI's and iLQR's budget per env (Hyper; an env not named takes "default"): a horizon of about a second of the
+task's dynamics (a pumping half-cycle, a turn of the sleigh), knots of a few env steps where dt is short. The bead's
+control is the bar's rate, three integrations from its position: small perturbations, since a mean of large ones
+flings it off the bar."""
 
 
 def hyper(env_id: str, **overrides) -> Hyper:
@@ -133,6 +137,11 @@ class Planner:
         r = self.hyper.repeat
         return np.concatenate([self.plan[r:], self.plan[-r:]])
 
+    @staticmethod
+    def ROLLOUTS(h: Hyper) -> int:
+        """Rollouts per iteration."""
+        raise NotImplementedError
+
     def optimize(self, x: np.ndarray, U: np.ndarray) -> np.ndarray:
         raise NotImplementedError
 
@@ -163,6 +172,10 @@ class MPPI(Planner):
     plans through the clips, end stops and switching surfaces where the Jacobians are one-sided. The unperturbed plan
     is one of the K, so that an update never loses the warm start's return by sampling alone."""
 
+    @staticmethod
+    def ROLLOUTS(h):
+        return h.samples
+
     def optimize(self, x, U):
         h = self.hyper
         half = (self.high - self.low) / 2
@@ -192,6 +205,10 @@ class ILQR(Planner):
     ALPHAS = 0.5 ** np.arange(8)  # the line search's step sizes
     MU_MIN, MU_MAX = 1e-6, 1e10
     FD_STEP = 1e-4  # relative: the fourth root of the rounding, where a second difference's errors balance
+
+    @staticmethod
+    def ROLLOUTS(h):
+        return 1 + len(ILQR.ALPHAS)  # the trajectory, and the line search's
 
     def start_episode(self):
         super().start_episode()
@@ -280,3 +297,211 @@ class ILQR(Planner):
 
         returns, _, trials, _ = rollout(self.model, np.repeat(x[None], len(self.ALPHAS), axis=0), act, self.steps)
         return returns, trials
+
+
+PLANNER_CLASSES = {"mpc": MPPI, "ilqr": ILQR}
+JACOBIAN_TOLERANCE = 1e-4  # relative: complex step against central differences, whose own error is about 1e-8
+
+
+def planner(name: str, env_id: str, seed: int = 0, **overrides) -> Planner:
+    """A planner by its name in agents.evaluate ("mpc": MPPI, "ilqr"), seeded."""
+    if name not in PLANNER_CLASSES:
+        raise ValueError(f"planner {name!r} is not one of {list(PLANNER_CLASSES)}")
+    return PLANNER_CLASSES[name](env_id, seed, **overrides)
+
+
+def check_planner(env_id: str, name: str):
+    """ValueError, in one line, where the planner cannot run on the env: its model does not step, reward or
+    terminate rows, or (iLQR) its Jacobians raise or disagree with central differences at a reset state."""
+    try:
+        env = gym.make(env_id, **registry[env_id].make_kwargs()).unwrapped
+        env.reset(seed=0)
+        model = env.model
+        x = model.pack(env.state)
+        a = np.full((2, model.m), 0.3)
+        X = model.step(np.stack([x, x]), a)
+        model.reward(np.stack([x, x]), a, X), model.terminated(X)
+        if name == "ilqr":
+            error = jacobian_error(model, x, a[0])
+            if not error <= JACOBIAN_TOLERANCE:
+                raise ValueError(f"its model's Jacobians differ from central differences by {error:.2g} (relative)")
+    except Exception as error:  # whatever the model raises: the planner cannot run, and the reason is named
+        reason = f"{type(error).__name__}: {error}" if not isinstance(error, ValueError) else str(error)
+        raise ValueError(cli.one_line(f"planner {name!r} cannot run on {env_id}: {reason}")[:300]) from error
+
+
+def jacobian_error(model, x, a, h=1e-6) -> float:
+    """The largest relative difference between model.jacobians and central differences of model.step at (x, a),
+    over the entries that move (the differences' rows in one batched step)."""
+    A, B = model.jacobians(x, a)
+    moving = np.flatnonzero([e.real for e in model.entries for _ in range(e.size)])
+    k = len(moving) + model.m
+    X, U = np.repeat(x[None], 2 * k, axis=0), np.repeat(a[None], 2 * k, axis=0)
+    for j in range(k):
+        target, column = (X, moving[j]) if j < len(moving) else (U, j - len(moving))
+        step = h * max(1.0, abs(target[2 * j, column]))
+        target[2 * j, column] += step
+        target[2 * j + 1, column] -= step
+    after = model.step(X, U)
+    widths = np.array([2 * h * max(1.0, abs(x[c])) for c in moving] + [2 * h * max(1.0, abs(a[c])) for c in
+                                                                      range(model.m)])
+    D = (after[0::2] - after[1::2]).T / widths
+    exact = np.concatenate([A[:, moving], B], axis=1)
+    rows = moving
+    return float(np.nanmax(np.abs(D[rows] - exact[rows])) / max(np.nanmax(np.abs(D[rows])), 1e-300))
+
+
+# -- the table ------------------------------------------------------------------------------------------------------
+
+TABLE_ENVS = (
+    "connenv/KapitzaSwingUp-v0", "connenv/RollingBallPose-v0", "connenv/BeadOnBar-v0", "connenv/ChaplyginSleigh-v0",
+    "connenv/Skier-v0", "connenv/Swing-v0", "connenv/RollingCoinSurface-v0",
+)  # fmt: skip
+
+
+def evaluate_env(env_id: str, episodes: int, seed: int) -> dict:
+    """The analytic controller and each planner on the same episodes (seeds seed, seed + 1, ...): their summaries
+    (agents.evaluate) with the env's physical measure and, for a planner, its compute per control step; a planner
+    that cannot run on the env has its reason instead."""
+    from agents.baselines import statistic
+    from agents.evaluate import evaluate, make_policy, summarize
+
+    measure = registry[env_id].measure
+    rows = []
+    for name in ("analytic", *PLANNERS):
+        try:
+            if name in PLANNERS:
+                check_planner(env_id, name)
+        except ValueError as error:
+            rows.append({"policy": name, "error": str(error)})
+            continue
+        _, policy = make_policy(name, env_id, seed)
+        row = summarize(name, evaluate(env_id, policy, episodes, seed))
+        row["measure"] = statistic(measure.statistic)(row)
+        if name in PLANNERS:
+            row["compute"] = compute(policy, sum(e["length"] for e in row["episodes"]))
+        del row["episodes"]
+        rows.append(row)
+    return {"env": env_id, "measure": [measure.label, measure.unit], "policies": rows}
+
+
+def compute(policy: Planner, env_steps: int) -> dict:
+    """A planner's cost: the median wall time of a plan, the mean per env step (a plan every ``repeat`` steps), and
+    the model's row-steps one plan takes: rollouts (MPPI's K samples per iteration; iLQR's trajectory and its line
+    search's step sizes per iteration) × the T steps of each."""
+    h = policy.hyper
+    seconds = np.array(policy.plan_seconds)
+    return {
+        "ms_per_plan": 1e3 * float(np.median(seconds)),
+        "ms_per_step": 1e3 * float(seconds.sum()) / env_steps,
+        "rollouts": h.iterations * policy.ROLLOUTS(h),
+        "steps": policy.steps,
+        "repeat": h.repeat,
+    }
+
+
+def cell(row: dict, unit: str) -> str:
+    value = row["measure"]
+    return "–" if value is None else f"{value:.4g} {unit}".strip()
+
+
+def format_page(reports: list[dict], command: str, episodes: int, seed: int) -> str:
+    """The markdown page: one table row per (env, policy), and a sentence per env where a planner beats the
+    analytic controller on its measure (every measure here is better lower: a time, a path, an error) at no lower
+    success."""
+    lines = [
+        "# Planners on the model: MPPI and iLQR beside the analytic controller",
+        "",
+        f"Generated by `{command}`: {episodes} episodes per env, reset with seeds {seed}..{seed + episodes - 1} "
+        "(agents.baselines' unseen episodes), the same for every policy. `mpc` is MPPI and `ilqr` iLQR (agents/mpc.py), "
+        "both planning from the env's true state on `env.unwrapped.model` with the env's own reward. Compute: the "
+        "median wall time of one plan, the mean per env step (a plan every `repeat` steps), and rollouts × steps, "
+        "the model's row-steps per plan. Measured on a machine shared with other work: times are indicative.",
+        "",
+        "| env: measure | policy | success | return | physical measure | ms / plan (median) | ms / step (mean) "
+        "| rollouts × steps per plan |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    notes = []
+    for report in reports:
+        label, unit = report["measure"]
+        env = report["env"].split("/")[-1]
+        for i, row in enumerate(report["policies"]):
+            first = f"{env}: {label}" if i == 0 else ""
+            if "error" in row:
+                lines.append(f"| {first} | {row['policy']} | – | – | cannot run: {row['error'].split(': ', 1)[1]} "
+                             "| – | – | – |")
+                continue
+            c = row.get("compute")
+            cost = ("– | – | –" if c is None else f"{c['ms_per_plan']:.1f} | {c['ms_per_step']:.1f} | "
+                    f"{c['rollouts']} × {c['steps']} (every {c['repeat']})")
+            lines.append(f"| {first} | {row['policy']} | {100 * row['success_rate']:.0f}% | "
+                         f"{row['return_mean']:.3f} ± {row['return_std']:.3f} | {cell(row, unit)} | {cost} |")
+        notes += comparisons(report)
+    lines += ["", "## Where a planner beats the analytic controller", ""]
+    lines += notes or ["Nowhere on these episodes."]
+    return "\n".join(lines) + "\n"
+
+
+def comparisons(report: dict) -> list[str]:
+    """A sentence for each planner that beats the analytic controller's measure at no lower success."""
+    rows = {row["policy"]: row for row in report["policies"] if "error" not in row}
+    analytic = rows.get("analytic")
+    label, unit = report["measure"]
+    out = []
+    for name in PLANNERS:
+        row = rows.get(name)
+        if not (row and analytic and row["measure"] is not None and analytic["measure"] is not None):
+            continue
+        if row["success_rate"] >= analytic["success_rate"] and row["measure"] < analytic["measure"]:
+            ratio = analytic["measure"] / row["measure"]
+            out.append(f"- {report['env'].split('/')[-1]}: {name} {label} {cell(row, unit)} against the analytic "
+                       f"controller's {cell(analytic, unit)}, {ratio:.2f}× lower ({100 * (1 - 1 / ratio):.0f}% less), "
+                       f"success {100 * row['success_rate']:.0f}% against {100 * analytic['success_rate']:.0f}%.")
+    return out
+
+
+def table(args):
+    """Evaluate the envs one by one (or --jobs at once) and write the page, each env's report printed as it ends."""
+    import json
+    import sys
+    from concurrent.futures import ProcessPoolExecutor
+    from pathlib import Path
+
+    work = [(env_id, args.episodes, args.seed) for env_id in args.envs]
+    with ProcessPoolExecutor(args.jobs) as pool:
+        reports = list(pool.map(evaluate_env, *zip(*work)))
+    command = "python -m agents.mpc " + " ".join(sys.argv[1:]) if args.argv is None else " ".join(args.argv)
+    page = format_page(reports, command, args.episodes, args.seed)
+    print(page)
+    if args.write:
+        Path(args.write).write_text(page)
+        Path(args.write).with_suffix(".json").write_text(json.dumps(reports, indent=1))
+        print(f"wrote {args.write} and its .json")
+    return reports
+
+
+def parse_args(argv=None):
+    from agents.baselines import UNSEEN_SEED
+
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("table", help="the analytic controller, MPPI and iLQR on the same episodes, as markdown")
+    run.add_argument("--envs", nargs="+", default=list(TABLE_ENVS), choices=[i for i in registry if registry[i].measure],
+                     metavar="ID", help="envs with a physical measure (default: %(default)s)")
+    run.add_argument("--episodes", type=positive_int, default=10)
+    run.add_argument("--seed", type=seed_int, default=UNSEEN_SEED, help="episode i is reset with seed + i")
+    run.add_argument("--jobs", type=positive_int, default=1, help="envs evaluated at once, one process each")
+    run.add_argument("--write", type=writable_file, help="the markdown page (and its numbers beside it as .json)")
+    args = parser.parse_args(argv)
+    args.argv = None if argv is None else [PROG.split()[-1], *argv]
+    return args
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    return table(args)
+
+
+if __name__ == "__main__":
+    cli.run(main, PROG)
