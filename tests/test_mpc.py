@@ -3,6 +3,8 @@ answer, seeded runs repeat to the bit, and bad budgets are refused by name."""
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -36,13 +38,13 @@ class Linear:
     """A model with x′ = x + a (one entry each) and reward −x′²: the best one-step action from x is −x, which one
     Newton step of iLQR finds exactly (the reward is quadratic and the dynamics linear)."""
 
-    entries = [type("Entry", (), {"real": True, "size": 1})()]
+    entries: ClassVar[list] = [type("Entry", (), {"real": True, "size": 1})()]
 
     def step(self, X, A):
         return X + A
 
     def reward(self, X, A, X_next):
-        return -X_next[:, 0] ** 2
+        return -(X_next[:, 0] ** 2)
 
     def terminated(self, X):
         return np.zeros(len(X), bool)
