@@ -6,8 +6,9 @@ ID is a connenv id (``--help`` lists them), NAME the id without its namespace.
 
 Episode i of every policy starts from ``reset(seed=seed + i)``, so the rows compare like with like. A policy is
 ``analytic`` (the env's first controller in agents.controllers), the name of one of its controllers (``arc``,
-``holonomy``, ...), ``random`` (uniform actions, seeded), the zip of a trained SB3 model, or ``pretrained``: the
-env's models committed under agents/pretrained/, one per algorithm (``python -m agents.baselines``). Columns
+``holonomy``, ...), ``random`` (uniform actions, seeded), ``mpc`` or ``ilqr`` (planners on the env's own model,
+agents.mpc, seeded), the zip of a trained SB3 model, or ``pretrained``: the env's models committed under
+agents/pretrained/, one per algorithm (``python -m agents.baselines``). Columns
 beyond return, success, time and length are the env's own measures, the info keys named by its
 ``metadata["measures"]``, averaged over the episodes' final infos. The rl-zoo3 run folder around a zip, as
 ``train.py`` and ``python -m rl_zoo3.train`` write it, tells the algorithm (``{env}/args.yml``) and the observation
@@ -35,6 +36,7 @@ from gymnasium.wrappers import RenderCollection
 
 import connenv  # noqa: F401  (registers the envs)
 from agents.controllers import CONTROLLERS, controller, controller_names
+from agents.mpc import PLANNERS, check_planner, planner
 from connenv import cli
 from connenv.cli import positive_int, seed_int, writable_file
 
@@ -81,12 +83,13 @@ class NormalizedPolicy:
 
 
 def policy_spec(text: str) -> str:
-    """argparse type: a controller name, 'random', 'pretrained' or an existing model zip that SB3 saved."""
-    if text in (*CONTROLLER_NAMES, "random", "pretrained"):
+    """argparse type: a controller name, 'random', a planner, 'pretrained' or an existing model zip that SB3 saved."""
+    if text in (*CONTROLLER_NAMES, "random", *PLANNERS, "pretrained"):
         return text
     if not (text.endswith(".zip") and Path(text).is_file()):
         raise argparse.ArgumentTypeError(
-            f"{text!r} is not one of {CONTROLLER_NAMES}, 'random', 'pretrained' or an existing PATH.zip"
+            f"{text!r} is not one of {CONTROLLER_NAMES}, 'random', {', '.join(map(repr, PLANNERS))}, 'pretrained' or "
+            "an existing PATH.zip"
         )
     try:
         check_model_zip(Path(text))
@@ -96,8 +99,10 @@ def policy_spec(text: str) -> str:
 
 
 def check_policy(env_id: str, spec: str):
-    """ValueError if spec names a controller the env lacks, or 'pretrained' for an env without pretrained models:
-    checked before any policy runs its episodes."""
+    """ValueError if spec names a controller the env lacks, a planner that cannot run on it, or 'pretrained' for an env
+    without pretrained models: checked before any policy runs its episodes."""
+    if spec in PLANNERS:
+        check_planner(env_id, spec)
     names = controller_names(env_id) if env_id in CONTROLLERS else []
     if spec in CONTROLLER_NAMES and spec not in names:
         raise ValueError(f"{spec!r} is no controller of {env_id}; its controllers: {names or 'none'}")
@@ -233,7 +238,9 @@ def load_model(model_path: str | Path, env_id: str, algo: str | None = None, env
 def make_policy(
     spec: str, env_id: str, seed: int, algo: str | None = None, env_kwargs: dict | None = None
 ) -> tuple[str, object]:
-    """(label, policy) for a controller name, 'random' or a model zip; a zip's label is algo:run-folder."""
+    """(label, policy) for a controller name, 'random', a planner or a model zip; a zip's label is algo:run-folder."""
+    if spec in PLANNERS:
+        return spec, planner(spec, env_id, seed)
     if spec in CONTROLLER_NAMES:
         return spec, controller(env_id, spec)
     if spec == "random":
@@ -247,7 +254,10 @@ def make_policy(
 
 
 def run_episode(env: gym.Env, policy, seed: int) -> Episode:
-    """One episode from reset(seed=seed), deterministic actions."""
+    """One episode from reset(seed=seed), deterministic actions; a planner (a policy with ``bind``) is bound to env
+    first, since it plans from the env's state."""
+    if hasattr(policy, "bind"):
+        policy.bind(env)
     obs, _ = env.reset(seed=seed)
     ret, length, done, state = 0.0, 0, False, None
     while not done:  # state and episode_start as SB3's evaluate_policy passes them, for recurrent policies
@@ -371,8 +381,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         nargs="+",
         type=policy_spec,
         default=["analytic", "random"],
-        help=f"one of {CONTROLLER_NAMES} (the env's controllers; analytic is its first), random, pretrained"
-        " (agents/pretrained/) or PATH.zip",
+        help=f"one of {CONTROLLER_NAMES} (the env's controllers; analytic is its first), random, mpc or ilqr"
+        " (planners on the env's model, agents.mpc), pretrained (agents/pretrained/) or PATH.zip",
     )
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)

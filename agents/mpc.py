@@ -1,0 +1,531 @@
+"""Planners on the env's own model: sampling MPC (MPPI) and iLQR, a reference row that needs no training.
+
+    python -m agents.evaluate --env connenv/Skier-v0 --policy analytic mpc ilqr
+    python -m agents.mpc table --envs connenv/Skier-v0 connenv/Swing-v0 --episodes 10 --write docs/baselines/planners.md
+
+Both plan from the env's true state, not its observation: ``env.unwrapped.model`` (connenv.core.model) steps the task
+state x = ``model.pack(env.unwrapped.state)`` exactly as the env does, so a plan's predicted return is the return the
+env pays if the plan is followed. A planner is bound to the env it drives (``bind``, which agents.evaluate's
+run_episode calls before the episode) and re-reads the env's model at each episode's start, since a reset may change
+its parameters. Each answers SB3's ``predict(obs, state=None, episode_start=None, deterministic=True)``.
+
+A plan is H knots, each an action held for ``repeat`` steps of the env (the control is piecewise constant on a grid
+coarser than dt where dt is short against the task's time scale); the first knot is executed, then the plan is
+shifted by one knot and its last knot repeated (the warm start), and optimized again from the state reached. The
+return of a rollout is the env's reward summed, as the env pays it, until the step the task terminates (success, or a
+failure that ends the episode): nothing past the end counts, so a plan that reaches the target early is not charged
+for the time after it. No terminal value is added: the rewards are potential-based (Ng et al. 1999), so a horizon's
+return is already the progress of its last state.
+
+``python -m agents.mpc table`` evaluates the analytic controller, MPPI and iLQR on the same episodes (reset with
+seeds from agents.baselines' UNSEEN_SEED, which nothing was tuned on) and writes their success, the env's physical
+measure (its spec's ``measure``, as agents.baselines reads it) and the planners' compute per control step.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass, fields, replace
+from typing import ClassVar
+
+import gymnasium as gym
+import numpy as np
+import scipy.linalg
+
+import connenv  # noqa: F401  (registers the envs)
+from connenv import cli
+from connenv.cli import positive_int, seed_int, writable_file
+from connenv.envs.spec import registry
+
+PROG = "python -m agents.mpc"
+PLANNERS = ("mpc", "ilqr")
+
+
+@dataclass(frozen=True)
+class Hyper:
+    """A planner's budget. ``samples``: MPPI's rollouts per iteration (K); ``horizon``: knots per plan (H);
+    ``repeat``: env steps per knot; ``iterations``: MPPI updates, or iLQR iterations, per control step;
+    ``temperature``: MPPI's λ, in units of the spread (std) of the sampled returns, so that one value suits returns of
+    any scale; ``noise``: the std of MPPI's perturbations, as a fraction of the action range's half width."""
+
+    samples: int = 64
+    horizon: int = 20
+    repeat: int = 1
+    iterations: int = 1
+    temperature: float = 0.5
+    noise: float = 0.5
+
+    RANGES: ClassVar[dict[str, tuple[float, float]]] = {
+        "samples": (2, 100_000), "horizon": (1, 10_000), "repeat": (1, 1_000), "iterations": (1, 1_000),
+        "temperature": (1e-6, 1e6), "noise": (1e-6, 10.0),
+    }  # fmt: skip
+
+    def __post_init__(self):
+        for f in fields(self):
+            low, high = self.RANGES[f.name]
+            value = getattr(self, f.name)
+            if f.type == "int" and value != int(value):
+                raise ValueError(f"{f.name}={value!r} is not an integer in [{low:g}, {high:g}]")
+            if not low <= value <= high:
+                raise ValueError(f"{f.name}={value!r} is outside [{low:g}, {high:g}]")
+
+
+HYPER = {
+    "default": Hyper(),
+    "connenv/BeadOnBar-v0": Hyper(samples=128, horizon=40, noise=0.1),
+    "connenv/BeadOnBar-v1": Hyper(samples=128, horizon=40, noise=0.1),
+    "connenv/ChaplyginSleigh-v0": Hyper(samples=64, horizon=20, repeat=2),
+    "connenv/KapitzaPendulum-v0": Hyper(samples=64, horizon=25, repeat=4),
+    "connenv/KapitzaSwingUp-v0": Hyper(samples=64, horizon=25, repeat=4),
+    "connenv/RollingBallPose-v0": Hyper(samples=64, horizon=20),
+    "connenv/Skier-v0": Hyper(samples=64, horizon=20),
+    "connenv/Swing-v0": Hyper(samples=64, horizon=20),
+}
+"""MPPI's and iLQR's budget per env (Hyper; an env not named takes "default"): a horizon of about a second of the
+task's dynamics (a pumping half-cycle, a turn of the sleigh), knots of a few env steps where dt is short. The bead's
+control is the bar's rate, three integrations from its position: small perturbations, since a mean of large ones
+flings it off the bar."""
+
+
+def hyper(env_id: str, **overrides) -> Hyper:
+    return replace(HYPER.get(env_id, HYPER["default"]), **overrides)
+
+
+class Planner:
+    """The shared part of MPPI and iLQR: binding to the env, the knot schedule, the warm start, timing. The plan is
+    kept per env step, T = horizon × repeat rows of actions, and optimized again every ``repeat`` steps."""
+
+    def __init__(self, env_id: str, seed: int = 0, **overrides):
+        self.env_id, self.hyper = env_id, hyper(env_id, **overrides)
+        self.rng = np.random.default_rng(seed)
+        self.env = self.model = self.plan = None
+        self.plan_seconds: list[float] = []  # wall time of each optimization, for the compute column
+
+    @property
+    def steps(self) -> int:
+        """T: env steps per plan."""
+        return self.hyper.horizon * self.hyper.repeat
+
+    def bind(self, env: gym.Env):
+        """Drive env: plan from its true state, with its model (read again at each episode's start)."""
+        self.env, self.model = env, None
+
+    def start_episode(self):
+        unwrapped = self.env.unwrapped
+        self.model, self.plan, self.step_in_knot = unwrapped.model, None, 0
+        space = unwrapped.action_space
+        self.low, self.high = (
+            np.broadcast_to(b, space.shape).reshape(-1).astype(float) for b in (space.low, space.high)
+        )
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):
+        if self.env is None:
+            raise RuntimeError(f"{type(self).__name__} plans from the env's state: call bind(env) before predict")
+        if self.model is None or (episode_start is not None and np.any(episode_start)):
+            self.start_episode()
+        if self.step_in_knot == 0:
+            start = time.perf_counter()
+            self.plan = self.optimize(self.model.pack(self.env.unwrapped.state), self.warm_start())
+            self.plan_seconds.append(time.perf_counter() - start)
+        action = self.plan[self.step_in_knot].reshape(self.env.unwrapped.action_space.shape).astype(np.float32)
+        self.step_in_knot = (self.step_in_knot + 1) % self.hyper.repeat
+        return action, state
+
+    def warm_start(self) -> np.ndarray:
+        """The last plan (T, m) shifted by one knot, its last knot repeated; the range's middle at an episode's
+        start."""
+        if self.plan is None:
+            return np.tile((self.low + self.high) / 2, (self.steps, 1))
+        r = self.hyper.repeat
+        return np.concatenate([self.plan[r:], self.plan[-r:]])
+
+    @staticmethod
+    def ROLLOUTS(h: Hyper) -> int:
+        """Rollouts per iteration."""
+        raise NotImplementedError
+
+    def optimize(self, x: np.ndarray, U: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+
+def rollout(model, x: np.ndarray, act, T: int):
+    """(returns (N,), states (N, T + 1, n), actions (N, T, m), alive (N, T)) of the rows' plans from x through
+    model.step, act(t, X) giving the rows' actions (N, m) at step t from their states X; a row's reward counts until
+    the step after which it terminates, and ``alive[:, t]`` says whether step t counts."""
+    X = x[None] if x.ndim == 1 else x
+    states, actions, alive = [X], [], []
+    total, live = np.zeros(len(X)), np.ones(len(X), bool)
+    for t in range(T):
+        a = act(t, X)
+        X_next = model.step(X, a)
+        alive.append(live.copy())
+        total += np.where(live, model.reward(X, a, X_next), 0.0)
+        live &= ~np.asarray(model.terminated(X_next), bool)
+        X = X_next
+        states.append(X)
+        actions.append(a)
+    return total, np.stack(states, axis=1), np.stack(actions, axis=1), np.stack(alive, axis=1)
+
+
+class MPPI(Planner):
+    """Model predictive path integral control (Williams, Aldrich & Theodorou, J. Guid. Control Dyn. 2017): K plans
+    perturbed by Gaussian noise about the current plan (one draw per knot) are rolled out on the model's rows, and the
+    plan moves to their average weighted by exp(return/λ), a soft-max over returns that needs no gradient, so it
+    plans through the clips, end stops and switching surfaces where the Jacobians are one-sided. The unperturbed plan
+    is one of the K, so that an update never loses the warm start's return by sampling alone."""
+
+    @staticmethod
+    def ROLLOUTS(h):
+        return h.samples
+
+    def optimize(self, x, U):
+        h = self.hyper
+        half = (self.high - self.low) / 2
+        for _ in range(h.iterations):
+            noise = self.rng.standard_normal((h.samples, h.horizon, U.shape[1])) * (h.noise * half)
+            noise[0] = 0.0
+            candidates = np.clip(U + np.repeat(noise, h.repeat, axis=1), self.low, self.high)
+            R = rollout(
+                self.model, np.repeat(x[None], h.samples, axis=0), lambda t, X, C=candidates: C[:, t], self.steps
+            )[0]
+            weights = np.exp((R - R.max()) / (h.temperature * max(float(R.std()), 1e-12)))
+            U = np.tensordot(weights / weights.sum(), candidates, axes=1)
+        return U
+
+
+class ILQR(Planner):
+    """Iterative LQR (Li & Todorov 2004; Tassa, Erez & Todorov 2012): the dynamics linearized along the plan's
+    trajectory by ``model.jacobians`` (complex step, one batched call on the T steps' rows), the reward modelled to
+    second order, a backward Riccati pass for the feedforward and feedback gains, and a forward pass of the closed loop
+    tried at several step sizes α at once (rows of one rollout: the line search), kept if it raises the return.
+
+    The cost is the env's own reward, not a hand-written quadratic: its derivatives in z = (x, x′), the states before
+    and after a step, are central finite differences of ``model.reward`` (cheap: no step), composed with (A, B) to
+    first order in the dynamics (Gauss-Newton: the dynamics' second derivatives are left out, as iLQR does).
+    Regularization μ is subtracted from Q_uu (Levenberg-Marquardt, Tassa et al. 2012): raised when Q_uu − μI is not
+    negative definite or no step size improves, lowered after a success. The gains are per env step; actions are
+    clipped to the action space in the forward pass, where the model's B is 0 for a clipped entry."""
+
+    ALPHAS = 0.5 ** np.arange(8)  # the line search's step sizes
+    MU_MIN, MU_MAX = 1e-6, 1e10
+    FD_STEP = 1e-4  # relative: the fourth root of the rounding, where a second difference's errors balance
+
+    @staticmethod
+    def ROLLOUTS(h):
+        return 1 + len(ILQR.ALPHAS)  # the trajectory, and the line search's
+
+    def start_episode(self):
+        super().start_episode()
+        self.mu = 1.0
+        self.real = np.array([e.real for e in self.model.entries for _ in range(e.size)])
+
+    def optimize(self, x, U):
+        for _ in range(self.hyper.iterations):
+            U = self.iterate(x, U)
+        return U
+
+    def iterate(self, x, U):
+        """One iLQR iteration from plan U (T, m): backward pass, then the line search; U itself if none improves."""
+        R, X, _, alive = rollout(self.model, x, lambda t, X: U[None, t], self.steps)
+        X, alive = X[0], alive[0]
+        A, B = self.model.jacobians(X[:-1], U)
+        gains = self.backward(A, B, *self.reward_derivatives(X[:-1], U, X[1:], alive))
+        if gains is None:
+            self.mu = min(self.mu * 10, self.MU_MAX)
+            return U
+        returns, trials = self.forward(x, X, U, *gains)
+        best = int(np.argmax(returns))
+        if returns[best] <= R[0]:
+            self.mu = min(self.mu * 10, self.MU_MAX)
+            return U
+        self.mu = max(self.mu / 2, self.MU_MIN)
+        return trials[best]
+
+    def reward_derivatives(self, X, U, X_next, alive):
+        """Gradient (T, 2n) and Hessian (T, 2n, 2n) of r(x, a, x′) in z = (x, x′) at each step, by central
+        differences of model.reward on rows (every pair of entries at once): r(z ± h_i e_i ± h_j e_j) for i ≤ j, which
+        on the diagonal are z ± 2h_i e_i and z. Zero on flags and counters, and after the row has ended."""
+        T, n = X.shape
+        idx = np.flatnonzero(np.concatenate([self.real, self.real]))
+        Z = np.concatenate([X, X_next], axis=1)
+        h = self.FD_STEP * np.maximum(1.0, np.abs(Z[:, idx]))  # (T, k)
+        I, J = np.triu_indices(len(idx))
+        signs = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]])
+        points = np.repeat(Z[:, None, None], len(I), axis=1).repeat(4, axis=2)  # (T, pairs, 4, 2n)
+        pair, sign = np.arange(len(I))[:, None], np.arange(4)[None]
+        points[:, pair, sign, idx[I][:, None]] += signs[:, 0] * h[:, I][..., None]
+        points[:, pair, sign, idx[J][:, None]] += signs[:, 1] * h[:, J][..., None]
+        flat = points.reshape(-1, 2 * n)
+        r = self.model.reward(flat[:, :n], np.repeat(U, 4 * len(I), axis=0), flat[:, n:]).reshape(T, len(I), 4)
+        second = (r[..., 0] - r[..., 1] - r[..., 2] + r[..., 3]) / (4 * h[:, I] * h[:, J])
+        diagonal = I == J
+        second[:, diagonal] = (r[:, diagonal, 0] - 2 * r[:, diagonal, 1] + r[:, diagonal, 3]) / (4 * h**2)
+        gradient, hessian = np.zeros((T, 2 * n)), np.zeros((T, 2 * n, 2 * n))
+        gradient[:, idx] = (r[:, diagonal, 0] - r[:, diagonal, 3]) / (4 * h)
+        hessian[:, idx[I], idx[J]] = second
+        hessian[:, idx[J], idx[I]] = second
+        return gradient * alive[:, None], hessian * alive[:, None, None]
+
+    def backward(self, A, B, gradient, hessian):
+        """Feedforward k (T, m) and feedback K (T, m, n) maximizing the quadratic model of the return, or None when
+        Q_uu − μI is not negative definite (the return must curve down in the action for a maximum)."""
+        T, n, m = B.shape
+        V_x, V_xx = np.zeros(n), np.zeros((n, n))
+        ks, Ks = np.zeros((T, m)), np.zeros((T, m, n))
+        for t in reversed(range(T)):
+            r_ab, r_bb = hessian[t, :n, n:], hessian[t, n:, n:]
+            g, G = gradient[t, n:] + V_x, r_bb + V_xx  # the next state's value, this step's reward of it included
+            Q_x = gradient[t, :n] + A[t].T @ g
+            Q_u = B[t].T @ g
+            Q_xx = hessian[t, :n, :n] + r_ab @ A[t] + A[t].T @ r_ab.T + A[t].T @ G @ A[t]
+            Q_ux = B[t].T @ (r_ab.T + G @ A[t])
+            Q_uu = B[t].T @ G @ B[t] - self.mu * np.eye(m)
+            try:
+                L = np.linalg.cholesky(-Q_uu)
+            except np.linalg.LinAlgError:
+                return None
+            ks[t] = scipy.linalg.cho_solve((L, True), Q_u)
+            Ks[t] = scipy.linalg.cho_solve((L, True), Q_ux)
+            V_x = Q_x + Ks[t].T @ Q_uu @ ks[t] + Ks[t].T @ Q_u + Q_ux.T @ ks[t]
+            V_xx = Q_xx + Ks[t].T @ Q_uu @ Ks[t] + Ks[t].T @ Q_ux + Q_ux.T @ Ks[t]
+            V_xx = (V_xx + V_xx.T) / 2
+        return ks, Ks
+
+    def forward(self, x, X, U, ks, Ks):
+        """(returns, plans) of the closed loop u = ū + α k + K (x̂ − x̄), one row per step size α, rolled out
+        together."""
+        alphas = self.ALPHAS[:, None]
+
+        def act(t, Xh):
+            return np.clip(U[t] + alphas * ks[t] + (Xh - X[t]) @ Ks[t].T, self.low, self.high)
+
+        returns, _, trials, _ = rollout(self.model, np.repeat(x[None], len(self.ALPHAS), axis=0), act, self.steps)
+        return returns, trials
+
+
+PLANNER_CLASSES = {"mpc": MPPI, "ilqr": ILQR}
+JACOBIAN_TOLERANCE = 1e-4  # relative: complex step against central differences, whose own error is about 1e-8
+
+
+def planner(name: str, env_id: str, seed: int = 0, **overrides) -> Planner:
+    """A planner by its name in agents.evaluate ("mpc": MPPI, "ilqr"), seeded."""
+    if name not in PLANNER_CLASSES:
+        raise ValueError(f"planner {name!r} is not one of {list(PLANNER_CLASSES)}")
+    return PLANNER_CLASSES[name](env_id, seed, **overrides)
+
+
+def check_planner(env_id: str, name: str):
+    """ValueError, in one line, where the planner cannot run on the env: its model does not step, reward or
+    terminate rows, or (iLQR) its Jacobians raise or disagree with central differences at a reset state."""
+    try:
+        env = gym.make(env_id, **registry[env_id].make_kwargs()).unwrapped
+        env.reset(seed=0)
+        model = env.model
+        x = model.pack(env.state)
+        a = np.full((2, model.m), 0.3)
+        X = model.step(np.stack([x, x]), a)
+        model.reward(np.stack([x, x]), a, X), model.terminated(X)
+        if name == "ilqr":
+            error = jacobian_error(model, x, a[0])
+            if not error <= JACOBIAN_TOLERANCE:
+                raise ValueError(f"its model's Jacobians differ from central differences by {error:.2g} (relative)")
+    except Exception as error:  # whatever the model raises: the planner cannot run, and the reason is named
+        reason = f"{type(error).__name__}: {error}" if not isinstance(error, ValueError) else str(error)
+        raise ValueError(cli.one_line(f"planner {name!r} cannot run on {env_id}: {reason}")[:300]) from error
+
+
+def jacobian_error(model, x, a, h=1e-6) -> float:
+    """The largest relative difference between model.jacobians and central differences of model.step at (x, a),
+    over the entries that move (the differences' rows in one batched step)."""
+    A, B = model.jacobians(x, a)
+    moving = np.flatnonzero([e.real for e in model.entries for _ in range(e.size)])
+    k = len(moving) + model.m
+    X, U = np.repeat(x[None], 2 * k, axis=0), np.repeat(a[None], 2 * k, axis=0)
+    for j in range(k):
+        target, column = (X, moving[j]) if j < len(moving) else (U, j - len(moving))
+        step = h * max(1.0, abs(target[2 * j, column]))
+        target[2 * j, column] += step
+        target[2 * j + 1, column] -= step
+    after = model.step(X, U)
+    widths = np.array(
+        [2 * h * max(1.0, abs(x[c])) for c in moving] + [2 * h * max(1.0, abs(a[c])) for c in range(model.m)]
+    )
+    D = (after[0::2] - after[1::2]).T / widths
+    exact = np.concatenate([A[:, moving], B], axis=1)
+    return float(np.nanmax(np.abs(D[moving] - exact[moving])) / max(np.nanmax(np.abs(D[moving])), 1e-300))
+
+
+# -- the table ------------------------------------------------------------------------------------------------------
+
+TABLE_ENVS = (
+    "connenv/KapitzaSwingUp-v0", "connenv/RollingBallPose-v0", "connenv/BeadOnBar-v0", "connenv/ChaplyginSleigh-v0",
+    "connenv/Skier-v0", "connenv/Swing-v0", "connenv/RollingCoinSurface-v0",
+)  # fmt: skip
+
+
+def evaluate_env(env_id: str, episodes: int, seed: int) -> dict:
+    """The analytic controller and each planner on the same episodes (seeds seed, seed + 1, ...): their summaries
+    (agents.evaluate) with the env's physical measure and, for a planner, its compute per control step; a planner
+    that cannot run on the env has its reason instead."""
+    from agents.baselines import statistic
+    from agents.evaluate import evaluate, make_policy, summarize
+
+    measure = registry[env_id].measure
+    rows = []
+    for name in ("analytic", *PLANNERS):
+        try:
+            if name in PLANNERS:
+                check_planner(env_id, name)
+        except ValueError as error:
+            rows.append({"policy": name, "error": str(error)})
+            continue
+        _, policy = make_policy(name, env_id, seed)
+        row = summarize(name, evaluate(env_id, policy, episodes, seed))
+        row["measure"] = statistic(measure.statistic)(row)
+        if name in PLANNERS:
+            row["compute"] = compute(policy, sum(e["length"] for e in row["episodes"]))
+        del row["episodes"]
+        rows.append(row)
+    return {"env": env_id, "measure": [measure.label, measure.unit], "policies": rows}
+
+
+def compute(policy: Planner, env_steps: int) -> dict:
+    """A planner's cost: the median wall time of a plan, the mean per env step (a plan every ``repeat`` steps), and
+    the model's row-steps one plan takes: rollouts (MPPI's K samples per iteration; iLQR's trajectory and its line
+    search's step sizes per iteration) × the T steps of each."""
+    h = policy.hyper
+    seconds = np.array(policy.plan_seconds)
+    return {
+        "ms_per_plan": 1e3 * float(np.median(seconds)),
+        "ms_per_step": 1e3 * float(seconds.sum()) / env_steps,
+        "rollouts": h.iterations * policy.ROLLOUTS(h),
+        "steps": policy.steps,
+        "repeat": h.repeat,
+    }
+
+
+def cell(row: dict, unit: str) -> str:
+    value = row["measure"]
+    return "–" if value is None else f"{value:.4g} {unit}".strip()
+
+
+def format_page(reports: list[dict], command: str, episodes: int, seed: int) -> str:
+    """The markdown page: one table row per (env, policy), and a sentence per env where a planner beats the
+    analytic controller on its measure (every measure here is better lower: a time, a path, an error) at no lower
+    success."""
+    lines = [
+        "# Planners on the model: MPPI and iLQR beside the analytic controller",
+        "",
+        (
+            f"Generated by `{command}`: {episodes} episodes per env, reset with seeds {seed}..{seed + episodes - 1} "
+            "(agents.baselines' unseen episodes), the same for every policy. `mpc` is MPPI and `ilqr` iLQR (agents/mpc.py), "
+            "both planning from the env's true state on `env.unwrapped.model` with the env's own reward. Compute: the "
+            "median wall time of one plan, the mean per env step (a plan every `repeat` steps), and rollouts × steps, "
+            "the model's row-steps per plan. Measured on a machine shared with other work: times are indicative."
+        ),
+        "",
+        (
+            "| env: measure | policy | success | return | physical measure | ms / plan (median) | ms / step (mean) "
+            "| rollouts × steps per plan |"
+        ),
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    notes = []
+    for report in reports:
+        label, unit = report["measure"]
+        env = report["env"].split("/")[-1]
+        for i, row in enumerate(report["policies"]):
+            first = f"{env}: {label}" if i == 0 else ""
+            if "error" in row:
+                lines.append(
+                    f"| {first} | {row['policy']} | – | – | cannot run: {row['error'].split(': ', 1)[1]} | – | – | – |"
+                )
+                continue
+            c = row.get("compute")
+            cost = (
+                "– | – | –"
+                if c is None
+                else f"{c['ms_per_plan']:.1f} | {c['ms_per_step']:.1f} | "
+                f"{c['rollouts']} × {c['steps']} (every {c['repeat']})"
+            )
+            lines.append(
+                f"| {first} | {row['policy']} | {100 * row['success_rate']:.0f}% | "
+                f"{row['return_mean']:.3f} ± {row['return_std']:.3f} | {cell(row, unit)} | {cost} |"
+            )
+        notes += comparisons(report)
+    lines += ["", "## Where a planner beats the analytic controller", ""]
+    lines += notes or ["Nowhere on these episodes."]
+    return "\n".join(lines) + "\n"
+
+
+def comparisons(report: dict) -> list[str]:
+    """A sentence for each planner that beats the analytic controller's measure at no lower success."""
+    rows = {row["policy"]: row for row in report["policies"] if "error" not in row}
+    analytic = rows.get("analytic")
+    label, unit = report["measure"]
+    out = []
+    for name in PLANNERS:
+        row = rows.get(name)
+        if not (row and analytic and row["measure"] is not None and analytic["measure"] is not None):
+            continue
+        if row["success_rate"] >= analytic["success_rate"] and row["measure"] < analytic["measure"]:
+            ratio = analytic["measure"] / row["measure"]
+            out.append(
+                f"- {report['env'].split('/')[-1]}: {name} {label} {cell(row, unit)} against the analytic "
+                f"controller's {cell(analytic, unit)}, {ratio:.2f}× lower ({100 * (1 - 1 / ratio):.0f}% less), "
+                f"success {100 * row['success_rate']:.0f}% against {100 * analytic['success_rate']:.0f}%."
+            )
+    return out
+
+
+def table(args):
+    """Evaluate the envs one by one (or --jobs at once) and write the page, each env's report printed as it ends."""
+    import json
+    import sys
+    from concurrent.futures import ProcessPoolExecutor
+    from pathlib import Path
+
+    work = [(env_id, args.episodes, args.seed) for env_id in args.envs]
+    with ProcessPoolExecutor(args.jobs) as pool:
+        reports = list(pool.map(evaluate_env, *zip(*work)))
+    command = "python -m agents.mpc " + " ".join(sys.argv[1:]) if args.argv is None else " ".join(args.argv)
+    page = format_page(reports, command, args.episodes, args.seed)
+    print(page)
+    if args.write:
+        Path(args.write).write_text(page)
+        Path(args.write).with_suffix(".json").write_text(json.dumps(reports, indent=1))
+        print(f"wrote {args.write} and its .json")
+    return reports
+
+
+def parse_args(argv=None):
+    from agents.baselines import UNSEEN_SEED
+
+    parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("table", help="the analytic controller, MPPI and iLQR on the same episodes, as markdown")
+    run.add_argument(
+        "--envs",
+        nargs="+",
+        default=list(TABLE_ENVS),
+        choices=[i for i in registry if registry[i].measure],
+        metavar="ID",
+        help="envs with a physical measure (default: %(default)s)",
+    )
+    run.add_argument("--episodes", type=positive_int, default=10)
+    run.add_argument("--seed", type=seed_int, default=UNSEEN_SEED, help="episode i is reset with seed + i")
+    run.add_argument("--jobs", type=positive_int, default=1, help="envs evaluated at once, one process each")
+    run.add_argument("--write", type=writable_file, help="the markdown page (and its numbers beside it as .json)")
+    args = parser.parse_args(argv)
+    args.argv = None if argv is None else [PROG.split()[-1], *argv]
+    return args
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    return table(args)
+
+
+if __name__ == "__main__":
+    cli.run(main, PROG)
