@@ -305,7 +305,6 @@ class ILQR(Planner):
 
 
 PLANNER_CLASSES = {"mpc": MPPI, "ilqr": ILQR}
-JACOBIAN_TOLERANCE = 1e-4  # relative: complex step against central differences, whose own error is about 1e-8
 
 
 def planner(name: str, env_id: str, seed: int = 0, **overrides) -> Planner:
@@ -316,44 +315,21 @@ def planner(name: str, env_id: str, seed: int = 0, **overrides) -> Planner:
 
 
 def check_planner(env_id: str, name: str):
-    """ValueError, in one line, where the planner cannot run on the env: its model does not step, reward or
-    terminate rows, or (iLQR) its Jacobians raise or disagree with central differences at a reset state."""
+    """ValueError, in one line, where the planner cannot run on the env: its model does not step, reward, terminate
+    or (iLQR) differentiate rows at a reset state."""
     try:
         env = gym.make(env_id, **registry[env_id].make_kwargs()).unwrapped
         env.reset(seed=0)
         model = env.model
-        x = model.pack(env.state)
+        x = np.stack([model.pack(env.state)] * 2)
         a = np.full((2, model.m), 0.3)
-        X = model.step(np.stack([x, x]), a)
-        model.reward(np.stack([x, x]), a, X), model.terminated(X)
+        X = model.step(x, a)
+        model.reward(x, a, X), model.terminated(X)
         if name == "ilqr":
-            error = jacobian_error(model, x, a[0])
-            if not error <= JACOBIAN_TOLERANCE:
-                raise ValueError(f"its model's Jacobians differ from central differences by {error:.2g} (relative)")
+            model.jacobians(x, a)
     except Exception as error:  # whatever the model raises: the planner cannot run, and the reason is named
         reason = f"{type(error).__name__}: {error}" if not isinstance(error, ValueError) else str(error)
         raise ValueError(cli.one_line(f"planner {name!r} cannot run on {env_id}: {reason}")[:300]) from error
-
-
-def jacobian_error(model, x, a, h=1e-6) -> float:
-    """The largest relative difference between model.jacobians and central differences of model.step at (x, a),
-    over the entries that move (the differences' rows in one batched step)."""
-    A, B = model.jacobians(x, a)
-    moving = np.flatnonzero([e.real for e in model.entries for _ in range(e.size)])
-    k = len(moving) + model.m
-    X, U = np.repeat(x[None], 2 * k, axis=0), np.repeat(a[None], 2 * k, axis=0)
-    for j in range(k):
-        target, column = (X, moving[j]) if j < len(moving) else (U, j - len(moving))
-        step = h * max(1.0, abs(target[2 * j, column]))
-        target[2 * j, column] += step
-        target[2 * j + 1, column] -= step
-    after = model.step(X, U)
-    widths = np.array(
-        [2 * h * max(1.0, abs(x[c])) for c in moving] + [2 * h * max(1.0, abs(a[c])) for c in range(model.m)]
-    )
-    D = (after[0::2] - after[1::2]).T / widths
-    exact = np.concatenate([A[:, moving], B], axis=1)
-    return float(np.nanmax(np.abs(D[moving] - exact[moving])) / max(np.nanmax(np.abs(D[moving])), 1e-300))
 
 
 # -- the table ------------------------------------------------------------------------------------------------------
