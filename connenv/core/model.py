@@ -62,9 +62,12 @@ class Entry:
         """Whether the entry is a real number that moves continuously (not a flag or a counter)."""
         return self.dtype.kind == "f"
 
-    def names(self) -> list[str]:
+    def names(self, components: dict) -> list[str]:
+        """The entries' names: the field's own, its components' (``State.components``), or name[i, …]."""
         if not self.shape:
             return [self.name]
+        if len(components.get(self.name, ())) == self.size:
+            return list(components[self.name])
         return [f"{self.name}[{','.join(map(str, i))}]" for i in np.ndindex(*self.shape)]
 
     def single(self, x: np.ndarray):
@@ -123,7 +126,8 @@ class Model:
         self.env.close()
         self.row_stepper = batched(self.env.stepper)
         self.entries = layout(self.env.state)
-        self.state_names = tuple(name for entry in self.entries for name in entry.names())
+        components = type(self.env.state).components
+        self.state_names = tuple(name for entry in self.entries for name in entry.names(components))
         self.n = len(self.state_names)
         self.m = int(np.prod(self.env.action_space.shape))
         Params = params_type(self.env)

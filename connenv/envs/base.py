@@ -38,7 +38,10 @@ from connenv.core.validation import check_action, check_mapping
 @dataclasses.dataclass
 class State:
     """Base of the task states: a dataclass of numbers (floats, ints, bools, small arrays) in the single env, the
-    same fields as arrays over rows in the vector env."""
+    same fields as arrays over rows in the vector env. ``components`` names the entries of an array field where
+    the literature has names for them (the model's ``state_names``)."""
+
+    components: ClassVar[dict] = {}
 
     def rows(self, n: int) -> State:
         """A state of n rows shaped and typed like this one's fields, zeroed."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -40,6 +41,8 @@ ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which
 class BeadState(ActiveConstraintState):
     """ActiveConstraintEnv's state (y = (r, p), u = (θ,), t, the energy error) and the task's: the target r*,
     whether the bead is within the target's tolerances, and for how long it has been (s)."""
+
+    components: ClassVar[dict] = {"y": ("r", "p"), "u": ("theta",)}
 
     target: float
     inside: bool

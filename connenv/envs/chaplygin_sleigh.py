@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -49,6 +50,8 @@ class SleighState(State):
     """y = (x, y, φ, p₁, p₂) (P, heading, Bressan's momenta, `connenv.systems.chaplygin_sleigh`); the mass offset
     u = (u₁ along, u₂ across) and its velocity u̇ at the end of the step (arrays (2,)); the target (x, y); the time t;
     the stepper's energy error (the change of T over the segments where u is held, summed since reset)."""
+
+    components: ClassVar[dict] = {"y": ("x", "y", "phi", "p1", "p2"), "u": ("u1", "u2"), "u_dot": ("u1_dot", "u2_dot"), "target": ("target_x", "target_y")}
 
     y: np.ndarray
     u: np.ndarray

@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -34,6 +35,8 @@ def least_speed(args):
 class BeanieState(ConnectionState):
     """ConnectionState with g = (θ,) the body's angle (unwrapped), s = (ψ,) the beanie's relative to it
     (unwrapped); the angular momentum μ, the target θ* and the time held within the tolerance."""
+
+    components: ClassVar[dict] = {"g": ("theta",), "s": ("psi",)}
 
     momentum: float
     target: float

@@ -68,6 +68,8 @@ class KapitzaState(State):
     the step); the time t; the energy E in the frame of that u̇; the stepper's energy error (the change of E on each
     segment of constant u̇, summed since reset). Each task's state adds its record."""
 
+    components: ClassVar[dict] = {"y": ("theta", "p"), "u": ("u1", "u2"), "u_dot": ("u1_dot", "u2_dot")}
+
     y: np.ndarray
     u: np.ndarray
     u_dot: np.ndarray

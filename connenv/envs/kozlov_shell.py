@@ -39,6 +39,8 @@ class ShellState(State):
     target (x, y); the time t; full: whether the state steps the full model (else the reduced one); and the
     spatial momentum at reset, which the full model conserves."""
 
+    components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "u": ("u1", "u2"), "target": ("target_x", "target_y")}
+
     pose: np.ndarray
     momentum: np.ndarray
     u: np.ndarray

@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -27,6 +28,8 @@ OFFSET_BOUND = 10.0  # m: the observed offsets are clipped here
 @dataclass
 class CoinState(ConnectionState):
     """ConnectionState with g = (x, y), s = (θ, φ), and the target (x*, y*, θ*)."""
+
+    components: ClassVar[dict] = {"g": ("x", "y"), "s": ("theta", "phi"), "target": ("target_x", "target_y", "target_theta")}
 
     target: np.ndarray
 

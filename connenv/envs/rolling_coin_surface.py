@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -38,6 +39,8 @@ START = {"bowl": (0.0, -4.0)}  # the start on a built-in surface where the origi
 class CoinSurfaceState(State):
     """y = (x, y, φ, φ̇); the heading θ; the target (x, y); the time t; E and its value at reset E₀; where the
     last step started (x, y) and the closest approach of its chord to the target, m."""
+
+    components: ClassVar[dict] = {"y": ("x", "y", "phi", "phi_dot"), "target": ("target_x", "target_y"), "previous": ("previous_x", "previous_y")}
 
     y: np.ndarray
     theta: float

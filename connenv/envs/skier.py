@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -56,6 +57,8 @@ class SkierState(State):
     from which the one goal is reached; the energy E at (y, h), which the reward compares; the stepper's energy
     error (the change of E on held segments since reset); ẋ, f′, σ and κ at (x, h), which the observation and
     the info read."""
+
+    components: ClassVar[dict] = {"y": ("x", "p")}
 
     y: np.ndarray
     h: float

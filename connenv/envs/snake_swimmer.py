@@ -43,6 +43,8 @@ class SnakeState(State):
     s = (α, β); the target (x, y); the time t; full: whether the state steps the full model (else the reduced
     one); and the spatial momentum at reset, which the full model conserves."""
 
+    components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "s": ("alpha", "beta"), "target": ("target_x", "target_y")}
+
     pose: np.ndarray
     momentum: np.ndarray
     s: np.ndarray

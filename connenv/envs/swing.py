@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -38,6 +39,8 @@ def momentum_bound(env, values):
 class SwingState(State):
     """y = (θ, p); the radius r; the time t; the energy E and lift h at (y, r), which the reward compares; the
     stepper's energy error (the change of E on held segments since reset)."""
+
+    components: ClassVar[dict] = {"y": ("theta", "p")}
 
     y: np.ndarray
     r: float
