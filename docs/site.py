@@ -6,10 +6,11 @@ under its analytic controller, as Gymnasium's docs are made.
     python docs/site.py --check         # exit 1 naming the pages that differ from what the docstrings make
 
 A subclass's docstring (RollingBallGoal-v0's, KapitzaSwingUp-v0's) gives what differs; the sections it leaves out
-are its base class's. The animations are recorded with imageio from ``render_mode="rgb_array"``: ANIMATION_WIDTH
-pixels wide, about ANIMATION_FPS frames a second, at most MAX_FRAMES frames (and MIN_FRAMES over MIN_SECONDS for a
-short episode, in slow motion), under the env's first analytic
-controller (agents/controllers.py), or a periodic shape change for the two builders, which have none.
+are its base class's. The animations are recorded with imageio from ``render_mode="rgb_array"``: at the canvas's own
+ANIMATION_WIDTH pixels (not resampled, so that their labels read and they compress; the README's gallery shows them
+THUMBNAIL_WIDTH wide), about ANIMATION_FPS frames a second, at most MAX_FRAMES frames (and MIN_FRAMES over
+MIN_SECONDS for a short episode, in slow motion), under the env's first analytic controller (agents/controllers.py),
+or a periodic shape change for the two builders, which have none.
 """
 
 from __future__ import annotations
@@ -26,11 +27,13 @@ import numpy as np
 
 import connenv
 from connenv.envs.spec import registry, spec
+from connenv.rendering import SIZE
 
 DOCS = Path(__file__).resolve().parent
 PAGES = DOCS / "envs"
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End", "Arguments")
-ANIMATION_WIDTH, ANIMATION_FPS, MAX_FRAMES, MIN_FRAMES, MIN_SECONDS = 200, 12, 90, 30, 3.0
+ANIMATION_WIDTH, THUMBNAIL_WIDTH = SIZE, 200
+ANIMATION_FPS, MAX_FRAMES, MIN_FRAMES, MIN_SECONDS = 12, 90, 30, 3.0
 VERSION_HISTORY = "- v0: the first version, in connenv 0.1.0."
 STEPPERS = """## Scales, steppers and errors
 
@@ -308,8 +311,8 @@ def shape_size(space) -> str:
 
 
 def gallery() -> str:
-    """The README's table of every env: its animation at its own width, class, action and observation sizes, analytic
-    controller."""
+    """The README's table of every env: its animation shown THUMBNAIL_WIDTH wide, class, action and observation sizes,
+    analytic controller."""
     from agents.controllers import CONTROLLERS
 
     lines = ["| | env | class | action | observation | analytic controller |", "|---|---|---|---|---|---|"]
@@ -317,7 +320,7 @@ def gallery() -> str:
         env, cls, short = make(env_id), env_class(env_id), name(env_id)
         controller = next(iter(CONTROLLERS[env_id])) if env_id in CONTROLLERS else "–"
         lines.append(
-            f'| <img src="docs/envs/{short}.gif" width="{ANIMATION_WIDTH}"> | [{short}](docs/envs/{short}.md) '
+            f'| <img src="docs/envs/{short}.gif" width="{THUMBNAIL_WIDTH}"> | [{short}](docs/envs/{short}.md) '
             f"| `{cls.__name__}` "
             f"| {shape_size(env.action_space)} | {shape_size(env.observation_space)} | {controller} |"
         )
@@ -385,7 +388,6 @@ def record(env_id: str, path: Path, seed: int = 0) -> int:
     """An episode under the env's controller as a GIF, at about ANIMATION_FPS frames of the env's time a second, in
     slow motion for an episode shorter than MIN_SECONDS; returns its frame count."""
     import imageio.v3 as iio
-    from PIL import Image
 
     env = make(env_id, render_mode="rgb_array")
     observation, _ = env.reset(seed=seed, options=spec(env_id).animation_start)
@@ -399,17 +401,10 @@ def record(env_id: str, path: Path, seed: int = 0) -> int:
     pictures.append(env.render())
     env.close()
     stride = max(1, min(stride, len(pictures) // MIN_FRAMES))
-    frames = [shrink(Image.fromarray(picture)) for picture in pictures[::stride]]
+    frames = pictures[::stride]
     duration = max(1000.0 * stride / fps, 1000.0 * MIN_SECONDS / len(frames))
     iio.imwrite(path, np.stack(frames), duration=duration, loop=0, plugin="pillow")
     return len(frames)
-
-
-def shrink(picture):
-    from PIL import Image
-
-    height = round(picture.height * ANIMATION_WIDTH / picture.width)
-    return np.asarray(picture.resize((ANIMATION_WIDTH, height), Image.LANCZOS))
 
 
 def main(argv: list[str] | None = None) -> int:

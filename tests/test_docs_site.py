@@ -45,7 +45,9 @@ def test_the_generated_pages_are_what_the_docstrings_make():
 
 
 def test_every_registered_env_has_a_page_with_its_animation():
+    """At least 400 px wide, as Gymnasium's docs' animations are: their labels read."""
     site = site_module()
+    assert site.ANIMATION_WIDTH >= 400
     for env_id in site.env_ids():
         name = site.name(env_id)
         page = (ROOT / "docs" / "envs" / f"{name}.md").read_text()
@@ -200,7 +202,7 @@ for (const page of pages) {
 @pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (.ci/run installs Debian's package)")
 def test_chromium_lays_out_code_thumbnails_and_class_names_readably(served, built_site, tmp_path):
     """At 1200 px, in the home page, an env page and the guide with the longest command: no code block runs off its
-    right edge and no copy button covers code; the gallery's thumbnails are drawn at the animations' own width;
+    right edge and no copy button covers code; the gallery's thumbnails are drawn at their width, THUMBNAIL_WIDTH;
     no code span in a table (a class name) breaks across lines."""
     import json
 
@@ -210,7 +212,7 @@ def test_chromium_lays_out_code_thumbnails_and_class_names_readably(served, buil
                          timeout=120).stdout  # fmt: skip
     found = json.loads(unescape(re.search(r'<pre id="result">(.*?)</pre>', dom, re.DOTALL).group(1)))
     assert found.keys() == set(LAYOUT_PAGES) and found[""]["images"] and found["guides/own-system/"]["blocks"]
-    width, problems = site_module().ANIMATION_WIDTH, []  # the animations' own width: a thumbnail not scaled down
+    width, problems = site_module().THUMBNAIL_WIDTH, []  # the gallery's width: a thumbnail not squeezed by the table
     for page, layout in found.items():
         problems += [(page, block) for block in layout["blocks"] if block["overflow"] > 0 or block["covered"]]
         problems += [(page, "image", image) for image in layout["images"] if image != [width, width]]

@@ -8,6 +8,7 @@ import numpy as np
 from gymnasium.error import DependencyNotInstalled
 
 SIZE = 500
+POINTS = 250  # a canvas is POINTS points wide: widths, radii and text are in points, so they scale with SIZE
 
 
 class Canvas:
@@ -30,7 +31,12 @@ class Canvas:
         else:
             self.screen = pygame.Surface((SIZE, SIZE))
         self.clock = pygame.time.Clock()
-        self.font = pygame.font.Font(None, 22)
+        self.font = pygame.font.Font(None, self.pt(13))
+
+    @staticmethod
+    def pt(points: float) -> int:
+        """A length in points as whole pixels, at least one: lines stay visible in the docs' animations."""
+        return max(1, round(points * SIZE / POINTS))
 
     def px(self, x, y):
         return int(SIZE / 2 + (x - self.center_x) * self.scale), int(SIZE / 2 - (y - self.center_y) * self.scale)
@@ -44,10 +50,21 @@ class Canvas:
         return np.transpose(np.array(self.pygame.surfarray.pixels3d(self.screen)), axes=(1, 0, 2))
 
     def caption(self, *lines: str):
-        """The lines of text in the top left corner, and the frame shown (`show`)."""
+        """The lines of text in the top left corner, on white to read over any background, and the frame shown
+        (`show`)."""
         for k, text in enumerate(lines):
-            self.screen.blit(self.font.render(text, True, (0, 0, 0)), (10, 10 + 20 * k))
+            label = self.font.render(text, True, (0, 0, 0), (255, 255, 255))
+            self.screen.blit(label, (self.pt(5), self.pt(5) + self.font.get_linesize() * k))
         return self.show()
+
+    def target(self, position, radius: float):
+        """A target: its disc of `radius` metres (the tolerance), ringed and with its centre marked, and never smaller
+        than a marker, so that it shows however far the view is zoomed out."""
+        centre, pg = self.px(*position), self.pygame
+        size = max(int(radius * self.scale), self.pt(6))
+        pg.draw.circle(self.screen, (200, 230, 200), centre, size)
+        pg.draw.circle(self.screen, (40, 140, 40), centre, size, self.pt(1))
+        pg.draw.circle(self.screen, (40, 140, 40), centre, self.pt(1.5))
 
     def close(self):
         if self.render_mode == "human":
@@ -65,8 +82,9 @@ class Renderer:
 
 class CoordinatePlot(Renderer):
     """The coordinates against time: each q and u over the last WINDOW seconds (from the left edge, scrolling once
-    the window is full), scaled to the range they have covered; or, with a user's ``draw(state, canvas)``, that
-    picture on a Canvas spanning [-1, 1]² (metres by default: the callback may change ``canvas.scale``)."""
+    the window is full), scaled to the range they have covered, with a dot at its value now; or, with a user's
+    ``draw(state, canvas)``, that picture on a Canvas spanning [-1, 1]² (metres by default: the callback may change
+    ``canvas.scale``)."""
 
     WINDOW = 10.0  # s of history shown
     COLORS = ((204, 77, 77), (77, 110, 204), (77, 160, 77), (200, 140, 40), (140, 77, 180), (60, 60, 60))
@@ -90,12 +108,16 @@ class CoordinatePlot(Renderer):
         low, high = trace[:, 1:].min(), trace[:, 1:].max()
         half = max(0.5 * (high - low), 1e-9)
         mid = 0.5 * (high + low)
-        top, height = 40, SIZE - 60
-        x = 10 + (trace[:, 0] - trace[0, 0]) / self.WINDOW * (SIZE - 20)
+        margin, top = c.pt(5), c.pt(20)
+        height = SIZE - top - c.pt(10) - c.font.get_linesize()
+        x = margin + (trace[:, 0] - trace[0, 0]) / self.WINDOW * (SIZE - 2 * margin)
         for k, label in enumerate(self.labels):
             y = top + height * (0.5 - 0.45 * (trace[:, 1 + k] - mid) / half)
             color = self.COLORS[k % len(self.COLORS)]
-            if len(trace) > 1:
-                pg.draw.lines(c.screen, color, False, list(zip(x.astype(int), y.astype(int))), 2)
-            c.screen.blit(c.font.render(f"{label} = {trace[-1, 1 + k]:+.3f}", True, color), (10 + 110 * k, SIZE - 18))
+            points = list(zip(x.astype(int), y.astype(int)))
+            if len(points) > 1:
+                pg.draw.lines(c.screen, color, False, points, c.pt(1))
+            pg.draw.circle(c.screen, color, points[-1], c.pt(2.5))  # the value now, shown from the first frame
+            text = c.font.render(f"{label} = {trace[-1, 1 + k]:+.3f}", True, color)
+            c.screen.blit(text, (margin + c.pt(60) * k, SIZE - margin - c.font.get_linesize()))
         return c.caption(f"t = {state['t']:5.2f} s   range [{low:.3g}, {high:.3g}]")

@@ -20,11 +20,12 @@ class BeadRenderer(Renderer):
         c.screen.fill((255, 255, 255))
         along = math.cos(theta), math.sin(theta)
         L = self.half_length
-        pg.draw.line(c.screen, (60, 60, 60), c.px(-L * along[0], -L * along[1]), c.px(L * along[0], L * along[1]), 5)
-        size = max(int(0.05 * L * c.scale), 4)
+        ends = c.px(-L * along[0], -L * along[1]), c.px(L * along[0], L * along[1])
+        pg.draw.line(c.screen, (60, 60, 60), *ends, c.pt(2.5))
+        size = max(int(0.05 * L * c.scale), c.pt(2))
         ring = (77, 160, 77) if inside else (77, 110, 204)
-        pg.draw.circle(c.screen, ring, c.px(target * along[0], target * along[1]), size + 5, 3)
+        pg.draw.circle(c.screen, ring, c.px(target * along[0], target * along[1]), size + c.pt(2.5), c.pt(1.5))
         pg.draw.circle(c.screen, (204, 77, 77), c.px(r * along[0], r * along[1]), size)
-        pg.draw.circle(c.screen, (0, 0, 0), c.px(0.0, 0.0), 5)
+        pg.draw.circle(c.screen, (0, 0, 0), c.px(0.0, 0.0), c.pt(2.5))
         text = f"t = {t:5.2f} s   r = {r:+5.3f} m   r* = {target:+5.3f} m"
         return c.caption(text)

@@ -30,20 +30,20 @@ class SleighRenderer(Renderer):
         c.center_x, c.center_y = 0.5 * (P + target)  # the sled and the target in view
         c.scale = SIZE / (2.0 * max(2.5, 0.6 * float(np.hypot(*(P - target))) + 1.0))
         c.screen.fill((255, 255, 255))
-        pg.draw.circle(c.screen, (200, 230, 200), c.px(*target), max(int(self.tolerance * c.scale), 3))
-        pg.draw.circle(c.screen, (60, 140, 60), c.px(*target), 4)
+        c.target(target, self.tolerance)
         if len(self.track) > 1:
-            pg.draw.lines(c.screen, (150, 150, 150), False, [c.px(*p) for p in self.track], 2)
+            pg.draw.lines(c.screen, (110, 110, 110), False, [c.px(*p) for p in self.track], c.pt(1))
         half = 1.2 * self.rail
         front = self.offset + 1.2 * max(self.box, 0.1)
         corners = [P - 0.1 * e1 + half * e2, P + front * e1 + half * e2, P + front * e1 - half * e2,
                    P - 0.1 * e1 - half * e2]
         pg.draw.polygon(c.screen, (225, 225, 240), [c.px(*p) for p in corners])
-        pg.draw.polygon(c.screen, (60, 60, 90), [c.px(*p) for p in corners], 2)
-        pg.draw.line(c.screen, (40, 40, 40), c.px(*(P - 0.15 * e1)), c.px(*(P + 0.15 * e1)), 5)  # the knife edge
-        b, r = self.box, self.rail
+        pg.draw.polygon(c.screen, (60, 60, 90), [c.px(*p) for p in corners], c.pt(1))
+        knife = c.px(*(P - 0.15 * e1)), c.px(*(P + 0.15 * e1))  # the knife edge
+        pg.draw.line(c.screen, (40, 40, 40), *knife, c.pt(2.5))
+        b, r = self.box, self.rail  # the mass's box (a rail if b = 0)
         box = [C + b * e1 + r * e2, C + b * e1 - r * e2, C - b * e1 - r * e2, C - b * e1 + r * e2]
-        pg.draw.lines(c.screen, (120, 120, 160), True, [c.px(*p) for p in box], 2)  # the mass's box (a rail if b = 0)
-        pg.draw.circle(c.screen, (0, 0, 0), c.px(*C), 3)
-        pg.draw.circle(c.screen, (204, 77, 77), c.px(*(C + u[0] * e1 + u[1] * e2)), 8)
+        pg.draw.lines(c.screen, (120, 120, 160), True, [c.px(*p) for p in box], c.pt(1))
+        pg.draw.circle(c.screen, (0, 0, 0), c.px(*C), c.pt(1.5))
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*(C + u[0] * e1 + u[1] * e2)), c.pt(4))
         return c.caption(f"t = {t:5.2f} s")

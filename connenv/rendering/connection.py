@@ -36,15 +36,15 @@ class ConnectionRenderer(Renderer):
         else:
             origin, axes = np.zeros(2), g[:2, :]
         if self.group == "SO3":
-            pg.draw.circle(screen, (200, 200, 200), canvas.px(0.0, 0.0), int(canvas.scale), 1)
+            pg.draw.circle(screen, (200, 200, 200), canvas.px(0.0, 0.0), int(canvas.scale), canvas.pt(1))
         for column, colour in zip(axes.T, ((204, 60, 60), (60, 160, 60), (60, 60, 204))):
-            pg.draw.line(screen, colour, canvas.px(*origin), canvas.px(*(origin + column)), 4)
-        pg.draw.circle(screen, (0, 0, 0), canvas.px(*origin), 5)
-        size = screen.get_width()
+            pg.draw.line(screen, colour, canvas.px(*origin), canvas.px(*(origin + column)), canvas.pt(2))
+        pg.draw.circle(screen, (0, 0, 0), canvas.px(*origin), canvas.pt(2.5))
+        size, bar, pt = screen.get_width(), canvas.pt(50), canvas.pt
         for i, value in enumerate(state["s"]):  # a bar per shape coordinate: its place within the bounds
             finite = math.isfinite(low[i]) and math.isfinite(high[i])
             fraction = (value - low[i]) / (high[i] - low[i]) if finite else 0.5 + math.atan(value) / math.pi
-            x, width = 10 + 18 * i, 12
-            pg.draw.rect(screen, (220, 220, 230), (x, size - 110, width, 100))
-            pg.draw.rect(screen, (70, 110, 160), (x, size - 10 - int(100 * fraction), width, int(100 * fraction)))
+            x, width, height = pt(5) + pt(9) * i, pt(6), int(bar * fraction)
+            pg.draw.rect(screen, (220, 220, 230), (x, size - pt(5) - bar, width, bar))
+            pg.draw.rect(screen, (70, 110, 160), (x, size - pt(5) - height, width, height))
         return canvas.caption(f"t = {state['t']:5.2f}   s = {np.round(state['s'], 2)}")

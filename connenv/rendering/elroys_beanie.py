@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from connenv.rendering import Canvas, Renderer
+from connenv.rendering import SIZE, Canvas, Renderer
 
 
 class BeanieRenderer(Renderer):
@@ -22,17 +22,17 @@ class BeanieRenderer(Renderer):
             return c.px(length * math.cos(angle), length * math.sin(angle))
 
         pg.draw.circle(c.screen, (225, 225, 235), c.px(0.0, 0.0), int(1.0 * c.scale))
-        pg.draw.circle(c.screen, (60, 60, 60), c.px(0.0, 0.0), int(1.0 * c.scale), 2)
+        pg.draw.circle(c.screen, (60, 60, 60), c.px(0.0, 0.0), int(1.0 * c.scale), c.pt(1))
         for k in range(12):  # dashes toward the target, past the body's rim
-            pg.draw.line(c.screen, (90, 170, 90), ray(target, 0.1 * k), ray(target, 0.1 * k + 0.05), 3)
-        pg.draw.line(c.screen, (60, 60, 120), c.px(0.0, 0.0), ray(theta, 1.0), 5)  # the body's mark
+            pg.draw.line(c.screen, (90, 170, 90), ray(target, 0.1 * k), ray(target, 0.1 * k + 0.05), c.pt(1.5))
+        pg.draw.line(c.screen, (60, 60, 120), c.px(0.0, 0.0), ray(theta, 1.0), c.pt(2.5))  # the body's mark
         pg.draw.circle(c.screen, (250, 230, 120), c.px(0.0, 0.0), int(0.4 * c.scale))
-        pg.draw.circle(c.screen, (150, 120, 40), c.px(0.0, 0.0), int(0.4 * c.scale), 2)
+        pg.draw.circle(c.screen, (150, 120, 40), c.px(0.0, 0.0), int(0.4 * c.scale), c.pt(1))
         for blade in (0.0, math.pi):  # the beanie's propeller, at θ + ψ in space
-            pg.draw.line(c.screen, (204, 77, 77), c.px(0.0, 0.0), ray(theta + psi + blade, 0.38), 4)
-        width = int(held * 200)
-        pg.draw.rect(c.screen, (220, 220, 230), (10, 470, 200, 14))
-        pg.draw.rect(c.screen, (90, 170, 90), (10, 470, min(width, 200), 14))
+            pg.draw.line(c.screen, (204, 77, 77), c.px(0.0, 0.0), ray(theta + psi + blade, 0.38), c.pt(2))
+        left, top, length, height = c.pt(5), SIZE - c.pt(15), c.pt(100), c.pt(7)
+        pg.draw.rect(c.screen, (220, 220, 230), (left, top, length, height))
+        pg.draw.rect(c.screen, (90, 170, 90), (left, top, min(int(held * length), length), height))
         lines = [f"t = {t:5.2f} s   θ* − θ = {math.remainder(target - theta, 2 * math.pi):+6.3f} rad",
                  f"beanie turns ψ/2π = {psi / (2 * math.pi):+7.2f}   μ = {momentum:+5.2f}"]  # fmt: skip
         return c.caption(*lines)

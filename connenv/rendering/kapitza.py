@@ -8,7 +8,8 @@ from connenv.rendering import Canvas, Renderer
 
 
 class KapitzaRenderer(Renderer):
-    """The pivot's travel as a bar, the pivot, rod and bob; the time in the corner."""
+    """The pivot's travel as a bar, the pivot, rod and bob, the goal (the bob inverted over the pivot) as a ring; the
+    time in the corner."""
 
     def __init__(self, length: float, a_max: float, render_mode: str, fps: int):
         self.length, self.a_max = length, a_max
@@ -21,7 +22,9 @@ class KapitzaRenderer(Renderer):
         pg.draw.rect(c.screen, (225, 225, 235), pg.Rect(*c.px(-a, a), 2 * a * c.scale + 1, 2 * a * c.scale + 1))
         pivot = c.px(u[0], u[1])
         bob = c.px(u[0] + self.length * math.sin(theta), u[1] - self.length * math.cos(theta))
-        pg.draw.line(c.screen, (60, 60, 60), pivot, bob, 3)
-        pg.draw.circle(c.screen, (204, 77, 77), bob, 12)
-        pg.draw.circle(c.screen, (0, 0, 0), pivot, 5)
+        pg.draw.line(c.screen, (60, 60, 60), pivot, bob, c.pt(1.5))
+        pg.draw.circle(c.screen, (204, 77, 77), bob, c.pt(6))
+        goal = c.px(u[0], u[1] + self.length)
+        pg.draw.circle(c.screen, (40, 140, 40), goal, c.pt(8), c.pt(1))  # over the bob: it rings it when held
+        pg.draw.circle(c.screen, (0, 0, 0), pivot, c.pt(2.5))
         return c.caption(f"t = {t:5.2f} s")

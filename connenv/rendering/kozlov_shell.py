@@ -33,13 +33,12 @@ class KozlovShellRenderer(Renderer):
 
         outline = [c.px(*p) for p in to_space(self.outline)]
         pg.draw.polygon(c.screen, (225, 232, 245), outline)
-        pg.draw.polygon(c.screen, (70, 110, 160), outline, 3)
+        pg.draw.polygon(c.screen, (70, 110, 160), outline, c.pt(1.5))
         nose = to_space([(0.0, 0.0), (self.a, 0.0)])
-        pg.draw.line(c.screen, (70, 110, 160), c.px(*nose[0]), c.px(*nose[1]), 1)
-        pg.draw.circle(c.screen, (40, 140, 40), c.px(*target), max(int(success_radius * c.scale), 2), 2)
-        pg.draw.circle(c.screen, (40, 140, 40), c.px(*target), 3)
+        pg.draw.line(c.screen, (70, 110, 160), c.px(*nose[0]), c.px(*nose[1]), c.pt(1))
+        c.target(target, success_radius)
         if len(path) > 1:
-            pg.draw.lines(c.screen, (90, 90, 90), False, [c.px(*p) for p in path], 1)
-        pg.draw.circle(c.screen, (204, 77, 77), c.px(*to_space([u])[0]), 7)
+            pg.draw.lines(c.screen, (150, 150, 150), False, [c.px(*p) for p in path], c.pt(1))
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*to_space([u])[0]), c.pt(3.5))
         distance = math.hypot(target[0] - x, target[1] - y)
         return c.caption(f"t = {t:5.2f} s   distance = {distance:4.2f} m")

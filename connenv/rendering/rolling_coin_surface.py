@@ -42,14 +42,13 @@ class CoinSurfaceRenderer(Renderer):
     def draw(self, y, theta: float, target, track, tolerance: float, t: float):
         c, pg = self.canvas, self.canvas.pygame
         c.screen.blit(self.background, (0, 0))
-        pg.draw.circle(c.screen, (30, 120, 30), c.px(*target), max(int(tolerance * c.scale), 3), 2)
-        pg.draw.circle(c.screen, (30, 120, 30), c.px(*target), 2)
+        c.target(target, tolerance)
         if len(track) > 1:
-            pg.draw.lines(c.screen, (60, 60, 60), False, [c.px(*p) for p in track], 2)
+            pg.draw.lines(c.screen, (60, 60, 60), False, [c.px(*p) for p in track], c.pt(1))
         heading = self.radius * np.array([math.sin(theta), math.cos(theta)])
         contact = np.asarray(y[:2])
-        pg.draw.line(c.screen, (150, 40, 40), c.px(*(contact - heading)), c.px(*(contact + heading)), 5)
-        pg.draw.circle(c.screen, (0, 0, 0), c.px(*contact), 4)
+        pg.draw.line(c.screen, (150, 40, 40), c.px(*(contact - heading)), c.px(*(contact + heading)), c.pt(2.5))
+        pg.draw.circle(c.screen, (0, 0, 0), c.px(*contact), c.pt(2))
         distance = math.hypot(target[0] - y[0], target[1] - y[1])
         text = f"t = {t:5.2f} s   v = {self.radius * y[3]:5.2f} m/s   distance = {distance:5.2f} m"
         return c.caption(text)

@@ -23,7 +23,7 @@ class SkierRenderer(Renderer):
     def draw(self, x: float, h: float, h_min: float, t: float):
         c, pg = self.canvas, self.canvas.pygame
         c.screen.fill((255, 255, 255))
-        pg.draw.lines(c.screen, (70, 110, 160), False, self.points, 4)
+        pg.draw.lines(c.screen, (70, 110, 160), False, self.points, c.pt(2))
         f, f1, _, _ = self.trail.derivatives(x)
         sigma = math.sqrt(1.0 + f1 * f1)
         tangent, normal = np.array([1.0, f1]) / sigma, np.array([-f1, 1.0]) / sigma
@@ -33,9 +33,10 @@ class SkierRenderer(Renderer):
         knee = foot + 0.5 * h * normal + bend * tangent
         neck = hip + 0.45 * self.h_max * normal
         for a, b in ((foot, knee), (knee, hip), (hip, neck)):
-            pg.draw.line(c.screen, (40, 40, 40), c.px(*a), c.px(*b), 4)
-        pg.draw.line(c.screen, (40, 40, 40), c.px(*(foot - 0.4 * tangent)), c.px(*(foot + 0.4 * tangent)), 3)  # ski
+            pg.draw.line(c.screen, (40, 40, 40), c.px(*a), c.px(*b), c.pt(2))
+        ski = c.px(*(foot - 0.4 * tangent)), c.px(*(foot + 0.4 * tangent))
+        pg.draw.line(c.screen, (40, 40, 40), *ski, c.pt(1.5))
         head = neck + 0.15 * self.h_max * normal
-        pg.draw.circle(c.screen, (204, 77, 77), c.px(*head), max(int(0.15 * self.h_max * c.scale), 3))
-        pg.draw.circle(c.screen, (0, 0, 0), c.px(*hip), 4)
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*head), max(int(0.15 * self.h_max * c.scale), c.pt(1.5)))
+        pg.draw.circle(c.screen, (0, 0, 0), c.px(*hip), c.pt(2))
         return c.caption(f"t = {t:5.2f} s   h = {h:4.2f} m")

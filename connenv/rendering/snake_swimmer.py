@@ -9,7 +9,7 @@ import numpy as np
 from connenv.rendering import Canvas, Renderer
 
 OUTLINE_POINTS = 48
-WAKE_COLOURS = ((200, 170, 170), (170, 170, 170), (170, 190, 210))  # rear, middle, front
+WAKE_COLOURS = ((200, 130, 130), (130, 130, 130), (110, 150, 200))  # rear, middle, front
 
 
 class SnakeSwimmerRenderer(Renderer):
@@ -29,19 +29,18 @@ class SnakeSwimmerRenderer(Renderer):
         start = wake[0][1]
         c.center_x, c.center_y = 0.5 * (start[0] + target[0]), 0.5 * (start[1] + target[1])
         c.screen.fill((255, 255, 255))
-        pg.draw.circle(c.screen, (40, 140, 40), c.px(*target), max(int(success_radius * c.scale), 2), 2)
-        pg.draw.circle(c.screen, (40, 140, 40), c.px(*target), 3)
+        c.target(target, success_radius)
         if len(wake) > 1:
             for i, colour in enumerate(WAKE_COLOURS):
-                pg.draw.lines(c.screen, colour, False, [c.px(*centres[i]) for centres in wake], 1)
+                pg.draw.lines(c.screen, colour, False, [c.px(*centres[i]) for centres in wake], c.pt(1))
         for i, (x, y, phi) in enumerate(links):
             rotation = np.array([[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]])
             outline = [c.px(*p) for p in self.outline @ rotation.T + (x, y)]
             pg.draw.polygon(c.screen, (150, 175, 215) if i == 1 else (215, 225, 242), outline)
-            pg.draw.polygon(c.screen, (70, 110, 160), outline, 2)
+            pg.draw.polygon(c.screen, (70, 110, 160), outline, c.pt(1))
         x, y, phi = links[2]
         nose = (x + self.a * math.cos(phi), y + self.a * math.sin(phi))
-        pg.draw.circle(c.screen, (204, 77, 77), c.px(*nose), 4)
+        pg.draw.circle(c.screen, (204, 77, 77), c.px(*nose), c.pt(3))
         middle = links[1]
         distance = math.hypot(target[0] - middle[0], target[1] - middle[1])
         return c.caption(f"t = {t:5.2f} s   distance = {distance:4.2f} m")
