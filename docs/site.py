@@ -207,11 +207,11 @@ def model_section(env_id: str) -> list[str]:
     if declared:
         lines += [
             "The physical parameters, which `reset(options={\"params\": {...}})` sets for an episode and "
-            "`gym.make(id, randomize={name: (low, high)})` draws per episode (uniform, or log-uniform for a scale), "
-            "within the Arguments' ranges ([the model guide](../guides/model.md)):", "",
-            "| parameter | default | draw |", "|---|---|---|",
-            *(f"| `{n}` | {getattr(env.args, n)} {p.unit} | {'log-uniform' if p.kind == 'scale' else 'uniform'} |"
-              for n, p in declared.items()), "",
+            "`gym.make(id, randomize={name: (low, high)})` draws per episode (uniform, or log-uniform for a scale drawn above 0), "
+            "within their ranges ([the model guide](../guides/model.md)):", "",
+            "| parameter | value | range | draw |", "|---|---|---|---|",
+            *(f"| `{n}` | {getattr(env.args, n)} {p.unit} | {p.span()} | "
+              f"{'log-uniform' if p.kind == 'scale' else 'uniform'} |" for n, p in declared.items()), "",
         ]  # fmt: skip
     else:
         lines += ["No declared physical parameters: the system's are the user's.", ""]

@@ -82,21 +82,23 @@ class Param:
                                         NAMED.get(self.default, repr(self.default)))  # fmt: skip
         if self.kind in ("given", "options"):
             return cells(self.name, self.default_text if self.kind == "options" else default, self.range_text)
+        return cells(self.name, default, self.span() + (f", {self.about}" if self.about else ""))
+
+    def span(self) -> str:
+        """The valid range as the Arguments table writes it, with the unit: [low, high] unit, or the choices."""
         if self.kind == "choice":
-            span = ", ".join(text(c) for c in self.choices)
-        else:
-            low, high = written(self.low), written(self.high)
-            typical, is_open = self.default if self.typical is None else self.typical, self.open_low
-            if self.kind == "scale":
-                is_open = isinstance(self.low, str)
-                low = "0" if self.low == 0.0 else low if is_open else scaled(typical, 1 / SCALE_SPAN)
-                capped = isinstance(self.high, (str, Bound)) or self.high < math.inf and (
-                    isinstance(typical, Bound) or self.high < typical * SCALE_SPAN)
-                high = high if capped else scaled(typical, SCALE_SPAN)
-            brackets = "(" if is_open else "[", ")" if self.open_high else "]"
-            span = f"{'None or ' if self.optional else ''}{brackets[0]}{low}, {high}{brackets[1]}"
-            span += f" {self.unit}" if self.unit else ""
-        return cells(self.name, default, span + (f", {self.about}" if self.about else ""))
+            return ", ".join(text(c) for c in self.choices)
+        low, high = written(self.low), written(self.high)
+        typical, is_open = self.default if self.typical is None else self.typical, self.open_low
+        if self.kind == "scale":
+            is_open = isinstance(self.low, str)
+            low = "0" if self.low == 0.0 else low if is_open else scaled(typical, 1 / SCALE_SPAN)
+            capped = isinstance(self.high, (str, Bound)) or self.high < math.inf and (
+                isinstance(typical, Bound) or self.high < typical * SCALE_SPAN)
+            high = high if capped else scaled(typical, SCALE_SPAN)
+        brackets = "(" if is_open else "[", ")" if self.open_high else "]"
+        span = f"{'None or ' if self.optional else ''}{brackets[0]}{low}, {high}{brackets[1]}"
+        return span + (f" {self.unit}" if self.unit else "")
 
 
 def cells(*texts: str) -> str:
