@@ -127,7 +127,7 @@ def local_connection(target, group: str | None = None, frame: str = "body") -> L
             raise ValueError(f"group={group!r}: a callable connection needs its group, one of {list(GROUPS)}")
         connection = Connection(group, frame, target)
         return _standalone(connection, connection)
-    name = getattr(env, "name", type(env).__name__)
+    name = getattr(getattr(target, "spec", None), "id", None) or getattr(env, "name", type(env).__name__)
     raise ValueError(f"{name} has no mechanical connection (its shape does not fix its group velocity by "
                      "ξ = −A(s) ṡ): no curvature to draw")  # fmt: skip
 
@@ -502,7 +502,8 @@ def draw(env_id: str, path: str, points: int = 41):
     F = curvature(local, shapes).F[:, :, 0, 1]
     A = np.real(evaluate(local.connection, shapes))
     moving = [d for d in range(local.group.dim) if np.any(F[:, d] != 0.0) or np.any(A[:, d] != 0.0)]
-    figure, panels = plt.subplots(1, len(moving), figsize=(FIGURE[0] * len(moving), FIGURE[1]), squeeze=False)
+    figure, panels = plt.subplots(1, len(moving), figsize=(FIGURE[0] * len(moving), FIGURE[1]), squeeze=False,
+                                   layout="constrained")
     names, every = DIRECTIONS[local.group.name], max(1, points // 12)
     for panel, d in zip(panels[0], moving):
         scale = max(np.max(np.abs(F[:, d])), 1e-300)
@@ -511,13 +512,13 @@ def draw(env_id: str, path: str, points: int = 41):
         figure.colorbar(image, ax=panel)
         arrows = shapes.reshape(points, points, 2)[::every, ::every].reshape(-1, 2)
         field = -A.reshape(points, points, -1, 2)[::every, ::every, d].reshape(-1, 2)
-        panel.quiver(arrows[:, 0], arrows[:, 1], field[:, 0], field[:, 1], color="0.25")
+        if np.any(field):
+            panel.quiver(arrows[:, 0], arrows[:, 1], field[:, 0], field[:, 1], color="0.25")
         if len(gait):
             panel.plot(gait[:, 0], gait[:, 1], color="k", lw=1.5)
         panel.set(title=f"F ({names[d]}), arrows −A ({names[d]})", xlabel=f"{local.field}[0]",
                   ylabel=f"{local.field}[1]", aspect="auto")  # fmt: skip
-    figure.suptitle(f"{env_id}: curvature of the connection ({local.connection.group}, {local.connection.frame} "
-                    "frame) and the analytic gait")  # fmt: skip
+    figure.suptitle(f"{env_id}\ncurvature ({local.connection.group}, {local.connection.frame} frame), analytic gait")
     figure.savefig(path, dpi=DPI)
     plt.close(figure)
 
