@@ -45,6 +45,7 @@ and ``python -m connenv.geometry ID [--write FILE.png]`` draws an env's curvatur
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import sys
 import warnings
@@ -333,11 +334,24 @@ class MinimumPerturbation:
     axes: tuple
     beta: np.ndarray
 
-    def at(self, s) -> np.ndarray:
-        """β(s) (N, 3) at shapes s (N, 2)."""
+    @functools.cached_property
+    def splines(self):
+        return [RectBivariateSpline(*self.axes, self.beta[..., c]) for c in range(3)]
+
+    def at(self, s, derivative=(0, 0)) -> np.ndarray:
+        """β(s) (N, 3) at shapes s (N, 2), or its derivative ∂^derivative β."""
         s = np.asarray(s, float)
-        splines = [RectBivariateSpline(*self.axes, self.beta[..., c]) for c in range(3)]
-        return np.stack([spline.ev(s[:, 0], s[:, 1]) for spline in splines], -1)
+        return np.stack([spline.ev(s[:, 0], s[:, 1], *derivative) for spline in self.splines], -1)
+
+    def transformed(self, s, A) -> np.ndarray:
+        """A' = Ad_{β⁻¹} A − β⁻¹ ∂β (N, 3, 2), the connection in the new frame, from A (N, 3, 2) at shapes s (N, 2);
+        β⁻¹ ∂_i β = (R(−β_θ) ∂_i β_p, ∂_i β_θ)."""
+        theta, out = self.at(s)[:, 2], np.moveaxis(self.adjoint_inverse(s, np.moveaxis(A, 1, -1)), -1, 1)
+        c, n = np.cos(theta), np.sin(theta)
+        for i, derivative in enumerate(((1, 0), (0, 1))):
+            x, y, turn = self.at(s, derivative).T
+            out[:, :, i] -= np.stack([c * x + n * y, c * y - n * x, turn], -1)
+        return out
 
     def adjoint_inverse(self, s, xi) -> np.ndarray:
         """Ad_{β(s)⁻¹} ξ = (R(−β_θ)(v + ω J β_p), ω), J p = (−p_y, p_x): ξ (N, …, 3) at shapes s (N, 2), the
