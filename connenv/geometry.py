@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import itertools
 import math
 import sys
 import warnings
@@ -63,6 +64,7 @@ from connenv.core.backend import floats
 from connenv.core.lie import GROUPS, Connection, ConstantConnection, Magnus
 from connenv.core.segments import run_segments
 from connenv.core.steppers import ConnectionSystem, conforms
+from connenv.systems.rolling_ball import RollingBall
 
 PROG = "python -m connenv.geometry"
 COMPLEX_STEP = 1e-20  # Im A(s + ih)/h: far below rounding of any shape, far above the smallest float
@@ -112,9 +114,11 @@ def local_connection(target, group: str | None = None, frame: str = "body") -> L
     if hasattr(env, "reduced_system"):  # a swimmer: its connection is its zero-momentum (reduced) model's
         bound = np.asarray(env.shape_bounds, float)
         field = "s" if hasattr(env.state, "s") else "u"
-        return LocalConnection(_as_connection(env.reduced_system), env.reduced_system, env.stepper, -bound, bound, field)
+        return LocalConnection(
+            _as_connection(env.reduced_system), env.reduced_system, env.stepper, -bound, bound, field
+        )
     system = getattr(env, "system", None)
-    if system is not None and hasattr(system, "spin"):  # the rolling ball: ω = e_z × v/ρ, Ṙ = ω̂ R
+    if isinstance(system, RollingBall):  # ω = e_z × v/ρ = −A v, Ṙ = ω̂ R: a constant connection, space frame
         A = np.array([[0.0, 1.0], [-1.0, 0.0], [0.0, 0.0]]) / system.radius
         unbounded = np.full(2, np.inf)
         return LocalConnection(ConstantConnection("SO3", "space", A=A), system, env.stepper, -unbounded, unbounded,
@@ -278,7 +282,7 @@ def loop_holonomy(target, loop, *, period=None, apex=None, frame_change=None, gr
     k > 2 that spanning surface. ``frame_change``: a `MinimumPerturbation`, whose frame both are given in."""
     local = local_connection(target, group, frame)
     loop = _closed(np.asarray(loop, float), period)
-    segments = [(p, q - p, 1.0) for p, q in zip(loop[:-1], loop[1:])]  # the flow is geometric: any speed will do
+    segments = [(p, q - p, 1.0) for p, q in itertools.pairwise(loop)]  # the flow is geometric: any speed will do
     y = np.asarray(run_segments(local.stepper, local.system, np.array(local.group.identity()), segments)[0], float)
     net = _net(local.group.name, y)
     if frame_change is not None:
@@ -381,8 +385,10 @@ def minimum_perturbation(target, grid: int = GRID) -> MinimumPerturbation:
     c = local.connection
     box = None if local.low is None else np.array([local.low, local.high])
     if (c.group, c.frame) != ("SE2", "body") or box is None or box.shape != (2, 2) or not np.all(np.isfinite(box)):
-        raise ValueError(f"minimum-perturbation coordinates here are for SE(2) connections in the body frame over a "
-                         f"bounded 2-D shape box; got {c.group}, {c.frame}, a box {local.low} to {local.high}")
+        raise ValueError(
+            f"minimum-perturbation coordinates here are for SE(2) connections in the body frame over a "
+            f"bounded 2-D shape box; got {c.group}, {c.frame}, a box {local.low} to {local.high}"
+        )
     axes = tuple(np.linspace(lo, hi, grid) for lo, hi in zip(local.low, local.high))
     difference, mean, midpoints, direction = _edges(axes)
     column = evaluate(c, midpoints)[np.arange(len(direction)), :, direction]  # (E, 3): A at each edge, along it
@@ -516,8 +522,9 @@ def draw(env_id: str, path: str, points: int = 41):
     F = curvature(local, shapes).F[:, :, 0, 1]
     A = np.real(evaluate(local.connection, shapes))
     moving = [d for d in range(local.group.dim) if np.any(F[:, d] != 0.0) or np.any(A[:, d] != 0.0)]
-    figure, panels = plt.subplots(1, len(moving), figsize=(FIGURE[0] * len(moving), FIGURE[1]), squeeze=False,
-                                   layout="constrained")
+    figure, panels = plt.subplots(
+        1, len(moving), figsize=(FIGURE[0] * len(moving), FIGURE[1]), squeeze=False, layout="constrained"
+    )
     names, every = DIRECTIONS[local.group.name], max(1, points // 12)
     for panel, d in zip(panels[0], moving):
         scale = max(np.max(np.abs(F[:, d])), 1e-300)
