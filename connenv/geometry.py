@@ -17,8 +17,8 @@ second-order Magnus expansion of the flow around a small loop that encloses the 
 dA the *nonconservative* part (Stokes' theorem turns the loop integral −∮A ds into the area integral of dA) and the
 bracket the *noncommutative* one (the group's motions in different directions do not commute). The first-order
 prediction of a loop's holonomy is −∬F over a surface the loop bounds (`loop_holonomy`); its error is third order in
-the loop's size, and fourth where the loop is based at the centre of the area it encloses (the third-order term is
-the area's first moment about the base point).
+the loop's size, and fourth where the loop is based at the centre of the area it encloses (the third-order term goes
+with the area's first moment about the base point).
 
 Derivatives of A are by complex step where the connection carries complex shapes (every connection of connenv's
 systems does: ``connenv.core.backend``): Im A(s + ih e_i)/h = ∂_i A(s), exact to rounding, as the models'
