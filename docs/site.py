@@ -3,6 +3,7 @@ under its analytic controller, as Gymnasium's docs are made.
 
     python docs/site.py                 # write docs/envs/{name}.md, the generated physics pages, README's gallery
     python docs/site.py --animations    # also record docs/envs/{name}.gif (about a minute)
+    python docs/site.py --maps          # also draw docs/envs/{name}-curvature.png (python -m connenv.geometry)
     python docs/site.py --check         # exit 1 naming the pages that differ from what the docstrings make
 
 A subclass's docstring (RollingBallGoal-v0's, KapitzaSwingUp-v0's) gives what differs; the sections it leaves out
@@ -80,8 +81,8 @@ GENERATED_PHYSICS = {
             "velocity into a group velocity, and a closed loop of shapes moves the body by the loop's holonomy — the "
             "curvature of A integrated over the area the loop encloses, whatever the speed of the loop."
         ),
-        ["connenv.core.lie", "connenv.envs.connection"],
-        ["tests/test_connection.py"],
+        ["connenv.core.lie", "connenv.envs.connection", "connenv.geometry"],
+        ["tests/test_connection.py", "tests/test_geometry.py"],
     ),
     "swing.md": (
         "The swing",
@@ -189,6 +190,8 @@ def page(env_id: str) -> str:
     lines += [header, "|---|---|", *rest, ""]
     for title, body in merged_sections(cls).items():
         lines += [f"## {title}", "", body, ""]
+        if title == "Description":
+            lines += map_section(env_id)
         if title == "Arguments":
             lines += model_section(env_id) + steppers_section(env_id)
     lines += reference_results(env_id)
@@ -219,6 +222,35 @@ def model_section(env_id: str) -> list[str]:
     lines += [f"`env.unwrapped.model` steps a state vector of {model.n} entries: {names}.", ""]
     env.close()
     return lines
+
+
+def curvature_map(env_id: str) -> Path:
+    return PAGES / f"{name(env_id)}-curvature.png"
+
+
+def draw_map(env_id: str) -> bool:
+    """Draw the env's curvature map (connenv.geometry.draw) where it has a connection on a 2-D shape space."""
+    from connenv import geometry
+
+    try:
+        geometry.draw(env_id, str(curvature_map(env_id)))
+    except ValueError:  # no connection, or not a 2-D shape space: no map
+        return False
+    return True
+
+
+def map_section(env_id: str) -> list[str]:
+    """The curvature map with the analytic gait, where ``--maps`` drew one."""
+    if not curvature_map(env_id).is_file():
+        return []
+    return [
+        "## Curvature map", "",
+        "The curvature F of the connection over the shape space, one panel per group direction that moves (colour; "
+        "a small loop of area a, counterclockwise, moves the body by about −F a in that direction), the shape "
+        "velocities −A that move it fastest (arrows), and the analytic controller's gait (black), drawn by "
+        f"`python -m connenv.geometry {env_id}` ([the geometry of connections](../physics/connections.md)):", "",
+        f"![curvature map of {name(env_id)}]({curvature_map(env_id).name})", "",
+    ]  # fmt: skip
 
 
 def steppers_section(env_id: str) -> list[str]:
@@ -411,6 +443,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--check", action="store_true", help="compare the pages with the docstrings' instead")
     parser.add_argument("--animations", action="store_true", help="also record the animations")
+    parser.add_argument("--maps", action="store_true", help="also draw the connection envs' curvature maps")
     args = parser.parse_args(argv)
     if args.check:
         stale = stale_pages()
@@ -418,6 +451,11 @@ def main(argv: list[str] | None = None) -> int:
         return 1 if stale else 0
     for path in write_pages():
         print(f"wrote {path.relative_to(DOCS.parent)}")
+    for env_id in env_ids() if args.maps else ():
+        if draw_map(env_id):
+            print(f"wrote {curvature_map(env_id).relative_to(DOCS.parent)}")
+    if args.maps:
+        write_pages()  # the pages of the envs with a map show it
     for env_id in env_ids() if args.animations else ():
         gif = PAGES / f"{name(env_id)}.gif"
         frames = record(env_id, gif)
