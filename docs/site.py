@@ -219,7 +219,9 @@ def model_section(env_id: str) -> list[str]:
     else:
         lines += ["No declared physical parameters: the system's are the user's.", ""]
     names = ", ".join(f"`{n}`" for n in model.state_names)
-    lines += [f"`env.unwrapped.model` steps a state vector of {model.n} entries: {names}.", ""]
+    lines += [f"`env.unwrapped.model` steps a state vector of {model.n} entries: {names}. `model.jacobians` "
+              "differentiates the step by complex step, exact to rounding, with any of the env's steppers but "
+              "\"lsoda\" and \"radau\" (which step rows one by one and take no complex numbers).", ""]
     env.close()
     return lines
 

@@ -219,6 +219,12 @@ class ActiveConstraintEnv(TaskEnv):
 
         return cls(LagrangianSystem(kinetic, potential, q, u), **kwargs)
 
+    @property
+    def components(self) -> dict:
+        """The state's names for the model: y = (q₁…qₙ, p₁…pₙ), u = (u₁…uₘ)."""
+        n, m = range(1, self.n + 1), range(1, self.m + 1)
+        return {"y": (*(f"q{i}" for i in n), *(f"p{i}" for i in n)), "u": tuple(f"u{i}" for i in m)}
+
     def parameters(self):
         """A declared subclass's physical parameters, else the builder's system and controls."""
         if hasattr(self, "args"):

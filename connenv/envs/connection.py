@@ -201,6 +201,13 @@ class ConnectionEnv(TaskEnv):
         shape = self.observe(self.state).shape
         return spaces.Box(-np.inf, np.inf, shape, np.float32)
 
+    @property
+    def components(self) -> dict:
+        """The state's names for the model: g's coordinates (x, y, theta for SE2, R's entries for SO3), s₁…s_k."""
+        names = {"SO2": ("theta",), "SE2": ("x", "y", "theta"), "R2": ("x", "y"),
+                 "SO3": tuple(f"R{i}{j}" for i in range(1, 4) for j in range(1, 4))}[self.group.name]
+        return {"g": names, "s": tuple(f"s{i}" for i in range(1, self.low.size + 1))}
+
     def parameters(self):
         own = {"group": self.group.name, "frame": self.system.frame, "max_shape_speed": self.max_shape_speed}
         return {**own, **super().parameters()}
