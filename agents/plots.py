@@ -18,21 +18,21 @@ q, p and u where the state's field ``y`` = (q, p) and its field ``u`` do not.
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
 
 import gymnasium as gym
 import matplotlib
 import numpy as np
+from matplotlib import patheffects
+from matplotlib.collections import LineCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from scipy.spatial.transform import Rotation
 
-matplotlib.use("Agg")
-from matplotlib import pyplot as plt  # noqa: E402  (after the backend is chosen)
-from matplotlib import patheffects  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
-from scipy.spatial.transform import Rotation  # noqa: E402
-
-from connenv import geometry  # noqa: E402
-from connenv.core import mechanics  # noqa: E402
+from connenv import geometry
+from connenv.core import mechanics
 
 DPI = 100
 PANEL = (4.2, 3.8)  # inches per panel
@@ -41,7 +41,7 @@ GROUP_FIELDS = ("g", "pose", "R")  # the state's field that holds the group elem
 RETURN = 0.08  # a cycle ends where the shape comes this close (a fraction of the path's extent) to its start
 EXCURSION = 0.3  # ... after having gone at least this far from it
 JUMP = 0.25  # a step of u larger than this fraction of u's range is a jump
-MARKS = 60  # events past this many (a random policy's, nearly every step) are counted, not marked
+MARKS = 30  # events past this many (a random policy's, nearly every step) are counted, not marked
 LOOP_POINTS = 120  # a cycle's loop is thinned to at most this many points for the area integral
 OUTLINE = [patheffects.withStroke(linewidth=3, foreground="white")]  # paths stay visible on any colour
 ACTIVE = {
@@ -67,14 +67,13 @@ def draw(env_id: str, traces: dict, path, env_kwargs: dict | None = None):
     env.close()
     figure.suptitle(f"{env_id}: the first episode of each policy")
     Path(path).parent.mkdir(parents=True, exist_ok=True)  # --plot's check allows missing folders
-    figure.savefig(path, dpi=DPI)
-    plt.close(figure)
+    figure.savefig(path, dpi=DPI)  # a Figure without pyplot: Agg's canvas, no global state to close
     return tuple(round(float(inches) * DPI) for inches in figure.get_size_inches())
 
 
 def colours(labels) -> dict:
     """A colour per policy, the same in every panel."""
-    cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    cycle = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     return {label: cycle[i % len(cycle)] for i, label in enumerate(labels)}
 
 
@@ -109,8 +108,8 @@ def connection_figure(env, local, traces):
     A = np.real(geometry.evaluate(local.connection, shapes))
     F = geometry.curvature(local, shapes).F[:, :, 0, 1] if k == 2 else np.zeros(A.shape[:2])
     moving = [d for d in range(local.group.dim) if np.any(F[:, d] != 0.0) or np.any(A[:, d] != 0.0)]
-    figure, panels = plt.subplots(1, len(moving) + 1, figsize=(PANEL[0] * (len(moving) + 1), PANEL[1] + 0.6),
-                                  layout="constrained", squeeze=False)  # fmt: skip
+    figure = Figure(figsize=(PANEL[0] * (len(moving) + 1), PANEL[1] + 0.6), layout="constrained")
+    panels = figure.subplots(1, len(moving) + 1, squeeze=False)
     colour = colours(traces)
     names = geometry.DIRECTIONS[local.group.name]
     for panel, d in zip(panels[0], moving):
@@ -118,10 +117,10 @@ def connection_figure(env, local, traces):
             curvature_panel(figure, panel, axes, shapes, F[:, d], -A[:, d], paths, colour)
         else:
             line_panel(panel, axes[0], -A[:, d, 0], paths, {label: g[:, d] for label, g in groups.items()}, colour)
-        flat = k == 1 or not np.any(F[:, d])
-        panel.set(title=f"{names[d]}: " + ("F = 0" if flat else "curvature F") + (", arrows −A" if k == 2 else
-                                                                                    ", arrows (1, −A)"),
-                  xlabel=shape_name(env, local, 0), ylabel=shape_name(env, local, 1) if k == 2 else f"Δ{names[d]}")
+        colour_key = "F = 0" if k == 1 or not np.any(F[:, d]) else "curvature F"
+        arrows = "−A" if k == 2 else "(1, −A)"
+        ylabel = shape_name(env, local, 1) if k == 2 else f"Δ{names[d]}"
+        panel.set(title=f"{names[d]}: {colour_key}, arrows {arrows}", xlabel=shape_name(env, local, 0), ylabel=ylabel)
     drawn = net_panel(panels[0][-1], local, paths, groups, moving, colour)
     handles = [Line2D([], [], color=c, lw=2, label=f"{label}: net {drawn[label]}") for label, c in colour.items()]
     figure.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), len(moving) + 1), frameon=False)
@@ -208,7 +207,7 @@ def returns(path, start: int, extent: float) -> list[tuple[int, int]]:
         if away and distance[i] < RETURN and distance[i] <= distance[i - 1] and distance[i] <= distance[i + 1]:
             ends.append(i)
             away = False
-    return list(zip(ends[:-1], ends[1:]))
+    return list(itertools.pairwise(ends))
 
 
 def predictions(local, path, g, moving) -> tuple[np.ndarray, np.ndarray, str]:
@@ -255,8 +254,8 @@ def net_panel(panel, local, paths, groups, moving, colour) -> dict:
         panel.bar(x + width, predicted, width, color="none", edgecolor=colour[label], hatch="///")
     panel.axhline(0.0, color="0.5", lw=0.8)
     panel.set_xticks(np.arange(len(moving)), [names[d] for d in moving])
-    body = local.connection.frame == "body"
-    panel.set(title="net motion: simulated (filled),\npredicted −∬F (hatched)", ylabel=f"{'g₀⁻¹g₁' if body else 'g₁g₀⁻¹'} (algebra coordinates)")
+    net = "g₀⁻¹g₁" if local.connection.frame == "body" else "g₁g₀⁻¹"
+    panel.set(title="net motion: simulated (filled),\npredicted −∬F (hatched)", ylabel=f"{net} (algebra coordinates)")
     return drawn
 
 
@@ -266,7 +265,7 @@ def net_panel(panel, local, paths, groups, moving, colour) -> dict:
 def active_figure(env, local, traces):
     """A phase portrait per policy (shared axes, one colour scale of u) over the energy against time."""
     n = len(traces)
-    figure = plt.figure(figsize=(max(PANEL[0] * n, 7.0), 2 * PANEL[1]), layout="constrained")
+    figure = Figure(figsize=(max(PANEL[0] * n, 7.0), 2 * PANEL[1]), layout="constrained")
     grid = figure.add_gridspec(2, n, height_ratios=(1.4, 1))
     portraits = [figure.add_subplot(grid[0, 0])]
     portraits += [figure.add_subplot(grid[0, i], sharex=portraits[0], sharey=portraits[0]) for i in range(1, n)]
@@ -321,8 +320,6 @@ def shown(marks) -> np.ndarray:
 def portrait(panel, q, p, u, norm):
     """The path (q, p), its segments coloured by u, a dot at its start, the jumps (triangles) and the turns of u's
     rate (crosses)."""
-    from matplotlib.collections import LineCollection
-
     points = np.stack([q, p], -1)
     lines = LineCollection(np.stack([points[:-1], points[1:]], 1), cmap="viridis", norm=norm, lw=1.5)
     lines.set_array(0.5 * (u[:-1] + u[1:]))
@@ -364,5 +361,8 @@ def measure_panel(panel, env, traces, u, colour):
         panel.plot(t[turns], values[turns], "x", color=colour[label], ms=4, ls="none")
     marks = [Line2D([], [], marker="^", color="0.3", ls="none", label="u jumps"),
              Line2D([], [], marker="x", color="0.3", ls="none", label="u̇ changes sign")]  # fmt: skip
-    panel.legend(handles=[*panel.get_legend_handles_labels()[0], *marks], fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    handles = [*panel.get_legend_handles_labels()[0], *marks]
+    panel.figure.legend(
+        handles=handles, fontsize=8, loc="outside lower center", ncols=min(len(handles), 3), frameon=False
+    )  # below the figure: a legend beside the axes would narrow the portraits too
     panel.set(xlabel="t (s)", ylabel=name, title=f"{name} against time")

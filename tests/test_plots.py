@@ -39,7 +39,8 @@ def test_cli_plot(tmp_path, capsys):
     path = tmp_path / "figures" / "swing.png"
     main(["--env", "connenv/Swing-v0", "--policy", "analytic", "random", "--episodes", "2", "--plot", str(path),
           "--json", str(tmp_path / "eval.json"), "--env-kwargs", f'{{"max_episode_steps": {STEPS}}}'])  # fmt: skip
-    assert image.imread(path).shape[:2] == (round(2 * plots.PANEL[1] * plots.DPI), round(2 * plots.PANEL[0] * plots.DPI))
+    width, height = 2 * plots.PANEL[0], 2 * plots.PANEL[1]  # two policies side by side over the energy
+    assert image.imread(path).shape[:2] == (round(height * plots.DPI), round(width * plots.DPI))
     assert str(path) in capsys.readouterr().out
 
 
