@@ -26,7 +26,7 @@ import os
 import sys
 import zipfile
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import gymnasium as gym
@@ -59,6 +59,23 @@ class Episode:
     time: float
     length: int
     measures: dict
+
+
+@dataclass
+class Trace:
+    """What `agents.plots` draws of an episode: the model's packed state x after reset and after each step
+    (``env.unwrapped.model.pack``, named by its ``state_names``), the actions and the infos (``info["state"]``
+    among them)."""
+
+    states: list = field(default_factory=list)
+    actions: list = field(default_factory=list)
+    infos: list = field(default_factory=list)
+
+    def record(self, env: gym.Env, info: dict, action=None):
+        self.states.append(env.unwrapped.model.pack(env.unwrapped.state))
+        self.infos.append(info)
+        if action is not None:
+            self.actions.append(np.array(action, float))
 
 
 class RandomPolicy:
@@ -108,6 +125,13 @@ def check_policy(env_id: str, spec: str):
         raise ValueError(f"{spec!r} is no controller of {env_id}; its controllers: {names or 'none'}")
     if spec == "pretrained":
         pretrained_models(env_id)
+
+
+def png_file(text: str) -> str:
+    """argparse type: a writable path ending in .png (agents.plots writes PNGs only)."""
+    if Path(text).suffix.lower() != ".png":
+        raise argparse.ArgumentTypeError(f"{text!r} does not end in .png (the figure is a PNG)")
+    return writable_file(text)
 
 
 def gif_file(text: str) -> str:
@@ -253,16 +277,20 @@ def make_policy(
     return f"{algo}:{Path(spec).parent.name}", load_model(spec, env_id, algo, env_kwargs)
 
 
-def run_episode(env: gym.Env, policy, seed: int) -> Episode:
+def run_episode(env: gym.Env, policy, seed: int, trace: Trace | None = None) -> Episode:
     """One episode from reset(seed=seed), deterministic actions; a planner (a policy with ``bind``) is bound to env
-    first, since it plans from the env's state."""
+    first, since it plans from the env's state. ``trace``: a Trace that records it (the others skip the packing)."""
     if hasattr(policy, "bind"):
         policy.bind(env)
-    obs, _ = env.reset(seed=seed)
+    obs, info = env.reset(seed=seed)
+    if trace is not None:
+        trace.record(env, info)
     ret, length, done, state = 0.0, 0, False, None
     while not done:  # state and episode_start as SB3's evaluate_policy passes them, for recurrent policies
         action, state = policy.predict(obs, state=state, episode_start=np.array([length == 0]), deterministic=True)
         obs, reward, terminated, truncated, info = env.step(action)
+        if trace is not None:
+            trace.record(env, info, action)
         ret, length, done = ret + float(reward), length + 1, terminated or truncated
     measures = {key: float(info[key]) for key in env.unwrapped.metadata.get("measures", ())}
     return Episode(ret, bool(info["is_success"]), float(info["state"]["t"]), length, measures)
@@ -280,13 +308,22 @@ def save_gif(frames: list[np.ndarray], path: str | Path, fps: float):
 
 
 def evaluate(
-    env_id: str, policy, episodes: int, seed: int, video: str | Path | None = None, env_kwargs: dict | None = None
+    env_id: str,
+    policy,
+    episodes: int,
+    seed: int,
+    video: str | Path | None = None,
+    env_kwargs: dict | None = None,
+    trace: Trace | None = None,
 ) -> list[Episode]:
-    """Episodes reset with seeds seed, seed + 1, ...; with `video`, the first is also written as a GIF."""
+    """Episodes reset with seeds seed, seed + 1, ...; with `video`, the first is also written as a GIF; with
+    `trace`, the first is recorded in it."""
     env_kwargs = env_kwargs or {}
     env = gym.make(env_id, **env_kwargs)
     first_env = RenderCollection(gym.make(env_id, render_mode="rgb_array", **env_kwargs)) if video else env
-    results = [run_episode(first_env if i == 0 else env, policy, seed + i) for i in range(episodes)]
+    results = [
+        run_episode(first_env if i == 0 else env, policy, seed + i, trace if i == 0 else None) for i in range(episodes)
+    ]
     if video:
         save_gif(first_env.render(), video, env.metadata["render_fps"])
     env.close()
@@ -328,15 +365,23 @@ def compare(
     algo: str | None = None,
     video=None,
     env_kwargs: dict | None = None,
+    plot=None,
 ) -> dict:
-    """Evaluate each policy spec on the same episodes; `video` films the first policy's first episode. `algo`
-    applies to the zips given by path; a pretrained model's is read from its folder. env_kwargs: gym.make's."""
-    rows = []
+    """Evaluate each policy spec on the same episodes; `video` films the first policy's first episode, `plot` draws
+    every policy's first episode (agents.plots). `algo` applies to the zips given by path; a pretrained model's is
+    read from its folder. env_kwargs: gym.make's."""
+    rows, traces = [], {}
     for i, (spec, spec_algo) in enumerate(expand_pretrained(specs, env_id, algo)):
         label, policy = make_policy(spec, env_id, seed, spec_algo, env_kwargs)
-        rows.append(
-            summarize(label, evaluate(env_id, policy, episodes, seed, video if i == 0 else None, env_kwargs))
-        )
+        trace = Trace() if plot else None
+        if plot:  # a policy given twice is drawn twice
+            traces[f"{label} ({i + 1})" if label in traces else label] = trace
+        episodes_run = evaluate(env_id, policy, episodes, seed, video if i == 0 else None, env_kwargs, trace)
+        rows.append(summarize(label, episodes_run))
+    if plot:
+        from agents.plots import draw
+
+        draw(env_id, traces, plot, env_kwargs)
     return {"env": env_id, "seed": seed, "episodes": episodes, "policies": rows}
 
 
@@ -389,6 +434,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--seed", type=seed_int, default=0, help="episode i is reset with seed + i")
     parser.add_argument("--json", type=writable_file, help="default: runs/eval_{env}_s{seed}.json")
     parser.add_argument("--video", type=gif_file, help="GIF of the first policy's first episode")
+    parser.add_argument(
+        "--plot",
+        type=png_file,
+        metavar="FILE.png",
+        help="draw each policy's first episode in one figure (agents.plots): for an env with a mechanical connection "
+        "the shape path over the curvature map and the net motion beside its prediction, for an active-constraint "
+        "env the phase portrait coloured by the control and the energy (or the env's measure) against time",
+    )
     parser.add_argument("--env-kwargs", nargs="+", metavar="KWARGS", help=ENV_KWARGS_HELP)
     args = parser.parse_args(argv)
     for spec in args.policy:
@@ -411,10 +464,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> dict:
     args = parse_args(argv)
     env_kwargs = make_kwargs(args.env, args.env_kwargs)
-    report = compare(args.env, args.policy, args.episodes, args.seed, args.algo, args.video, env_kwargs)
+    report = compare(args.env, args.policy, args.episodes, args.seed, args.algo, args.video, env_kwargs, args.plot)
     print(format_table(report))
     write_json(report, args.json)
-    print(f"wrote {args.json}" + (f" and {args.video}" if args.video else ""))
+    print(f"wrote {args.json}" + "".join(f" and {path}" for path in (args.video, args.plot) if path))
     return report
 
 
