@@ -190,12 +190,24 @@ def net_motion(local, g0, g1) -> np.ndarray:
 
 def cycles(path) -> list[tuple[int, int]]:
     """(start, end) index pairs of the cycles of a shape path (T, k): the returns nearest its shape at its start, or
-    a quarter into the episode (past the transient from reset), whichever gives more, each after an excursion of
-    EXCURSION of the path's extent and within RETURN of it; none where the path does not come back."""
+    a quarter into the episode (past the transient from reset), each after an excursion of EXCURSION of the path's
+    extent and within RETURN of it, or (a 2-D path) its turns about its centre past that quarter, which a loop that
+    drifts as it repeats makes without returning; whichever gives most. None where the path does not come back."""
     extent = np.max(np.ptp(path, axis=0))
     if extent == 0.0 or len(path) < 8:
         return []
-    return max((returns(path, start, extent) for start in (0, len(path) // 4)), key=len)
+    found = [returns(path, start, extent) for start in (0, len(path) // 4)]
+    return max(found + ([turns(path, len(path) // 4)] if path.shape[1] == 2 else []), key=len)
+
+
+def turns(path, start: int) -> list[tuple[int, int]]:
+    """The cycles of a 2-D path from index start: each full turn (2π of its unwrapped angle about the centre of the
+    path from there) ends one."""
+    relative = path[start:] - path[start:].mean(axis=0)
+    angle = np.unwrap(np.arctan2(relative[:, 1], relative[:, 0]))
+    turned = np.floor(np.abs(angle - angle[0]) / (2 * math.pi))
+    ends = [start, *(start + 1 + np.flatnonzero(np.diff(turned) > 0)).tolist()]
+    return list(itertools.pairwise(ends))
 
 
 def returns(path, start: int, extent: float) -> list[tuple[int, int]]:
