@@ -13,8 +13,10 @@ floats, on rows ((N, n)) the native vector env's on numpy arrays. From the same 
 state of ``env.step`` (single) and of the vector env's step (rows) to the bit.
 
 Jacobians are by complex step (Squire & Trapp, SIAM Rev. 1998; Martins, Sturdza & Alonso, ACM TOMS 2003): an input
-entry moved by i·h (h = 1e-20) through the rows' path gives Im(x_next)/h, its column, exact to rounding since no
-difference cancels. It differentiates the step's own arithmetic: substeps, closed-form flows, projections and all.
+entry moved by i·h (h = 1e-150) through the rows' path gives Im(x_next)/h, its column, exact to rounding since no
+difference cancels. h lies far below any entry a state holds: an entry near 0 (a segment a planner's action makes
+1e-45 s long) keeps the step analytic within i·h of it, which h = 1e-20, common elsewhere, would not. It
+differentiates the step's own arithmetic: substeps, closed-form flows, projections and all.
 Where the step is not differentiable (a clip, an end stop, a switching surface), the branch the real part takes
 is followed, which is the one-sided derivative; a flag or counter does not move under a small change, so its
 column and row are 0, and so is the column of an action entry the action space clips.
@@ -33,7 +35,7 @@ from connenv.core.backend import BATCH, SCALAR
 from connenv.core.batched import batched
 from connenv.core.steppers import StepperError
 
-STEP = 1e-20  # the complex step: far below rounding of any entry, far above the smallest float
+STEP = 1e-150  # far below any entry a state holds (a step's series converges within |entry|), far above 1e-308
 CACHED_MODELS = 64  # models of other parameter values kept by with_params
 
 
