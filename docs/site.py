@@ -226,6 +226,13 @@ def model_section(env_id: str) -> list[str]:
     return lines
 
 
+ONE_DIMENSIONAL = (
+    "The shape space is 1-D: a loop of shapes encloses no area, so the connection is flat (F = 0), and a shape path "
+    "that returns moves the body only by the times it winds (`connenv.geometry.loop_holonomy`, "
+    "[the geometry of connections](../physics/connections.md))."
+)
+
+
 def curvature_map(env_id: str) -> Path:
     return PAGES / f"{name(env_id)}-curvature.png"
 
@@ -242,9 +249,15 @@ def draw_map(env_id: str) -> bool:
 
 
 def map_section(env_id: str) -> list[str]:
-    """The curvature map with the analytic gait, where ``--maps`` drew one."""
+    """The curvature map with the analytic gait, where ``--maps`` drew one; a word where the shape space is 1-D."""
+    from connenv import geometry
+
     if not curvature_map(env_id).is_file():
-        return []
+        try:
+            one = geometry.local_connection(make(env_id)).low.size == 1
+        except ValueError:  # no connection
+            one = False
+        return ["## Curvature map", "", ONE_DIMENSIONAL, ""] if one else []
     return [
         "## Curvature map", "",
         "The curvature F of the connection over the shape space, one panel per group direction that moves (colour; "
