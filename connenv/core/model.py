@@ -24,6 +24,7 @@ column and row are 0, and so is the column of an action entry the action space c
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from types import SimpleNamespace
@@ -33,6 +34,7 @@ from gymnasium.vector.utils import batch_space
 
 from connenv.core.backend import BATCH, SCALAR
 from connenv.core.batched import batched
+from connenv.core.context import physical_params
 from connenv.core.steppers import StepperError
 
 STEP = 1e-150  # far below any entry a state holds (a step's series converges within |entry|), far above 1e-308
@@ -92,21 +94,17 @@ def layout(state) -> list[Entry]:
     entries, offset = [], 0
     for name, value in state.fields().items():
         array = np.asarray(value)
-        container = type(value) if isinstance(value, (np.ndarray, tuple, list)) else type(value)
-        if isinstance(value, (np.floating, np.integer, np.bool_)):
+        container = type(value)
+        if isinstance(value, (np.floating, np.integer, np.bool_)):  # a numpy scalar: the Python number it stands for
             container = {"f": float, "i": int, "u": int, "b": bool}[array.dtype.kind]
-        dtype = array.dtype
-        entries.append(Entry(name, array.shape, offset, container, dtype))
+        entries.append(Entry(name, array.shape, offset, container, array.dtype))
         offset += array.size
     return entries
 
 
 def params_type(env) -> type:
     """A frozen dataclass of the env's physical parameters (its ARGS' numbers marked physical), named after it."""
-    args = getattr(env, "ARGS", None)
-    declared = [] if args is None or not hasattr(env, "args") else [
-        p for p in args.params.values() if p.physical and p.kind in ("scale", "interval")
-    ]
+    declared = list(physical_params(env).values())
     rows = "\n".join(f"    {p.row()}" for p in declared)
     fields = [(p.name, float | None if p.optional else float) for p in declared]
     cls = dataclasses.make_dataclass(type(env).__name__.removesuffix("Env") + "Params", fields, frozen=True)
@@ -122,8 +120,6 @@ class Model:
     changes it; ``with_params`` gives the model of other parameter values."""
 
     def __init__(self, env):
-        import copy
-
         self.env = copy.deepcopy(env)
         self.env.close()
         self.row_stepper = batched(self.env.stepper)
@@ -214,8 +210,8 @@ class Model:
     # -- task ------------------------------------------------------------------
 
     def reward(self, x, a, x_next):
-        """The env's reward of the step from x to x_next (a, the action, as the env's reward does not read it
-        beyond what x_next holds)."""
+        """The env's reward of the step from x to x_next. ``a`` completes a planner's signature: the rewards read the
+        states alone (x_next holds what the action did)."""
         x, x_next = self._check_state(x), self._check_state(x_next)
         ops = SCALAR if x.ndim == 1 else BATCH
         after = self.state(x_next)
