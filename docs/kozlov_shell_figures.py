@@ -5,7 +5,10 @@ rate independence, and the gait planner's worst case over 90 directions at 1 m.
 """
 
 import math
-import gymnasium as gym, numpy as np, connenv
+
+import gymnasium as gym
+import numpy as np
+
 from connenv.core import make_stepper
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 

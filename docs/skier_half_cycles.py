@@ -2,8 +2,13 @@
 
     python docs/skier_half_cycles.py
 """
-import collections, gymnasium as gym, numpy as np, connenv
+import collections
+
+import gymnasium as gym
+import numpy as np
+
 from agents.controllers.skier import SkierPumping
+
 env = gym.make("connenv/Skier-v0"); pol = SkierPumping(); counts = collections.Counter(); times = []
 for seed in range(100):
     obs, info = env.reset(seed=seed); done = False; ups = 0

@@ -32,7 +32,8 @@ from gymnasium import spaces
 
 from connenv.core.state import Fields, number
 from connenv.core.validation import check_dt
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv
+from connenv.core.backend import BATCH, SCALAR
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 from throwaway.point_system import flow

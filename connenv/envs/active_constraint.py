@@ -8,7 +8,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv import examples
-from connenv.core.backend import ARRAYS
+from connenv.core.backend import ARRAYS, SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import (
     JUMP_ROWS,
@@ -33,7 +33,7 @@ from connenv.core.validation import (
     check_stepper_options,
     probe,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import vector_env

@@ -9,6 +9,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import SCALAR
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import check_drift
 from connenv.core.state import Fields, angle, number
@@ -18,7 +19,6 @@ from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env'
     ActiveConstraintEnv,
     ActiveConstraintState,
 )
-from connenv.envs.base import SCALAR
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 

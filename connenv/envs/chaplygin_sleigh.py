@@ -9,14 +9,14 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import ARRAYS
+from connenv.core.backend import ARRAYS, SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JUMP_ROWS, JUMP_STEPPER, JumpClass, JumpFlow
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.state import Fields, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh

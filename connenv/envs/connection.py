@@ -8,6 +8,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv import examples
+from connenv.core.backend import SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, ExactConnection, connection_system
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
@@ -22,7 +23,7 @@ from connenv.core.validation import (
     check_stepper_options,
     real_array,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import vector_env

@@ -10,10 +10,10 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import SCALAR
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.state import Fields, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys
-from connenv.envs.base import SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env

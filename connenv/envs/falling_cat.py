@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import BATCH, SCALAR
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.state import Fields, rotation, vector
@@ -17,7 +18,6 @@ from connenv.core.validation import (
     check_keys,
     decimal,
 )
-from connenv.envs.base import BATCH, SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env

@@ -9,12 +9,13 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, choice, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.state import Fields, angle, number, vector
 from connenv.core.validation import check_keys
-from connenv.envs.base import SCALAR, RenderedEnv, State, TaskEnv
+from connenv.envs.base import RenderedEnv, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 from connenv.systems.kapitza import KapitzaPendulum

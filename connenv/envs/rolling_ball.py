@@ -10,7 +10,7 @@ import numpy as np
 from gymnasium import spaces
 from scipy.spatial.transform import Rotation
 
-from connenv.core.backend import ARRAYS
+from connenv.core.backend import ARRAYS, SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.segments import run_segments
@@ -22,7 +22,7 @@ from connenv.core.validation import (
     finite_action,
     ndim,
 )
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv, vector_env
 from connenv.systems.rolling_ball import (

@@ -9,12 +9,13 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, interval, options, step
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.state import Fields, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface

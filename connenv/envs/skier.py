@@ -9,12 +9,13 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, options, scale, step
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.state import Fields, number
 from connenv.core.validation import check_keys, check_number
-from connenv.envs.base import SCALAR, State, TaskEnv, control_path
+from connenv.envs.base import State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 from connenv.systems.skier import Skier, check_curvature

@@ -11,13 +11,13 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import ARRAYS
+from connenv.core.backend import ARRAYS, SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus, fixed_rule
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.state import number
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector, decimal
-from connenv.envs.base import SCALAR, State, TaskEnv
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, POSITION_BOUND, TARGET_BOUND, PlanarSwimmer, swimmer_state
 from connenv.envs.vector import vector_env

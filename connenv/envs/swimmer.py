@@ -6,11 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from connenv.core.backend import components
+from connenv.core.backend import SCALAR, components
 from connenv.core.params import Bound
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.state import Field, Fields, angle, number, vector
-from connenv.envs.base import SCALAR
 from connenv.systems import ideal_fluid
 
 TIME_COST = 0.01  # reward paid per step until success

@@ -9,12 +9,13 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import BATCH, SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.state import Fields, angle, number
 from connenv.core.validation import check_keys
-from connenv.envs.base import BATCH, SCALAR, State, TaskEnv, control_path
+from connenv.envs.base import State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 from connenv.systems.swing import Swing

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import SCALAR
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.state import Fields, rotation
@@ -16,7 +17,6 @@ from connenv.core.validation import (
     check_keys,
     check_number,
 )
-from connenv.envs.base import SCALAR
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env

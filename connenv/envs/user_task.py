@@ -24,8 +24,9 @@ import numbers
 import numpy as np
 from gymnasium import spaces
 
+from connenv.core.backend import SCALAR
 from connenv.core.validation import check_keys, check_returned
-from connenv.envs.base import SCALAR, each_row
+from connenv.envs.base import each_row
 
 REQUIRED = {
     "reset": "reset(np_random) -> state dict",

@@ -42,9 +42,10 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from connenv.core.backend import BATCH
 from connenv.core.batched import batched
 from connenv.core.steppers import StepperError
-from connenv.envs.base import BATCH, State
+from connenv.envs.base import State
 
 
 class TaskVectorEnv(VectorEnv):
