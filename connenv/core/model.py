@@ -102,6 +102,16 @@ def layout(state) -> list[Entry]:
     return entries
 
 
+def flatten(fields: dict, entries: list[Entry]) -> np.ndarray:
+    """The entries of a task state's fields in one float64 vector (n,), or rows (N, n) where the time is one per
+    row (complex on a Jacobian's rows)."""
+    values = [fields[e.name] for e in entries]
+    if np.ndim(fields["t"]) == 1:
+        rows = [np.asarray(v).reshape(len(v), -1) for v in values]
+        return np.concatenate(rows, axis=1).astype(np.result_type(float, *rows))
+    return np.concatenate([np.asarray(v, float).ravel() for v in values])
+
+
 def params_type(env) -> type:
     """A frozen dataclass of the env's physical parameters (its ARGS' numbers marked physical), named after it."""
     declared = list(physical_params(env).values())
@@ -140,13 +150,7 @@ class Model:
     def pack(self, state) -> np.ndarray:
         """x of a task state (a State, or a dict of its fields as ``unpack`` gives): (n,) for one state, (N, n)
         for rows (the vector env's ``state``)."""
-        fields = state if isinstance(state, dict) else state.fields()
-        values = [fields[e.name] for e in self.entries]
-        if np.ndim(fields["t"]) == 1:  # rows: the time of each
-            return np.concatenate([np.asarray(v).reshape(len(v), -1) for v in values], axis=1).astype(
-                np.result_type(float, *values)
-            )
-        return np.concatenate([np.asarray(v, float).ravel() for v in values])
+        return flatten(state if isinstance(state, dict) else state.fields(), self.entries)
 
     def unpack(self, x) -> dict:
         """The task state's fields of x: as the single env holds them for (n,), arrays over rows for (N, n)."""

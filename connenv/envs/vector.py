@@ -44,6 +44,7 @@ from gymnasium.vector.utils import batch_space
 
 from connenv.core.backend import BATCH
 from connenv.core.batched import batched
+from connenv.core.model import flatten, layout
 from connenv.core.steppers import StepperError
 from connenv.envs.base import State
 
@@ -78,7 +79,8 @@ class TaskVectorEnv(VectorEnv):
         self.all_rows = np.ones(self.num_envs, bool)  # the "_key" mask of every info key
         self.state = self.env.state.rows(self.num_envs)
         self.row_params = None  # each row's physical parameters, once they may differ (connenv.core.context)
-        self.group_envs = {}  # an env and its batched stepper per parameter values of rows
+        self.row_envs = [None] * self.num_envs  # then each row's own single env, which steps it
+        self.entries = layout(self.env.state)  # how a row's state is read and written as one state
 
     def reset(self, *, seed=None, options=None):
         """Reset every row, or with ``options={"reset_mask": mask}`` (Gymnasium's partial reset, a bool array over
@@ -104,8 +106,9 @@ class TaskVectorEnv(VectorEnv):
         actions = self.check_action(actions)
         if self.row_params is None:
             state, info, reward, terminated = self._transition(self.env, self.advance, self.state, actions)
-        else:
-            state, info, reward, terminated = self._by_params(self._transition_of, self.state, actions)
+            obs = None
+        else:  # each row's observation with its step, in the one pass over the rows
+            state, info, reward, terminated, obs = self._each_row(self._transition_one, self.state, actions)
         self.state = state
         reward, terminated = np.asarray(reward, float), np.array(terminated, bool)
         self.steps += 1
@@ -114,12 +117,13 @@ class TaskVectorEnv(VectorEnv):
             self._reset_row(i)
         self.steps[restart] = 0
         if restart.size:
-            info = self._describe(self.state)
+            info, obs = self._describe(self.state), None
         limit = math.inf if self.max_episode_steps is None else self.max_episode_steps
         truncated = self.steps >= limit
         reward[restart], terminated[restart], truncated[restart] = 0.0, False, False
         self.prev_done = terminated | truncated
-        return self._observe(self.state), reward, terminated, truncated, self._with_masks(info)
+        obs = self._observe(self.state) if obs is None else obs
+        return obs, reward, terminated, truncated, self._with_masks(info)
 
     def _transition(self, env, advance, before, actions):
         """(state, info, reward, terminated) of rows stepped by env's task with advance(state, command)."""
@@ -133,44 +137,59 @@ class TaskVectorEnv(VectorEnv):
         info = env.report(env.describe(state, BATCH))
         return state, info, env.reward(before, state, info, BATCH), env.terminated(state, info, BATCH)
 
-    def _transition_of(self, env, before, actions):
-        """_transition with the rows' own env (that of their parameters) and its batched stepper."""
-        stepper = self.group_envs[tuple(sorted(env.context.current.items()))][1]
-        return self._transition(env, lambda s, c: env.advance_rows(s, c, stepper), before, actions)
-
     # -- rows with their own parameters ------------------------------------------------
 
-    def _by_params(self, function, state, *arrays):
-        """function(env, rows' state, rows' arrays) for each group of rows of equal parameters, with that
-        group's env, put back together over the batch (a state, dicts of arrays, arrays)."""
-        groups = {}
-        for i, params in enumerate(self.row_params):
-            groups.setdefault(tuple(sorted(params.items())), []).append(i)
-        parts = []
-        for key, rows in groups.items():
-            env = self._group_env(key)
-            rows = np.array(rows)
-            parts.append((rows, function(env, state.take(rows), *(a[rows] for a in arrays))))
-        return gather(parts, self.num_envs)
+    @staticmethod
+    def _transition_one(env, before, action):
+        """(state, info, reward, terminated, observation) of one row's state, by the single env of its parameters."""
+        try:
+            state = env.advance(before, env.command(action), env.stepper)
+        except StepperError as error:
+            raise env._stepper_error(error, before.t) from error
+        info = env.report(env.describe(state))
+        return state, info, env.reward(before, state, info), env.terminated(state, info), env.observation(state)
 
-    def _group_env(self, key):
-        """The env of parameters key (sorted items), made once, with the prototype's context at those values."""
-        if key not in self.group_envs:
-            context = copy.copy(self.env.context)
-            env = type(self.env)(**{**context.kwargs, **dict(key)})
-            context.current, env.context, env.reports_params = dict(key), context, True
-            self.group_envs[key] = env, batched(env.stepper)
-        return self.group_envs[key][0]
+    def _each_row(self, function, state, *arrays):
+        """function(env, row's state, row's entries of arrays) for each row, by the single env of its parameters,
+        stacked over the batch. Rows whose parameters are drawn per episode all differ: each runs the single env's
+        path on its Python floats, which is the fastest way through one state."""
+        X = flatten(state.fields(), self.entries)
+        results = []
+        for i in range(self.num_envs):
+            row = type(state)(**{e.name: e.single(X[i]) for e in self.entries})
+            results.append(function(self._row_env(i), row, *(a[i] for a in arrays)))
+        return self._stacked(results)
+
+    def _row_env(self, i):
+        """Row i's own single env: the prototype's copy, with row i's parameters (rebuilt where they change)."""
+        if self.row_envs[i] is None:
+            self.row_envs[i] = copy.deepcopy(self.env)
+        env = self.row_envs[i]
+        env.set_params(self.row_params[i])
+        env.reports_params = True
+        return env
+
+    def _stacked(self, results):
+        """Per-row results put together over the batch: States, dicts (infos), tuples of them, numbers, arrays."""
+        first = results[0]
+        if isinstance(first, tuple):
+            return tuple(self._stacked([r[k] for r in results]) for k in range(len(first)))
+        if isinstance(first, dict):
+            return {key: self._stacked([r[key] for r in results]) for key in first}
+        if isinstance(first, State):
+            X = np.stack([flatten(r.fields(), self.entries) for r in results])
+            return type(first)(**{e.name: e.rows(X) for e in self.entries})
+        return np.stack([np.asarray(r) for r in results])
 
     def _describe(self, state):
         if self.row_params is None:
             return self.env.report(self.env.describe(state, BATCH))
-        return self._by_params(lambda env, s: env.report(env.describe(s, BATCH)), state)
+        return self._each_row(lambda env, s: env.report(env.describe(s)), state)
 
     def _observe(self, state):
         if self.row_params is None:
             return self.env.observation(state, BATCH)
-        return self._by_params(lambda env, s: env.observation(s, BATCH), state)
+        return self._each_row(lambda env, s: env.observation(s), state)
 
     def check_action(self, actions):
         """The actions as the single env checks one: a finite array (N, *shape), clipped or projected into the
@@ -200,22 +219,6 @@ class TaskVectorEnv(VectorEnv):
 
     def advance(self, state, command):
         return self.env.advance_rows(state, command, self.stepper)
-
-
-def gather(parts, n: int):
-    """Results of groups of rows [(rows, result)] put together over n rows: a State, a dict (of results), an array."""
-    first = parts[0][1]
-    if isinstance(first, tuple):
-        return tuple(gather([(rows, r[k]) for rows, r in parts], n) for k in range(len(first)))
-    if isinstance(first, dict):
-        return {key: gather([(rows, r[key]) for rows, r in parts], n) for key in first}
-    if isinstance(first, State):
-        return type(first)(**gather([(rows, r.fields()) for rows, r in parts], n))
-    first = np.asarray(first)
-    out = np.empty((n, *first.shape[1:]), first.dtype)
-    for rows, result in parts:
-        out[rows] = result
-    return out
 
 
 def vector_env(single_env: type, base: type = TaskVectorEnv) -> type:
