@@ -4,9 +4,9 @@ Each vector env keeps one single env, its *prototype*: it checks the make kwargs
 and the constants, and its task functions (``connenv.envs.base``: command, observe, describe, reward,
 terminated) are the ones the vector env calls, on its state of arrays over the rows, with the array operations of
 ``BATCH`` in place of the scalar ones of ``SCALAR``. `vector_env` makes the vector env of a task, whose
-``advance_rows(state, command, stepper)`` then runs with the batched stepper and ``BATCH``. Rows whose physical
-parameters differ (``randomize``, `connenv.core.context`) are stepped in groups of equal values, each by an env
-made with them.
+``advance_rows(state, command, stepper)`` then runs with the batched stepper and ``BATCH``. Once rows' physical
+parameters may differ (``randomize``, `connenv.core.context`), each row is stepped by its own single env, made with
+its values: the single env's numbers, at about the speed of a SyncVectorEnv.
 
 Seeding, resets and autoreset are Gymnasium's SyncVectorEnv's, so that row i of a vector env and env i of a
 SyncVectorEnv made from the same id and kwargs follow the same episodes (to rounding; tests):
