@@ -259,6 +259,8 @@ class ILQR(Planner):
         gradient[:, idx] = (r[:, diagonal, 0] - r[:, diagonal, 3]) / (4 * h)
         hessian[:, idx[I], idx[J]] = second
         hessian[:, idx[J], idx[I]] = second
+        # a difference that leaves the reward's domain (a stored lift moved below its floor of 1e-4) is no slope: 0
+        gradient, hessian = (np.nan_to_num(d, nan=0.0, posinf=0.0, neginf=0.0) for d in (gradient, hessian))
         return gradient * alive[:, None], hessian * alive[:, None, None]
 
     def backward(self, A, B, gradient, hessian):

@@ -90,6 +90,13 @@ def selected(choose):
     return function
 
 
+def quotient(numerator, denominator):
+    """numerator / denominator, 0 where the denominator is 0: the derivative taken at the origin of atan2 and
+    hypot, where they have none (a cone's apex), is 0, which the branch the real parts take there keeps finite."""
+    numerator, denominator = np.broadcast_arrays(numerator, denominator)
+    return np.divide(numerator, denominator, out=np.zeros(numerator.shape), where=denominator != 0.0)
+
+
 def _copysign(a, b):
     """|a| with b's sign: a itself, or −a, whole, by the signs of the real parts."""
     if not (np.iscomplexobj(a) or np.iscomplexobj(b)):
@@ -102,8 +109,8 @@ ARRAYS = operations(
     **{name: getattr(np, name) for name in NAMES},
 )
 vars(ARRAYS).update(
-    atan2=complex_step(np.atan2, lambda re, im: (re[1] * im[0] - re[0] * im[1]) / (re[0] ** 2 + re[1] ** 2)),
-    hypot=complex_step(np.hypot, lambda re, im: (re[0] * im[0] + re[1] * im[1]) / np.hypot(re[0], re[1])),
+    atan2=complex_step(np.atan2, lambda re, im: quotient(re[1] * im[0] - re[0] * im[1], re[0] ** 2 + re[1] ** 2)),
+    hypot=complex_step(np.hypot, lambda re, im: quotient(re[0] * im[0] + re[1] * im[1], np.hypot(re[0], re[1]))),
     copysign=_copysign,
     maximum=selected(np.maximum),
     minimum=selected(np.minimum),
