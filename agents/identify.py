@@ -1,6 +1,6 @@
 """System identification on the model: recover an env's physical parameters from recorded transitions.
 
-    python -m agents.identify --env connenv/Swing-v0 --true g=7.3 mass=1.8 --steps 1000
+    python -m agents.identify --env ID --true NAME=VALUE ... --steps 1000    # e.g. g=7.3 mass=1.8
 
 The transitions (x, a, x′) are the env's own steps under a random policy, x the model's state vector
 (``env.unwrapped.model``). The fit is ``scipy.optimize.least_squares`` on the one-step prediction error

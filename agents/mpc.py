@@ -1,6 +1,6 @@
 """Planners on the env's own model: sampling MPC (MPPI) and iLQR, a reference row that needs no training.
 
-    python -m agents.evaluate --env connenv/Skier-v0 --policy analytic mpc ilqr
+    python -m agents.evaluate --env ID --policy analytic mpc ilqr
 
 Both plan from the env's true state, not its observation: ``env.unwrapped.model`` (connenv.core.model) steps the task
 state x = ``model.pack(env.unwrapped.state)`` exactly as the env does, so a plan's predicted return is the return the
@@ -21,13 +21,16 @@ Their table beside the analytic controller is agents.planners'.
 
 from __future__ import annotations
 
+import functools
 import time
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import ClassVar
 
 import gymnasium as gym
 import numpy as np
 import scipy.linalg
+import yaml
 
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli
@@ -65,25 +68,18 @@ class Hyper:
                 raise ValueError(f"{f.name}={value!r} is outside [{low:g}, {high:g}]")
 
 
-HYPER = {
-    "default": Hyper(),
-    "connenv/BeadOnBar-v0": Hyper(samples=128, horizon=40, noise=0.1),
-    "connenv/BeadOnBar-v1": Hyper(samples=128, horizon=40, noise=0.1),
-    "connenv/ChaplyginSleigh-v0": Hyper(samples=64, horizon=20, repeat=2),
-    "connenv/KapitzaPendulum-v0": Hyper(samples=64, horizon=25, repeat=4),
-    "connenv/KapitzaSwingUp-v0": Hyper(samples=64, horizon=25, repeat=4),
-    "connenv/RollingBallPose-v0": Hyper(samples=64, horizon=20),
-    "connenv/Skier-v0": Hyper(samples=64, horizon=20),
-    "connenv/Swing-v0": Hyper(samples=64, horizon=20),
-}
-"""MPPI's and iLQR's budget per env (Hyper; an env not named takes "default"): a horizon of about a second of the
-task's dynamics (a pumping half-cycle, a turn of the sleigh), knots of a few env steps where dt is short. The bead's
-control is the bar's rate, three integrations from its position: small perturbations, since a mean of large ones
-flings it off the bar."""
+HYPERPARAMS = Path(__file__).resolve().parent / "hyperparams" / "mpc.yml"
+"""The planners' budget per env (Hyper's fields by env id, ``default`` for the others); its comments say why."""
+
+
+@functools.cache
+def budgets() -> dict[str, dict]:
+    return yaml.safe_load(HYPERPARAMS.read_text())
 
 
 def hyper(env_id: str, **overrides) -> Hyper:
-    return replace(HYPER.get(env_id, HYPER["default"]), **overrides)
+    """The env's budget in agents/hyperparams/mpc.yml, with overrides."""
+    return Hyper(**{**budgets().get(env_id, budgets()["default"]), **overrides})
 
 
 class Planner:

@@ -19,7 +19,7 @@ import numpy as np
 
 from agents.baselines import UNSEEN_SEED, statistic
 from agents.evaluate import evaluate, make_policy, summarize
-from agents.mpc import PLANNERS, Planner, check_planner
+from agents.mpc import PLANNERS, Planner, budgets, check_planner
 from connenv import cli
 from connenv.cli import positive_int, seed_int, writable_file
 from connenv.envs.spec import registry
@@ -27,10 +27,9 @@ from connenv.envs.spec import registry
 PROG = "python -m agents.planners"
 
 
-TABLE_ENVS = (
-    "connenv/KapitzaSwingUp-v0", "connenv/RollingBallPose-v0", "connenv/BeadOnBar-v0", "connenv/ChaplyginSleigh-v0",
-    "connenv/Skier-v0", "connenv/Swing-v0", "connenv/RollingCoinSurface-v0",
-)  # fmt: skip
+def table_envs() -> list[str]:
+    """The planners' table's envs by default: agents/hyperparams/mpc.yml's ``table``."""
+    return list(budgets()["table"])
 
 
 def evaluate_env(env_id: str, episodes: int, seed: int) -> dict:
@@ -166,7 +165,7 @@ def parse_args(argv=None):
     run.add_argument(
         "--envs",
         nargs="+",
-        default=list(TABLE_ENVS),
+        default=table_envs(),
         choices=[i for i in registry if registry[i].measure],
         metavar="ID",
         help="envs with a physical measure (default: %(default)s)",

@@ -12,8 +12,8 @@ first episode (an `agents.evaluate.Trace`), all policies in one figure on shared
   by the assigned coordinate u, and below them the energy (or the env's own measure) against time, every policy on
   one axis; the events of u (its jumps and the turns of its rate) are marked on both.
 
-What to draw is read from the env's model (``state_names``, the fields of its state) and ``info``; `ACTIVE` names
-q, p and u where the state's field ``y`` = (q, p) and its field ``u`` do not.
+What to draw is read from the env's model (``state_names``, the fields of its state) and ``info``; a state's
+``phase`` names q, p and u where its fields ``y`` = (q, p) and ``u`` do not.
 """
 
 from __future__ import annotations
@@ -44,12 +44,6 @@ JUMP = 0.25  # a step of u larger than this fraction of u's range is a jump
 MARKS = 30  # events past this many (a random policy's, nearly every step) are counted, not marked
 LOOP_POINTS = 120  # a cycle's loop is thinned to at most this many points for the area integral
 OUTLINE = [patheffects.withStroke(linewidth=3, foreground="white")]  # paths stay visible on any colour
-ACTIVE = {
-    "connenv/Swing-v0": {"u": ("r",)},
-    "connenv/Skier-v0": {"u": ("h",)},
-    "connenv/ChaplyginSleigh-v0": {"q": "phi", "p": "p2"},
-    "connenv/RollingCoinSurface-v0": {"q": "phi", "p": "phi_dot", "u": ("theta",)},
-}
 """q, p (a state name each) and the candidates for u (state names; the one that moves most is drawn) where the
 state's field y = (q, p) and its field u do not give them."""
 
@@ -129,7 +123,7 @@ def connection_figure(env, local, traces):
 
 def shape_name(env, local, i: int) -> str:
     """The name of shape coordinate i: its component's name in the state (``State.components``), else field[i]."""
-    names = type(env.state).components.get(local.field, ())
+    names = env.model.components.get(local.field, ())
     return names[i] if i < len(names) else f"{local.field}[{i}]"
 
 
@@ -298,14 +292,13 @@ def active_figure(env, local, traces):
 
 
 def roles(env) -> tuple[str, str, tuple[str, ...]]:
-    """The state names of q, p and the candidates for u: `ACTIVE`'s, else the state's fields y = (q, p) and u."""
-    components = type(env.state).components
-    spec_id = env.spec.id if env.spec else None
-    table = ACTIVE.get(spec_id, {})
+    """The state names of q, p and the candidates for u: the state's ``phase`` where it declares one, else the
+    fields y = (q, p) and u."""
+    components, phase = env.model.components, type(env.state).phase
     names = env.model.state_names
     y = [name for name in names if name in components.get("y", ()) or name.startswith("y[")]
     u = tuple(name for name in names if name in components.get("u", ()) or name.startswith("u["))
-    return table.get("q", y[0]), table.get("p", y[1]), table.get("u", u)
+    return (phase[0], phase[1], phase[2:]) if phase else (y[0], y[1], u)
 
 
 def assigned(env, trace, names) -> np.ndarray:

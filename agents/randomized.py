@@ -1,6 +1,6 @@
 """Agents trained on randomized physical parameters against agents trained on fixed ones, on both kinds of episode.
 
-    python -m agents.randomized --env connenv/Swing-v0 --randomize '{"g": [7, 12]}' --runs runs/randomized \\
+    python -m agents.randomized --env ID --randomize '{"NAME": [LOW, HIGH]}' --runs runs/randomized \\
         --write docs/baselines/randomized.md
 
 Every seed's best model in --runs (trained by ``train.py --env-kwargs '{"randomize": ...}'``) and the shipped

@@ -1,6 +1,6 @@
 """What the trained policies do in shape space, beside the analytic gait, for the connection envs.
 
-    python -m agents.shape_space --write docs/baselines/shape-space.md
+    python -m agents.shape_space --envs ID ... --write docs/baselines/shape-space.md
 
 For each env, the analytic controller and the shipped models (agents/pretrained/, each algorithm's best seed) run
 the score's first unseen episode (reset seed agents.baselines.UNSEEN_SEED). Their shape paths are drawn over the
@@ -19,11 +19,10 @@ import numpy as np
 
 from agents import plots
 from agents.baselines import UNSEEN_SEED, short
-from agents.evaluate import Trace, evaluate, expand_pretrained, make_policy
+from agents.evaluate import ENV_IDS, Trace, evaluate, expand_pretrained, make_policy
 from connenv import cli, geometry
 
 PROG = "python -m agents.shape_space"
-ENVS = ("connenv/SnakeSwimmer-v0", "connenv/KozlovShell-v0", "connenv/FallingCat-v0", "connenv/RollingBallPose-v0")
 
 
 def traces(env_id: str) -> dict:
@@ -90,7 +89,7 @@ def section(env_id: str, folder: Path) -> list[str]:
 def page(envs, folder: Path) -> str:
     lines = [
         "# What the policies do in shape space", "",
-        f"Written by `{PROG} --write docs/baselines/shape-space.md`: the analytic controller and the shipped models on "
+        f"Written by `{PROG} --envs {' '.join(envs)} --write docs/baselines/shape-space.md`: the analytic controller and the shipped models on "
         f"the score's first unseen episode (reset seed {UNSEEN_SEED}). The figures draw each policy's shape path over "
         "the curvature map (colour F, arrows −A) and the net motion beside its first-order prediction. The tables "
         "measure the loops: a cycle is a return of the shape near where it was; its area is signed (positive "
@@ -105,7 +104,8 @@ def page(envs, folder: Path) -> str:
 
 def main(argv: list[str] | None = None) -> str:
     parser = cli.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
-    parser.add_argument("--envs", nargs="+", default=list(ENVS), choices=list(ENVS))
+    parser.add_argument("--envs", nargs="+", required=True, choices=ENV_IDS, metavar="ID",
+                        help="connection envs with shipped models")
     parser.add_argument("--write", type=cli.writable_file, required=True, help="the markdown page")
     args = parser.parse_args(argv)
     path = Path(args.write)

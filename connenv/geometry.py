@@ -37,7 +37,7 @@ that rigid change of frame, but the area integral of F' predicts it better where
 least with the shape (`minimum_perturbation`: β minimizing ∫|A'|² over the shape box). The command prints the
 prediction error of circular gaits in both frames:
 
-    python -m connenv.geometry --prediction-error connenv/SnakeSwimmer-v0
+    python -m connenv.geometry --prediction-error ID    # an SE(2) swimmer: SnakeSwimmer, KozlovShell
 
 and ``python -m connenv.geometry ID [--write FILE.png]`` draws an env's curvature map over its shape space.
 """

@@ -134,8 +134,8 @@ class Model:
         self.env.close()
         self.row_stepper = batched(self.env.stepper)
         self.entries = layout(self.env.state)
-        components = {**getattr(self.env, "components", {}), **type(self.env.state).components}
-        self.state_names = tuple(name for entry in self.entries for name in entry.names(components))
+        self.components = {**getattr(self.env, "components", {}), **type(self.env.state).components}
+        self.state_names = tuple(name for entry in self.entries for name in entry.names(self.components))
         self.n = len(self.state_names)
         self.m = int(np.prod(self.env.action_space.shape))
         Params = params_type(self.env)

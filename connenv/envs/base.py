@@ -42,6 +42,9 @@ class State:
     the literature has names for them (the model's ``state_names``)."""
 
     components: ClassVar[dict] = {}
+    phase: ClassVar[tuple[str, ...]] = ()
+    """(q, p, u…): the names, among the model's ``state_names``, of a conjugate pair and the assigned coordinates
+    that a phase portrait draws, where they are not y = (q, p) and u."""
 
     def rows(self, n: int) -> State:
         """A state of n rows shaped and typed like this one's fields, zeroed."""

@@ -52,6 +52,7 @@ class SleighState(State):
     the stepper's energy error (the change of T over the segments where u is held, summed since reset)."""
 
     components: ClassVar[dict] = {"y": ("x", "y", "phi", "p1", "p2"), "u": ("u1", "u2"), "u_dot": ("u1_dot", "u2_dot"), "target": ("target_x", "target_y")}
+    phase: ClassVar[tuple] = ("phi", "p2", "u1", "u2")
 
     y: np.ndarray
     u: np.ndarray

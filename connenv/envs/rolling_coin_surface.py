@@ -42,6 +42,7 @@ class CoinSurfaceState(State):
     last step started (x, y) and the closest approach of its chord to the target, m."""
 
     components: ClassVar[dict] = {"y": ("x", "y", "phi", "phi_dot"), "target": ("target_x", "target_y"), "previous": ("previous_x", "previous_y")}
+    phase: ClassVar[tuple] = ("phi", "phi_dot", "theta")
 
     y: np.ndarray
     theta: float

@@ -60,6 +60,7 @@ class SkierState(State):
     the info read."""
 
     components: ClassVar[dict] = {"y": ("x", "p")}
+    phase: ClassVar[tuple] = ("x", "p", "h")
 
     y: np.ndarray
     h: float

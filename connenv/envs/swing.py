@@ -42,6 +42,7 @@ class SwingState(State):
     stepper's energy error (the change of E on held segments since reset)."""
 
     components: ClassVar[dict] = {"y": ("theta", "p")}
+    phase: ClassVar[tuple] = ("theta", "p", "r")
 
     y: np.ndarray
     r: float
