@@ -176,6 +176,12 @@ check_env(env.unwrapped)
 vector = gym.make_vec(ID, 3, vectorization_mode="vector_entry_point")
 vector.reset(seed=0)
 vector.step(vector.action_space.sample())
+model = env.unwrapped.model  # the model comes with the task: no code of its own
+model_env = gym.make(ID).unwrapped
+model_env.reset(seed=1)
+x = model.pack(model_env.state)
+model_env.step([0.5])
+A, B = model.jacobians(x, [0.5])
 law = agents.controllers.controller(ID, env=env)
 obs, _ = env.reset(seed=0)
 for _ in range(50):
@@ -192,6 +198,7 @@ print(json.dumps({
     "audit": audit.STATE_KEYS[ID],
     "dt_max": registry[ID].dt_max,
     "docs_page": docs_site.page(ID).splitlines()[0],
+    "model": bool((model.step(x, [0.5]) == model.pack(model_env.state)).all()) and B[model.state_names.index("x"), 0],
 }))
 """
 
@@ -221,4 +228,5 @@ def test_an_env_declared_in_its_own_files_is_registered_checked_and_tabled(tmp_p
         "audit": {"x": 0},
         "dt_max": 1.0,
         "docs_page": "# Point-v0",
+        "model": 0.1,  # ∂x′/∂a = dt · speed: the step is the env's, and its Jacobian the exact flow's
     }
