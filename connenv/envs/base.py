@@ -147,6 +147,7 @@ class TaskEnv(RenderedEnv):
 
     context: Context | None = None
     """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
+    _model = None  # the model, made on first use
     reports_params = False  # whether info carries "params" (and the observation them, if observed): where they vary,
     # or a reset set them
 
@@ -183,7 +184,7 @@ class TaskEnv(RenderedEnv):
     @property
     def observation_space(self):
         """The task's observation space, with the observed parameters' appended (``observe_params``)."""
-        space = self.__dict__["_observation_space"]
+        space = self._observation_space  # not self.__dict__: an instance whose dict is read loses its fast attributes
         return self.context.observation_space(space) if self.context is not None and self.context.observe else space
 
     @observation_space.setter
@@ -214,7 +215,9 @@ class TaskEnv(RenderedEnv):
             raise ValueError(f"params {values} change {self.name}'s observation space, which must stay fixed")
         self.close()
         keep = ("_np_random", "_np_random_seed", "context", "spec", "render_mode", "_renderer")
-        vars(self).update({k: v for k, v in vars(fresh).items() if k not in keep})
+        for key, value in vars(fresh).items():
+            if key not in keep:
+                setattr(self, key, value)
         self._model = None
         self.context.current = values
 
@@ -226,7 +229,7 @@ class TaskEnv(RenderedEnv):
     def model(self):
         """The env's step as a pure function of a flat state, with its Jacobians (`connenv.core.model.Model`),
         for the env's current parameters."""
-        if self.__dict__.get("_model") is None:
+        if self._model is None:
             self._model = Model(self)
         return self._model
 
