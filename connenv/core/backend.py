@@ -59,12 +59,20 @@ FLOATS = operations(
 NAMES = tuple(name for name in vars(FLOATS) if not name.startswith("__"))  # a module's own: __name__, …
 
 
+def is_complex(a) -> bool:
+    """Whether a holds complex numbers (a Jacobian's rows), told by the dtype of an array or the type of a number:
+    cheaper than np.iscomplexobj on the real rows and floats every step passes."""
+    if type(a) is np.ndarray:
+        return a.dtype.kind == "c"
+    return not isinstance(a, (float, int)) and np.iscomplexobj(a)
+
+
 def complex_step(real_function, derivative):
     """real_function on real arrays; on complex ones (x + ih), its value at the real parts plus i times the
     directional derivative ``derivative(real parts, imaginary parts)``."""
 
     def function(*args):
-        if not any(np.iscomplexobj(a) for a in args):
+        if not any(map(is_complex, args)):
             return real_function(*args)
         re, im = [np.real(a) for a in args], [np.imag(a) for a in args]
         return real_function(*re) + 1j * derivative(re, im)
@@ -80,7 +88,7 @@ def selected(choose):
     two (a ramp toward a command u meets: its stop is the command, its length |u_cmd − u|/speed grows)."""
 
     def function(a, b):
-        if not (np.iscomplexobj(a) or np.iscomplexobj(b)):
+        if not (is_complex(a) or is_complex(b)):
             return choose(a, b)
         re_a, re_b, im_a = np.real(a), np.real(b), np.imag(a)
         first = np.where(re_a == re_b, choose(im_a, np.imag(b)) == im_a, choose(re_a, re_b) == re_a)
@@ -99,7 +107,7 @@ def quotient(numerator, denominator):
 
 def _copysign(a, b):
     """|a| with b's sign: a itself, or −a, whole, by the signs of the real parts."""
-    if not (np.iscomplexobj(a) or np.iscomplexobj(b)):
+    if not (is_complex(a) or is_complex(b)):
         return np.copysign(a, b)
     return np.where(np.signbit(np.real(a)) == np.signbit(np.real(b)), a, -a)
 

@@ -57,7 +57,8 @@ def check_drift(stepper, quantity: str, drift, bound: float, unit: str = "", nor
     flow conserves (the energy at held u, the spatial momentum). With norm (the quantity's norm, per row), the
     bound is relative: a row fails where |drift| > bound · norm, and the error names the first such row's. A
     Jacobian's complex rows are checked on their real parts."""
-    drift = np.real(drift)
+    if type(drift) is not float:  # one state's drift is a Python float; rows (complex on a Jacobian's) an array
+        drift = np.real(drift)
     if norm is not None:
         drift, norm = np.atleast_1d(np.abs(drift)), np.atleast_1d(np.real(norm))
         failed = np.flatnonzero(~(drift <= bound * norm))

@@ -303,7 +303,7 @@ class ActiveConstraintEnv(TaskEnv):
         the single env's step (ops=SCALAR), and the vector env's over its rows (its batched steppers, ops=BATCH)."""
         delta, segments, u_end = self.segments(s.u, command, ops)
         y = s.y
-        if delta is not None and self.jump_class is JumpClass.FIT and np.any(np.real(delta) != 0.0):
+        if delta is not None and self.jump_class is JumpClass.FIT and np.any(delta.real != 0.0):
             y = (JUMP_STEPPER if ops is SCALAR else JUMP_ROWS)(self.jump, y, s.u, delta, 1.0)
         y, change = run_segments(stepper, self.field, y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change, y, u_end)
@@ -314,7 +314,7 @@ class ActiveConstraintEnv(TaskEnv):
     def held_energy(self, y, u, u_dot):
         """E = ½ pᵀ A p + V(q, u) on the states whose u is held (u̇ = 0, of the real parts on a Jacobian's rows), 0
         where u moves."""
-        held = np.all(np.real(u_dot) == 0.0, axis=-1)
+        held = np.all(u_dot.real == 0.0, axis=-1)
         if not np.any(held):
             return 0.0 if np.ndim(held) == 0 else np.zeros(held.shape)
         n = self.n
@@ -324,7 +324,7 @@ class ActiveConstraintEnv(TaskEnv):
     def check_energy_error(self, energy_error, y, u):
         n = self.n
         energy = hamiltonian(self.system, y[..., :n], y[..., n:], u, np.zeros_like(u))
-        energy_error, energy = np.real(energy_error), np.real(energy)
+        energy_error, energy = energy_error.real, energy.real
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
 
     @staticmethod

@@ -193,7 +193,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         tolerances, and the hold grown by dt if it was inside before the step too (before=None: at reset)."""
         r, p = s.y.T
         L = self.half_length
-        r, p = np.real(r), np.real(p)  # a flag: of the real parts on a Jacobian's rows
+        r, p = r.real, p.real  # a flag: of the real parts on a Jacobian's rows
         inside = (abs(r - target) <= POSITION_TOLERANCE * L) & (abs(p / self.mass) <= SPEED_TOLERANCE * L)
         hold = 0.0 if before is None else ops.where(before.inside & inside, before.hold + self.dt, 0.0)
         return BeadState(s.y, s.u, s.t, s.energy_error, target, inside, hold)
@@ -206,12 +206,12 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         """E = p²/(2m) + m g r sin θ where θ is held, 0 where it turns (the builder's, in closed form)."""
         if np.ndim(y) == 1:  # one state: Python floats
             return 0.0 if u_dot[0] != 0.0 else float(self.system.energy(y, u[0]))
-        return np.where(np.real(u_dot[..., 0]) == 0.0, self.system.energy(y, u[..., 0]), 0.0)
+        return np.where(u_dot[..., 0].real == 0.0, self.system.energy(y, u[..., 0]), 0.0)
 
     def check_energy_error(self, energy_error, y, u):
         if isinstance(energy_error, float) and energy_error == 0.0:  # one state, nothing to bound (the bar turned)
             return
-        energy_error, energy = np.real(energy_error), np.real(self.system.energy(y, u[..., 0]))
+        energy_error, energy = energy_error.real, self.system.energy(y, u[..., 0]).real
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
 
     # -- task: one state, or a batch with ops=BATCH (the vector env) ---------------------------------------------

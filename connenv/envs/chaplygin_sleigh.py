@@ -225,7 +225,7 @@ class ChaplyginSleighEnv(TaskEnv):
         the mass has no speed limit: one state, or rows with the vector env's steppers and ops=BATCH."""
         delta, segments, u_end, u_dot_end = self.segments(s.u, command, ops)
         y = s.y
-        if delta is not None and np.any(np.real(delta) != 0.0):
+        if delta is not None and np.any(delta.real != 0.0):
             jump = JUMP_STEPPER if ops is SCALAR else JUMP_ROWS
             y = jump(self.jump, y, s.u, delta, 1.0 if ops is SCALAR else np.ones(len(y)))
         y, change = run_segments(stepper, self.system, y, segments, self.held_energy)
@@ -234,12 +234,12 @@ class ChaplyginSleighEnv(TaskEnv):
 
     def held_energy(self, y, u, u_dot):
         """T where the mass is held (u̇ = 0, of the real parts on a Jacobian's rows), 0 where it moves."""
-        held = np.all(np.real(u_dot) == 0.0, axis=-1)
+        held = np.all(u_dot.real == 0.0, axis=-1)
         energy = self.system.energy(y, u, 0.0 * u)
         return np.where(held, energy, 0.0) if np.ndim(held) else (float(energy) if held else 0.0)
 
     def check_energy_error(self, energy_error, y, u):
-        energy_error, energy = np.real(energy_error), np.real(self.system.energy(y, u, 0.0 * u))
+        energy_error, energy = energy_error.real, self.system.energy(y, u, 0.0 * u).real
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + energy), ENERGY_ERROR_BOUND)
 
     # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------

@@ -262,7 +262,7 @@ class KapitzaPendulumEnv(TaskEnv):
 
     def command(self, a):
         """The commanded pivot velocity u̇ (2) of action a: v_max · a along the actuated axes."""
-        u_dot = np.zeros(a.shape[:-1] + (2,), np.result_type(a, float))  # complex on a Jacobian's rows
+        u_dot = np.zeros(a.shape[:-1] + (2,), complex if a.dtype.kind == "c" else float)  # complex: a Jacobian's rows
         u_dot[..., self.actuated] = a * self.v_max
         return u_dot
 
