@@ -59,6 +59,7 @@ class Context:
         self.observe = bool(observe_params)
         self.varies = bool(self.ranges)
         self.current = dict(self.base)
+        self.moved = False  # whether the current values differ from the make-time ones (a reset set them)
         self.kwargs = dict(env.kwargs)  # the make kwargs, without these
         if self.ranges:
             self._check_fixed_space(env)
@@ -89,11 +90,6 @@ class Context:
                 raise ValueError(f"randomize[{name!r}]=({low!r}, {high!r}): low must be at most high")
             ranges[name] = Range(low, high, self.declared[name].kind == "scale" and low > 0.0)
         return ranges
-
-    @property
-    def moved(self) -> bool:
-        """Whether the current values differ from the make-time ones (a reset set them)."""
-        return self.current != self.base
 
     def draw(self, rng, given) -> dict:
         """This episode's values: the make-time ones, the randomized ones drawn (in the order of ``randomize``),

@@ -155,13 +155,12 @@ class TaskEnv(RenderedEnv):
         super().reset(seed=seed)
         check_mapping("reset options", options or {})
         options = dict(options or {})
-        given = options.pop("params", None)
-        if given is not None and self.context is None:
+        given, context = options.pop("params", None), self.context
+        if given is not None and context is None:
             raise ValueError(f'reset option "params": {self.name} declares no physical parameters')
-        if self.context is not None and (given is not None or self.context.varies or self.context.moved):
-            self.set_params(self.context.draw(self.np_random, given))
-        self.reports_params = given is not None or (self.context is not None and (self.context.varies or
-                                                                                   self.context.observe))
+        if context is not None and (given is not None or context.varies or context.moved):
+            self.set_params(context.draw(self.np_random, given))
+        self.reports_params = given is not None or (context is not None and context.varies)
         self.state = self.start(options)
         return self.observation(self.state), self.report(self.describe(self.state))
 
@@ -219,7 +218,7 @@ class TaskEnv(RenderedEnv):
             if key not in keep:
                 setattr(self, key, value)
         self._model = None
-        self.context.current = values
+        self.context.current, self.context.moved = values, values != self.context.base
 
     def check_action(self, action):
         """The action as a finite float array of the space's shape, clipped into the space (else ValueError)."""

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipeinc, ellipj, ellipk
 
-from connenv.core.backend import ARRAYS, FLOATS, floats
+from connenv.core.backend import ARRAYS, FLOATS, floats, is_complex
 from connenv.core.validation import ndim
 
 try:  # scipy's ellipj on one float without the ufunc's per-call machinery: the same function, the same bits
@@ -143,7 +143,7 @@ def jacobi_elliptic(w, m):
     −dn ∂F/∂m along m, with ∂F/∂m = (E(φ|m) − (1 − m) w)/(2m(1 − m)) − sn cn/(2(1 − m) dn) (Byrd & Friedman 710.00;
     DLMF 19.4.2), its limit (2φ − sin 2φ)/8 at m = 0; then sn, cn and dn move with φ, and dn with m (dn² = 1 − m sn²).
     Near m = 0 the difference loses about ε/m of its value, far below the Jacobian's tolerances at a swing's m."""
-    if not (np.iscomplexobj(w) or np.iscomplexobj(m)):
+    if not (is_complex(w) or is_complex(m)):
         return ellipj(w, m)
     w, dw, m, dm = np.real(w), np.imag(w), np.real(m), np.imag(m)
     sn, cn, dn, phi = ellipj(w, m)
