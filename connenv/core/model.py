@@ -280,9 +280,7 @@ class Model:
 
     def _advance(self, state, command, stepper, ops, x):
         try:
-            if ops is SCALAR:
-                return self.env.advance(state, command, stepper)
-            return self.env.advance_rows(state, command, stepper)
+            return self.env.advance(state, command, stepper, ops)
         except StepperError as error:
             raise self.env._stepper_error(error, float(np.min(np.real(x[..., self.t_column])))) from error
 

@@ -25,7 +25,7 @@ from typing import ClassVar
 import gymnasium as gym
 import numpy as np
 
-from connenv.core.backend import BATCH, SCALAR
+from connenv.core.backend import SCALAR
 from connenv.core.context import Context
 from connenv.core.model import Model
 from connenv.core.params import Args, document
@@ -57,10 +57,6 @@ class State:
 
     def fields(self) -> dict:
         return {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
-
-    def take(self, rows) -> State:
-        """The state of these rows of a batch."""
-        return type(self)(**{k: v[rows] for k, v in self.fields().items()})
 
     def replace(self, **changes) -> State:
         return dataclasses.replace(self, **changes)
@@ -231,11 +227,6 @@ class TaskEnv(RenderedEnv):
         if self._model is None:
             self._model = Model(self)
         return self._model
-
-    def advance_rows(self, state, command, stepper) -> State:
-        """advance over rows (arrays over them, ops=BATCH) with the batched stepper: the native vector env's and the
-        model's step."""
-        return self.advance(state, command, stepper, BATCH)
 
     def terminated(self, state, info, ops=SCALAR):
         """Whether the task ends the episode: on success, unless the task says otherwise."""

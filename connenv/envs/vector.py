@@ -4,7 +4,7 @@ Each vector env keeps one single env, its *prototype*: it checks the make kwargs
 and the constants, and its task functions (``connenv.envs.base``: command, observe, describe, reward,
 terminated) are the ones the vector env calls, on its state of arrays over the rows, with the array operations of
 ``BATCH`` in place of the scalar ones of ``SCALAR``. `vector_env` makes the vector env of a task, whose
-``advance_rows(state, command, stepper)`` then runs with the batched stepper and ``BATCH``. Once rows' physical
+``advance(state, command, stepper, ops)`` then runs with the batched stepper and ``BATCH``. Once rows' physical
 parameters may differ (``randomize``, `connenv.core.context`), each row is stepped by its own single env, made with
 its values: the single env's numbers, at about the speed of a SyncVectorEnv.
 
@@ -218,7 +218,7 @@ class TaskVectorEnv(VectorEnv):
         return masked
 
     def advance(self, state, command):
-        return self.env.advance_rows(state, command, self.stepper)
+        return self.env.advance(state, command, self.stepper, BATCH)
 
 
 def vector_env(single_env: type, base: type = TaskVectorEnv) -> type:
