@@ -18,6 +18,7 @@ import numpy as np
 
 from agents.baselines import EPISODES, PRETRAINED, UNSEEN_SEED, run_seeds, short
 from agents.evaluate import ENV_IDS, evaluate, make_policy
+from agents.imitate import bootstrap_interval
 from connenv import cli
 
 PROG = "python -m agents.randomized"
@@ -26,13 +27,6 @@ PROG = "python -m agents.randomized"
 def success(env_id: str, model: Path, algo: str, env_kwargs: dict) -> float:
     _, policy = make_policy(str(model), env_id, UNSEEN_SEED, algo, env_kwargs)
     return float(np.mean([e.success for e in evaluate(env_id, policy, EPISODES, UNSEEN_SEED, env_kwargs=env_kwargs)]))
-
-
-def interval(values: list[float], rng=None) -> tuple[float, float]:
-    """The 95% bootstrap interval of the mean over seeds (percentile, 10,000 resamples)."""
-    rng = rng or np.random.default_rng(0)
-    means = rng.choice(values, (10_000, len(values))).mean(axis=1)
-    return float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))
 
 
 def rows(env_id: str, algo: str, randomize: dict, runs: Path) -> list[dict]:
@@ -53,7 +47,7 @@ def rows(env_id: str, algo: str, randomize: dict, runs: Path) -> list[dict]:
 
 def markdown(env_id: str, randomize: dict, table: list[dict]) -> str:
     def cell(values):
-        low, high = interval(values)
+        low, high = bootstrap_interval(values, method="percentile")
         return f"{100 * np.mean(values):.0f}% [{100 * low:.0f}, {100 * high:.0f}]"
 
     lines = [
