@@ -58,8 +58,7 @@ class Context:
                              "high)} too")
         self.observe = bool(observe_params)
         self.varies = bool(self.ranges)
-        self.current = dict(self.base)
-        self.moved = False  # whether the current values differ from the make-time ones (a reset set them)
+        self.take(dict(self.base))
         self.kwargs = dict(env.kwargs)  # the make kwargs, without these
         if self.ranges:
             self._check_fixed_space(env)
@@ -111,8 +110,11 @@ class Context:
         high = np.concatenate([space.high, np.ones(k, np.float32)])
         return spaces.Box(low, high, dtype=np.float32)
 
-    def observed(self, values: dict) -> list[float]:
-        return [r.normalized(values[name]) for name, r in self.ranges.items()]
+    def take(self, values: dict):
+        """These values as the current ones: whether they moved from the make-time ones (a reset set them), and the
+        observed ones normalized, once per episode rather than every step."""
+        self.current, self.moved = values, values != self.base
+        self.observed = np.array([r.normalized(values[name]) for name, r in self.ranges.items()], np.float32)
 
 
 def physical_params(env) -> dict:

@@ -191,7 +191,7 @@ class TaskEnv(RenderedEnv):
         obs = self.observe(state, ops)
         if self.context is None or not self.context.observe:
             return obs
-        params = np.asarray(self.context.observed(self.context.current), np.float32)
+        params = self.context.observed
         return np.concatenate([obs, np.broadcast_to(params, (*obs.shape[:-1], params.size))], axis=-1)
 
     def report(self, info: dict) -> dict:
@@ -214,7 +214,7 @@ class TaskEnv(RenderedEnv):
             if key not in keep:
                 setattr(self, key, value)
         self._model = None
-        self.context.current, self.context.moved = values, values != self.context.base
+        self.context.take(values)
 
     def check_action(self, action):
         """The action as a finite float array of the space's shape, clipped into the space (else ValueError)."""
