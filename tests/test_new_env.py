@@ -36,6 +36,7 @@ from connenv.core.backend import BATCH, SCALAR
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from throwaway.point_rendering import PointRenderer
 from throwaway.point_system import flow
 
 DT_MAX = 1.0
@@ -64,6 +65,7 @@ class PointEnv(TaskEnv):
     """
 
     name = "Point-v0"
+    renderer = PointRenderer
     STATE = Fields(number("x", "m", bound=10.0))
 
     def __init__(self, render_mode=None, dt=0.1):
@@ -92,13 +94,6 @@ class PointEnv(TaskEnv):
     def reward(self, before, after, info, ops=SCALAR):
         return abs(1.0 - before.x) - abs(1.0 - after.x)
 
-    def _make_renderer(self):
-        from throwaway.point_rendering import PointRenderer
-
-        return PointRenderer(self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        return renderer.draw(self.state.x)
 
 
 PointVectorEnv = vector_env(PointEnv)
@@ -114,21 +109,18 @@ SPECS = (
 RENDERER = '''
 """pygame drawing of the point."""
 
-from connenv.rendering import Canvas
+from connenv.rendering import Canvas, Renderer
 
 
-class PointRenderer:
-    def __init__(self, render_mode, fps):
-        self.canvas = Canvas(2.0, 0.0, render_mode, fps)
+class PointRenderer(Renderer):
+    def __init__(self, env):
+        self.canvas = Canvas(env, 2.0)
 
-    def draw(self, x):
+    def draw(self, env):
         c = self.canvas
         c.screen.fill((255, 255, 255))
-        c.pygame.draw.circle(c.screen, (40, 40, 40), c.px(x, 0.0), 8)
+        c.pygame.draw.circle(c.screen, (40, 40, 40), c.px(env.state.x, 0.0), 8)
         return c.show()
-
-    def close(self):
-        self.canvas.close()
 '''
 
 CONTROLLER = '''

@@ -37,6 +37,7 @@ from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import vector_env
+from connenv.rendering import CoordinatePlot
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which it has diverged: StepperError
@@ -150,6 +151,7 @@ class ActiveConstraintEnv(TaskEnv):
     """
 
     name = "ActiveConstraint-v0"  # how bad make kwargs name the env
+    renderer = CoordinatePlot
 
     STATE = Fields(
         vector("q", "n", about="the free coordinates", bound=MAGNITUDE_BOUND, scalar=True),
@@ -358,16 +360,6 @@ class ActiveConstraintEnv(TaskEnv):
 
     def terminated(self, s, info, ops=SCALAR):
         return info["is_success"] if self.task is None else self.task.terminated(info["state"], ops)
-
-    # -- rendering -------------------------------------------------------------
-
-    def _make_renderer(self):
-        from connenv.envs.rendering import CoordinatePlot
-
-        return CoordinatePlot(self.n, self.m, self.render_mode, self.metadata["render_fps"], self.draw)
-
-    def _draw(self, renderer):
-        return renderer.draw(self.state_dict(self.state))
 
 
 SYSTEM = (

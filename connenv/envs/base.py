@@ -73,10 +73,11 @@ def each_row(function, states, ops):
 
 
 class RenderedEnv(gym.Env):
-    """A Gymnasium env whose subclasses give ``_make_renderer()`` and ``_draw(renderer)``; pygame loads on first
-    render, as in classic control."""
+    """A Gymnasium env drawn by its ``renderer`` (`connenv.rendering.Renderer`), made of the env on the first render;
+    pygame loads then, as in classic control."""
 
     metadata: ClassVar[dict] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
+    renderer: ClassVar[type]
     ARGS: ClassVar[Args]
     """The make kwargs (`connenv.core.params`): their checks, the docstring's Arguments table, `parameters()`."""
 
@@ -112,8 +113,8 @@ class RenderedEnv(gym.Env):
             gym.logger.warn('render() without render_mode; pass render_mode="rgb_array" or "human" to make().')
             return None
         if self._renderer is None:
-            self._renderer = self._make_renderer()
-        return self._draw(self._renderer)
+            self._renderer = self.renderer(self)
+        return self._renderer.draw(self)
 
     def __getstate__(self):
         """The env without its renderer (a pygame window or surface, which cannot be pickled or copied): a copy
@@ -144,6 +145,8 @@ class TaskEnv(RenderedEnv):
     context: Context | None = None
     """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
     _model = None  # the model, made on first use
+    trace: list | None = None
+    """While rendering: the renderer's ``point(env)`` of each state since reset, the track drawn behind the body."""
     reports_params = False  # whether info carries "params" (and the observation them, if observed): where they vary,
     # or a reset set them
 
@@ -158,6 +161,9 @@ class TaskEnv(RenderedEnv):
             self.set_params(context.draw(self.np_random, given))
         self.reports_params = given is not None or (context is not None and context.varies)
         self.state = self.start(options)
+        if self.render_mode is not None:
+            self.trace = []
+            self.rendered()
         return self.observation(self.state), self.report(self.describe(self.state))
 
     def step(self, action):
@@ -170,8 +176,8 @@ class TaskEnv(RenderedEnv):
         info = self.describe(self.state)
         reward = self.reward(before, self.state, info)
         terminated = self.terminated(self.state, info)
-        if self.render_mode == "human":
-            self.render()
+        if self.render_mode is not None:
+            self.rendered()
         if self.reports_params:  # checked here, not in calls, as the step of fixed parameters is the common one
             return self.observation(self.state), reward, terminated, False, self.report(info)
         return self.observe(self.state), reward, terminated, False, info
@@ -215,6 +221,14 @@ class TaskEnv(RenderedEnv):
                 setattr(self, key, value)
         self._model = None
         self.context.take(values)
+
+    def rendered(self):
+        """While rendering, after a reset or a step: the state's point on the trace (if the renderer draws one), and
+        in human mode the frame shown, as in classic control."""
+        if self.renderer.point is not None:
+            self.trace.append(self.renderer.point(self))
+        if self.render_mode == "human":
+            self.render()
 
     def check_action(self, action):
         """The action as a finite float array of the space's shape, clipped into the space (else ValueError)."""

@@ -21,6 +21,7 @@ from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env'
 )
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.bead_on_bar import BeadRenderer
 
 OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
 START_REACH = 0.8  # |r₀| ≤ 0.8 L, and so |r*| (g > 0)
@@ -124,6 +125,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     """
 
     name = "BeadOnBar-v0"  # how bad make kwargs name the env
+    renderer = BeadRenderer
 
     ARGS = Args(
         scale("half_length", 1.0, "m", "L"),
@@ -257,17 +259,6 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     def terminated(self, state, info, ops=SCALAR):
         return info["is_success"] | info["left_bar"]
-
-    # -- rendering -------------------------------------------------------------------------------------------
-
-    def _make_renderer(self):
-        from connenv.rendering.bead_on_bar import BeadRenderer
-
-        return BeadRenderer(self.half_length, self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        s = self.state
-        return renderer.draw(float(s.y[0]), float(s.u[0]), float(s.target), s.t, bool(s.inside))
 
 
 BeadOnBarVectorEnv = vector_env(BeadOnBarEnv)

@@ -19,6 +19,7 @@ from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.chaplygin_sleigh import SleighRenderer
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -126,6 +127,7 @@ class ChaplyginSleighEnv(TaskEnv):
     """
 
     name = "ChaplyginSleigh-v0"  # how bad make kwargs name the env
+    renderer = SleighRenderer
 
     ARGS = Args(
         scale("sled_mass", 1.0, "kg"),
@@ -275,18 +277,6 @@ class ChaplyginSleighEnv(TaskEnv):
             "energy": ops.real(self.system.energy(s.y, s.u, s.u_dot)),
             "is_success": ops.flag(distance <= self.tolerance),
         }
-
-    # -- rendering -------------------------------------------------------------
-
-    def _make_renderer(self):
-        from connenv.rendering.chaplygin_sleigh import SleighRenderer
-
-        return SleighRenderer(self.system.offset, self.rail, self.box, self.tolerance, self.render_mode,
-                              self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        s = self.state
-        return renderer.draw(s.y[:3].copy(), s.u.copy(), s.target.copy(), s.t)
 
 
 ChaplyginSleighVectorEnv = vector_env(ChaplyginSleighEnv)

@@ -27,6 +27,7 @@ from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
 from connenv.envs.vector import vector_env
+from connenv.rendering.connection import ConnectionRenderer
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 ON_GROUP = 1e-9  # how far a given g may be from its group (reset options, a task's reset)
@@ -134,6 +135,7 @@ class ConnectionEnv(TaskEnv):
     """
 
     name = "Connection-v0"  # how bad make kwargs name the env
+    renderer = ConnectionRenderer
 
     STATE = Fields(
         given("g", "g_shape", "check_g", "on its group to 1e-9, every entry within ±1e3", "a vector for R2"),
@@ -309,17 +311,6 @@ class ConnectionEnv(TaskEnv):
         if self.task is None:
             return False if ops is SCALAR else np.zeros(len(state.t), bool)
         return self.task.terminated(info["state"], ops)
-
-    # -- rendering ---------------------------------------------------------------
-
-    def _make_renderer(self):
-        from connenv.rendering.connection import ConnectionRenderer
-
-        fps = self.metadata["render_fps"]
-        return ConnectionRenderer(self.group.name, self.low, self.high, self.render_mode, fps, self.draw)
-
-    def _draw(self, renderer):
-        return renderer.draw(self.state_dict(self.state))
 
 
 ConnectionVectorEnv = vector_env(ConnectionEnv)

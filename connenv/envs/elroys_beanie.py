@@ -17,6 +17,7 @@ from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.elroys_beanie import BeanieRenderer
 from connenv.systems import elroys_beanie
 
 MOMENTUM_RANGE = (0.25, 1.0)  # |μ| drawn at reset (kg m²/s), with a random sign
@@ -100,6 +101,7 @@ class ElroysBeanieEnv(ConnectionEnv):
     """
 
     name = "ElroysBeanie-v0"
+    renderer = BeanieRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("error",)}
 
     ARGS = Args(
@@ -209,17 +211,6 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     def terminated(self, state, info, ops=SCALAR):
         return info["is_success"]
-
-    # -- rendering ---------------------------------------------------------------
-
-    def _make_renderer(self):
-        from connenv.rendering.elroys_beanie import BeanieRenderer
-
-        return BeanieRenderer(self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        s = self.state
-        return renderer.draw(float(s.g[0]), float(s.s[0]), s.target, s.momentum, s.t, s.held / self.hold_time)
 
 
 ElroysBeanieVectorEnv = vector_env(ElroysBeanieEnv)

@@ -21,6 +21,7 @@ from connenv.core.validation import (
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.falling_cat import CatRenderer
 from connenv.systems import falling_cat
 
 ROLL_OFFSET = 0.2  # rad: the start's roll is π + δ, δ uniform in [−ROLL_OFFSET, ROLL_OFFSET]
@@ -109,6 +110,7 @@ class FallingCatEnv(ConnectionEnv):
     """
 
     name = "FallingCat-v0"
+    renderer = CatRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("roll_error",)}
 
     ARGS = Args(
@@ -250,19 +252,6 @@ class FallingCatEnv(ConnectionEnv):
     def terminated(self, state, info, ops=SCALAR):
         landed = np.asarray(state.t) >= self.fall_time - LANDING_SLACK
         return ops.flag(info["is_success"] | landed)
-
-    # -- rendering ---------------------------------------------------------------
-
-    def _make_renderer(self):
-        from connenv.rendering.falling_cat import CatRenderer
-
-        return CatRenderer(self.cm_distance, self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        g, H = self.frames(self.state)
-        Q_A, Q_B = falling_cat.halves(self.state.s)
-        roll, _, _ = self.errors(self.state)
-        return renderer.draw(H.T @ g, Q_A, Q_B, self.state.s, self.state.t, roll)
 
 
 FallingCatVectorEnv = vector_env(FallingCatEnv)

@@ -18,6 +18,7 @@ from connenv.core.validation import check_keys
 from connenv.envs.base import RenderedEnv, State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.kapitza import KapitzaRenderer
 from connenv.systems.kapitza import KapitzaPendulum
 
 DT_MAX = 10.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -162,6 +163,7 @@ class KapitzaPendulumEnv(TaskEnv):
     """
 
     name = "KapitzaPendulum-v0"  # how bad make kwargs name the env
+    renderer = KapitzaRenderer
 
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ("max_deviation",)}
 
@@ -207,14 +209,6 @@ class KapitzaPendulumEnv(TaskEnv):
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         y, u, u_dot = np.array([math.pi, 0.0]), np.zeros(2), np.zeros(2)
         self.state = self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
-
-    def _make_renderer(self):
-        from connenv.rendering.kapitza import KapitzaRenderer
-
-        return KapitzaRenderer(self.system.length, self.a_max, self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        return renderer.draw(self.state.y[0], self.state.u, self.state.t)
 
     def parameters(self):
         return {"pivot": self.pivot, **super().parameters()}

@@ -21,6 +21,7 @@ from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, POSITION_BOUND, TARGET_BOUND, PlanarSwimmer, swimmer_state
 from connenv.envs.vector import vector_env
+from connenv.rendering.kozlov_shell import KozlovShellRenderer
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -122,6 +123,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     """
 
     name = "KozlovShell-v0"  # how bad make kwargs name the env
+    renderer = KozlovShellRenderer
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
@@ -169,36 +171,11 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
         self.momentum_scale = np.diag(self.full_system.locked_inertia(np.zeros(2)))  # M + m + λ₁, M + m + λ₂, J + λ₃
         self.shape_bounds, self.momentum_bounds = self.u_max.tolist(), self.momentum_scale.tolist()  # as floats
-        self.target_unit = 1.0  # m
+        self.target_unit, self.reach = 1.0, TARGET_DISTANCES[1]  # m; the farthest target, which the view takes in
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = ShellState(np.zeros(3), np.zeros(3), np.zeros(2), np.zeros(2), 0.0, False, np.zeros(3))
-        self.wake = []  # rendering history: the centre at the start of every step since reset (only when rendering)
-
-    # -- rendering: the wake is history, kept beside the state ----------------
-
-    def reset(self, *, seed=None, options=None):
-        self.wake = []
-        return super().reset(seed=seed, options=options)
-
-    def step(self, action):
-        if self.render_mode is not None:
-            self.wake.append(tuple(self.state.pose[:2]))
-        return super().step(action)
-
-    def _make_renderer(self):
-        from connenv.rendering.kozlov_shell import KozlovShellRenderer
-
-        system = self.full_system
-        return KozlovShellRenderer(
-            system.a, system.b, TARGET_DISTANCES[1], self.render_mode, self.metadata["render_fps"]
-        )
-
-    def _draw(self, renderer):
-        s = self.state
-        path = [*self.wake, tuple(s.pose[:2])]
-        return renderer.draw(s.pose, s.u, s.target, path, self.success_radius, s.t)
 
     def parameters(self):
         system = self.full_system

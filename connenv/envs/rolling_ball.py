@@ -25,6 +25,7 @@ from connenv.core.validation import (
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv, vector_env
+from connenv.rendering.rolling_ball import RollingBallRenderer
 from connenv.systems.rolling_ball import (
     RollingBall,
     attitude_error,
@@ -149,6 +150,7 @@ class RollingBallEnv(TaskEnv):
     """
 
     name = "RollingBall-v0"  # how bad make kwargs name the env
+    renderer = RollingBallRenderer
 
     metadata = {**TaskEnv.metadata, "measures": ("angle_error", "path_ratio")}
     measures_distance = True  # whether start solves for the optimal arc (info "distance"); the vector env may not
@@ -177,29 +179,11 @@ class RollingBallEnv(TaskEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.observation_space = self._observation_space()
         self.state = self.at(np.eye(3), np.eye(3), np.zeros(2), 0.0, 0.0, math.nan)
-        self.path = []  # where each step since reset started: the track drawn behind the ball
-
-    def reset(self, *, seed=None, options=None):
-        self.path = []
-        return super().reset(seed=seed, options=options)
-
-    def step(self, action):
-        self.path.append(self.state.position)
-        return super().step(action)
 
     def check_action(self, action):
         """The action as a finite float array of the space's shape (else ValueError), not clipped: the command
         projects it onto the unit disk."""
         return finite_action(action, self.action_space)
-
-    def _make_renderer(self):
-        from connenv.rendering.rolling_ball import RollingBallRenderer
-
-        return RollingBallRenderer(self.system.radius, self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        s = self.state
-        return renderer.draw(s.R, s.R_target, np.array([*self.path, s.position]), s.t, s.angle_error)
 
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (6,), np.float32)

@@ -17,6 +17,7 @@ from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.rolling_coin import CoinRenderer
 from connenv.systems import rolling_coin
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -92,6 +93,7 @@ class RollingCoinEnv(ConnectionEnv):
     """
 
     name = "RollingCoin-v0"
+    renderer = CoinRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("distance", "heading_error")}
 
     ARGS = Args(
@@ -129,19 +131,10 @@ class RollingCoinEnv(ConnectionEnv):
             **stepper_options,
         )
         self.state = CoinState(np.zeros(2), np.zeros(2), 0.0, np.array([0.0, 1.0, 0.0]))
-        self.track = []  # where each step since reset started: drawn behind the coin
 
     def _observation_space(self):
         high = np.array([OFFSET_BOUND, OFFSET_BOUND, 1.0, 1.0], np.float32)
         return spaces.Box(-high, high, dtype=np.float32)
-
-    def reset(self, *, seed=None, options=None):
-        self.track = []
-        return super().reset(seed=seed, options=options)
-
-    def step(self, action):
-        self.track.append(self.state.g.copy())
-        return super().step(action)
 
     # -- physics ---------------------------------------------------------------
 
@@ -208,17 +201,6 @@ class RollingCoinEnv(ConnectionEnv):
 
     def terminated(self, state, info, ops=SCALAR):
         return info["is_success"]
-
-    # -- rendering ---------------------------------------------------------------
-
-    def _make_renderer(self):
-        from connenv.rendering.rolling_coin import CoinRenderer
-
-        return CoinRenderer(self.radius, self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        s = self.state
-        return renderer.draw(np.array([*self.track, s.g]), s.s[0], s.s[1], s.target, s.t)
 
 
 RollingCoinVectorEnv = vector_env(RollingCoinEnv)

@@ -18,6 +18,7 @@ from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.rolling_coin_surface import CoinSurfaceRenderer
 from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface
 from connenv.systems.surfaces import LENGTH_MIN, check_surface, make_surface
 
@@ -128,6 +129,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
     """
 
     name = "RollingCoinSurface-v0"  # how bad make kwargs name the env
+    renderer = CoinSurfaceRenderer
 
     ARGS = Args(
         given("surface", "hill", '"plane", "bowl", "hill", or a sympy expression in x and y (or its text)'),
@@ -182,7 +184,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
         high = np.array([1.0, 1.0, reach, reach, 1.0, 1.0, SPEED_BOUND, 1.0, 1.0], np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = self.at(np.array([*self.start_point, 0.0, 0.0]), 0.0, np.zeros(2), 0.0, None, None)
-        self.path = []  # where each step since reset started: the track drawn behind the coin
 
     def _start_point(self, surface):
         start = START.get(surface, (0.0, 0.0)) if isinstance(surface, str) else (0.0, 0.0)
@@ -210,25 +211,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
                 f"({xs[i]:.6g}, {ys[i]:.6g}) is {where} (start {self.start_point}, arena ±{self.arena} m)"
             )
         return heading
-
-    def reset(self, *, seed=None, options=None):
-        self.path = []
-        return super().reset(seed=seed, options=options)
-
-    def step(self, action):
-        self.path.append(self.state.y[:2].copy())
-        return super().step(action)
-
-    def _make_renderer(self):
-        from connenv.rendering.rolling_coin_surface import CoinSurfaceRenderer
-
-        return CoinSurfaceRenderer(self.surface, self.arena, self.system.radius, self.render_mode,
-                                   self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        s = self.state
-        track = np.array([*self.path, s.y[:2]])
-        return renderer.draw(s.y, s.theta, s.target, track, self.tolerance, s.t)
 
     # -- physics ---------------------------------------------------------------
 

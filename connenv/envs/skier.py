@@ -18,6 +18,7 @@ from connenv.core.validation import check_keys, check_number
 from connenv.envs.base import State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.skier import SkierRenderer
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
 
@@ -146,6 +147,7 @@ class SkierEnv(TaskEnv):
     """
 
     name = "Skier-v0"  # how bad make kwargs name the env
+    renderer = SkierRenderer
 
     ARGS = Args(
         scale("h_min", 0.5, "m", "below h_max"),
@@ -228,14 +230,6 @@ class SkierEnv(TaskEnv):
         elif integrator == "dop853":
             options = {**DOP853_TOLERANCES, **options}
         return integrator, options
-
-    def _make_renderer(self):
-        from connenv.rendering.skier import SkierRenderer
-
-        return SkierRenderer(self.trail, self.h_max, self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        return renderer.draw(self.state.y[0], self.state.h, self.h_min, self.state.t)
 
     def parameters(self):
         lever = round(self.min_lever, 12)  # beside h_max, which sets it

@@ -21,6 +21,7 @@ from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, POSITION_BOUND, TARGET_BOUND, PlanarSwimmer, swimmer_state
 from connenv.envs.vector import vector_env
+from connenv.rendering.snake_swimmer import SnakeSwimmerRenderer
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
 DT_MAX = 0.25  # s: the longest dt; longer steps (joint moves up to the whole range) make the Lie-group rule's choice
@@ -169,6 +170,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     """
 
     name = "SnakeSwimmer-v0"  # how bad make kwargs name the env
+    renderer = SnakeSwimmerRenderer
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
@@ -209,35 +211,11 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         self.momentum_scale = np.diag(self.full_system.locked_inertia(np.zeros(2)))
         self.momentum_bounds = self.momentum_scale.tolist()
         self.target_unit, self.shape_bounds = self.body_length, (JOINT_LIMIT, JOINT_LIMIT)
+        self.reach = TARGET_DISTANCES[1] * self.body_length  # the farthest target, which the view takes in
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = SnakeState(np.zeros(3), np.zeros(3), np.zeros(2), np.zeros(2), 0.0, False, np.zeros(3))
-        self.wake = []  # rendering history: the links' centres at the start of every step (only when rendering)
-
-    # -- rendering: the wake is history, kept beside the state ----------------
-
-    def reset(self, *, seed=None, options=None):
-        self.wake = []
-        return super().reset(seed=seed, options=options)
-
-    def step(self, action):
-        if self.render_mode is not None:
-            self.wake.append(self.full_system.link_poses(self.state.pose, self.state.s)[:, :2])
-        return super().step(action)
-
-    def _make_renderer(self):
-        from connenv.rendering.snake_swimmer import SnakeSwimmerRenderer
-
-        system = self.full_system
-        return SnakeSwimmerRenderer(
-            system.a, system.b, TARGET_DISTANCES[1] * self.body_length, self.render_mode, self.metadata["render_fps"]
-        )
-
-    def _draw(self, renderer):
-        s = self.state
-        links = self.full_system.link_poses(s.pose, s.s)
-        return renderer.draw(links, s.target, [*self.wake, links[:, :2]], self.success_radius, s.t)
 
     def parameters(self):
         return {**super().parameters(), "model": "full" if self.state.full else "reduced"}

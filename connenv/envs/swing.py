@@ -18,6 +18,7 @@ from connenv.core.validation import check_keys
 from connenv.envs.base import State, TaskEnv, control_path
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.swing import SwingRenderer
 from connenv.systems.swing import Swing
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -116,6 +117,7 @@ class SwingEnv(TaskEnv):
     """
 
     name = "Swing-v0"  # how bad make kwargs name the env
+    renderer = SwingRenderer
 
     ARGS = Args(
         scale("r_min", 1.6, "m"),
@@ -153,14 +155,6 @@ class SwingEnv(TaskEnv):
         high = self.obs_high.astype(np.float32)
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = self.at(np.zeros(2), self.r_max, 0.0, 0.0)
-
-    def _make_renderer(self):
-        from connenv.rendering.swing import SwingRenderer
-
-        return SwingRenderer(self.r_max, self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        return renderer.draw(self.state.y[0], self.state.r, self.r_min, self.state.t)
 
     # -- physics ---------------------------------------------------------------
 

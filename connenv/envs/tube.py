@@ -20,6 +20,7 @@ from connenv.core.validation import (
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
+from connenv.rendering.tube import TubeRenderer
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
 
 __all__ = ["DT_MAX", "TubeTwistEnv", "TubeTwistVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
@@ -107,6 +108,7 @@ class TubeTwistEnv(ConnectionEnv):
     """
 
     name = "TubeTwist-v0"
+    renderer = TubeRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("path_ratio", "path_length")}
 
     ARGS = Args(
@@ -127,18 +129,9 @@ class TubeTwistEnv(ConnectionEnv):
                          max_shape_speed=a.max_bend_rate, render_mode=render_mode, integrator=a.integrator,
                          **stepper_options)  # fmt: skip
         self.state = self.at(np.eye(3).ravel(), np.zeros(2), 0.0, np.eye(3).ravel(), 1.0, 0.0)
-        self.trace = []  # T at the start of each step since reset: the tangent's trace drawn on the sphere
 
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (11,), np.float32)
-
-    def reset(self, *, seed=None, options=None):
-        self.trace = []
-        return super().reset(seed=seed, options=options)
-
-    def step(self, action):
-        self.trace.append(self.state.g[2::3].copy())
-        return super().step(action)
 
     # -- physics ---------------------------------------------------------------
 
@@ -209,19 +202,6 @@ class TubeTwistEnv(ConnectionEnv):
             "path_ratio": self.path_ratio(s, ops),
             "is_success": ops.flag(self.success(s, ops)),
         }
-
-    # -- rendering ---------------------------------------------------------------
-
-    def _make_renderer(self):
-        from connenv.rendering.tube import TubeRenderer
-
-        return TubeRenderer(self.render_mode, self.metadata["render_fps"])
-
-    def _draw(self, renderer):
-        s = self.state
-        trace = np.array([*self.trace, s.g[2::3]])
-        info = self.describe(s)
-        return renderer.draw(s.g.reshape(3, 3), s.R0.reshape(3, 3), trace, s.t, info["twist"], s.target)
 
 
 TubeTwistVectorEnv = vector_env(TubeTwistEnv)

@@ -14,7 +14,9 @@ POINTS = 250  # a canvas is POINTS points wide: widths, radii and text are in po
 class Canvas:
     """A square pygame surface in world coordinates (metres, y up), shown or returned as an array."""
 
-    def __init__(self, half_width: float, center_y: float, render_mode: str, fps: int, center_x: float = 0.0):
+    def __init__(self, env, half_width: float, center_y: float = 0.0, center_x: float = 0.0):
+        """A canvas for env (its render_mode and fps), half_width metres each side of (center_x, center_y)."""
+        render_mode, fps = env.render_mode, env.metadata["render_fps"]
         try:
             import pygame
         except ImportError as e:
@@ -72,9 +74,12 @@ class Canvas:
 
 
 class Renderer:
-    """Base of the renderers: each draws on its ``canvas``, which closing closes."""
+    """Base of the renderers: an env makes its renderer on its first render, ``renderer(env)``, which then draws the
+    env's state, ``draw(env)``, on its ``canvas`` (closing closes it). A renderer that draws a track behind the body
+    gives ``point(env)``: while rendering, the env keeps the point of each state since reset (``env.trace``)."""
 
     canvas: Canvas
+    point = None
 
     def close(self):
         self.canvas.close()
@@ -89,12 +94,13 @@ class CoordinatePlot(Renderer):
     WINDOW = 10.0  # s of history shown
     COLORS = ((204, 77, 77), (77, 110, 204), (77, 160, 77), (200, 140, 40), (140, 77, 180), (60, 60, 60))
 
-    def __init__(self, n: int, m: int, render_mode: str, fps: int, draw=None):
-        self.canvas = Canvas(1.0, 0.0, render_mode, fps)
-        self.labels = [f"q{i}" for i in range(n)] + [f"u{i}" for i in range(m)]
-        self.user_draw, self.history = draw, []
+    def __init__(self, env):
+        self.canvas = Canvas(env, 1.0)
+        self.labels = [f"q{i}" for i in range(env.n)] + [f"u{i}" for i in range(env.m)]
+        self.user_draw, self.history = env.draw, []
 
-    def draw(self, state: dict):
+    def draw(self, env):
+        state = env.state_dict(env.state)
         c, pg = self.canvas, self.canvas.pygame
         c.screen.fill((255, 255, 255))
         if self.user_draw is not None:

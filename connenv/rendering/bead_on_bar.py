@@ -11,11 +11,13 @@ class BeadRenderer(Renderer):
     """The bar at its angle with the pivot, the target as a ring on the bar (green while the bead is within the
     tolerances), the bead, and the time, r and r* in the corner."""
 
-    def __init__(self, half_length: float, render_mode: str, fps: int):
-        self.half_length = half_length
-        self.canvas = Canvas(1.25 * half_length, 0.0, render_mode, fps)
+    def __init__(self, env):
+        self.half_length = env.half_length
+        self.canvas = Canvas(env, 1.25 * env.half_length)
 
-    def draw(self, r: float, theta: float, target: float, t: float, inside: bool):
+    def draw(self, env):
+        s = env.state
+        r, theta, target, t, inside = float(s.y[0]), float(s.u[0]), float(s.target), s.t, bool(s.inside)
         c, pg = self.canvas, self.canvas.pygame
         c.screen.fill((255, 255, 255))
         along = math.cos(theta), math.sin(theta)

@@ -13,14 +13,14 @@ class SleighRenderer(Renderer):
     """Top view: the track of the knife edge, the sled (its outline, the knife edge at P, the mass's box or rail
     around C), the mass and the target disc."""
 
-    def __init__(self, offset: float, rail: float, box: float, tolerance: float, render_mode: str, fps: int):
-        self.offset, self.rail, self.box, self.tolerance = offset, rail, box, tolerance
-        self.canvas = Canvas(3.0, 0.0, render_mode, fps)
+    def __init__(self, env):
+        self.offset, self.rail, self.box, self.tolerance = env.system.offset, env.rail, env.box, env.tolerance
+        self.canvas = Canvas(env, 3.0)
         self.track = []
 
-    def draw(self, pose, u, target, t: float):
-        c, pg = self.canvas, self.canvas.pygame
-        x, y, phi = pose
+    def draw(self, env):
+        c, pg, s = self.canvas, self.canvas.pygame, env.state
+        (x, y, phi), u, target, t = s.y[:3], s.u, s.target, s.t
         if t == 0.0:
             self.track = []
         self.track.append((x, y))

@@ -15,11 +15,12 @@ class ConnectionRenderer(Renderer):
     circle), centred on g's position for SE2 and R2, and s as bars against its bounds; the time. With a user's
     ``draw(state, canvas)``, that picture instead, on a Canvas spanning [-2, 2]²."""
 
-    def __init__(self, group: str, low, high, render_mode: str, fps: int, draw=None):
-        self.canvas = Canvas(2.0, 0.0, render_mode, fps)
-        self.group, self.low, self.high, self.user_draw = group, low, high, draw
+    def __init__(self, env):
+        self.canvas = Canvas(env, 2.0)
+        self.group, self.low, self.high, self.user_draw = env.group.name, env.low, env.high, env.draw
 
-    def draw(self, state: dict):
+    def draw(self, env):
+        state = env.state_dict(env.state)
         if self.user_draw is not None:
             self.user_draw(state, self.canvas)
             return self.canvas.show()

@@ -11,10 +11,13 @@ class BeanieRenderer(Renderer):
     """The body (a disk with a radius drawn at θ), the beanie on it (a smaller disk with its propeller at θ + ψ),
     the target θ* as a dashed line, and the beanie's winding ψ/2π counted beside; a bar shows the hold."""
 
-    def __init__(self, render_mode: str, fps: int):
-        self.canvas = Canvas(1.5, 0.0, render_mode, fps)
+    def __init__(self, env):
+        self.canvas = Canvas(env, 1.5)
 
-    def draw(self, theta, psi, target, momentum, t, held):
+    def draw(self, env):
+        s = env.state
+        theta, psi, target, momentum, t, held = float(s.g[0]), float(s.s[0]), s.target, s.momentum, s.t, s.held
+        held = held / env.hold_time
         c, pg = self.canvas, self.canvas.pygame
         c.screen.fill((255, 255, 255))
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from connenv.rendering import Canvas, Renderer
+from connenv.systems import falling_cat
 
 
 class CatRenderer(Renderer):
@@ -12,12 +13,14 @@ class CatRenderer(Renderer):
     joint, with legs along each half's −e₃ (feet); beside it, a dial seen along the spine with the back's
     direction (feet down: the back up, the goal ticked at the dial's top); the time, the roll and the bend."""
 
-    def __init__(self, cm_distance: float, render_mode: str, fps: int):
-        self.length = cm_distance
-        self.canvas = Canvas(3.2 * cm_distance, 0.0, render_mode, fps, center_x=0.8 * cm_distance)
+    def __init__(self, env):
+        self.length = env.cm_distance
+        self.canvas = Canvas(env, 3.2 * env.cm_distance, center_x=0.8 * env.cm_distance)
 
-    def draw(self, E, Q_A, Q_B, bend, t, roll):
+    def draw(self, env):
         """E: the cat frame in the heading frame; Q_A, Q_B: the halves in the cat frame."""
+        (g, H), (Q_A, Q_B), bend, t = env.frames(env.state), falling_cat.halves(env.state.s), env.state.s, env.state.t
+        E, roll = H.T @ g, env.errors(env.state)[0]
         c, pg, ell = self.canvas, self.canvas.pygame, self.length
         c.screen.fill((255, 255, 255))
         front, rear = E @ Q_A, E @ Q_B

@@ -11,11 +11,12 @@ class KapitzaRenderer(Renderer):
     """The pivot's travel as a bar, the pivot, rod and bob, the goal (the bob inverted over the pivot) as a ring; the
     time in the corner."""
 
-    def __init__(self, length: float, a_max: float, render_mode: str, fps: int):
-        self.length, self.a_max = length, a_max
-        self.canvas = Canvas(1.3 * (length + a_max), 0.0, render_mode, fps)
+    def __init__(self, env):
+        self.length, self.a_max = env.system.length, env.a_max
+        self.canvas = Canvas(env, 1.3 * (self.length + self.a_max))
 
-    def draw(self, theta: float, u, t: float):
+    def draw(self, env):
+        theta, u, t = env.state.y[0], env.state.u, env.state.t
         c, pg = self.canvas, self.canvas.pygame
         c.screen.fill((255, 255, 255))
         a = self.a_max

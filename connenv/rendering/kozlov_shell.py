@@ -15,13 +15,20 @@ class KozlovShellRenderer(Renderer):
     """The ellipse with its body x axis, the inner mass, the target with its success circle, and the path of the
     centre (the wake) drawn over the shell; the view is centred between the start and the target."""
 
-    def __init__(self, a: float, b: float, reach: float, render_mode: str, fps: int):
-        self.canvas = Canvas(0.5 * reach + a + 0.3, 0.0, render_mode, fps)
+    def __init__(self, env):
+        a, b = env.full_system.a, env.full_system.b
+        self.canvas = Canvas(env, 0.5 * env.reach + a + 0.3)
         angles = np.linspace(0.0, 2.0 * math.pi, OUTLINE_POINTS, endpoint=False)
         self.outline = np.stack([a * np.cos(angles), b * np.sin(angles)], axis=-1)  # body frame
         self.a = a
 
-    def draw(self, pose, u, target, path, success_radius: float, t: float):
+    @staticmethod
+    def point(env):
+        return tuple(env.state.pose[:2])
+
+    def draw(self, env):
+        s, path, success_radius = env.state, env.trace, env.success_radius
+        pose, u, target, t = s.pose, s.u, s.target, s.t
         c, pg = self.canvas, self.canvas.pygame
         c.center_x, c.center_y = 0.5 * (path[0][0] + target[0]), 0.5 * (path[0][1] + target[1])
         c.screen.fill((255, 255, 255))

@@ -13,9 +13,13 @@ class RollingBallRenderer(Renderer):
 
     COLORS = ((204, 77, 77), (77, 160, 77), (77, 110, 204))  # body x, y, z
 
-    def __init__(self, radius: float, render_mode: str, fps: int):
-        self.radius = radius
-        self.canvas = Canvas(4.0 * radius, 0.0, render_mode, fps)
+    def __init__(self, env):
+        self.radius = env.system.radius
+        self.canvas = Canvas(env, 4.0 * self.radius)
+
+    @staticmethod
+    def point(env):
+        return env.state.position
 
     def axes(self, R, center, size):
         """Each body axis as a line from the centre to its tip, seen from above, and a marker at the tip."""
@@ -25,7 +29,9 @@ class RollingBallRenderer(Renderer):
             pg.draw.line(c.screen, self.COLORS[i], c.px(*center), c.px(*tip), c.pt(1.5))
             pg.draw.circle(c.screen, self.COLORS[i], c.px(*tip), c.pt(3), 0 if R[2, i] >= 0 else c.pt(1))
 
-    def draw(self, R, R_target, path, t: float, angle_error: float):
+    def draw(self, env):
+        s, path = env.state, np.array(env.trace)
+        R, R_target, t, angle_error = s.R, s.R_target, s.t, s.angle_error
         c, pg = self.canvas, self.canvas.pygame
         c.center_x, c.center_y = path[-1]
         c.screen.fill((255, 255, 255))

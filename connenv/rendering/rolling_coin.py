@@ -13,9 +13,13 @@ class CoinRenderer(Renderer):
     """Top view: the track of the contact point, the coin as a segment along its heading (its edge seen from
     above) with a tick at the rolled angle φ, and the target pose as a hollow outline."""
 
-    def __init__(self, radius: float, render_mode: str, fps: int):
-        self.radius = radius
-        self.canvas = Canvas(4.0, 0.0, render_mode, fps)
+    def __init__(self, env):
+        self.radius = env.radius
+        self.canvas = Canvas(env, 4.0)
+
+    @staticmethod
+    def point(env):
+        return env.state.g.copy()
 
     def coin(self, position, theta, colour, width):
         c, pg = self.canvas, self.canvas.pygame
@@ -23,7 +27,9 @@ class CoinRenderer(Renderer):
         pg.draw.line(c.screen, colour, c.px(*(position - heading)), c.px(*(position + heading)), width)
         pg.draw.circle(c.screen, colour, c.px(*(position + heading)), c.pt(2.5))  # the front
 
-    def draw(self, track, theta, phi, target, t):
+    def draw(self, env):
+        s, track = env.state, np.array(env.trace)
+        (theta, phi), target, t = s.s, s.target, s.t
         c, pg = self.canvas, self.canvas.pygame
         c.center_x, c.center_y = 0.5 * (track[-1] + target[:2])
         c.screen.fill((255, 255, 255))

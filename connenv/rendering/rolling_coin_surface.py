@@ -17,10 +17,14 @@ class CoinSurfaceRenderer(Renderer):
     its tolerance circle, the coin's track, and the coin seen from above: a bar of its diameter along the heading,
     with a dot at the contact point; the time, speed and distance in the corner."""
 
-    def __init__(self, surface, arena: float, radius: float, render_mode: str, fps: int):
-        self.canvas = Canvas(arena, 0.0, render_mode, fps)
-        self.radius = radius
-        self.background = self.pixels(self.contour_map(surface, arena))
+    def __init__(self, env):
+        self.canvas = Canvas(env, env.arena)
+        self.radius = env.system.radius
+        self.background = self.pixels(self.contour_map(env.surface, env.arena))
+
+    @staticmethod
+    def point(env):
+        return env.state.y[:2].copy()
 
     @staticmethod
     def contour_map(surface, arena):
@@ -39,7 +43,9 @@ class CoinSurfaceRenderer(Renderer):
     def pixels(self, image):
         return self.canvas.pygame.surfarray.make_surface(np.ascontiguousarray(np.transpose(image, (1, 0, 2))))
 
-    def draw(self, y, theta: float, target, track, tolerance: float, t: float):
+    def draw(self, env):
+        s, track, tolerance = env.state, np.array(env.trace), env.tolerance
+        y, theta, target, t = s.y, s.theta, s.target, s.t
         c, pg = self.canvas, self.canvas.pygame
         c.screen.blit(self.background, (0, 0))
         c.target(target, tolerance)

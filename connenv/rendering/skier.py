@@ -12,15 +12,16 @@ from connenv.rendering import Canvas, Renderer
 class SkierRenderer(Renderer):
     """The trail, and the skier as a stick figure: legs bent at the knee as h drops, torso and head along the normal."""
 
-    def __init__(self, trail, h_max: float, render_mode: str, fps: int):
-        self.trail, self.h_max = trail, h_max
+    def __init__(self, env):
+        self.trail, self.h_max = trail, h_max = env.trail, env.h_max
         xs = np.linspace(trail.lo, trail.hi, 300)
         ys = trail.profile(xs)[0]
         half = 0.55 * max(trail.hi - trail.lo, ys.max() - ys.min() + 2.5 * h_max)
-        self.canvas = Canvas(half, 0.5 * (ys.max() + ys.min()) + h_max, render_mode, fps, 0.5 * (trail.lo + trail.hi))
+        self.canvas = Canvas(env, half, 0.5 * (ys.max() + ys.min()) + h_max, 0.5 * (trail.lo + trail.hi))
         self.points = [self.canvas.px(x, y) for x, y in zip(xs, ys)]
 
-    def draw(self, x: float, h: float, h_min: float, t: float):
+    def draw(self, env):
+        x, h, t = env.state.y[0], env.state.h, env.state.t
         c, pg = self.canvas, self.canvas.pygame
         c.screen.fill((255, 255, 255))
         pg.draw.lines(c.screen, (70, 110, 160), False, self.points, c.pt(2))

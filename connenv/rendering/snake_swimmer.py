@@ -17,14 +17,21 @@ class SnakeSwimmerRenderer(Renderer):
     circle, and the wake: the path of every link's centre since reset; the view is centred between the start and
     the target."""
 
-    def __init__(self, a: float, b: float, reach: float, render_mode: str, fps: int):
-        self.canvas = Canvas(0.5 * reach + 4.0 * a, 0.0, render_mode, fps)
+    def __init__(self, env):
+        a, b = env.full_system.a, env.full_system.b
+        self.canvas = Canvas(env, 0.5 * env.reach + 4.0 * a)
         angles = np.linspace(0.0, 2.0 * math.pi, OUTLINE_POINTS, endpoint=False)
         self.outline = np.stack([a * np.cos(angles), b * np.sin(angles)], axis=-1)  # a link's frame
         self.a = a
 
-    def draw(self, links, target, wake, success_radius: float, t: float):
-        """links: the (x, y, φ) of the rear, middle and front links; wake: their centres (3, 2) step by step."""
+    @staticmethod
+    def point(env):
+        """The links' (x, y, φ): rear, middle and front."""
+        return env.full_system.link_poses(env.state.pose, env.state.s)
+
+    def draw(self, env):
+        links, wake = env.trace[-1], [links[:, :2] for links in env.trace]  # the wake: the centres, step by step
+        target, success_radius, t = env.state.target, env.success_radius, env.state.t
         c, pg = self.canvas, self.canvas.pygame
         start = wake[0][1]
         c.center_x, c.center_y = 0.5 * (start[0] + target[0]), 0.5 * (start[1] + target[1])

@@ -10,10 +10,11 @@ from connenv.rendering import SIZE, Canvas, Renderer
 class SwingRenderer(Renderer):
     """Pivot, rod and bob; the reachable radii as a shaded band; the time in the corner."""
 
-    def __init__(self, r_max: float, render_mode: str, fps: int):
-        self.canvas = Canvas(1.15 * r_max, 0.0, render_mode, fps)
+    def __init__(self, env):
+        self.canvas = Canvas(env, 1.15 * env.r_max)
 
-    def draw(self, theta: float, r: float, r_min: float, t: float):
+    def draw(self, env):
+        theta, r, r_min, t = env.state.y[0], env.state.r, env.r_min, env.state.t
         c, pg = self.canvas, self.canvas.pygame
         c.screen.fill((255, 255, 255))
         pivot = c.px(0.0, 0.0)

@@ -17,10 +17,16 @@ class TubeRenderer(Renderer):
     TILT = 1.0  # rad: the view axis from T₀ toward B₀: loops turning toward B₀ face the viewer, not edge-on
     COLORS = ((204, 77, 77), (77, 160, 77), (77, 110, 204))  # N, B, T
 
-    def __init__(self, render_mode: str, fps: int):
-        self.canvas = Canvas(1.5, 0.0, render_mode, fps)
+    def __init__(self, env):
+        self.canvas = Canvas(env, 1.5)
 
-    def draw(self, R, R0, trace, t: float, twist: float, target: float):
+    @staticmethod
+    def point(env):
+        return env.state.g[2::3].copy()
+
+    def draw(self, env):
+        s, trace = env.state, np.array(env.trace)
+        R, R0, t, twist, target = s.g.reshape(3, 3), s.R0.reshape(3, 3), s.t, env.describe(s)["twist"], s.target
         c, pg = self.canvas, self.canvas.pygame
         c.screen.fill((255, 255, 255))
         cos, sin = math.cos(self.TILT), math.sin(self.TILT)
