@@ -64,7 +64,6 @@ class PointEnv(TaskEnv):
     | dt | 0.1 | [1e-06, 1] s |
     """
 
-    name = "Point-v0"
     renderer = PointRenderer
     STATE = Fields(number("x", "m", bound=10.0))
 
@@ -95,11 +94,9 @@ class PointEnv(TaskEnv):
         return abs(1.0 - before.x) - abs(1.0 - after.x)
 
 
-
-PointVectorEnv = vector_env(PointEnv)
 SPECS = (
     Spec(
-        "throwaway/Point-v0", PointEnv, PointVectorEnv, max_episode_steps=50, dt_max=DT_MAX, physics="point.md",
+        "throwaway/Point-v0", PointEnv, vector_env(PointEnv), max_episode_steps=50, dt_max=DT_MAX, physics="point.md",
         measure=Measure("time to target", "s", "time_to_success"), controllers=("toward",),
         golden=(("point", {"max_episode_steps": 20}, None),),
     ),

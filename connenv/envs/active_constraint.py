@@ -150,7 +150,6 @@ class ActiveConstraintEnv(TaskEnv):
     docs/guides/own-system.md gives one: turn a body with a rotor to a target angle.
     """
 
-    name = "ActiveConstraint-v0"  # how bad make kwargs name the env
     renderer = CoordinatePlot
 
     STATE = Fields(
@@ -400,12 +399,9 @@ def check_fields(system, q, u):
             check_returned(name, value, y[point].shape, f"real finite arrays of y's shape {y[point].shape}")
 
 
-ActiveConstraintVectorEnv = vector_env(ActiveConstraintEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/ActiveConstraint-v0", ActiveConstraintEnv, ActiveConstraintVectorEnv, max_episode_steps=1000,
+        "connenv/ActiveConstraint-v0", ActiveConstraintEnv, vector_env(ActiveConstraintEnv), max_episode_steps=1000,
         dt_max=DT_MAX, physics="framework.md", example=examples.swing,
         # the swing at rest at the bottom stays there whatever its radius does: pumping grows a swing, cannot start one
         animation_start={"state": {"q": [0.5]}},

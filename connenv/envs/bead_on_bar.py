@@ -124,7 +124,6 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     - v0: the first version, in connenv 0.1.0.
     """
 
-    name = "BeadOnBar-v0"  # how bad make kwargs name the env
     renderer = BeadRenderer
 
     ARGS = Args(
@@ -261,15 +260,13 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         return info["is_success"] | info["left_bar"]
 
 
-BeadOnBarVectorEnv = vector_env(BeadOnBarEnv)
-
-
 BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,
         "measure": Measure("time to target", "s", "time_to_success"), "controllers": ("tilt",),
         "variants": ({}, {"g": 0.0}), "option_keys": {"target": 0},
         "fast_start": {"state": {"r_dot": 1000.0}}}
 SPECS = (
-    Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, BeadOnBarVectorEnv, **BEAD,
+    Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, vector_env(BeadOnBarEnv), **BEAD,
          golden=(("bead", {"max_episode_steps": 60}, None),), bench="bead"),
-    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, BeadOnBarVectorEnv, kwargs={"omega_max": 1.0}, **BEAD),  # see Version History
+    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, vector_env(BeadOnBarEnv), kwargs={"omega_max": 1.0},
+         **BEAD),  # see Version History
 )

@@ -126,7 +126,6 @@ class ChaplyginSleighEnv(TaskEnv):
     `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
     """
 
-    name = "ChaplyginSleigh-v0"  # how bad make kwargs name the env
     renderer = SleighRenderer
 
     ARGS = Args(
@@ -279,12 +278,9 @@ class ChaplyginSleighEnv(TaskEnv):
         }
 
 
-ChaplyginSleighVectorEnv = vector_env(ChaplyginSleighEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/ChaplyginSleigh-v0", ChaplyginSleighEnv, ChaplyginSleighVectorEnv, max_episode_steps=1000,
+        "connenv/ChaplyginSleigh-v0", ChaplyginSleighEnv, vector_env(ChaplyginSleighEnv), max_episode_steps=1000,
         dt_max=DT_MAX, physics="ChaplyginSleigh.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("planner", "tail_first"),
         variants=({}, {"offset": 0.0, "box": 0.0}),  # general: u̇ commanded; fit: u commanded

@@ -134,7 +134,6 @@ class ConnectionEnv(TaskEnv):
     wrong kind is a TypeError or ValueError naming the method. The vector env calls it row by row.
     """
 
-    name = "Connection-v0"  # how bad make kwargs name the env
     renderer = ConnectionRenderer
 
     STATE = Fields(
@@ -313,12 +312,9 @@ class ConnectionEnv(TaskEnv):
         return self.task.terminated(info["state"], ops)
 
 
-ConnectionVectorEnv = vector_env(ConnectionEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/Connection-v0", ConnectionEnv, ConnectionVectorEnv, max_episode_steps=1000, dt_max=DT_MAX,
+        "connenv/Connection-v0", ConnectionEnv, vector_env(ConnectionEnv), max_episode_steps=1000, dt_max=DT_MAX,
         physics="connections.md", example=examples.beanie,
         variants=(examples.beanie, examples.rolling_ball),  # a flat and a curved connection
         fast_start={"state": {"s": [1000.0]}},

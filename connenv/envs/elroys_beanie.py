@@ -100,7 +100,6 @@ class ElroysBeanieEnv(ConnectionEnv):
     wrapped, rad), `"held"` (s) and `"is_success"`.
     """
 
-    name = "ElroysBeanie-v0"
     renderer = BeanieRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("error",)}
 
@@ -213,12 +212,9 @@ class ElroysBeanieEnv(ConnectionEnv):
         return info["is_success"]
 
 
-ElroysBeanieVectorEnv = vector_env(ElroysBeanieEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/ElroysBeanie-v0", ElroysBeanieEnv, ElroysBeanieVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
+        "connenv/ElroysBeanie-v0", ElroysBeanieEnv, vector_env(ElroysBeanieEnv), max_episode_steps=200, dt_max=DT_MAX,
         physics="ElroysBeanie.md", measure=Measure("time to hold", "s", "time_to_success"), controllers=("dead_beat",),
         option_keys={"target": 0},
         golden=(("beanie", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),),

@@ -109,7 +109,6 @@ class FallingCatEnv(ConnectionEnv):
     `"is_success"`.
     """
 
-    name = "FallingCat-v0"
     renderer = CatRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("roll_error",)}
 
@@ -254,12 +253,9 @@ class FallingCatEnv(ConnectionEnv):
         return ops.flag(info["is_success"] | landed)
 
 
-FallingCatVectorEnv = vector_env(FallingCatEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/FallingCat-v0", FallingCatEnv, FallingCatVectorEnv, max_episode_steps=60, dt_max=DT_MAX,
+        "connenv/FallingCat-v0", FallingCatEnv, vector_env(FallingCatEnv), max_episode_steps=60, dt_max=DT_MAX,
         physics="FallingCat.md", measure=Measure("roll error at landing", "rad", "roll_error"),
         controllers=("kane_scher",),
         golden=(("cat", {"max_episode_steps": 60, "fall_time": 0.4, "max_bend": 0.5}, None),),

@@ -162,7 +162,6 @@ class KapitzaPendulumEnv(TaskEnv):
     `"deviation"` (δ, rad), `"max_deviation"` (its largest value this episode) and `"is_success"`.
     """
 
-    name = "KapitzaPendulum-v0"  # how bad make kwargs name the env
     renderer = KapitzaRenderer
 
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ("max_deviation",)}
@@ -351,8 +350,6 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     of starts released from every angle) are in the reference-results guide, "What changed, and what is still open".
     """
 
-    name = "KapitzaSwingUp-v0"  # how bad make kwargs name the env
-
     metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ()}
 
     ARGS = KapitzaPendulumEnv.ARGS + (scale("hold_time", 2.0, "s", physical=False),)
@@ -392,17 +389,11 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
         return info["is_success"]
 
 
-KapitzaPendulumVectorEnv = vector_env(KapitzaPendulumEnv)
-
-
-KapitzaSwingUpVectorEnv = vector_env(KapitzaSwingUpEnv)
-
-
 PENDULUM = {"dt_max": DT_MAX, "physics": "kapitza.md",
             "fast_start": {"state": {"theta": math.pi}}}  # on the separatrix: the exact step's RK4 branch
 SPECS = (
     Spec(
-        "connenv/KapitzaPendulum-v0", KapitzaPendulumEnv, KapitzaPendulumVectorEnv, max_episode_steps=2000,
+        "connenv/KapitzaPendulum-v0", KapitzaPendulumEnv, vector_env(KapitzaPendulumEnv), max_episode_steps=2000,
         **PENDULUM, measure=Measure("max deviation", "rad", "max_deviation"), controllers=("kapitza", "damped"),
         variants=({}, {"pivot": "planar"}),
         golden=(
@@ -412,7 +403,8 @@ SPECS = (
         bench="kapitza", single_target=1.5, vector_target=0.1,
     ),
     Spec(
-        "connenv/KapitzaSwingUp-v0", KapitzaSwingUpEnv, KapitzaSwingUpVectorEnv, max_episode_steps=6000, **PENDULUM,
+        "connenv/KapitzaSwingUp-v0", KapitzaSwingUpEnv, vector_env(KapitzaSwingUpEnv), max_episode_steps=6000,
+        **PENDULUM,
         measure=Measure("time to target", "s", "time_to_success"), controllers=("swingup",),
         golden=(("swingup", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),),
         single_target=1.5, vector_target=0.1,

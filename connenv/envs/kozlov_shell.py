@@ -122,7 +122,6 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
     """
 
-    name = "KozlovShell-v0"  # how bad make kwargs name the env
     renderer = KozlovShellRenderer
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
@@ -218,9 +217,6 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         return {"u": ops.vector(s.u)}
 
 
-KozlovShellVectorEnv = vector_env(KozlovShellEnv)
-
-
 @functools.cache
 def shell_rule(system, u_max, dt, atol):
     """The Lie-group step's rule (pieces, points) for the shell's reduced model: the cheapest that meets atol on
@@ -233,7 +229,7 @@ def shell_rule(system, u_max, dt, atol):
 
 SPECS = (
     Spec(
-        "connenv/KozlovShell-v0", KozlovShellEnv, KozlovShellVectorEnv, max_episode_steps=300, dt_max=DT_MAX,
+        "connenv/KozlovShell-v0", KozlovShellEnv, vector_env(KozlovShellEnv), max_episode_steps=300, dt_max=DT_MAX,
         physics="kozlov-shell.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
         starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
         option_keys={"target": 2},

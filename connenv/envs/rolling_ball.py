@@ -149,7 +149,6 @@ class RollingBallEnv(TaskEnv):
     1 where the start is the target) and `"is_success"`.
     """
 
-    name = "RollingBall-v0"  # how bad make kwargs name the env
     renderer = RollingBallRenderer
 
     metadata = {**TaskEnv.metadata, "measures": ("angle_error", "path_ratio")}
@@ -304,8 +303,6 @@ class RollingBallPoseEnv(RollingBallEnv):
     guide ("Why it did not learn, and what did", "What changed, and what is still open").
     """
 
-    name = "RollingBallPose-v0"  # how bad make kwargs name the env
-
     metadata = {**RollingBallEnv.metadata, "measures": ("angle_error", "position_error", "path_length")}
 
     ARGS = RollingBallEnv.ARGS + (scale("position_tolerance", 0.05, "m", physical=False),)
@@ -364,8 +361,6 @@ class RollingBallGoalEnv(RollingBallEnv):
     unwraps), but SB3's `check_env(gym.make(...))` raises AttributeError on it: check the env itself,
     `check_env(env.unwrapped)`.
     """
-
-    name = "RollingBallGoal-v0"  # how bad make kwargs name the env
 
     def _observation_space(self):
         box = spaces.Box(-1.0, 1.0, (6,), np.float32)
@@ -427,12 +422,6 @@ class RollingBallVectorEnv(TaskVectorEnv):
         self.env.measures_distance = bool(measure_distance)
 
 
-RollingBallPoseVectorEnv = vector_env(RollingBallPoseEnv, RollingBallVectorEnv)
-
-
-RollingBallGoalVectorEnv = vector_env(RollingBallGoalEnv, RollingBallVectorEnv)
-
-
 BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse",
         "rotations": ((("target",), "target"),)}
 SPECS = (
@@ -443,13 +432,15 @@ SPECS = (
         single_target=1.5, vector_target=0.1,
     ),
     Spec(
-        "connenv/RollingBallPose-v0", RollingBallPoseEnv, RollingBallPoseVectorEnv, max_episode_steps=300, **BALL,
+        "connenv/RollingBallPose-v0", RollingBallPoseEnv, vector_env(RollingBallPoseEnv, RollingBallVectorEnv),
+        max_episode_steps=300, **BALL,
         measure=Measure("path length", "m", "path_length"), controllers=("holonomy",),
         golden=(("ball_pose", {"max_episode_steps": 50, "tolerance": 2.5, "position_tolerance": 0.3}, None),),
         single_target=1.5,
     ),
     Spec(
-        "connenv/RollingBallGoal-v0", RollingBallGoalEnv, RollingBallGoalVectorEnv, max_episode_steps=200, **BALL,
+        "connenv/RollingBallGoal-v0", RollingBallGoalEnv, vector_env(RollingBallGoalEnv, RollingBallVectorEnv),
+        max_episode_steps=200, **BALL,
         measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
         golden=(("ball_goal", {"max_episode_steps": 50, "tolerance": 1.5}, None),),
         single_target=3.0,

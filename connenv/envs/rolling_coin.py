@@ -92,7 +92,6 @@ class RollingCoinEnv(ConnectionEnv):
     `"heading_error"` (θ* − θ wrapped into [−π, π], rad) and `"is_success"`.
     """
 
-    name = "RollingCoin-v0"
     renderer = CoinRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("distance", "heading_error")}
 
@@ -203,12 +202,9 @@ class RollingCoinEnv(ConnectionEnv):
         return info["is_success"]
 
 
-RollingCoinVectorEnv = vector_env(RollingCoinEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/RollingCoin-v0", RollingCoinEnv, RollingCoinVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
+        "connenv/RollingCoin-v0", RollingCoinEnv, vector_env(RollingCoinEnv), max_episode_steps=200, dt_max=DT_MAX,
         physics="RollingCoin.md", measure=Measure("time to park", "s", "time_to_success"),
         controllers=("turn_roll_turn",), variants=({}, {"integrator": "magnus"}),
         option_keys={"target": 3},

@@ -128,7 +128,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
     `"is_success"`.
     """
 
-    name = "RollingCoinSurface-v0"  # how bad make kwargs name the env
     renderer = CoinSurfaceRenderer
 
     ARGS = Args(
@@ -304,13 +303,10 @@ class RollingCoinSurfaceEnv(TaskEnv):
         }
 
 
-RollingCoinSurfaceVectorEnv = vector_env(RollingCoinSurfaceEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv, RollingCoinSurfaceVectorEnv, max_episode_steps=200,
-        dt_max=DT_MAX, physics="RollingCoinSurface.md", measure=Measure("time to target", "s", "time_to_success"),
+        "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv, vector_env(RollingCoinSurfaceEnv),
+        max_episode_steps=200, dt_max=DT_MAX, physics="RollingCoinSurface.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("steer",), variants=({}, {"surface": "plane"}),
         option_keys={"target": 2},
         golden=(

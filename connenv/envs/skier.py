@@ -146,7 +146,6 @@ class SkierEnv(TaskEnv):
     SI), `"energy"` (E = p²/(2 m (1 − κh)² σ²) + m g (f + h cos φ), J), `"progress"` (ε) and `"is_success"`.
     """
 
-    name = "Skier-v0"  # how bad make kwargs name the env
     renderer = SkierRenderer
 
     ARGS = Args(
@@ -350,12 +349,9 @@ class SkierEnv(TaskEnv):
         }
 
 
-SkierVectorEnv = vector_env(SkierEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/Skier-v0", SkierEnv, SkierVectorEnv, max_episode_steps=1000, dt_max=DT_MAX, physics="skier.md",
+        "connenv/Skier-v0", SkierEnv, vector_env(SkierEnv), max_episode_steps=1000, dt_max=DT_MAX, physics="skier.md",
         measure=Measure("time to target", "s", "time_to_success"), controllers=("pumping",),
         play="space", space_action=1.0,  # held: the skier rises (h_max)
         variants=(

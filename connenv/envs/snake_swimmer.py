@@ -169,7 +169,6 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     (m), `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
     """
 
-    name = "SnakeSwimmer-v0"  # how bad make kwargs name the env
     renderer = SnakeSwimmerRenderer
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
@@ -261,9 +260,6 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return {"alpha": alpha, "beta": beta}
 
 
-SnakeSwimmerVectorEnv = vector_env(SnakeSwimmerEnv)
-
-
 @functools.cache
 def snake_rule(system, max_speed, dt, atol):
     """The Lie-group step's rule (pieces, points) for the reduced model: the cheapest that meets atol on every
@@ -282,7 +278,7 @@ def snake_rule(system, max_speed, dt, atol):
 
 SPECS = (
     Spec(
-        "connenv/SnakeSwimmer-v0", SnakeSwimmerEnv, SnakeSwimmerVectorEnv, max_episode_steps=1000, dt_max=DT_MAX,
+        "connenv/SnakeSwimmer-v0", SnakeSwimmerEnv, vector_env(SnakeSwimmerEnv), max_episode_steps=1000, dt_max=DT_MAX,
         physics="SnakeSwimmer.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
         starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
         option_keys={"target": 2},

@@ -105,7 +105,7 @@ def entry_point(cls: type) -> str:
 
 
 def register(*specs: Spec):
-    """Register each spec with Gymnasium and in `registry`."""
+    """Register each spec with Gymnasium and in `registry`, and name its env class (``name``) after its first id."""
     for spec in specs:
         gym_register(
             id=spec.id,
@@ -114,6 +114,8 @@ def register(*specs: Spec):
             max_episode_steps=spec.max_episode_steps,
             kwargs=dict(spec.kwargs),
         )
+        if spec.env not in {known.env for known in registry.values()}:  # the class's first id names it in errors
+            spec.env.name = spec.name
         registry[spec.id] = spec
 
 

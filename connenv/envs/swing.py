@@ -116,7 +116,6 @@ class SwingEnv(TaskEnv):
     J), `"lift"` (h), `"amplitude"` (rad) and `"is_success"`.
     """
 
-    name = "Swing-v0"  # how bad make kwargs name the env
     renderer = SwingRenderer
 
     ARGS = Args(
@@ -221,12 +220,9 @@ class SwingEnv(TaskEnv):
         }
 
 
-SwingVectorEnv = vector_env(SwingEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/Swing-v0", SwingEnv, SwingVectorEnv, max_episode_steps=500, dt_max=DT_MAX, physics="swing.md",
+        "connenv/Swing-v0", SwingEnv, vector_env(SwingEnv), max_episode_steps=500, dt_max=DT_MAX, physics="swing.md",
         measure=Measure("time to target", "s", "time_to_success"), controllers=("pumping",),
         play="space", space_action=-1.0,  # held: the child stands (r_min)
         variants=({}, {"integrator": "rk4", "substeps": 4}),

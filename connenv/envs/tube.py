@@ -23,7 +23,7 @@ from connenv.envs.vector import vector_env
 from connenv.rendering.tube import TubeRenderer
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
 
-__all__ = ["DT_MAX", "TubeTwistEnv", "TubeTwistVectorEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
+__all__ = ["DT_MAX", "TubeTwistEnv"]  # DT_MAX: ConnectionEnv's, which checks dt here
 
 TIME_COST = 0.01  # reward paid per step until success
 TARGET_RANGE = (0.3, 3.0)  # rad: ψ* drawn uniformly at reset
@@ -107,7 +107,6 @@ class TubeTwistEnv(ConnectionEnv):
     inequality on the sphere) and `"is_success"`.
     """
 
-    name = "TubeTwist-v0"
     renderer = TubeRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("path_ratio", "path_length")}
 
@@ -204,12 +203,9 @@ class TubeTwistEnv(ConnectionEnv):
         }
 
 
-TubeTwistVectorEnv = vector_env(TubeTwistEnv)
-
-
 SPECS = (
     Spec(
-        "connenv/TubeTwist-v0", TubeTwistEnv, TubeTwistVectorEnv, max_episode_steps=200, dt_max=DT_MAX,
+        "connenv/TubeTwist-v0", TubeTwistEnv, vector_env(TubeTwistEnv), max_episode_steps=200, dt_max=DT_MAX,
         physics="TubeTwist.md", measure=Measure("bend / shortest loop", "", "path_ratio"), controllers=("cap", "square"),
         play="mouse", variants=({}, {"integrator": "magnus"}), option_keys={"target": 0},
         golden=(("tube", {"max_episode_steps": 40, "tolerance": 0.6}, None),),

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import copy
 import math
+import sys
 from typing import ClassVar
 
 import numpy as np
@@ -225,7 +226,11 @@ def vector_env(single_env: type, base: type = TaskVectorEnv) -> type:
     """The native vector env of a task class: a subclass of base (TaskVectorEnv, or the vector env of the class
     the task extends) that steps the rows by the task's own ``advance`` with the batched stepper. Named after the
     task and placed in its module, so that its "module:Class" entry point and pickles find it."""
-    name = single_env.__name__.removesuffix("Env") + "VectorEnv"
-    doc = f"{single_env.name} over a batch: the single env's advance over the rows (see connenv.envs.vector)."
+    name, module = single_env.__name__.removesuffix("Env") + "VectorEnv", sys.modules[single_env.__module__]
+    if getattr(getattr(module, name, None), "single_env", None) is single_env:  # made for another id of the class
+        return getattr(module, name)
+    doc = f"{single_env.__name__} over a batch: the single env's advance over the rows (see connenv.envs.vector)."
     attributes = {"single_env": single_env, "__module__": single_env.__module__, "__qualname__": name, "__doc__": doc}
-    return type(name, (base,), attributes)
+    cls = type(name, (base,), attributes)
+    setattr(module, name, cls)
+    return cls
