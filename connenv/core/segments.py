@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from connenv.core.backend import ARRAYS, floats
+from connenv.core.backend import ARRAYS, SCALAR, floats
 from connenv.core.steppers import StepperError
 
 
@@ -157,3 +157,15 @@ def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):
         u, u_dot = np.where(stopped, stops, u), np.where(stopped, 0.0, u_dot)
         start = end
     return segments, u, u_dot
+
+
+def control_path(u, u_cmd, dt: float, max_speed: float | None, ops=SCALAR):
+    """One assigned coordinate's control segments over a step toward the command u_cmd (``connenv.core.segments``:
+    a jump to it, or with max_speed a ramp and a hold), with u and u̇ as columns (…, 1), as a system takes them; and
+    u at the end of the step. One state (floats) or rows (arrays over them, ops=BATCH)."""
+    if ops is SCALAR:
+        cuts = control_segments(u, u_cmd, dt, max_speed)
+        u, u_dot, tau = cuts[-1]
+        return [(np.array([a]), np.array([v]), duration) for a, v, duration in cuts], u + u_dot * tau
+    cuts, u_end = control_segments_batch(u, u_cmd, dt, max_speed)
+    return [(a[:, None], v[:, None], duration) for a, v, duration in cuts], u_end

@@ -16,7 +16,9 @@ from connenv.core.mechanics import (
     JumpClass,
     JumpFlow,
     MetricField,
+    check_fields,
     check_metric,
+    check_system,
     classify,
     hamiltonian,
 )
@@ -29,9 +31,7 @@ from connenv.core.validation import (
     check_dt,
     check_keys,
     check_number,
-    check_returned,
     check_stepper_options,
-    probe,
 )
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
@@ -359,44 +359,6 @@ class ActiveConstraintEnv(TaskEnv):
 
     def terminated(self, s, info, ops=SCALAR):
         return info["is_success"] if self.task is None else self.task.terminated(info["state"], ops)
-
-
-SYSTEM = (
-    "integer attributes n, m and methods metric(q, u) -> (G11, G12, G22) and potential(q, u) -> V, "
-    "broadcasting over leading axes; or use ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u)"
-)
-
-
-def check_system(system):
-    """ValueError unless system has integer attributes n, m ≥ 1 and callable metric and potential."""
-    if system is None or not all(hasattr(system, key) for key in ("n", "m", "metric", "potential")):
-        raise ValueError(f"system={system!r} must have {SYSTEM}")
-    for name in ("n", "m"):
-        value = getattr(system, name)
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"system.{name}={value!r} must be an integer ≥ 1")
-    for name in ("metric", "potential", "vector_field", "jump_field"):
-        if hasattr(system, name) and not callable(getattr(system, name)):
-            raise ValueError(
-                f"system.{name}={getattr(system, name)!r} is not callable; system must have {SYSTEM} (and may have "
-                "methods vector_field(y, u, u_dot) and jump_field(y, u, delta_u))"
-            )
-
-
-def check_fields(system, q, u):
-    """Where the system gives its own vector_field (and jump_field), each tried at construction: at one state
-    y = (q, 0) and over the batch of samples (each q with each u) at rest, it must return real finite arrays of
-    y's shape, else TypeError or ValueError naming it (not a failure at the first step)."""
-    q, u = np.repeat(q, len(u), axis=0), np.tile(u, (len(q), 1))
-    y = np.concatenate([q, np.zeros_like(q)], axis=-1)
-    for method in ("vector_field", "jump_field"):
-        if not hasattr(system, method):
-            continue
-        for point in (0, slice(None)):  # one state, then the batch
-            where = "y = (q, p = 0)" if point == 0 else f"a batch of {len(y)} states y = (q, p = 0)"
-            name = f"system.{method}(y, u, {'u_dot' if method == 'vector_field' else 'delta_u'}) at {where}"
-            value = probe(name, getattr(system, method), y[point], u[point], np.zeros_like(u[point]))
-            check_returned(name, value, y[point].shape, f"real finite arrays of y's shape {y[point].shape}")
 
 
 SPECS = (

@@ -29,7 +29,6 @@ from connenv.core.backend import SCALAR
 from connenv.core.context import Context
 from connenv.core.model import Model
 from connenv.core.params import Args, document
-from connenv.core.segments import control_segments, control_segments_batch
 from connenv.core.state import Fields, document_state
 from connenv.core.steppers import StepperError
 from connenv.core.validation import check_action, check_mapping
@@ -265,15 +264,3 @@ class TaskEnv(RenderedEnv):
 
     def reward(self, before, after, info, ops=SCALAR):
         raise NotImplementedError
-
-
-def control_path(u, u_cmd, dt: float, max_speed: float | None, ops=SCALAR):
-    """One assigned coordinate's control segments over a step toward the command u_cmd (``connenv.core.segments``:
-    a jump to it, or with max_speed a ramp and a hold), with u and u̇ as columns (…, 1), as a system takes them; and
-    u at the end of the step. One state (floats) or rows (arrays over them, ops=BATCH)."""
-    if ops is SCALAR:
-        cuts = control_segments(u, u_cmd, dt, max_speed)
-        u, u_dot, tau = cuts[-1]
-        return [(np.array([a]), np.array([v]), duration) for a, v, duration in cuts], u + u_dot * tau
-    cuts, u_end = control_segments_batch(u, u_cmd, dt, max_speed)
-    return [(a[:, None], v[:, None], duration) for a, v, duration in cuts], u_end

@@ -13,11 +13,7 @@ from connenv.core.backend import BATCH, SCALAR
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.state import Fields, rotation, vector
-from connenv.core.validation import (
-    MAGNITUDE_BOUND,
-    check_keys,
-    decimal,
-)
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, decimal
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,13 +14,7 @@ from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.state import Fields, number, rotation
-from connenv.core.steppers import StepperError
-from connenv.core.validation import (
-    check_keys,
-    check_rotation,
-    finite_action,
-    ndim,
-)
+from connenv.core.validation import check_keys, check_rotation, finite_action, ndim
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv, vector_env
@@ -29,7 +22,7 @@ from connenv.rendering.rolling_ball import RollingBallRenderer
 from connenv.systems.rolling_ball import (
     RollingBall,
     attitude_error,
-    dot3,
+    check_so3,
     from_six_d,
     rotation_angle,
     six_d,
@@ -38,29 +31,12 @@ from connenv.systems.rolling_ball import (
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TIME_COST = 0.01  # reward paid per step until success
-DRIFT_LIMIT = 1e-6  # ‖RᵀR − I‖ past which a stepper has left SO(3): StepperError
 POSITION_BOUND = 3.0  # |observed position| / (4πρ) is clipped here
-PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the distinct entries of a symmetric 3×3 matrix
 
 
 def position_bound(env, values):
     """|x|, |y| given at reset, m: the position RollingBallPose-v0 observes."""
     return POSITION_BOUND * 4 * math.pi * env.system.radius
-
-
-def check_so3(stepper, R):
-    """StepperError if R (any row of a batch) is more than DRIFT_LIMIT off SO(3): the stepper has left it."""
-    if R.ndim == 2:  # one attitude: ‖RᵀR − I‖ (Frobenius) on Python floats
-        columns = R.T.tolist()
-        gram = [dot3(u, v) - (u is v) for u in columns for v in columns]
-        drift = math.sqrt(sum(map(operator.mul, gram, gram)))
-    else:  # the six distinct entries of RᵀR − I elementwise over the rows: cheaper than a stacked matmul
-        c = [np.real(R[..., :, k]) for k in range(3)]  # a check: of the real parts on complex rows
-        dot = [c[i][..., 0] * c[j][..., 0] + c[i][..., 1] * c[j][..., 1] + c[i][..., 2] * c[j][..., 2] for i, j in PAIRS]
-        square = sum((d - (i == j)) ** 2 * (1 if i == j else 2) for d, (i, j) in zip(dot, PAIRS))
-        drift = math.sqrt(float(np.max(square)))
-    if not drift <= DRIFT_LIMIT:
-        raise StepperError(f"{stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")
 
 
 @dataclass

@@ -12,10 +12,10 @@ from gymnasium import spaces
 from connenv.core.backend import SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, options, scale, step
-from connenv.core.segments import check_drift, run_segments
+from connenv.core.segments import check_drift, control_path, run_segments
 from connenv.core.state import Fields, number
 from connenv.core.validation import check_keys, check_number
-from connenv.envs.base import State, TaskEnv, control_path
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 from connenv.rendering.skier import SkierRenderer

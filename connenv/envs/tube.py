@@ -12,11 +12,7 @@ from connenv.core.backend import SCALAR
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.state import Fields, rotation
-from connenv.core.validation import (
-    MAGNITUDE_BOUND,
-    check_keys,
-    check_number,
-)
+from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env

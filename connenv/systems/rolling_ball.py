@@ -28,6 +28,7 @@ Everywhere below a rotation E "to roll" acts in space, R → E R; E = R* Rᵀ re
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +37,7 @@ from scipy.spatial.transform import Rotation
 
 from connenv.core.backend import ARRAYS, floats
 from connenv.core.lie.groups import GROUPS
+from connenv.core.steppers import StepperError
 from connenv.core.validation import ndim
 
 E_Z = np.array([0.0, 0.0, 1.0])
@@ -43,6 +45,8 @@ ARC_BRANCHES = 3
 """Branches m of the rotation vector searched by optimal_arc: 2(β + mπ) n̂ for m = −4 … 3 (see there)."""
 ARC_GRID = 2048  # points of the scan for sign changes, per branch
 CLOSURE = 1e-9  # largest rotation (rad) a solution may miss its target by before it is discarded
+DRIFT_LIMIT = 1e-6  # ‖RᵀR − I‖ past which a stepper has left SO(3): StepperError
+PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the distinct entries of a symmetric 3×3 matrix
 
 
 def rz(angle) -> Rotation:
@@ -366,3 +370,18 @@ def from_six_d(x):
     b = b - np.sum(c1 * b, axis=-1, keepdims=True) * c1
     c2 = b / norm(b, keepdims=True)
     return np.stack([c1, c2, np.cross(c1, c2)], axis=-1)
+
+
+def check_so3(stepper, R):
+    """StepperError if R (any row of a batch) is more than DRIFT_LIMIT off SO(3): the stepper has left it."""
+    if R.ndim == 2:  # one attitude: ‖RᵀR − I‖ (Frobenius) on Python floats
+        columns = R.T.tolist()
+        gram = [dot3(u, v) - (u is v) for u in columns for v in columns]
+        drift = math.sqrt(sum(map(operator.mul, gram, gram)))
+    else:  # the six distinct entries of RᵀR − I elementwise over the rows: cheaper than a stacked matmul
+        c = [np.real(R[..., :, k]) for k in range(3)]  # a check: of the real parts on complex rows
+        dot = [c[i][..., 0] * c[j][..., 0] + c[i][..., 1] * c[j][..., 1] + c[i][..., 2] * c[j][..., 2] for i, j in PAIRS]
+        square = sum((d - (i == j)) ** 2 * (1 if i == j else 2) for d, (i, j) in zip(dot, PAIRS))
+        drift = math.sqrt(float(np.max(square)))
+    if not drift <= DRIFT_LIMIT:
+        raise StepperError(f"{stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")
