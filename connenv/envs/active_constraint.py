@@ -266,8 +266,6 @@ class ActiveConstraintEnv(TaskEnv):
         high = np.where(np.isfinite(self.u_high), self.u_high, self.u_start + 1.0)
         return q, np.stack([self.u_start, low, high, 0.75 * low + 0.25 * high])
 
-    # -- physics ---------------------------------------------------------------
-
     def at(self, y, u, t, energy_error):
         return ActiveConstraintState(y, u, t, energy_error)
 
@@ -334,8 +332,6 @@ class ActiveConstraintEnv(TaskEnv):
         observation holds them: a step that would make it ±inf raises, and leaves the state as it was."""
         check_observable("(q, p)", y)
         check_observable("u", u)
-
-    # -- task: one state, or a batch with ops=BATCH (the vector env) -----------
 
     def state_dict(self, s, ops=SCALAR):
         n = self.n

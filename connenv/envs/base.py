@@ -71,9 +71,11 @@ def each_row(function, states, ops):
     return np.stack([np.asarray(function(*({k: v[i] for k, v in d.items()} for d in states))) for i in rows])
 
 
-class RenderedEnv(gym.Env):
-    """A Gymnasium env drawn by its ``renderer`` (`connenv.rendering.Renderer`), made of the env on the first render;
-    pygame loads then, as in classic control."""
+class TaskEnv(gym.Env):
+    """A single env of the task layer (see the module): ``self.state`` is its State; subclasses give ``start``,
+    ``command``, ``advance``, ``observe``, ``describe``, ``reward`` and may override ``terminated``. It is drawn by its
+    ``renderer`` (`connenv.rendering.Renderer`), made of the env on the first render: pygame loads then, as in
+    classic control."""
 
     metadata: ClassVar[dict] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
     renderer: ClassVar[type]
@@ -81,6 +83,16 @@ class RenderedEnv(gym.Env):
     """How errors name the env: its first registered id without the namespace (`connenv.envs.spec.register`)."""
     ARGS: ClassVar[Args]
     """The make kwargs (`connenv.core.params`): their checks, the docstring's Arguments table, `parameters()`."""
+    state: State
+    STATE: ClassVar[Fields] = Fields()
+    """The reset state's keys (`connenv.core.state`): their checks in ``start``, the docstring's table of them."""
+    context: Context | None = None
+    """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
+    _model = None  # the model, made on first use
+    trace: list | None = None
+    """While rendering: the renderer's ``point(env)`` of each state since reset, the track drawn behind the body."""
+    reports_params = False  # whether info carries "params" (and the observation them, if observed): where they vary,
+    # or a reset set them
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -133,23 +145,6 @@ class RenderedEnv(gym.Env):
         values = ", ".join(f"{key} = {value!r}" for key, value in self.parameters().items())
         where = f"{type(self).__name__} in the step from t = {t:.6g} s, dt = {self.dt}"
         return StepperError(f"{error} [{where}, {values}]")
-
-
-class TaskEnv(RenderedEnv):
-    """A single env of the task layer (see the module): ``self.state`` is its State; subclasses give ``start``,
-    ``command``, ``advance``, ``observe``, ``describe``, ``reward`` and may override ``terminated``."""
-
-    state: State
-    STATE: ClassVar[Fields] = Fields()
-    """The reset state's keys (`connenv.core.state`): their checks in ``start``, the docstring's table of them."""
-
-    context: Context | None = None
-    """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
-    _model = None  # the model, made on first use
-    trace: list | None = None
-    """While rendering: the renderer's ``point(env)`` of each state since reset, the track drawn behind the body."""
-    reports_params = False  # whether info carries "params" (and the observation them, if observed): where they vary,
-    # or a reset set them
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)

@@ -161,8 +161,6 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         self.observation_space = spaces.Box(low.astype(np.float32), OBSERVATION_HIGH.astype(np.float32))
         self.state = self.track(self.state, 0.0, None)
 
-    # -- physics: ActiveConstraintEnv's step, and the task's part of the state --------------------------------
-
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
         r, target = self.draw_start()
@@ -214,8 +212,6 @@ class BeadOnBarEnv(ActiveConstraintEnv):
             return
         energy_error, energy = energy_error.real, self.system.energy(y, u[..., 0]).real
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
-
-    # -- task: one state, or a batch with ops=BATCH (the vector env) ---------------------------------------------
 
     def observe(self, s, ops=SCALAR):
         r, p = s.y.T

@@ -187,8 +187,6 @@ class ChaplyginSleighEnv(TaskEnv):
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = SleighState(np.zeros(5), np.zeros(2), np.zeros(2), np.array([1.0, 0.0]), 0.0, 0.0)
 
-    # -- physics ---------------------------------------------------------------
-
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
         values = self.STATE.check(self, options.get("state", {}))
@@ -242,8 +240,6 @@ class ChaplyginSleighEnv(TaskEnv):
     def check_energy_error(self, energy_error, y, u):
         energy_error, energy = energy_error.real, self.system.energy(y, u, 0.0 * u).real
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + energy), ENERGY_ERROR_BOUND)
-
-    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def relative_target(self, s, ops=SCALAR):
         """target − P in the sled's frame (along its axis, across it) and the distance."""

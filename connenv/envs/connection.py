@@ -214,8 +214,6 @@ class ConnectionEnv(TaskEnv):
         own = {"group": self.group.name, "frame": self.system.frame, "max_shape_speed": self.max_shape_speed}
         return {**own, **super().parameters()}
 
-    # -- physics ---------------------------------------------------------------
-
     def start(self, options):
         check_keys("reset options", options, {"state"})
         defaults = {"g": np.array(self.group.identity()), "s": self.start_shape()}
@@ -280,8 +278,6 @@ class ConnectionEnv(TaskEnv):
         if not off <= ON_GROUP:
             raise ValueError(f"state g={value!r} is {off:.3g} off {self.group.name}; it must be on it to {ON_GROUP}")
         return self.group.coordinates(g)
-
-    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
     def state_dict(self, state):
         """The state as `info["state"]`: g as a matrix (a vector for R2), s, t."""

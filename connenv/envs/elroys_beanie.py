@@ -151,8 +151,6 @@ class ElroysBeanieEnv(ConnectionEnv):
         """The largest |μ| a reset takes: 0.9 I₂ · max_beanie_speed, so that the beanie can still hold the body."""
         return 0.9 * self.beanie_inertia * self.max_beanie_speed
 
-    # -- physics ---------------------------------------------------------------
-
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
         rng = self.np_random
@@ -174,8 +172,6 @@ class ElroysBeanieEnv(ConnectionEnv):
         state = moved.replace(g=moved.g + np.asarray(phase)[..., None])
         inside = abs(self.error(state, ops)) <= self.tolerance
         return state.replace(held=ops.where(inside, before.held + self.dt, 0.0))
-
-    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
     def error(self, state, ops=SCALAR):
         """θ* − θ wrapped into [−π, π]."""

@@ -156,8 +156,6 @@ class FallingCatEnv(ConnectionEnv):
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (12,), np.float32)
 
-    # -- physics ---------------------------------------------------------------
-
     def start(self, options):
         check_keys("reset options", options, {"state"})
         given = options.get("state", {})
@@ -189,8 +187,6 @@ class FallingCatEnv(ConnectionEnv):
             g = run_segments(stepper, self.system, g, [(state.s, s_dot, tau)])[0]
             self.check_group(g)
         return state.replace(g=g, s=s, s_dot=v, t=state.t + self.dt)
-
-    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
     def frames(self, state):
         """g and H as (…, 3, 3)."""

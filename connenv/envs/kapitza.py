@@ -15,7 +15,7 @@ from connenv.core.params import Args, Bound, choice, integrator, interval, optio
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.state import Fields, angle, number, vector
 from connenv.core.validation import check_keys
-from connenv.envs.base import RenderedEnv, State, TaskEnv
+from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import vector_env
 from connenv.rendering.kapitza import KapitzaRenderer
@@ -164,7 +164,7 @@ class KapitzaPendulumEnv(TaskEnv):
 
     renderer = KapitzaRenderer
 
-    metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ("max_deviation",)}
+    metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("max_deviation",)}
 
     ARGS = Args(
         choice("pivot", "vertical", PIVOTS),
@@ -212,8 +212,6 @@ class KapitzaPendulumEnv(TaskEnv):
     def parameters(self):
         return {"pivot": self.pivot, **super().parameters()}
 
-    # -- physics ---------------------------------------------------------------
-
     def start_angle(self):
         """θ₀, drawn from np_random: near inverted."""
         return math.pi + self.np_random.uniform(-HOLD_START, HOLD_START)
@@ -244,8 +242,6 @@ class KapitzaPendulumEnv(TaskEnv):
         if self.system.damping == 0.0:
             bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.system.length
             check_drift(self.stepper, "energy error", energy_error, bound, " J")
-
-    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def at(self, y, u, u_dot, t, energy, energy_error, before=None, ops=SCALAR):
         """The state at (y, u, u̇, t) with energy E, its record continued from the state before (or started)."""
@@ -350,7 +346,7 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     of starts released from every angle) are in the reference-results guide, "What changed, and what is still open".
     """
 
-    metadata: ClassVar[dict] = {**RenderedEnv.metadata, "measures": ()}
+    metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ()}
 
     ARGS = KapitzaPendulumEnv.ARGS + (scale("hold_time", 2.0, "s", physical=False),)
 

@@ -181,8 +181,6 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         ratio = round(system.mass / (system.shell_mass + system.added_masses[0]), 12)
         return {**super().parameters(), "m/(M + λ₁)": ratio, "model": "full" if self.state.full else "reduced"}
 
-    # -- physics ---------------------------------------------------------------
-
     def start(self, options):
         """At rest at the origin, or options['state']; the target drawn by np_random, or options['target']. The
         model follows the momentum: reduced at zero, full otherwise."""
@@ -203,8 +201,6 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         segments = [(s.u, (u_cmd - s.u) / self.dt, self.dt)]
         pose, momentum = self.swim(s, segments, segments, stepper, ops)
         return ShellState(pose, momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
-
-    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def command(self, a):
         """The commanded mass position u* of action a."""

@@ -163,8 +163,6 @@ class RollingBallEnv(TaskEnv):
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (6,), np.float32)
 
-    # -- physics ---------------------------------------------------------------
-
     def at(self, R, R_target, position, t, path_length, distance, ops=SCALAR):
         """The state at attitude R and centre position, with its error P = R R*ᵀ and angle e."""
         error = attitude_error(R, R_target)
@@ -189,8 +187,6 @@ class RollingBallEnv(TaskEnv):
         check_so3(stepper, R)
         path_length = s.path_length + ops.hypot(v[..., 0], v[..., 1]) * self.dt
         return self.at(R, s.R_target, s.position + v * self.dt, s.t + self.dt, path_length, s.distance, ops)
-
-    # -- task: one state (Python floats and one R), or a batch with ops=BATCH (the vector env) ----------------
 
     def command(self, a):
         """v = v_max a, with a projected radially onto the unit disk; a is one action (2,) or a batch (N, 2). An action

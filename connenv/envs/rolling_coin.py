@@ -135,8 +135,6 @@ class RollingCoinEnv(ConnectionEnv):
         high = np.array([OFFSET_BOUND, OFFSET_BOUND, 1.0, 1.0], np.float32)
         return spaces.Box(-high, high, dtype=np.float32)
 
-    # -- physics ---------------------------------------------------------------
-
     def start(self, options):
         check_keys("reset options", options, {"state", "target"})
         state = self.STATE.check(self, options.get("state", {}))
@@ -152,8 +150,6 @@ class RollingCoinEnv(ConnectionEnv):
     def command(self, a):
         """(θ̇, φ̇) of action a (one (2,) or a batch (N, 2))."""
         return a * self.rates
-
-    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
     @staticmethod
     def coordinates(state, ops=SCALAR):

@@ -211,8 +211,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
             )
         return heading
 
-    # -- physics ---------------------------------------------------------------
-
     def at(self, y, theta, target, t, energy0, previous, ops=SCALAR):
         """The state at y = (x, y, φ, φ̇) and θ, with its energy (E₀ := E where energy0 is None, at reset), and the
         closest approach of the chord from `previous` (the coin's position where None, at reset)."""
@@ -252,8 +250,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
         tx, ty = s.target.T[0] - px, s.target.T[1] - py
         along = ops.clip((tx * cx + ty * cy) / ops.maximum(cx * cx + cy * cy, 1e-300), 0.0, 1.0)
         return ops.hypot(tx - along * cx, ty - along * cy)
-
-    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def command(self, a):
         """θ̇ = a · max_steer_rate."""

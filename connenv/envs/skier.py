@@ -249,8 +249,6 @@ class SkierEnv(TaskEnv):
         f, f1, _, _ = self.trail.profile(np.array(x))
         return float(f + self.h_min / math.sqrt(1.0 + f1**2))
 
-    # -- physics ---------------------------------------------------------------
-
     def at(self, y, h, t, side, energy_error, ops=SCALAR):
         """The state at (y, h, t), with its energy."""
         energy, x_dot, f1, sigma, kappa = (ops.real(v) for v in self.system.kinematics(y, h))
@@ -290,8 +288,6 @@ class SkierEnv(TaskEnv):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
         bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * (self.z_goal - self.z_floor)
         check_drift(self.stepper, "energy error", energy_error, bound, " J")
-
-    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def command(self, a):
         """The commanded height of action a."""

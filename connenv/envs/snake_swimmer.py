@@ -219,8 +219,6 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     def parameters(self):
         return {**super().parameters(), "model": "full" if self.state.full else "reduced"}
 
-    # -- physics ---------------------------------------------------------------
-
     def start(self, options):
         """At rest, straight, at the origin, or options['state']; the target drawn by np_random, or
         options['target']. The model follows the momentum: reduced at zero, full otherwise."""
@@ -245,8 +243,6 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         full = [moving, (s_end, np.zeros(s_dot.shape), self.dt - ramp)]
         pose, momentum = self.swim(s, full, [moving], stepper, ops)
         return SnakeState(pose, momentum, s_end, s.target, s.t + self.dt, s.full, s.momentum0)
-
-    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def command(self, a):
         """The commanded joint angles (α*, β*) of action a."""

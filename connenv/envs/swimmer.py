@@ -45,8 +45,6 @@ class PlanarSwimmer:
     measured in) and ``shape_bounds`` (the observed shape's scales), with ``shape(state)`` (its assigned
     coordinates) and ``shape_info(state, ops)`` (their entries of ``info["state"]``)."""
 
-    # -- physics: one state, or rows with ops=BATCH ----------------------------
-
     def swim(self, s, full_segments, reduced_segments, stepper, ops=SCALAR):
         """(pose, momentum) after a step: the full model across its control segments where s.full, its spatial
         momentum checked; the reduced model across its segments elsewhere (the momentum stays 0). One state (its
@@ -81,8 +79,6 @@ class PlanarSwimmer:
         drift = np.linalg.norm(np.real(self.full_system.spatial_momentum(y) - momentum0), axis=-1)
         norm = np.linalg.norm(np.real(momentum0), axis=-1)
         check_drift(self.stepper, "the spatial momentum", drift, MOMENTUM_ERROR_BOUND, norm=norm)
-
-    # -- task: one state on Python floats, or a batch with ops=BATCH -----------
 
     def distance(self, s, ops=SCALAR):
         """From the body's point (x, y) to the target, m."""

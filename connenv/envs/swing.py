@@ -155,8 +155,6 @@ class SwingEnv(TaskEnv):
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = self.at(np.zeros(2), self.r_max, 0.0, 0.0)
 
-    # -- physics ---------------------------------------------------------------
-
     def at(self, y, r, t, energy_error, ops=SCALAR):
         """The state at (y, r, t), with its energy and lift."""
         energy, weight = ops.real(self.system.energy(y, r)), self.system.mass * self.system.g * r
@@ -190,8 +188,6 @@ class SwingEnv(TaskEnv):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
         bound = ENERGY_ERROR_BOUND * self.system.mass * self.system.g * self.r_max
         check_drift(self.stepper, "energy error", energy_error, bound, " J")
-
-    # -- task: one state on Python floats, or a batch with ops=BATCH (the vector env) ---------
 
     def command(self, a):
         """The commanded radius of action a (one, a float; or a batch)."""

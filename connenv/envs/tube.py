@@ -128,8 +128,6 @@ class TubeTwistEnv(ConnectionEnv):
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (11,), np.float32)
 
-    # -- physics ---------------------------------------------------------------
-
     def at(self, g, s, t, R0, target, path_length, ops=SCALAR):
         """The state at R (g) from R₀, with its error from the target frame, its twist and its tangent angle."""
         lead = np.shape(g)[:-1]
@@ -155,8 +153,6 @@ class TubeTwistEnv(ConnectionEnv):
         self.check_group(g)
         length = state.path_length + ops.hypot(kappa[..., 0], kappa[..., 1]) * self.dt
         return self.at(g, state.s + kappa * self.dt, state.t + self.dt, state.R0, state.target, length, ops)
-
-    # -- task: one state, or a batch with ops=BATCH (the vector env) ------------
 
     def twist_error(self, s, ops=SCALAR):
         """ψ − ψ*, wrapped into [−π, π)."""
