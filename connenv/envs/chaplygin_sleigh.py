@@ -48,9 +48,8 @@ def along_speed(env, values):
 
 @dataclass
 class SleighState(State):
-    """y = (x, y, φ, p₁, p₂) (P, heading, Bressan's momenta, `connenv.systems.chaplygin_sleigh`); the mass offset
-    u = (u₁ along, u₂ across) and its velocity u̇ at the end of the step (arrays (2,)); the target (x, y); the time t;
-    the stepper's energy error (the change of T over the segments where u is held, summed since reset)."""
+    """y = (x, y, φ, p₁, p₂) (P, heading, Bressan's momenta: `connenv.systems.chaplygin_sleigh`); the mass offset u and
+    u̇ at the step's end (along, across); the target; t; the energy error (T's change where u is held, since reset)."""
 
     components: ClassVar[dict] = {"y": ("x", "y", "phi", "p1", "p2"), "u": ("u1", "u2"), "u_dot": ("u1_dot", "u2_dot"), "target": ("target_x", "target_y")}
     phase: ClassVar[tuple] = ("phi", "p2", "u1", "u2")
@@ -67,18 +66,15 @@ class ChaplyginSleighEnv(TaskEnv):
     r"""
     ## Description
 
-    A sled of mass M and inertia J (about its centre of mass C) glides on a plane on a knife edge at the point P of its
-    axis, C a distance a ahead of P: P cannot slip sideways (the Chaplygin sleigh). A mass m moves in a box on the sled;
-    its offset from C, u = (u₁ along the axis, |u₁| ≤ box; u₂ across it, left positive, |u₂| ≤ rail), is assigned by
-    the controller, an *active constraint*. Nothing else pushes the sled: shaking the mass across propels it (tail
-    first), shaking it along and across together turns it. u̇ enters the equations quadratically (the thrust), so the
-    sleigh is not fit for jumps and the control is the mass's velocity; only the rail over the knife edge (box=0,
-    offset=0) is fit, and takes the mass's position (docs/physics/ChaplyginSleigh.md).
+    A sled of mass M and inertia J (about its centre of mass C) glides on a knife edge at the point P of its axis, C a
+    distance a ahead of P: P cannot slip sideways (the Chaplygin sleigh). Its only drive is a mass m in a box on it at
+    the offset from C the controller assigns, u = (u₁ along the axis, u₂ across, left positive), an *active constraint*:
+    shaking the mass across propels the sled (tail first), along and across together turns it. u̇ enters the equations
+    quadratically (the thrust), so only the rail over the knife edge is fit for jumps (docs/physics/ChaplyginSleigh.md).
 
     ## Action Space
 
-    `Box(-1, 1, (2,), float32)` for (u₁, u₂), by the class (`env.unwrapped.jump_class`); action 0 with u = 0 keeps the
-    mass at C.
+    `Box(-1, 1, (2,), float32)` by the class (`env.unwrapped.jump_class`); action 0 at u = 0 keeps the mass at C.
 
     | class | action a means | |
     |---|---|---|
@@ -102,14 +98,13 @@ class ChaplyginSleighEnv(TaskEnv):
 
     ## Rewards
 
-    With d the distance from P to the target before the step and d′ after it: `10 (d − d′) − 0.01`, dense progress
-    (summed, 10 (d₀ − d_T), so no loop pays) and a cost of time.
+    `10 (d − d′) − 0.01`, d and d′ the distance from P to the target before and after the step: progress, summing to
+    10 (d₀ − d_T) so that no loop pays, and a cost of time.
 
     ## Starting State
 
     At rest at the origin heading along x, the mass at C (u = u̇ = 0), t = 0; the target uniform at 1 to 2 m in any
-    direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the
-    target (within ±1e3 m) exactly:
+    direction. `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target (±1e3 m) exactly:
 
     ## Episode End
 
@@ -118,12 +113,10 @@ class ChaplyginSleighEnv(TaskEnv):
 
     ## Arguments
 
-    The mass's travel in one step is at most 2 m (the default speed's at the longest dt): the sled answers a faster shake
-    faster, and past it the default's two RK4 substeps fall behind. The default is cheaper than DOP853 for the accuracy
-    the task needs. Diverged: an energy error past 1e-2 (1 + T) (T is conserved where the mass is held).
-
-    Every `info` has `"state"` (`x`, `y`, `phi`, `v`, `omega`, `u`, `u_dot`, `u_along`, `u_along_dot`, `t`),
-    `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
+    A step moves the mass at most 2 m (the default speed at the longest dt): the sled answers a faster shake faster, and
+    the default's two RK4 substeps (cheaper than DOP853 for the task's accuracy) fall behind. Diverged: an energy error
+    past 1e-2 (1 + T), T conserved where the mass is held. Every `info` has `"state"` (the Starting State's keys and
+    `t`), `"target"`, `"distance"`, `"energy"` (T, J) and `"is_success"`.
     """
 
     renderer = SleighRenderer
@@ -205,8 +198,8 @@ class ChaplyginSleighEnv(TaskEnv):
         return a * (self.max_mass_speed if self.control == "velocity" else self.u_high)
 
     def segments(self, u, command, ops=SCALAR):
-        """(Δu of a jump or None, control segments, u and u̇ at the end) of a step from u under the command: one
-        state, or rows (each stopped at its own bounds) with ops=BATCH."""
+        """(Δu of a jump or None, control segments, u and u̇ at the end) of a step from u: one state, or rows (each
+        stopped at its own bounds) with ops=BATCH."""
         if self.control == "position" and self.max_mass_speed is None:
             zero = np.zeros_like(command)
             return command - u, [(command, zero, self.dt if ops is SCALAR else np.full(len(u), self.dt))], command, zero
@@ -220,8 +213,7 @@ class ChaplyginSleighEnv(TaskEnv):
         return None, segments, u_end, u_dot_end
 
     def advance(self, s, command, stepper, ops=SCALAR):
-        """The state after a step under the command, a jump of the mass first where the sleigh is fit for jumps and
-        the mass has no speed limit: one state, or rows with the vector env's steppers and ops=BATCH."""
+        """The state after a step, the mass jumping first if fit and max_mass_speed is None; rows with ops=BATCH."""
         delta, segments, u_end, u_dot_end = self.segments(s.u, command, ops)
         y = s.y
         if delta is not None and np.any(delta.real != 0.0):
@@ -248,7 +240,6 @@ class ChaplyginSleighEnv(TaskEnv):
         return c * dx + n * dy, -n * dx + c * dy, ops.hypot(dx, dy)
 
     def reward(self, before, after, info, ops=SCALAR):
-        """10 (d − d′) − 0.01."""
         return PROGRESS_GAIN * (self.relative_target(before, ops)[2] - info["distance"]) - TIME_COST
 
     def observe(self, s, ops=SCALAR):

@@ -34,8 +34,8 @@ def least_speed(args):
 
 @dataclass
 class BeanieState(ConnectionState):
-    """ConnectionState with g = (θ,) the body's angle (unwrapped), s = (ψ,) the beanie's relative to it
-    (unwrapped); the angular momentum μ, the target θ* and the time held within the tolerance."""
+    """ConnectionState with g = (θ,) the body's angle, s = (ψ,) the beanie's relative to it (both unwrapped); the
+    angular momentum μ, the target θ* and the time held within the tolerance."""
 
     components: ClassVar[dict] = {"g": ("theta",), "s": ("psi",)}
 
@@ -48,15 +48,11 @@ class ElroysBeanieEnv(ConnectionEnv):
     r"""
     ## Description
 
-    Elroy's beanie (`connenv.systems.elroys_beanie`): a body of inertia I₁ with a beanie of inertia I₂ on it, both
-    turning about one axis; a motor spins the beanie at ψ̇ relative to the body. Their angular momentum
-    μ = (I₁ + I₂) θ̇ + I₂ ψ̇ is conserved, so the body turns by
-
-        θ̇ = −I₂/(I₁ + I₂) ψ̇ + μ/(I₁ + I₂):
-
-    the geometric phase of the flat connection A = I₂/(I₁ + I₂) on SO(2), −2π A per turn of the beanie whatever its
-    speed profile, plus the dynamic phase μ t/(I₁ + I₂), both exact (`ConnectionEnv`). μ is drawn nonzero at reset, so
-    the body drifts unless the beanie spins at μ/I₂.
+    Elroy's beanie (`connenv.systems.elroys_beanie`): a body of inertia I₁ and a beanie of inertia I₂ on it turn about
+    one axis, a motor spinning the beanie at ψ̇ relative to the body. Their angular momentum μ = (I₁ + I₂) θ̇ + I₂ ψ̇ is
+    conserved, so θ̇ = −I₂/(I₁ + I₂) ψ̇ + μ/(I₁ + I₂): the geometric phase of the flat connection A = I₂/(I₁ + I₂) on
+    SO(2), −2π A per turn of the beanie whatever its speed profile, plus the dynamic phase μ t/(I₁ + I₂), both exact
+    (`ConnectionEnv`). μ is drawn nonzero at reset, so the body drifts unless the beanie spins at μ/I₂.
 
     ## Action Space
 
@@ -76,12 +72,9 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     ## Rewards
 
-    With e = θ* − θ wrapped into [−π, π], e before the step and e′ after it:
-
-        reward = |e| − |e′| − 0.05 · min(1, |e′|/(10 tolerance)) · (|e′| > tolerance) + 1 · (hold completed)
-
-    The cost off the target grows with the error up to ten tolerances, so that the reward tells a near miss from a far
-    one; inside the tolerance there is none, so that staying there earns less than completing the hold.
+    `|e| − |e′| − 0.05 · min(1, |e′|/(10 tolerance)) · (|e′| > tolerance) + 1 · (hold completed)`, e = θ* − θ wrapped
+    into [−π, π] before the step, e′ after it. The cost off the target grows with the error up to ten tolerances (a near
+    miss costs less than a far one) and is 0 inside the tolerance, where staying earns less than completing the hold.
 
     ## Starting State
 
@@ -91,8 +84,8 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     ## Episode End
 
-    Terminated when the body has been within `tolerance` (0.01 rad) of θ* for `hold_time` (1 s) without a break
-    (`info["is_success"]`). Truncated after 200 steps (10 s) by the registration's time limit.
+    Terminated when the body has stayed within `tolerance` of θ* for `hold_time` (`info["is_success"]`). Truncated after
+    200 steps (10 s) by the registration's time limit.
 
     ## Arguments
 
@@ -166,8 +159,7 @@ class ElroysBeanieEnv(ConnectionEnv):
         return self.drifted(state, super().advance(state, s_dot, stepper, ops), ops)
 
     def drifted(self, before, moved, ops=SCALAR):
-        """The state after the connection's step `moved` from `before`, with the dynamic phase μ dt/(I₁ + I₂)
-        added to θ and the hold counted."""
+        """The connection's step `moved` plus the dynamic phase μ dt/(I₁ + I₂) on θ, and the hold counted."""
         phase = elroys_beanie.dynamic_phase(before.momentum, self.dt, self.body_inertia, self.beanie_inertia)
         state = moved.replace(g=moved.g + np.asarray(phase)[..., None])
         inside = abs(self.error(state, ops)) <= self.tolerance

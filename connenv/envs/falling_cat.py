@@ -34,9 +34,8 @@ def axial_min(args):
 
 @dataclass
 class CatState(ConnectionState):
-    """ConnectionState (g: the cat frame's 9 entries, s: the bend vector, t) with the bend velocity ṡ at the end of
-    the step (0 where the bend stopped at max_bend) and the heading frame H (9 entries: the start spine, the
-    horizontal across it, the vertical orthogonalized to the spine), fixed at reset."""
+    """ConnectionState (g: the cat frame's 9 entries, s: the bend vector, t) with the bend velocity ṡ at the step's end
+    (0 where the bend stopped at max_bend) and the heading frame H (9 entries), fixed at reset."""
 
     s_dot: np.ndarray
     heading: np.ndarray
@@ -46,23 +45,19 @@ class FallingCatEnv(ConnectionEnv):
     r"""
     ## Description
 
-    Kane and Scher's falling cat (`connenv.systems.falling_cat`): two identical axisymmetric halves (mass m, axial
-    inertia J, transverse inertia I, centre of mass ℓ from the joint) that bend at the joint but never twist about their
-    own axes. Dropped at rest, the cat keeps zero angular momentum, so its attitude g (the cat frame: e₁ the mean spine,
-    e₃ the back) follows the bend vector s = β (cos γ, sin γ) through a mechanical connection, Ω = −f(β) γ̇ e₁
-    (docs/physics/FallingCat.md): bending straight out turns nothing, and sweeping the bend around the spine rolls the
-    cat about it, by 2π f(β₀) for one sweep at the bend β₀ (Kane and Scher's motion). Built on `ConnectionEnv` (SO(3),
-    body frame); gravity moves only the centre of mass in free fall and does not enter.
+    Kane and Scher's falling cat (`connenv.systems.falling_cat`): two identical axisymmetric halves that bend at the
+    joint but never twist about their own axes. Dropped at rest (zero angular momentum), its attitude g (the cat frame:
+    e₁ the mean spine, e₃ the back) follows the bend vector s = β (cos γ, sin γ) through the mechanical connection
+    Ω = −f(β) γ̇ e₁ (docs/physics/FallingCat.md): bending straight out turns nothing, sweeping it around the spine rolls
+    the cat by 2π f(β₀) per sweep at β₀. `ConnectionEnv` on SO(3), body frame; gravity moves only the centre of mass.
 
     ## Action Space
 
-    `Box(-1, 1, (2,), float32)`: the bend velocity ṡ = a · max_bend_speed, constant over the step. A bend that reaches
-    β = max_bend stops there for the rest of the step.
+    `Box(-1, 1, (2,), float32)`: ṡ = a · max_bend_speed, constant over the step, stopping at β = max_bend.
 
     ## Observation Space
 
-    `Box(-1, 1, (12,), float32)`, with H the heading frame (columns: the start spine, the horizontal across it, the
-    vertical orthogonalized to the spine):
+    `Box(-1, 1, (12,), float32)`, H the heading frame (columns: start spine, horizontal across it, vertical ⊥ to it):
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -72,37 +67,29 @@ class FallingCatEnv(ConnectionEnv):
 
     ## Rewards
 
-    With the landing error e = |roll| + spine error + β (rad), e before the step and e′ after it:
-
-        reward = e − e′ + 1 · (is_success)
-
-    The roll is atan2(Z · g e₂, Z · g e₃) (0 feet down), the spine error the angle between g e₁ and its start. Bending
-    out costs β, paid back when the cat straightens; the sweep pays the roll it takes away. Summed over an episode:
-    e₀ − e_T, plus 1 on success.
+    `e − e′ + 1 · (is_success)`, with the landing error e = |roll| + spine error + β (rad) before the step and e′ after
+    it; the roll is atan2(Z · g e₂, Z · g e₃) (0 feet down), the spine error the angle between g e₁ and its start.
+    Bending out costs β, paid back when the cat straightens; the sweep pays the roll it takes away.
 
     ## Starting State
 
-    Straight (s = 0), at rest, t = 0, upside down: g = Rz(ψ) Rx(π + δ), the spine horizontal at the heading ψ uniform
-    in [0, 2π) (the roll does not depend on it), δ uniform in [−0.2, 0.2]. `reset(options={"state": {...}})` sets
-    either exactly:
+    Straight (s = 0) at rest, t = 0, upside down: g = Rz(ψ) Rx(π + δ), the spine horizontal, ψ and δ uniform in [0, 2π)
+    and [−0.2, 0.2] (the roll does not depend on the heading ψ). `reset(options={"state": {...}})` sets either exactly:
 
     ## Episode End
 
     Terminated on success, |roll|, spine error and β each ≤ `tolerance` (`info["is_success"]`), or at the landing,
-    t = fall_time: the cat meets the ground, a real end (not a truncation). The registration's time limit,
+    t = fall_time: the cat meets the ground, a termination, not a truncation. The registration's time limit,
     fall_time/dt = 60 steps, is the landing at the defaults; with another fall_time or dt pass `max_episode_steps`.
 
     ## Arguments
 
-    m and ℓ enter only the locked inertia across the spine, never the roll: they show in the angular momentum and the
-    rendering. The defaults are a slender cat (J/I = 0.03), whose half turn needs β₀ ≈ 0.35 rad and fits in the fall at
-    the bend speed (docs/physics/FallingCat.md). The default step is the roll in closed form up to a Gauss–Legendre
-    quadrature exact to rounding, whose pieces grow as J/I falls: hence J/I ≥ 1e-6. Diverged: R more than 1e-9 off
-    SO(3).
-
-    Every `info` has `"state"` (`R` (3×3) the front half's attitude, `bend` (2), `t`), `"angular_momentum"` (in space,
-    about the centre of mass, at the end of the step: 0 to rounding), `"roll"`, `"spine_error"`, `"bend_angle"` (β) and
-    `"is_success"`.
+    m and ℓ never enter the roll, only the locked inertia across the spine (in the angular momentum and the rendering).
+    The defaults are a slender cat (J/I = 0.03): its half turn needs β₀ ≈ 0.35 rad and fits in the fall at the bend
+    speed. The default step is the roll in closed form up to a Gauss–Legendre quadrature exact to rounding, whose pieces
+    grow as J/I falls: hence J/I ≥ 1e-6. Diverged: R more than 1e-9 off SO(3). Every `info` has `"state"` (the Starting
+    State's keys and `t`), `"angular_momentum"` (in space, about the centre of mass: 0 to rounding), `"roll"`,
+    `"spine_error"`, `"bend_angle"` (β) and `"is_success"`.
     """
 
     renderer = CatRenderer
@@ -207,7 +194,6 @@ class FallingCatEnv(ConnectionEnv):
         return np.arctan2(g[..., 2, 1], g[..., 2, 2]), spine_error, np.hypot(state.s[..., 0], state.s[..., 1])
 
     def landing_error(self, state, ops=SCALAR):
-        """e = |roll| + spine error + β: the reward pays its decrease."""
         roll, spine_error, beta = self.errors(state, ops)
         return abs(roll) + spine_error + beta
 

@@ -39,14 +39,10 @@ class RollingCoinEnv(ConnectionEnv):
     r"""
     ## Description
 
-    A coin of radius R stands upright on the plane and rolls without slipping (`connenv.systems.rolling_coin`). The
-    controller steers its heading θ (from the y axis) and rolls it by φ; its contact point (x, y) follows through the
-    mechanical connection of rolling,
-
-        ẋ = R sin θ φ̇,    ẏ = R cos θ φ̇,
-
-    ConnectionEnv on the group ℝ² with the shape (θ, φ). Steering alone never moves the coin, rolling moves it along its
-    heading: parking it beside where it stands takes a manoeuvre.
+    An upright coin of radius R rolls on the plane without slipping (`connenv.systems.rolling_coin`). The controller
+    steers its heading θ (from the y axis) and rolls it by φ; its contact point (x, y) follows through the mechanical
+    connection of rolling, ẋ = R sin θ φ̇, ẏ = R cos θ φ̇: `ConnectionEnv` on the group ℝ² with the shape (θ, φ). Steering
+    alone never moves the coin and rolling moves it along its heading, so parking it beside its start takes a manoeuvre.
 
     ## Action Space
 
@@ -54,8 +50,7 @@ class RollingCoinEnv(ConnectionEnv):
 
     ## Observation Space
 
-    `Box(4,) float32`: the target seen from the coin, with d = (x* − x, y* − y), the heading f = (sin θ, cos θ) and its
-    right-hand side r = (cos θ, −sin θ):
+    `Box(4,) float32`, with d = (x* − x, y* − y), the heading f = (sin θ, cos θ) and r = (cos θ, −sin θ) to its right:
 
     | Num | Observation | Min | Max | Unit |
     |-----|-------------|-----|-----|------|
@@ -66,30 +61,26 @@ class RollingCoinEnv(ConnectionEnv):
 
     ## Rewards
 
-    With the cost c = |d| + R |θ* − θ| (the heading error wrapped into [−π, π], weighed by the radius: m), c before the
-    step and c′ after it:
-
-        reward = c − c′ − 0.01 + 1 · (parked after the step)
+    `c − c′ − 0.01 + 1 · (parked after the step)`, with the cost c = |d| + R |θ* − θ| (m: the heading error wrapped into
+    [−π, π], weighed by the radius) before the step and c′ after it.
 
     ## Starting State
 
-    The coin at the origin, θ = 0, φ = 0, t = 0. The target: at a distance uniform in [1, 3] m in a uniform direction,
-    its heading θ* uniform in [−π, π). `reset(options={"state": {...}, "target": (x*, y*, θ*)})` sets
-    any of these and the target (x*, y* within ±1e3, θ* within [−2π, 2π]) exactly:
+    The coin at the origin, θ = φ = 0, t = 0; the target in a uniform direction at a distance uniform in [1, 3] m, its
+    heading θ* uniform in [−π, π). `reset(options={"state": {...}, "target": (x*, y*, θ*)})` sets any of these and the
+    target (x*, y* in ±1e3, θ* in [−2π, 2π]) exactly:
 
     ## Episode End
 
-    Terminated when parked (`info["is_success"]`): |d| ≤ `position_tolerance` (0.05 m) and |θ* − θ| ≤
-    `heading_tolerance` (0.05 rad, wrapped); φ is free. Truncated after 200 steps (20 s) by the registration's time
-    limit; the reference planner (`agents.controllers.rolling_coin.CoinPlanner`) needs at most π/2 + 3/(R · 2) + π s,
-    78 steps.
+    Terminated when parked (`info["is_success"]`): |d| ≤ `position_tolerance` and |θ* − θ| ≤ `heading_tolerance`
+    (wrapped); φ is free. Truncated after 200 steps (20 s) by the registration's time limit; the reference planner
+    (`agents.controllers.rolling_coin.CoinPlanner`) needs at most π/2 + 3/(R · 2) + π s, 78 steps.
 
     ## Arguments
 
     The default step is exact in closed form (the chord of the arc rolled at constant rates), for any rates and dt.
-
-    Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `t`), `"target"` (x*, y*, θ*), `"distance"` (|d|, m),
-    `"heading_error"` (θ* − θ wrapped into [−π, π], rad) and `"is_success"`.
+    Every `info` has `"state"` (the Starting State's keys and `t`), `"target"` (x*, y*, θ*), `"distance"` (|d|, m),
+    `"heading_error"` (θ* − θ wrapped, rad) and `"is_success"`.
     """
 
     renderer = CoinRenderer
@@ -165,7 +156,6 @@ class RollingCoinEnv(ConnectionEnv):
         return x_target - x, y_target - y, ops.sin(theta), ops.cos(theta), ops.atan2(ops.sin(turn), ops.cos(turn))
 
     def cost(self, distance, heading_error):
-        """c = |d| + R |θ* − θ|."""
         return distance + self.radius * abs(heading_error)
 
     def observe(self, state, ops=SCALAR):

@@ -39,8 +39,8 @@ START = {"bowl": (0.0, -4.0)}  # the start on a built-in surface where the origi
 
 @dataclass
 class CoinSurfaceState(State):
-    """y = (x, y, φ, φ̇); the heading θ; the target (x, y); the time t; E and its value at reset E₀; where the
-    last step started (x, y) and the closest approach of its chord to the target, m."""
+    """y = (x, y, φ, φ̇); the heading θ; the target (x, y); t; E and E₀ (at reset); where the last step started (x, y)
+    and its chord's closest approach to the target, m."""
 
     components: ClassVar[dict] = {"y": ("x", "y", "phi", "phi_dot"), "target": ("target_x", "target_y"), "previous": ("previous_x", "previous_y")}
     phase: ClassVar[tuple] = ("phi", "phi_dot", "theta")
@@ -59,13 +59,11 @@ class RollingCoinSurfaceEnv(TaskEnv):
     r"""
     ## Description
 
-    A vertical coin of radius R and mass m rolls without slipping over a surface of height z(x, y), under gravity g. The
-    controller assigns its heading θ (from the y-axis), an active constraint, by its rate; gravity does the rest: the
-    coin goes where it points, ẋ = R sin θ φ̇, ẏ = R cos θ φ̇ (φ the rolling angle), at the speed the slope along its
-    heading gives it (docs/physics/RollingCoinSurface.md). Steering does no work: E = ¾ m R² φ̇² + m g z is conserved,
-    and a coin at rest reaches exactly the points below it. At a held heading it rolls on a straight line, so reaching
-    a target around an obstacle takes steering: on the default surface, a plane sloping down along +y with a hill in
-    the way, the target lies behind the hill.
+    A vertical coin of radius R and mass m rolls without slipping over a surface of height z(x, y) under gravity g. The
+    controller steers its heading θ (from the y-axis), an active constraint; gravity rolls it where it points,
+    ẋ = R sin θ φ̇, ẏ = R cos θ φ̇ (φ the rolling angle), sped by the slope along it (docs/physics/RollingCoinSurface.md).
+    Steering does no work: E = ¾ m R² φ̇² + m g z is conserved, and a coin at rest reaches exactly the points below it.
+    At a held heading it rolls straight; by default a plane sloping down along +y has a hill in the way.
 
     ## Action Space
 
@@ -73,9 +71,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
     ## Observation Space
 
-    `Box(9,) float32`, each entry clipped to its bounds (the position once the coin has left the arena, which ends the
-    episode), with L the arena's half-width, D = `target_distance`, v* = √(4 g Δz/3) the speed of a drop through the
-    arena's height range Δz (z_max − z_min over |x|, |y| ≤ L) and G the steepest slope there:
+    `Box(9,) float32`, clipped (x and y only off the arena, which ends the episode); D = `target_distance`, L the
+    arena's half-width, G its steepest slope and v* = √(4 g Δz/3) the speed after a drop of Δz, its height range:
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -91,26 +88,20 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
     ## Rewards
 
-    With d the distance from the coin to the target before the step and d′ after it (m):
-
-        reward = d − d′ − 0.01
-
-    Summed over an episode: d₀ − d_T − 0.01·steps.
+    `d − d′ − 0.01`, d and d′ the distance (m) from the coin to the target before and after the step.
 
     ## Starting State
 
-    At rest (φ̇ = 0, φ = 0) at the origin, with the heading θ uniform in [−π, π) (np_random). The target lies at
-    `target_distance` (4 m) from the start, in a direction uniform within ±`target_angle` (0.25 rad) of the steepest
-    descent there: on the default hill, 4 m down the slope and up to 1 m to either side, straight behind the hill. The
-    construction checks that every such target lies in the arena and below the start, so that the coin can reach it.
-    `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target (in the arena) exactly; a
-    target above the coin's energy cannot be reached:
+    At rest, φ = 0, at the origin ((0, −4) on the bowl), θ uniform in [−π, π). The target: `target_distance` from the
+    start, in a direction uniform within ±`target_angle` of the steepest descent (all checked at construction to be
+    reachable: in the arena, below the start); by default 4 m downhill, up to 1 m aside.
+    `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target (in the arena) exactly; one
+    above the coin's energy cannot be reached:
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`): the chord of the step, from where the coin started it to where it
-    ended it, passes within `tolerance` (0.1 m) of the target; the track curves away from the chord by at most
-    v dt² max_steer_rate/8 (2.5 mm at 4 m/s with the defaults). Terminated too, without success, when the coin leaves
+    Terminated on success (`info["is_success"]`), the step's chord passing within `tolerance` of the target (the track
+    stays within v dt² max_steer_rate/8 of it, 2.5 mm at 4 m/s by default), or, without success, when the coin leaves
     the arena, |x| or |y| > L. Truncated after 200 steps (10 s at the default dt) by the registration's time limit.
 
     ## Arguments
@@ -118,14 +109,11 @@ class RollingCoinSurfaceEnv(TaskEnv):
     `surface_params`: bowl: radius=5.0 in [1e-3, 1e3] (z = (x² + y²)/(2 radius)); hill: height=1.0 in [0, 1e3],
     width=0.6 in [1e-3, 1e3], center=(0, 2); a sympy surface: its symbols besides x and y, each in [−1e3, 1e3].
 
-    On a plane the default step is exact, in closed form at any constant θ̇. Fixed steps fail on surfaces curved enough
-    for the dt (where: `python -m connenv.bench stability --env coin_surface`); there take `integrator="dop853"`. On a
-    plane the chart is `--env coin_plane`. Semi-implicit Euler takes q = (x, y, φ) and φ̇ for the momentum
-    (3/2) m R² φ̇. Diverged: an energy error |E − E₀| past 1e-3 m g Δz (Δz as in the observation).
-
-    Every `info` has `"state"` (`x`, `y`, `theta`, `phi`, `phi_dot`, `t`, in SI), `"energy"` (E, J, z = 0 the reference
-    height), `"distance"` (d′, m), `"miss"` (the closest approach of the step's chord, m), `"left_arena"` and
-    `"is_success"`.
+    On a plane the default step is exact (closed form at constant θ̇). Fixed steps fail on surfaces curved enough for the
+    dt (where: `python -m connenv.bench stability --env coin_surface`, on a plane `--env coin_plane`); there take
+    `integrator="dop853"`. Semi-implicit Euler takes q = (x, y, φ) and φ̇ for the momentum (3/2) m R² φ̇. Diverged:
+    |E − E₀| > 1e-3 m g Δz. Every `info` has `"state"` (the Starting State's keys and `t`), `"energy"` (E, J, z = 0 the
+    reference height), `"distance"` (d′), `"miss"` (the chord's closest approach), `"left_arena"` and `"is_success"`.
     """
 
     renderer = CoinSurfaceRenderer
@@ -191,8 +179,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
         return start
 
     def _downhill(self):
-        """The heading of steepest descent at the start (rad from the y-axis), after checking that every target
-        the reset may draw lies in the arena and below the start."""
+        """The heading of steepest descent at the start (rad from the y-axis), once every target the reset may draw is
+        checked to lie in the arena and below the start."""
         x0, y0 = self.start_point
         z0, z_x, z_y = self.surface.height(x0, y0)
         if math.hypot(z_x, z_y) == 0.0:
@@ -212,8 +200,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
         return heading
 
     def at(self, y, theta, target, t, energy0, previous, ops=SCALAR):
-        """The state at y = (x, y, φ, φ̇) and θ, with its energy (E₀ := E where energy0 is None, at reset), and the
-        closest approach of the chord from `previous` (the coin's position where None, at reset)."""
+        """The state at y = (x, y, φ, φ̇) and θ, with E (E₀ := E where energy0 is None, at reset) and the closest
+        approach of the chord from `previous` (None at reset: the coin's position)."""
         energy = ops.real(self.system.energy(y))
         previous = y[..., :2].copy() if previous is None else previous
         state = CoinSurfaceState(y, theta, target, t, energy, energy if energy0 is None else energy0, previous, 0.0)
@@ -252,7 +240,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
         return ops.hypot(tx - along * cx, ty - along * cy)
 
     def command(self, a):
-        """θ̇ = a · max_steer_rate."""
         return self.max_steer_rate * a.T[0]
 
     def distance(self, s, ops=SCALAR):
@@ -262,7 +249,6 @@ class RollingCoinSurfaceEnv(TaskEnv):
         return ops.maximum(abs(s.y.T[0]), abs(s.y.T[1])) > self.arena
 
     def reward(self, before, after, info, ops=SCALAR):
-        """d − d′ − 0.01."""
         return self.distance(before, ops) - info["distance"] - TIME_COST
 
     def terminated(self, state, info, ops=SCALAR):

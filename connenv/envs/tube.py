@@ -27,9 +27,8 @@ TARGET_RANGE = (0.3, 3.0)  # rad: ψ* drawn uniformly at reset
 
 @dataclass
 class TubeState(ConnectionState):
-    """ConnectionState (g: R's 9 entries, s: the accumulated bend, t) with the start frame R₀ (9 entries), the
-    target ψ*, and what the task reads: the error E = Rz(ψ*)ᵀR₀ᵀR (9 entries), the twist ψ and the tangent's angle
-    from T₀ (rad), the bend length so far."""
+    """ConnectionState (g: R's 9 entries, s: the accumulated bend, t) with the start frame R₀ and the error
+    E = Rz(ψ*)ᵀR₀ᵀR (9 entries each), the target ψ*, the twist ψ, the tangent's angle θ_T, the bend length so far."""
 
     R0: np.ndarray
     target: float
@@ -43,18 +42,16 @@ class TubeTwistEnv(ConnectionEnv):
     r"""
     ## Description
 
-    The tip of a tube that bends but cannot twist, as surgical and imaging probes are (Lawton): its frame R ∈ SO(3)
-    (tip → space) has columns N, B, T (normal, binormal, tangent), and the controller sets its bending rates
-    κ = (κ₁, κ₂) in the tip's frame, with no rate about T: Ṙ = R ω̂, ω = (κ₁, κ₂, 0). N is parallel transported along
-    the curve T traces on the unit sphere, so the only way to turn the tip about its own axis is a loop of T: back where
-    it started, the tip has turned by the area the loop encloses (counterclockwise seen from outside, mod 2π;
-    docs/physics/TubeTwist.md). The task is to turn it by a target angle ψ* and bring the tangent back. Built on
-    `ConnectionEnv` (SO(3), body frame, the shape the accumulated bend s = ∫κ dt, a constant connection).
+    The tip of a tube that bends but cannot twist, like surgical and imaging probes (Lawton): its frame R ∈ SO(3)
+    (tip → space) has columns N, B, T (normal, binormal, tangent), and the controller sets the bending rates
+    κ = (κ₁, κ₂) in the tip's frame, none about T: Ṙ = R ω̂, ω = (κ₁, κ₂, 0). N is parallel transported along the curve T
+    traces on the unit sphere, so the tip turns about its axis only by a loop of T, by the area enclosed
+    (counterclockwise seen from outside, mod 2π; docs/physics/TubeTwist.md). The task: turn it by a target angle ψ* and
+    bring the tangent back. `ConnectionEnv` on SO(3), body frame, with shape s = ∫κ dt and a constant connection.
 
-    The *twist* ψ (`info["twist"]`) is the angle by which N has turned about T relative to the start frame R₀, measured
-    once T is carried back to T₀ along the great circle between them: with Q = R₀ᵀR and G that rotation, G Q = Rz(ψ).
-    On a closed loop of T it is the enclosed area; while T is away it is the area of the path closed by that geodesic.
-    At T = −T₀, where no geodesic is singled out, ψ = 0.
+    The *twist* ψ (`info["twist"]`) is the angle N has turned about T from the start frame R₀ once T is carried back to
+    T₀ along the great circle between them, G Q = Rz(ψ) with Q = R₀ᵀR and G that rotation: the area enclosed by T's path
+    closed by that geodesic (ψ = 0 at T = −T₀, where none is singled out).
 
     ## Action Space
 
@@ -62,8 +59,8 @@ class TubeTwistEnv(ConnectionEnv):
 
     ## Observation Space
 
-    `Box(-1, 1, (11,), float32)`: the error E = Rz(ψ*)ᵀ R₀ᵀ R, the frame relative to the target frame R₀ Rz(ψ*) (E = I
-    at the goal), which turns as the tip does, Ė = E ω̂, so it is a Markov state; then the twist error.
+    `Box(-1, 1, (11,), float32)`: the error E = Rz(ψ*)ᵀ R₀ᵀ R, the frame relative to the target frame R₀ Rz(ψ*)
+    (E = I at the goal), which turns as the tip does, Ė = E ω̂, so it is a Markov state; then the twist error.
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -73,13 +70,9 @@ class TubeTwistEnv(ConnectionEnv):
 
     ## Rewards
 
-    With the cost e = θ_T + |ψ − ψ*| (θ_T the angle between T and T₀, the twist error wrapped into [−π, π)), e before
-    the step and e′ after it:
-
-        reward = e − e′ − 0.01
-
-    Bending T radially away from T₀ costs θ_T; going round pays back the twist it adds, at tan(θ_T/2) per radian of
-    bend, so the reward leads round a loop. Summed to success: e₀ − e_T − 0.01 · steps.
+    `e − e′ − 0.01`, with the cost e = θ_T + |ψ − ψ*| (θ_T the angle between T and T₀, the twist error wrapped into
+    [−π, π)) before the step and e′ after it. Bending T radially away from T₀ costs θ_T; going round pays back the twist
+    it adds, at tan(θ_T/2) per radian of bend, so the reward leads round a loop.
 
     ## Starting State
 
@@ -88,19 +81,16 @@ class TubeTwistEnv(ConnectionEnv):
 
     ## Episode End
 
-    Terminated when θ_T ≤ `tolerance` and |ψ − ψ*| ≤ `tolerance` (`info["is_success"]`). Truncated after 200 steps by
-    the registration's time limit: the cap controller, a loop of the shortest length, needs at most
-    √(3 (4π − 3))/(max_bend_rate · dt) ≈ 108 steps.
+    Terminated when θ_T and |ψ − ψ*| ≤ `tolerance` (`info["is_success"]`). Truncated after 200 steps, the registration's
+    time limit; the cap controller (shortest loop) takes ≤ √(3 (4π − 3))/(max_bend_rate · dt) ≈ 108 steps.
 
     ## Arguments
 
-    The default step is one exponential, R ← R exp(dt ω̂), exact, and keeps R on SO(3) to rounding; the generic steppers
-    integrate Ṙ = R ω̂ in coordinates and drift off. Diverged: R more than 1e-9 off SO(3) (‖RᵀR − I‖).
-
-    Every `info` has `"state"` (`R` (3×3), `t`), `"twist"` (ψ), `"twist_error"` (ψ − ψ*, wrapped), `"tangent_error"`
-    (θ_T), `"path_length"` (the bend ∫|κ| dt since reset, rad), `"path_ratio"` (path length over √(A (4π − A)),
-    A = |ψ*|: the length of a circle enclosing the area ψ*, the shortest loop that does the task; isoperimetric
-    inequality on the sphere) and `"is_success"`.
+    The default step, one exponential R ← R exp(dt ω̂), is exact and keeps R on SO(3) to rounding; the generic steppers
+    integrate Ṙ = R ω̂ in coordinates and drift off. Diverged: ‖RᵀR − I‖ > 1e-9. Every `info` has `"state"` (`R`, `t`),
+    `"twist"` (ψ), `"twist_error"` (ψ − ψ*, wrapped), `"tangent_error"` (θ_T), `"path_length"` (∫|κ| dt since reset,
+    rad), `"path_ratio"` (path_length over √(A (4π − A)), A = |ψ*|: the length of a circle of area A, the shortest loop
+    that does the task by the isoperimetric inequality on the sphere) and `"is_success"`.
     """
 
     renderer = TubeRenderer
@@ -163,7 +153,6 @@ class TubeTwistEnv(ConnectionEnv):
         return np.concatenate([s.error, np.stack([np.cos(e), np.sin(e)], -1)], -1).astype(np.float32)
 
     def cost(self, s, ops=SCALAR):
-        """e = θ_T + |ψ − ψ*|, the reward pays its decrease."""
         return s.tangent_error + abs(self.twist_error(s, ops))
 
     def reward(self, before, after, info, ops=SCALAR):
@@ -176,8 +165,7 @@ class TubeTwistEnv(ConnectionEnv):
         return info["is_success"]
 
     def path_ratio(self, s, ops=SCALAR):
-        """The bend so far over the shortest loop that does the task from T₀: a circle of the area |ψ*| (1 for
-        ψ* = 0)."""
+        """path_length over the shortest loop that does the task, a circle of area |ψ*| (1 for ψ* = 0)."""
         area = abs(s.target)
         shortest = ops.sqrt(area * (4 * math.pi - area))
         return ops.where(shortest > 0, s.path_length / ops.maximum(shortest, 1e-300), 1.0)
