@@ -40,8 +40,8 @@ ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + |E|) past which
 
 @dataclass
 class BeadState(ActiveConstraintState):
-    """ActiveConstraintEnv's state (y = (r, p), u = (θ,), t, the energy error) and the task's: the target r*,
-    whether the bead is within the target's tolerances, and for how long it has been (s)."""
+    """ActiveConstraintEnv's state (y = (r, p), u = (θ,), t, the energy error) and the task's: the target r*, whether
+    the bead is within the target's tolerances, and for how long (s)."""
 
     components: ClassVar[dict] = {"y": ("r", "p"), "u": ("theta",)}
 
@@ -54,13 +54,12 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     r"""
     ## Description
 
-    A bead of mass m slides without friction on a straight bar of half-length L that turns about a fixed pivot O in a
-    vertical plane. The controller assigns the bar's angle θ from the horizontal (an *active constraint*, Bressan), and
-    the bead at signed distance r from O moves by ṙ = p/m, ṗ = m r θ̇² − m g sin θ: tilting slides it down the bar,
-    spinning flings it away from the pivot. The env is `ActiveConstraintEnv` on the system of T = ½ m (ṙ² + r² θ̇²) and
-    V = m g r sin θ (`connenv.systems.bead_on_bar`), of the *general* class: θ may not jump, and the control is its rate
-    (docs/physics/BeadOnBar.md). The task: bring the bead to rest at a target. With g = 0 (Bressan's horizontal bar) it
-    can only move away from the pivot, ṙ ≥ 0: the target lies farther out, and success is to arrive there slowly.
+    A bead (mass m) slides frictionless on a straight bar of half-length L turning about a fixed pivot O in a vertical
+    plane. The controller assigns the bar's angle θ from the horizontal (an *active constraint*, Bressan); the bead at
+    signed distance r from O obeys ṙ = p/m, ṗ = m r θ̇² − m g sin θ: tilting slides it down, spinning flings it out. It
+    is `ActiveConstraintEnv` on T = ½ m (ṙ² + r² θ̇²), V = m g r sin θ (`connenv.systems.bead_on_bar`), of the *general*
+    class: θ may not jump, the control is its rate (docs/physics/BeadOnBar.md). Task: bring it to rest at a target. With
+    g = 0 (Bressan's horizontal bar) it only moves outward, ṙ ≥ 0: the target lies farther out, reached slowly.
 
     ## Action Space
 
@@ -68,7 +67,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     ## Observation Space
 
-    `Box(6,) float32`, each entry clipped to its bounds:
+    `Box(6,) float32`, clipped to bounds leaving room beyond the bar (|r/L| ≤ 1, |(r* − r)/L| ≤ 2) for the step off it:
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -79,48 +78,40 @@ class BeadOnBarEnv(ActiveConstraintEnv):
     | 4 | cos θ | -1 | 1 |
     | 5 | hold / hold_time: the part of the hold done (0 with g = 0, which has no hold) | 0 | 1 |
 
-    Within the bar |r/L| ≤ 1 and |(r* − r)/L| ≤ 2; the bounds leave room for the step that leaves it.
-
     ## Rewards
 
     With the potential Φ = −(|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L, Φ before the step and Φ′ after it,
 
         reward = 10 (Φ′ − Φ) − 0.01 · [outside the tolerances]
 
-    Potential-based shaping (Ng, Harada & Russell 1999) pays every step toward rest at the target and sums to
-    10 (Φ_end − Φ₀) whatever the path; the time cost, charged only outside the success tolerances, pays for reaching
-    them fast. From any state the rest of a 500-step episode inside the bar costs less than 35 (Φ ≥ −3); leaving the
-    bar (|r| > L) pays −exit_penalty instead (default 40) and ends the episode.
+    Potential-based shaping (Ng, Harada & Russell 1999) pays each step toward rest at the target and sums to
+    10 (Φ_end − Φ₀) whatever the path; the time cost pays for speed. In the bar the rest of a 500-step episode costs
+    under 35 from any state (Φ ≥ −3); leaving it (|r| > L) pays −exit_penalty instead (default 40) and ends the episode.
 
     ## Starting State
 
-    At rest (ṙ = 0), θ = 0, t = 0. With g > 0: r₀ uniform on [−0.8, 0.8] L, and the target r* uniform on the points of
-    [−0.8, 0.8] L at least 0.2 L from r₀. With g = 0: |r₀| uniform on [0.1, 0.6] L on either side of the pivot, and r*
-    on the same side, 0.2 to 0.3 L farther out. `reset(options={"state": {...}, "target": r*})` sets any of these
-    and the target r* (in [−L, L], L = half_length) exactly; the rest is drawn as above:
+    At rest, θ = 0, t = 0. With g > 0: r₀ and r* uniform on [−0.8, 0.8] L, r* at least 0.2 L from r₀. With g = 0: |r₀|
+    uniform on [0.1, 0.6] L either side of the pivot, r* on the same side, 0.2–0.3 L farther out.
+    `reset(options={"state": {...}, "target": r*})` sets any of these and r* ∈ [−L, L] exactly, others drawn as above:
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`) or when the bead leaves the bar (`info["left_bar"]`). Success:
-    |r − r*| ≤ 0.02 L and |ṙ| ≤ 0.05 L/s, held for hold_time (0.5 s: every step from entry to hold_time later) with
-    g > 0, and without a hold with g = 0, where ṙ cannot decrease. Truncated after 500 steps (10 s) by the
-    registration's time limit.
+    Terminated on success (`info["is_success"]`) or on leaving the bar (`info["left_bar"]`). Success: |r − r*| ≤ 0.02 L
+    and |ṙ| ≤ 0.05 L/s, held for hold_time (every step from entry to hold_time later) with g > 0, without a hold with
+    g = 0, where ṙ cannot decrease. Truncated after 500 steps (10 s) by the registration's time limit.
 
     ## Arguments
 
-    The default step is the closed form of the flow at constant θ̇, exact to rounding down to θ̇ = 0. Diverged: an
-    energy error (of E = p²/(2m) + m g r sin θ, conserved while θ is held) past 1e-2 (1 + |E|).
-
-    Every `info` has `"state"` (`r`, `r_dot`, `p`, `theta`, `t` in SI), `"target"` (r*, m), `"hold"` (s within the
-    tolerances so far), `"left_bar"` and `"is_success"`.
+    The default step is the flow's closed form at constant θ̇, exact to rounding down to θ̇ = 0. Diverged: an energy error
+    (of E = p²/(2m) + m g r sin θ, conserved at constant θ) past 1e-2 (1 + |E|). `info` has `"state"` (`r`, `r_dot`,
+    `p`, `theta`, `t` in SI), `"target"` (r*, m), `"hold"` (s inside the tolerances), `"left_bar"` and `"is_success"`.
 
     ## Version History
 
-    - v1 (connenv 0.4.0): registered with omega_max = 1 rad/s instead of 2π; all else is v0's, and the analytic tilt
-      law (its rate clipped to omega_max) loses no time by it. At 2π rad/s a random action spins the bar so fast that
-      the centrifugal force m r θ̇² (up to 4 m g at the bar's end) flings the bead off within a second: exploration met
-      the exit penalty, and agents learned to hold the bar still before reaching the target. At 1 rad/s it is at most
-      m L (1/s)², a tenth of m g on the default bar.
+    - v1 (connenv 0.4.0): registered with omega_max = 1 rad/s instead of 2π, all else v0's; the analytic tilt law (rate
+      clipped to omega_max) loses no time by it. At 2π rad/s random actions spin the bar so fast the centrifugal force
+      m r θ̇² (up to 4 m g at the bar's end) flings the bead off in a second: exploration met the exit penalty and agents
+      learned to hold the bar still short of the target. At 1 rad/s it is ≤ m L (1/s)², 0.1 m g on the default bar.
     - v0: the first version, in connenv 0.1.0.
     """
 
@@ -188,8 +179,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         return self.track(super().advance(s, command, stepper, ops), s.target, s, ops)
 
     def track(self, s, target, before, ops=SCALAR):
-        """The BeadState of the physical state s (an ActiveConstraintState) with target r*: inside the
-        tolerances, and the hold grown by dt if it was inside before the step too (before=None: at reset)."""
+        """The BeadState of s with target r*: whether inside the tolerances, and the hold grown by dt if inside before
+        the step too (before=None: at reset)."""
         r, p = s.y.T
         L = self.half_length
         r, p = r.real, p.real  # a flag: of the real parts on a Jacobian's rows
@@ -241,7 +232,6 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         }
 
     def potential(self, s, ops=SCALAR):
-        """Φ = −(|r − r*| + 0.1 s · min(|ṙ|, 10 L/s)) / L."""
         r, p = s.y.T
         L = self.half_length
         return -(abs(r - s.target) / L + SPEED_WEIGHT * ops.clip(abs(p / self.mass) / L, 0.0, SPEED_CAP))

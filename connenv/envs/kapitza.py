@@ -66,9 +66,8 @@ TIME_COST = 0.2  # the swing-up's reward paid per simulated second until success
 
 @dataclass
 class KapitzaState(State):
-    """The pendulum and its pivot: y = (θ, p); the pivot's position u and velocity u̇ (2 each, u̇ as at the end of
-    the step); the time t; the energy E in the frame of that u̇; the stepper's energy error (the change of E on each
-    segment of constant u̇, summed since reset). Each task's state adds its record."""
+    """y = (θ, p); the pivot's position u and velocity u̇ (2 each, u̇ at the end of the step); the time t; the energy E in
+    the frame of that u̇; the stepper's energy error (E's change on each segment of constant u̇, summed since reset)."""
 
     components: ClassVar[dict] = {"y": ("theta", "p"), "u": ("u1", "u2"), "u_dot": ("u1_dot", "u2_dot")}
 
@@ -89,8 +88,7 @@ class HoldState(KapitzaState):
 
 @dataclass
 class SwingUpState(KapitzaState):
-    """KapitzaSwingUp-v0's state: the steps held within tolerance of inverted without a break, and the lift ℓ,
-    which the reward compares."""
+    """KapitzaSwingUp-v0's state: the steps held within tolerance of inverted without a break; the lift ℓ."""
 
     upright_steps: int
     lift: float
@@ -100,23 +98,21 @@ class KapitzaPendulumEnv(TaskEnv):
     r"""
     ## Description
 
-    A pendulum, rod length l and bob mass m, whose pivot the controller moves: the pivot's position u = (u₁, u₂) is an
-    *active constraint* (Bressan). θ is the rod's angle from the downward vertical and p = m l² θ̇ + m l u̇·n its
-    conjugate momentum, n = (cos θ, sin θ). u̇ enters the equations quadratically (Bressan's *general* class), so fast
-    vibration of the pivot acts as a force: vibrated vertically with amplitude a ≪ l and frequency ω, the inverted
-    pendulum is stable when a²ω² > 2 g l (Kapitza 1951; docs/physics/kapitza.md). The goal is to hold the pendulum
-    inverted, |θ − π| ≤ `tolerance`, for the whole episode.
+    A pendulum (rod length l, bob mass m) whose pivot position u = (u₁, u₂) the controller moves, an *active constraint*
+    (Bressan); θ is the rod's angle from the downward vertical, p = m l² θ̇ + m l u̇·n its momentum, n = (cos θ, sin θ). u̇
+    enters quadratically (Bressan's *general* class), so fast pivot vibration acts as a force: vibrated vertically with
+    amplitude a ≪ l and frequency ω, the pendulum is stable inverted when a²ω² > 2 g l (Kapitza 1951;
+    docs/physics/kapitza.md). Goal: hold it inverted, |θ − π| ≤ `tolerance`, all episode.
 
     ## Action Space
 
-    `Box(-1, 1, (k,), float32)`: the pivot's velocity v_max · a along the actuated axes, constant over the step: u̇₂
-    for a vertical pivot, u̇₁ for a horizontal one (k = 1), (u̇₁, u̇₂) for a planar one (k = 2). An axis that meets its
-    end stop, |uᵢ| = a_max, rests there for the rest of the step. Only u̇ enters the equations, so its jumps are
-    admissible: p is continuous and θ̇ jumps by −Δu̇·n/l.
+    `Box(-1, 1, (k,), float32)`: the pivot's velocity v_max · a, constant over the step, along the actuated axes: u̇₂
+    (vertical pivot) or u̇₁ (horizontal), k = 1; (u̇₁, u̇₂) (planar), k = 2. An axis at its end stop |uᵢ| = a_max rests
+    there for the rest of the step. Only u̇ enters the equations, so it may jump: p is continuous, θ̇ jumps by −Δu̇·n/l.
 
     ## Observation Space
 
-    `Box(3 + 2k,) float32`:
+    `Box(3 + 2k,) float32`. No clock: (u, u̇) is the vibration's phase, where `agents.controllers.kapitza` reads it.
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -126,17 +122,13 @@ class KapitzaPendulumEnv(TaskEnv):
     | 3 (3, 4) | pivot position along the actuated axes, uᵢ / a_max | -1 | 1 |
     | 4 (5, 6) | pivot velocity along the actuated axes at the end of the step, u̇ᵢ / v_max | -1 | 1 |
 
-    There is no clock: the pivot's own state (u, u̇) is the phase of a vibration, and the reference controllers read it
-    there (`agents.controllers.kapitza`).
-
     ## Rewards
 
     With δ = |θ − π| (θ wrapped to (−π, π]) after the step, on every step:
 
         reward = 1 − (δ/tolerance)²
 
-    in [0, 1] while held (δ ≤ tolerance), negative on the step that falls (δ > tolerance, which ends the episode), and
-    never below 1 − (π/tolerance)² (δ ≤ π): −108.7 at the default tolerance.
+    in [0, 1] while held, negative on the falling step, never below 1 − (π/tolerance)²: −108.7 at the default tolerance.
 
     ## Starting State
 
@@ -146,20 +138,17 @@ class KapitzaPendulumEnv(TaskEnv):
     ## Episode End
 
     Terminated when the pendulum falls, δ > tolerance (`info["is_success"]` turns False). Truncated after 2000 steps
-    (10 s at the default dt) by the registration's time limit; an episode that reaches it has held the pendulum
-    inverted throughout.
+    (10 s at the default dt) by the registration's time limit, having held it inverted throughout.
 
     ## Arguments
 
-    At m l² √(g/l) the damping damps the swing in about one period; beyond a thousand times that, the step would spend
-    its work on the decay. The default step is exact: at constant u̇ the rod swings in the pivot's frame as a plain
-    pendulum, whose flow is closed-form, and near its separatrix (the held-inverted pendulum) RK4 at a fine step
-    (docs/physics/kapitza.md); with damping it is DOP853. Diverged: without damping, an energy error (in the pivot's
-    frame) past 0.1 m g l.
-
-    Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"`
-    (E = ½ m l² θ̇² − m g l cos θ, J, in the frame of the pivot's velocity, conserved while u̇ is constant),
-    `"deviation"` (δ, rad), `"max_deviation"` (its largest value this episode) and `"is_success"`.
+    Damping m l² √(g/l) damps a swing in about a period; a thousand times that would spend the step's work on the decay.
+    The default step is exact: at constant u̇ the rod swings in the pivot's frame as a plain pendulum, in closed form, or
+    by RK4 at a fine step near its separatrix (the held-inverted pendulum; docs/physics/kapitza.md); with damping,
+    DOP853. Diverged: without damping, an energy error (pivot's frame) past 0.1 m g l. Every `info` has `"state"`
+    (`theta`, `theta_dot`, `p`, `u` (2), `u_dot` (2), `t`, in SI), `"energy"` (E = ½ m l² θ̇² − m g l cos θ, J, in the
+    pivot's frame, conserved at constant u̇), `"deviation"` (δ, rad), `"max_deviation"` (δ's largest so far) and
+    `"is_success"`.
     """
 
     renderer = KapitzaRenderer
@@ -213,7 +202,6 @@ class KapitzaPendulumEnv(TaskEnv):
         return {"pivot": self.pivot, **super().parameters()}
 
     def start_angle(self):
-        """θ₀, drawn from np_random: near inverted."""
         return math.pi + self.np_random.uniform(-HOLD_START, HOLD_START)
 
     def start(self, options):
@@ -225,8 +213,7 @@ class KapitzaPendulumEnv(TaskEnv):
         return self.at(y, u, u_dot, 0.0, self.system.energy(y, u_dot), 0.0)
 
     def advance(self, s, u_dot_cmd, stepper, ops=SCALAR):
-        """The state after a step at the commanded pivot velocity, each axis stopped at its end stops: one state, or
-        rows (each cut at its own stops) with the vector env's stepper and ops=BATCH."""
+        """The state after a step at the commanded u̇, each axis (each row's, with ops=BATCH) held at its end stops."""
         bounded = bounded_segments if ops is SCALAR else bounded_segments_batch
         segments, u, u_dot = bounded(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt)
         y, change = run_segments(stepper, self.system, s.y, segments, self.frame_energy)
@@ -290,11 +277,9 @@ class KapitzaPendulumEnv(TaskEnv):
         return info
 
     def reward(self, before, after, info, ops=SCALAR):
-        """Hold inverted: 1 − (δ/tolerance)²."""
         return 1.0 - (info["deviation"] / self.tolerance) ** 2
 
     def terminated(self, s, info, ops=SCALAR):
-        """The pendulum has fallen."""
         return info["deviation"] > self.tolerance
 
 
@@ -302,9 +287,8 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     r"""
     ## Description
 
-    KapitzaPendulum-v0's pendulum and pivot, started hanging near rest: swing it up by moving the pivot, then hold it
-    inverted. Vertical pivot motion pumps energy in by parametric resonance, near twice the pendulum's natural frequency
-    √(g/l); fast vertical vibration then holds it inverted (Kapitza).
+    KapitzaPendulum-v0's pendulum, to swing up and hold inverted by moving the pivot: vertical motion pumps energy in by
+    parametric resonance near twice the natural frequency √(g/l); fast vertical vibration holds it up (Kapitza).
 
     ## Action Space, Observation Space
 
@@ -317,33 +301,29 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
         reward = ln(ℓ′/ℓ) − 0.2 dt
 
-    Parametric pumping multiplies ℓ by a factor per cycle, which the logarithm pays alike at every amplitude (a
-    potential-based shaping, Ng et al. 1999); the constant pays for time, 0.2 per simulated second. Summed to success:
-    ln(ℓ_T/ℓ₀) − 0.2 t.
+    Pumping multiplies ℓ by a factor per cycle, which the logarithm pays alike at every amplitude (potential-based
+    shaping, Ng et al. 1999); the constant pays for time. Summed to success: ln(ℓ_T/ℓ₀) − 0.2 t.
 
     ## Arguments
 
     ## Starting State
 
-    θ₀ uniform on ±[0.05, 0.1] rad from hanging (np_random; a pendulum at rest hanging cannot be pumped by vertical
-    motion), at rest, pivot at rest at the centre, t = 0. Reset options as KapitzaPendulum-v0.
+    θ₀ uniform on ±[0.05, 0.1] rad from hanging (np_random; at rest hanging, vertical motion cannot pump it), at rest,
+    pivot at rest at the centre, t = 0. Reset options as KapitzaPendulum-v0.
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`): the pendulum has stayed within `tolerance` of inverted for the last
-    `hold_time` seconds (rounded up to whole steps). Truncated after 6000 steps (30 s at the default dt).
-
-    Every `info` has KapitzaPendulum-v0's keys, with `"upright_time"`, the time it has been held within `tolerance` of
-    inverted without a break (s), in place of `"max_deviation"`.
+    Terminated on success (`info["is_success"]`): held within `tolerance` of inverted for the last `hold_time` seconds
+    (rounded up to whole steps). Truncated after 6000 steps (30 s at the default dt). `info` has KapitzaPendulum-v0's
+    keys, with `"upright_time"` (s held so without a break) in place of `"max_deviation"`.
 
     ## Open Challenge
 
-    No agent of the reference results learns this task: PPO and SAC pump the pendulum up but seldom catch and hold it.
-    A behaviour clone of the analytic controller into the same network does (trained with DAgger), so the observation
-    and the action suffice; what is missing is learning the catch, which the reward pays only through the time it saves
-    once the lift reaches its cap. The clones' success and the longest training curve, which begins to catch late in its
-    budget, are under Reference results below; the attempts that did not help (a reward that pays the hold, a curriculum
-    of starts released from every angle) are in the reference-results guide, "What changed, and what is still open".
+    No agent of the reference results learns this task: PPO and SAC pump the pendulum up but seldom catch and hold it. A
+    DAgger clone of the analytic controller into the same network does, so observation and action suffice: what is
+    missing is learning the catch, which the reward pays only through the time it saves once ℓ is capped. Clones and
+    training curves: under Reference results below; attempts that did not help (a reward paying the hold, a curriculum
+    of starts released from every angle): the reference-results guide, "What changed, and what is still open".
     """
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ()}
@@ -355,17 +335,14 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
         self.hold_steps = math.ceil(self.args.hold_time / self.dt - 1e-9)  # hold_time in whole steps
 
     def start_angle(self):
-        """θ₀, drawn from np_random: near hanging, either side."""
         return self.np_random.uniform(*HANG_START) * self.np_random.choice([-1.0, 1.0])
 
     def at(self, y, u, u_dot, t, energy, energy_error, before=None, ops=SCALAR):
-        """The state at (y, u, u̇, t) with energy E and its lift, the upright count continued from the state before
-        (or started at 0)."""
+        """The state at (y, u, u̇, t) with energy E and its lift, the upright count continued from before (or 0)."""
         upright = 0 if before is None else (before.upright_steps + 1) * (self.deviation(y, ops) <= self.tolerance)
         return SwingUpState(y, u, u_dot, t, energy, energy_error, upright, self.lift(energy, ops))
 
     def lift(self, energy, ops=SCALAR):
-        """ℓ = (E/(m g l) + 1)/2 in [LIFT_FLOOR, 1]."""
         system = self.system
         lift = 0.5 * (ops.real(energy) / (system.mass * system.g * system.length) + 1.0)
         return ops.clip(lift, LIFT_FLOOR, 1.0)
@@ -377,11 +354,9 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
         return info
 
     def reward(self, before, after, info, ops=SCALAR):
-        """ln(ℓ′/ℓ) − 0.2 dt."""
         return ops.log(after.lift / before.lift) - TIME_COST * self.dt
 
     def terminated(self, s, info, ops=SCALAR):
-        """Success: held inverted for hold_time."""
         return info["is_success"]
 
 

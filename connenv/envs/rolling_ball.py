@@ -41,9 +41,8 @@ def position_bound(env, values):
 
 @dataclass
 class BallState(State):
-    """The attitude R (body → space) and the target R*; the centre's position (x, y); the attitude error
-    P = R R*ᵀ and its angle e (rad), which the observation and reward read; the time t; the path length rolled
-    since reset; the distance, the optimal arc's length from the start attitude (NaN where not measured)."""
+    """R (body → space), the target R*, the centre (x, y); P = R R*ᵀ and its angle e (rad), read by observation and
+    reward; the time t; the path length; the distance, the optimal arc's length from the start (NaN if unmeasured)."""
 
     R: np.ndarray
     R_target: np.ndarray
@@ -57,8 +56,8 @@ class BallState(State):
 
 @dataclass
 class GoalBallState(BallState):
-    """BallState with the goals of RollingBallGoal-v0: R (achieved) and R* (desired) in 6-D form, float32, and
-    the angle between them (compute_reward's, computed once for the reward and the success)."""
+    """BallState with the goals R (achieved), R* (desired) in float32 6-D form and their angle, computed once for the
+    reward and the success."""
 
     achieved_goal: np.ndarray
     desired_goal: np.ndarray
@@ -70,25 +69,19 @@ class RollingBallEnv(TaskEnv):
     ## Description
 
     A ball of radius ρ rolls on a plane without slipping and without turning (spinning about the vertical); the
-    controller assigns the velocity v of its centre. With R the attitude (body → space), a kinematic model:
-
-        ω = e_z × v / ρ,    Ṙ = ω̂ R,    (ẋ, ẏ) = v.
-
-    Rolling straight tilts the ball about a horizontal axis; turning it about the vertical takes a loop, by the
-    spherical area the loop encloses (holonomy; Lioe 2004, Lawton slides 7–10). The goal is to reach a target attitude
-    R*, position free; the shortest way is an arc of a circle (the sub-Riemannian geodesic), whose length
-    `info["distance"]` gives.
+    controller assigns the velocity v of its centre: with R the attitude (body → space), ω = e_z × v / ρ, Ṙ = ω̂ R,
+    (ẋ, ẏ) = v. Rolling straight tilts the ball about a horizontal axis; a loop turns it about the vertical by the
+    spherical area it encloses (holonomy; Lioe 2004, Lawton slides 7–10). Goal: a target attitude R*, position free,
+    reached shortest by a circular arc (the sub-Riemannian geodesic) of length `info["distance"]`.
 
     ## Action Space
 
-    `Box(-1, 1, (2,), float32)`: v = v_max · a, (vx, vy). An action with |a| > 1 is projected radially onto the unit
-    disk (the speed is at most v_max, the direction kept) instead of clipped.
+    `Box(-1, 1, (2,), float32)`: v = (vx, vy) = v_max · a, |a| > 1 projected radially onto the unit disk, not clipped.
 
     ## Observation Space
 
-    `Box(-1, 1, (6,), float32)`: the attitude error P = R R*ᵀ in the continuous 6-D form (its first two columns; Zhou
-    et al. 2019), P = I at the target. In the space frame the error rolls as the ball does, Ṗ = ω̂ P, so the observation
-    is a Markov state (the body-frame error R*ᵀR is not: its rate depends on R*).
+    `Box(-1, 1, (6,), float32)`: P = R R*ᵀ (I at the target) in continuous 6-D form, its first two columns (Zhou et al.
+    2019). P rolls as the ball does, Ṗ = ω̂ P: a Markov state, unlike the body-frame R*ᵀR (its rate depends on R*).
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -101,8 +94,7 @@ class RollingBallEnv(TaskEnv):
 
         reward = e − e′ − 0.01
 
-    Summed to success: e₀ − e_T − 0.01·steps. A step changes e by at most v_max·dt/ρ (0.1 rad by default); the
-    constant pays for time.
+    A step changes e by ≤ v_max·dt/ρ (0.1 rad by default), the constant pays for time; summed: e₀ − e_T − 0.01·steps.
 
     ## Starting State
 
@@ -111,18 +103,15 @@ class RollingBallEnv(TaskEnv):
 
     ## Episode End
 
-    Terminated when e ≤ `tolerance` (`info["is_success"]`). Truncated after 200 steps by the registration's time
-    limit: the holonomy planner, the longer of the two reference controllers, needs at most ρ(π + π + π)/(v_max dt) + 4
-    = 99 steps.
+    Terminated when e ≤ `tolerance` (`info["is_success"]`). Truncated after 200 steps by the registration's time limit:
+    the holonomy planner, the slower reference controller, needs at most ρ(π + π + π)/(v_max dt) + 4 = 99 steps.
 
     ## Arguments
 
     The default step at constant v is exact, R ← exp(dt ω̂) R (Rodrigues), for any radius and dt; semi-implicit Euler is
-    refused (R is no (q, p) pair). Diverged: R more than 1e-6 off SO(3) (‖RᵀR − I‖).
-
-    Every `info` has `"state"` (`x`, `y`, `R` (3×3), `t`), `"angle_error"` (e, rad), `"path_length"` (m rolled since
-    reset), `"distance"` (the optimal arc's length from the start attitude, m), `"path_ratio"` (path length / distance;
-    1 where the start is the target) and `"is_success"`.
+    refused (R is no (q, p) pair). Diverged: R more than 1e-6 off SO(3) (‖RᵀR − I‖). Every `info` has `"state"` (`x`,
+    `y`, `R` (3×3), `t`), `"angle_error"` (e, rad), `"path_length"` (m since reset), `"distance"` (m), `"path_ratio"`
+    (path length / distance, 1 if the start is the target) and `"is_success"`.
     """
 
     renderer = RollingBallRenderer
@@ -156,8 +145,7 @@ class RollingBallEnv(TaskEnv):
         self.state = self.at(np.eye(3), np.eye(3), np.zeros(2), 0.0, 0.0, math.nan)
 
     def check_action(self, action):
-        """The action as a finite float array of the space's shape (else ValueError), not clipped: the command
-        projects it onto the unit disk."""
+        """The action as a finite float array of the space's shape (else ValueError), unclipped: command projects it."""
         return finite_action(action, self.action_space)
 
     def _observation_space(self):
@@ -189,8 +177,7 @@ class RollingBallEnv(TaskEnv):
         return self.at(R, s.R_target, s.position + v * self.dt, s.t + self.dt, path_length, s.distance, ops)
 
     def command(self, a):
-        """v = v_max a, with a projected radially onto the unit disk; a is one action (2,) or a batch (N, 2). An action
-        whose length overflows (entries near the largest float) is first scaled down along its direction."""
+        """v = v_max a, a (2,) or (N, 2) projected radially onto the unit disk, scaled down first if |a| overflows."""
         if a.ndim == 1:
             length = math.hypot(a[0], a[1])
             if length == math.inf:
@@ -234,21 +221,18 @@ class RollingBallPoseEnv(RollingBallEnv):
     r"""
     ## Description
 
-    RollingBall-v0's ball, now to reach the target attitude R* *and* return its centre to the origin. Rolling the centre
-    along a closed path changes the attitude by holonomy, so position and attitude are steered together: five degrees
-    of freedom from two controls.
+    RollingBall-v0's ball, to reach R* *and* bring its centre back to the origin: five degrees of freedom from two
+    controls, steered together, since a closed path of the centre turns the ball by holonomy.
 
     ## Observation Space
 
-    `Box(8,) float32`: the attitude error P = R R*ᵀ in 6-D form, as in RollingBall-v0, then the position.
+    `Box(8,) float32`: P as in RollingBall-v0, then the position / 4πρ, a bound of the holonomy planner's excursion.
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
     | 0–5 | P, first two columns | -1 | 1 |
     | 6 | x / (4πρ), clipped | -3 | 3 |
     | 7 | y / (4πρ), clipped | -3 | 3 |
-
-    4πρ bounds the holonomy planner's excursion from the origin.
 
     ## Rewards
 
@@ -258,8 +242,8 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     ## Episode End
 
-    Terminated when e ≤ `tolerance` and d ≤ `position_tolerance` (0.05 m). Truncated after 300 steps: the holonomy
-    planner needs at most ρ(2π + 2π)/(v_max dt) + 7 = 133 steps.
+    Terminated when e ≤ `tolerance` and d ≤ `position_tolerance`. Truncated after 300 steps: the holonomy planner needs
+    at most ρ(2π + 2π)/(v_max dt) + 7 = 133 steps.
 
     ## Arguments
 
@@ -267,12 +251,11 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     ## Open Challenge
 
-    No agent of the reference results learns this task. The reward is a trap for local improvement: a roll of length ℓ
-    turns the ball by at most ℓ/ρ and moves it ℓ away, so from the origin no action pays more than standing still, and
-    the target is reached only through a loop whose first half loses reward. The holonomy planner keeps a plan, which a
-    memoryless network has not been shown to reproduce. The clones' success and the longest training curve are under
-    Reference results below; the planner, the one-step greedy policy and the attempts are in the reference-results
-    guide ("Why it did not learn, and what did", "What changed, and what is still open").
+    No agent of the reference results learns this task. The reward is a trap: a roll of length ℓ turns the ball at most
+    ℓ/ρ and moves it ℓ away, so at the origin no action pays more than standing still, and the target is reached only
+    through a loop whose first half loses reward; the holonomy planner keeps a plan, which no memoryless network is
+    known to reproduce. Clones, curves: Reference results below; the planner, the one-step greedy policy, the attempts:
+    the reference-results guide ("Why it did not learn, and what did", "What changed, and what is still open").
     """
 
     metadata = {**RollingBallEnv.metadata, "measures": ("angle_error", "position_error", "path_length")}
@@ -312,7 +295,7 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     ## Observation Space
 
-    `Dict`, each entry `Box(-1, 1, (6,), float32)` holding a rotation in 6-D form (first two columns):
+    `Dict` of `Box(-1, 1, (6,), float32)` rotations in 6-D form; `observation` is goal-free: relabelling keeps it valid.
 
     | Key | Observation |
     |-----|-------------|
@@ -320,18 +303,15 @@ class RollingBallGoalEnv(RollingBallEnv):
     | achieved_goal | the attitude R |
     | desired_goal | the target R* |
 
-    Nothing in `observation` depends on the goal, so a relabelled goal leaves it valid.
-
     ## Rewards
 
     Sparse: `compute_reward(achieved_goal, desired_goal, info)` = −1 while the geodesic angle between the two exceeds
     `tolerance`, else 0; it takes batches (leading axes) and the env's reward is its value. Everything else is
     RollingBall-v0's; `compute_terminated` is success, `compute_truncated` False (the time limit truncates).
 
-    `compute_reward` is a method of this env, not of the wrappers `gym.make` puts around it (Gymnasium 1.x wrappers no
-    longer forward unknown attributes). HER is unaffected (SB3's vec envs reach it through `env_method`, which
-    unwraps), but SB3's `check_env(gym.make(...))` raises AttributeError on it: check the env itself,
-    `check_env(env.unwrapped)`.
+    `compute_reward` is this env's, not its `gym.make` wrappers' (Gymnasium 1.x wrappers do not forward unknown
+    attributes): HER reaches it through SB3's `env_method`, which unwraps, but SB3's `check_env(gym.make(...))` raises
+    AttributeError on it, so check `check_env(env.unwrapped)`.
     """
 
     def _observation_space(self):
@@ -379,13 +359,9 @@ def single_precision(x):
 
 
 class RollingBallVectorEnv(TaskVectorEnv):
-    """RollingBall-v0 over a batch (``gym.make_vec("connenv/RollingBall-v0", num_envs=N)``; see
-    ``connenv.envs.vector``), and the base of the Pose and Goal vector envs.
-
-    Takes the single env's make kwargs and ``measure_distance`` (default False): the optimal arc from each start
-    (info ``"distance"``, and ``"path_ratio"``) costs a root search per reset, which would dominate the batch's
-    step (`python -m connenv.throughput` times the batch); without it both keys are left out of the infos.
-    """
+    """RollingBall-v0 over a batch (``gym.make_vec("connenv/RollingBall-v0", num_envs=N)``, ``connenv.envs.vector``),
+    base of the Pose and Goal vector envs. Takes make kwargs and ``measure_distance``: each start's optimal arc (infos
+    ``"distance"``, ``"path_ratio"``, else absent) costs a root search per reset, dominating the batch's step."""
 
     single_env = RollingBallEnv
 

@@ -55,10 +55,9 @@ def momentum_bound(env, values):
 
 @dataclass
 class SkierState(State):
-    """y = (x, p); the height h; the time t; side, the sign of x − target_x at reset (0 on a trail with two rims),
-    from which the one goal is reached; the energy E at (y, h), which the reward compares; the stepper's energy
-    error (the change of E on held segments since reset); ẋ, f′, σ and κ at (x, h), which the observation and
-    the info read."""
+    """y = (x, p); the height h; the time t; side, the sign of x − target_x at reset (0 on a trail with two rims), from
+    which the one goal is reached; the energy E at (y, h), which the reward compares; the stepper's energy error (E's
+    change on held segments since reset); ẋ, f′, σ and κ at (x, h), read by the observation and info."""
 
     components: ClassVar[dict] = {"y": ("x", "p")}
     phase: ClassVar[tuple] = ("x", "p", "h")
@@ -79,22 +78,21 @@ class SkierEnv(TaskEnv):
     r"""
     ## Description
 
-    A skier on a narrow trail y = f(x) in a vertical plane pumps by raising and lowering the barycentre (Bressan): the
-    controller assigns its height h above the trail, along the trail's normal, an *active constraint*. x is the feet's
-    horizontal position, σ = √(1 + f′²), κ = f″/σ³ the curvature, φ the slope angle and p = m (1 − κh)² σ² ẋ
+    A skier on a narrow trail y = f(x) in a vertical plane pumps by raising and lowering the barycentre: its height h
+    above the trail, along the normal, is the control, an *active constraint* (Bressan). x is the feet's horizontal
+    position, σ = √(1 + f′²), κ = f″/σ³ the curvature, φ the slope angle and p = m (1 − κh)² σ² ẋ
     (docs/physics/skier.md); a jump of h leaves (x, p) unchanged. Standing up where the trail curves up and the skier is
-    fast, and crouching at the turning points, pumps energy in, as on a swing (on the circular `halfpipe` it is exactly
-    a swing of radius R − h). The goal is to escape the valley: reach a rim, or `target_x` on a trail without rims.
+    fast, and crouching at the turning points, pumps energy in as on a swing (on the circular `halfpipe`, exactly a
+    swing of radius R − h). Goal: escape the valley, to a rim, or to `target_x` on a trail without rims.
 
     ## Action Space
 
-    `Box(-1, 1, (1,), float32)`: the commanded height h = h_min + (a + 1)/2 · (h_max − h_min). h jumps there at the
-    start of the step or, with `max_height_speed`, moves toward it at that speed.
+    `Box(-1, 1, (1,), float32)`: the commanded height h = h_min + (a + 1)/2 · (h_max − h_min), jumped to at the start of
+    the step or, with `max_height_speed`, approached at that speed.
 
     ## Observation Space
 
-    `Box(6,) float32`, the position and the speed clipped to their bounds (the position only once the skier has left the
-    domain, after success):
+    `Box(6,) float32`, k* = max |κ| h_max on the trail; speed clipped, and position past the domain (after success).
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -105,8 +103,6 @@ class SkierEnv(TaskEnv):
     | 4 | (h − h_mid)/h_half over [h_min, h_max] | -1 | 1 |
     | 5 | κ h_max, the curvature at the feet in units of 1/h_max | -k* | k* |
 
-    k* is max |κ| h_max over the trail.
-
     ## Rewards
 
     With z = E/(m g) the height the barycentre would reach at rest, z₀ its lowest value (at rest at the bottom,
@@ -115,8 +111,7 @@ class SkierEnv(TaskEnv):
 
         reward = ln(max(ε′, 1e-4) / max(ε, 1e-4)) − 0.01
 
-    The logarithm pays each pumping half-cycle for the factor by which it multiplies the energy above the bottom, as on
-    the swing; the constant pays for time. Summed to success: ln(ε_T/ε₀) − 0.01·steps.
+    The logarithm pays the factor by which pumping multiplies ε; the constant, time. Summed: ln(ε_T/ε₀) − 0.01·steps.
 
     ## Starting State
 
@@ -125,25 +120,20 @@ class SkierEnv(TaskEnv):
 
     ## Episode End
 
-    Terminated on success (`info["is_success"]`): x at or beyond a rim (|x| ≥ L/2 on the valley, the lips on the
-    halfpipe) or at or past `target_x`, checked at the end of each step. Truncated after 1000 steps (50 s at the default
-    dt) by the registration's time limit.
+    Terminated on success (`info["is_success"]`): at a step's end, x at or past a rim (|x| ≥ L/2 on the valley, the
+    halfpipe's lips) or `target_x`. Truncated after 1000 steps (50 s by default) by the registration's time limit.
 
     ## Arguments
 
-    A user trail's `trail_params` also give the values of its expression's other symbols. Under g the skier moves as
-    under 9.81 m/s² with time scaled by √(g/9.81), so the longest dt, and the default's substeps, are those of the
-    scaled step dt √(g/9.81).
-
-    The default stepper, where 1 − κ h_max ≥ 0.5 on the whole trail (the valley and the halfpipe), is "rk8_energy":
-    ⌈dt √(g/9.81) / 0.05 s⌉ substeps of DOP853's formula, projected back onto the energy level where h is held, which
-    removes the phase error near the rims; a step whose energy error passes 1e-8 m g Δz is taken again with twice the
-    substeps. Nearer the centre of curvature it is DOP853 at rtol 1e-8, atol 1e-10 (why: docs/guides/env-notes.md).
-    Diverged: an energy error past 0.1 m g Δz. Beyond its domain a trail continues as its osculating parabola, so the
-    step that crosses a rim stays finite.
-
-    Every `info` has `"state"` (`x`, `x_dot`, `p`, `h`, `t`, `s` the arc length from the trail's origin, `kappa`, in
-    SI), `"energy"` (E = p²/(2 m (1 − κh)² σ²) + m g (f + h cos φ), J), `"progress"` (ε) and `"is_success"`.
+    A user trail's `trail_params` also give its expression's other symbols. Under g the skier moves as under 9.81 m/s²
+    in time scaled by √(g/9.81), so dt's bound and the default's substeps apply to dt √(g/9.81). Where 1 − κ h_max ≥ 0.5
+    on the whole trail (the valley, the halfpipe), the default is "rk8_energy": ⌈dt √(g/9.81)/0.05 s⌉ substeps of
+    DOP853's formula, projected back onto the energy level where h is held (no phase error near the rims); a step whose
+    energy error passes 1e-8 m g Δz is retaken at twice the substeps. Nearer the centre of curvature, DOP853 at rtol
+    1e-8, atol 1e-10 (why: docs/guides/env-notes.md). Diverged: an energy error past 0.1 m g Δz. Past its domain a trail
+    continues as its osculating parabola, so a step across a rim stays finite. Every `info` has `"state"` (`x`, `x_dot`,
+    `p`, `h`, `t`, `s` the arc length from the trail's origin, `kappa`, in SI), `"energy"` (E = p²/(2 m (1 − κh)² σ²) +
+    m g (f + h cos φ), J), `"progress"` (ε) and `"is_success"`.
     """
 
     renderer = SkierRenderer
@@ -270,8 +260,7 @@ class SkierEnv(TaskEnv):
         return self.at(y, h, 0.0, side, 0.0)
 
     def advance(self, s, h_cmd, stepper, ops=SCALAR):
-        """The state after a step toward the commanded height: one state, or rows with the vector env's stepper and
-        ops=BATCH."""
+        """The state after a step toward the commanded height; rows with the vector env's stepper and ops=BATCH."""
         segments, h = control_path(s.h, h_cmd, self.dt, self.max_height_speed, ops)
         y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
@@ -290,15 +279,12 @@ class SkierEnv(TaskEnv):
         check_drift(self.stepper, "energy error", energy_error, bound, " J")
 
     def command(self, a):
-        """The commanded height of action a."""
         return self.h_min + 0.5 * (a.T[0] + 1.0) * (self.h_max - self.h_min)
 
     def progress(self, energy):
-        """ε = (E/(m g) − z₀)/(z* − z₀)."""
         return (energy / (self.system.mass * self.system.g) - self.z_floor) / (self.z_goal - self.z_floor)
 
     def reward(self, before, after, info, ops=SCALAR):
-        """ln(max(ε′, 1e-4)/max(ε, 1e-4)) − 0.01."""
         progress_before, progress_after = self.progress(before.energy), info["progress"]
         floor = PROGRESS_FLOOR
         return ops.log(ops.maximum(progress_after, floor) / ops.maximum(progress_before, floor)) - TIME_COST

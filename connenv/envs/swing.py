@@ -39,8 +39,8 @@ def momentum_bound(env, values):
 
 @dataclass
 class SwingState(State):
-    """y = (θ, p); the radius r; the time t; the energy E and lift h at (y, r), which the reward compares; the
-    stepper's energy error (the change of E on held segments since reset)."""
+    """y = (θ, p); the radius r; the time t; the energy E and lift h at (y, r), which the reward compares; the stepper's
+    energy error (E's change on held segments since reset)."""
 
     components: ClassVar[dict] = {"y": ("theta", "p")}
     phase: ClassVar[tuple] = ("theta", "p", "r")
@@ -57,24 +57,21 @@ class SwingEnv(TaskEnv):
     r"""
     ## Description
 
-    A child on a swing pumps it by standing and squatting: the controller assigns the distance r from the pivot to the
-    barycentre, an *active constraint* (Bressan). The swing is a point mass m on a massless rod of length r, at angle θ
-    from the downward vertical, with angular momentum p = m r² θ̇:
-
-        θ̇ = p / (m r²),    ṗ = −m g r sin θ.
-
-    It is strongly fit for jumps: a jump of r leaves (θ, p) unchanged. Shortening r near the bottom and lengthening it
-    at the extremes multiplies 1 − cos(amplitude) by (r_max/r_min)³ per half swing (Piccoli & Kulkarni 2005). The goal
-    is to reach `target_amplitude` as fast as possible.
+    A child pumps a swing by standing and squatting: the controller assigns r, the pivot-to-barycentre distance, an
+    *active constraint* (Bressan). A point mass m on a massless rod of length r, at angle θ from the downward vertical,
+    with angular momentum p = m r² θ̇: ṗ = −m g r sin θ. It is strongly fit for jumps: a jump of r leaves (θ, p)
+    unchanged. Shortening r near the bottom and lengthening it at the extremes multiplies h = 1 − cos A at amplitude A
+    by ρ³ per half swing, ρ = r_max/r_min (Piccoli & Kulkarni 2005). Goal: reach `target_amplitude` fast.
 
     ## Action Space
 
-    `Box(-1, 1, (1,), float32)`: the commanded radius r = r_min + (a + 1)/2 · (r_max − r_min). r jumps there at the
-    start of the step or, with `max_radial_speed`, moves toward it at that speed.
+    `Box(-1, 1, (1,), float32)`: the commanded radius r = r_min + (a + 1)/2 · (r_max − r_min), jumped to at the start of
+    the step or, with `max_radial_speed`, approached at that speed.
 
     ## Observation Space
 
-    `Box(4,) float32`, with ρ = r_max/r_min:
+    `Box(4,) float32`. Below the top (h < 2) |θ̇| ≤ 2√(g/r_min), ρ² times that after a jump: the bound holds up to
+    success (after it, it may saturate) and for every reset state.
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -83,18 +80,13 @@ class SwingEnv(TaskEnv):
     | 2 | θ̇ / (2 √(g/r_min)): 1 at the bottom for a swing that just reaches the top at r_min | -ρ² | ρ² |
     | 3 | (r − r_mid) / r_half, r_mid and r_half the centre and half-width of [r_min, r_max] | -1 | 1 |
 
-    Below the top (h < 2, until success) |θ̇| ≤ 2√(g/r_min), and ρ² times that after a jump: the bound holds in every
-    episode up to success (stepping on after it may saturate it), and for every reset state.
-
     ## Rewards
 
-    With h = (E + m g r)/(m g r) the energy above the bottom in units of m g r (1 − cos A at amplitude A), h before the
-    step and h′ after it:
+    With h = (E + m g r)/(m g r), the energy above the bottom in units of m g r, h before the step and h′ after it:
 
         reward = ln(max(h′, 1e-4) / max(h, 1e-4)) − 0.01
 
-    Pumping multiplies h by ρ³ per half swing, which the logarithm pays alike at every amplitude; the constant pays for
-    time. Summed to success: ln(h*/h₀) − 0.01·steps.
+    The logarithm pays the factor ρ³ alike at any amplitude; the constant, time. To success: ln(h*/h₀) − 0.01·steps.
 
     ## Starting State
 
@@ -103,17 +95,14 @@ class SwingEnv(TaskEnv):
 
     ## Episode End
 
-    Terminated when the amplitude of the current energy at the current radius reaches `target_amplitude`
-    (`info["is_success"]`). Truncated after 500 steps (25 s at the default dt) by the registration's time limit; the
-    ideal pumping schedule needs 10.3 s.
+    Terminated when the amplitude of E at the current r reaches `target_amplitude` (`info["is_success"]`). Truncated
+    after 500 steps (25 s at the default dt) by the registration's time limit; the ideal pumping schedule needs 10.3 s.
 
     ## Arguments
 
     The default step is the pendulum's closed-form flow at constant r, without truncation error (docs/physics/swing.md).
-    Diverged: an energy error past 0.1 m g r_max.
-
-    Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `r`, `t` in SI), `"energy"` (E = p²/(2 m r²) − m g r cos θ,
-    J), `"lift"` (h), `"amplitude"` (rad) and `"is_success"`.
+    Diverged: an energy error past 0.1 m g r_max. Every `info` has `"state"` (`theta`, `theta_dot`, `p`, `r`, `t` in
+    SI), `"energy"` (E = p²/(2 m r²) − m g r cos θ, J), `"lift"` (h), `"amplitude"` (rad) and `"is_success"`.
     """
 
     renderer = SwingRenderer
@@ -170,8 +159,7 @@ class SwingEnv(TaskEnv):
         return self.at(y, r, 0.0, 0.0)
 
     def advance(self, s, r_cmd, stepper, ops=SCALAR):
-        """The state after a step toward the commanded radius: one state, or rows with the vector env's stepper and
-        ops=BATCH."""
+        """The state after a step toward the commanded radius; rows with the vector env's stepper and ops=BATCH."""
         segments, r = control_path(s.r, r_cmd, self.dt, self.max_radial_speed, ops)
         y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
