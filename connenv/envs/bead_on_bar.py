@@ -211,12 +211,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         high = OBSERVATION_HIGH
         return ops.pack(
             [
-                ops.clip(r / L, -high[0], high[0]),
-                ops.clip((s.target - r) / L, -high[1], high[1]),
-                ops.clip(p / (self.mass * L), -high[2], high[2]),
-                ops.sin(theta),
-                ops.cos(theta),
-                hold,
+                ops.clip(r / L, -high[0], high[0]), ops.clip((s.target - r) / L, -high[1], high[1]),
+                ops.clip(p / (self.mass * L), -high[2], high[2]), ops.sin(theta), ops.cos(theta), hold,
             ]
         )
 
@@ -224,10 +220,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         r, p = s.y.T
         state = {"r": r, "r_dot": p / self.mass, "p": p, "theta": s.u.T[0], "t": s.t}
         return {
-            "state": state,
-            "target": s.target,
-            "hold": s.hold,
-            "left_bar": ops.flag(abs(r) > self.half_length),
+            "state": state, "target": s.target, "hold": s.hold, "left_bar": ops.flag(abs(r) > self.half_length),
             "is_success": ops.flag(s.inside & (s.hold >= self.hold_needed - 1e-9 * self.dt)),
         }
 

@@ -257,10 +257,8 @@ class ChaplyginSleighEnv(TaskEnv):
                  "u": s.u[..., 1], "u_dot": s.u_dot[..., 1], "u_along": s.u[..., 0], "u_along_dot": s.u_dot[..., 0],
                  "t": s.t}
         return {
-            "state": {key: ops.real(value) for key, value in state.items()},
-            "target": s.target.copy(),
-            "distance": ops.real(distance),
-            "energy": ops.real(self.system.energy(s.y, s.u, s.u_dot)),
+            "state": {key: ops.real(value) for key, value in state.items()}, "target": s.target.copy(),
+            "distance": ops.real(distance), "energy": ops.real(self.system.energy(s.y, s.u, s.u_dot)),
             "is_success": ops.flag(distance <= self.tolerance),
         }
 

@@ -121,17 +121,9 @@ class ElroysBeanieEnv(ConnectionEnv):
         self.max_beanie_speed, self.hold_time = a.max_beanie_speed, a.hold_time
         inertias = {"body_inertia": self.body_inertia, "beanie_inertia": self.beanie_inertia}
         super().__init__(
-            "SO2",
-            functools.partial(elroys_beanie.connection, **inertias),
-            [-math.inf],
-            [math.inf],
-            dt=a.dt,
-            max_shape_speed=self.max_beanie_speed,
-            render_mode=render_mode,
-            vectorized=True,
-            integrator=a.integrator,
-            exact_segment=functools.partial(elroys_beanie.exact_segment, **inertias),
-            **stepper_options,
+            "SO2", functools.partial(elroys_beanie.connection, **inertias), [-math.inf], [math.inf], dt=a.dt,
+            max_shape_speed=self.max_beanie_speed, render_mode=render_mode, vectorized=True, integrator=a.integrator,
+            exact_segment=functools.partial(elroys_beanie.exact_segment, **inertias), **stepper_options,
         )
         self.state = BeanieState(np.zeros(1), np.zeros(1), 0.0, MOMENTUM_RANGE[0], 0.0, 0.0)
 
@@ -189,11 +181,8 @@ class ElroysBeanieEnv(ConnectionEnv):
                       "momentum": ops.real(state.momentum), "t": state.t}  # fmt: skip
         error = self.error(state, ops)
         return {
-            "state": state_dict,
-            "target": ops.real(state.target),
-            "error": ops.real(error),
-            "held": ops.real(state.held),
-            "is_success": ops.flag(self.success(state, ops)),
+            "state": state_dict, "target": ops.real(state.target), "error": ops.real(error),
+            "held": ops.real(state.held), "is_success": ops.flag(self.success(state, ops)),
         }
 
     def terminated(self, state, info, ops=SCALAR):

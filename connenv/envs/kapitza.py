@@ -261,12 +261,8 @@ class KapitzaPendulumEnv(TaskEnv):
         """The info both tasks give: the state, the energy and the deviation from inverted."""
         theta, p = ops.components(s.y)
         state = {
-            "theta": theta,
-            "theta_dot": self.theta_dot(s, ops),
-            "p": p,
-            "u": ops.vector(s.u),
-            "u_dot": ops.vector(s.u_dot),
-            "t": s.t,
+            "theta": theta, "theta_dot": self.theta_dot(s, ops), "p": p, "u": ops.vector(s.u),
+            "u_dot": ops.vector(s.u_dot), "t": s.t,
         }
         return {"state": state, "energy": ops.real(s.energy), "deviation": self.deviation(s.y, ops)}
 

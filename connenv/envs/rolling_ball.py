@@ -208,8 +208,7 @@ class RollingBallEnv(TaskEnv):
     def describe(self, s, ops=SCALAR):
         info = {
             "state": {"x": s.position[..., 0], "y": s.position[..., 1], "R": s.R.copy(), "t": s.t},
-            "angle_error": s.angle_error,
-            "path_length": s.path_length,
+            "angle_error": s.angle_error, "path_length": s.path_length,
         }
         if self.measures_distance:  # else not known: left out rather than NaN
             ratio = ops.where(s.distance > 0, s.path_length / ops.maximum(s.distance, 1e-300), 1.0)

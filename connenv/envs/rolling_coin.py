@@ -109,16 +109,9 @@ class RollingCoinEnv(ConnectionEnv):
         self.radius, self.rates = a.radius, np.array([a.max_steer_rate, a.max_roll_rate])
         self.position_tolerance, self.heading_tolerance = a.position_tolerance, a.heading_tolerance
         super().__init__(
-            "R2",
-            functools.partial(rolling_coin.connection, radius=self.radius),
-            [-math.inf, -math.inf],
-            [math.inf, math.inf],
-            dt=a.dt,
-            render_mode=render_mode,
-            vectorized=True,
-            integrator=a.integrator,
-            exact_segment=functools.partial(rolling_coin.exact_segment, radius=self.radius),
-            **stepper_options,
+            "R2", functools.partial(rolling_coin.connection, radius=self.radius), [-math.inf, -math.inf],
+            [math.inf, math.inf], dt=a.dt, render_mode=render_mode, vectorized=True, integrator=a.integrator,
+            exact_segment=functools.partial(rolling_coin.exact_segment, radius=self.radius), **stepper_options,
         )
         self.state = CoinState(np.zeros(2), np.zeros(2), 0.0, np.array([0.0, 1.0, 0.0]))
 
@@ -178,9 +171,7 @@ class RollingCoinEnv(ConnectionEnv):
         distance = ops.hypot(dx, dy)
         return {
             "state": {"x": ops.real(x), "y": ops.real(y), "theta": ops.real(theta), "phi": ops.real(phi), "t": state.t},
-            "target": state.target.copy(),
-            "distance": ops.real(distance),
-            "heading_error": ops.real(heading),
+            "target": state.target.copy(), "distance": ops.real(distance), "heading_error": ops.real(heading),
             "is_success": ops.flag(self.success(distance, heading)),
         }
 

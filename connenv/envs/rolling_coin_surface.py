@@ -260,14 +260,10 @@ class RollingCoinSurfaceEnv(TaskEnv):
         reach, scale = 2.0 * self.arena / self.target_distance, 1.0 / max(self.slope_bound, 1e-300)
         return ops.pack(
             [
-                ops.clip(x / self.arena, -1.0, 1.0),
-                ops.clip(y / self.arena, -1.0, 1.0),
+                ops.clip(x / self.arena, -1.0, 1.0), ops.clip(y / self.arena, -1.0, 1.0),
                 ops.clip((s.target.T[0] - x) / self.target_distance, -reach, reach),
-                ops.clip((s.target.T[1] - y) / self.target_distance, -reach, reach),
-                ops.sin(s.theta),
-                ops.cos(s.theta),
-                ops.clip(v / self.speed_scale, -SPEED_BOUND, SPEED_BOUND),
-                ops.clip(z_x * scale, -1.0, 1.0),
+                ops.clip((s.target.T[1] - y) / self.target_distance, -reach, reach), ops.sin(s.theta), ops.cos(s.theta),
+                ops.clip(v / self.speed_scale, -SPEED_BOUND, SPEED_BOUND), ops.clip(z_x * scale, -1.0, 1.0),
                 ops.clip(z_y * scale, -1.0, 1.0),
             ]
         )
@@ -276,11 +272,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
         state = {"x": s.y.T[0], "y": s.y.T[1], "theta": s.theta, "phi": s.y.T[2], "phi_dot": s.y.T[3],
                  "t": s.t}
         return {
-            "state": {k: ops.real(v) for k, v in state.items()},
-            "energy": s.energy,
-            "distance": self.distance(s, ops),
-            "miss": s.miss,
-            "left_arena": ops.flag(self.left_arena(s, ops)),
+            "state": {k: ops.real(v) for k, v in state.items()}, "energy": s.energy, "distance": self.distance(s, ops),
+            "miss": s.miss, "left_arena": ops.flag(self.left_arena(s, ops)),
             "is_success": ops.flag(s.miss <= self.tolerance),
         }
 

@@ -303,11 +303,8 @@ class SkierEnv(TaskEnv):
         speed = sigma * s.x_dot / self.speed_scale
         return ops.pack(
             [
-                ops.clip((x - mid) / half, -1.0, 1.0),
-                s.f1 / sigma,
-                1.0 / sigma,
-                ops.clip(speed, -SPEED_BOUND, SPEED_BOUND),
-                (h - h_mid) / h_half,
+                ops.clip((x - mid) / half, -1.0, 1.0), s.f1 / sigma, 1.0 / sigma,
+                ops.clip(speed, -SPEED_BOUND, SPEED_BOUND), (h - h_mid) / h_half,
                 ops.clip(s.kappa * self.h_max, -self.kappa_bound, self.kappa_bound),
             ]
         )
@@ -315,18 +312,11 @@ class SkierEnv(TaskEnv):
     def describe(self, s, ops=SCALAR):
         x, p = ops.components(s.y)
         state = {
-            "x": x,
-            "x_dot": s.x_dot,
-            "p": p,
-            "h": s.h,
-            "t": s.t,
-            "s": ops.real(self.trail.arc_length(x)),
+            "x": x, "x_dot": s.x_dot, "p": p, "h": s.h, "t": s.t, "s": ops.real(self.trail.arc_length(x)),
             "kappa": s.kappa,
         }
         return {
-            "state": state,
-            "energy": s.energy,
-            "progress": self.progress(s.energy),
+            "state": state, "energy": s.energy, "progress": self.progress(s.energy),
             "is_success": ops.flag(self.success(s, ops)),
         }
 
@@ -337,9 +327,7 @@ SPECS = (
         measure=Measure("time to target", "s", "time_to_success"), controllers=("pumping",),
         play="space", space_action=1.0,  # held: the skier rises (h_max)
         variants=(
-            {},
-            {"trail": "halfpipe"},
-            {"trail": "0.25*x**2", "trail_params": {"domain": (-5.0, 5.0)}, "target_x": 4.0},
+            {}, {"trail": "halfpipe"}, {"trail": "0.25*x**2", "trail_params": {"domain": (-5.0, 5.0)}, "target_x": 4.0},
             {"integrator": "rk4", "substeps": 8},
         ),
         fast_start={"state": {"x": 0.0, "x_dot": 23.0}},

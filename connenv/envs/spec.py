@@ -108,11 +108,9 @@ def register(*specs: Spec):
     """Register each spec with Gymnasium and in `registry`, and name its env class (``name``) after its first id."""
     for spec in specs:
         gym_register(
-            id=spec.id,
-            entry_point=entry_point(spec.env),
+            id=spec.id, entry_point=entry_point(spec.env),
             vector_entry_point=entry_point(spec.vector_env) if spec.vector_env else None,
-            max_episode_steps=spec.max_episode_steps,
-            kwargs=dict(spec.kwargs),
+            max_episode_steps=spec.max_episode_steps, kwargs=dict(spec.kwargs),
         )
         if spec.env not in {known.env for known in registry.values()}:  # the class's first id names it in errors
             spec.env.name = spec.name

@@ -197,9 +197,7 @@ class SwingEnv(TaskEnv):
         theta, p = ops.components(s.y)
         return {
             "state": {"theta": theta, "theta_dot": p / (self.system.mass * s.r**2), "p": p, "r": s.r, "t": s.t},
-            "energy": s.energy,
-            "lift": s.lift,
-            "amplitude": ops.acos(ops.clip(1.0 - s.lift, -1.0, 1.0)),
+            "energy": s.energy, "lift": s.lift, "amplitude": ops.acos(ops.clip(1.0 - s.lift, -1.0, 1.0)),
             "is_success": ops.flag(s.lift >= self.target_lift),
         }
 

@@ -173,12 +173,9 @@ class TubeTwistEnv(ConnectionEnv):
     def describe(self, s, ops=SCALAR):
         lead = np.shape(s.g)[:-1]
         return {
-            "state": {"R": s.g.reshape(*lead, 3, 3).copy(), "t": s.t},
-            "twist": s.twist,
-            "twist_error": ops.real(self.twist_error(s, ops)),
-            "tangent_error": s.tangent_error,
-            "path_length": s.path_length,
-            "path_ratio": self.path_ratio(s, ops),
+            "state": {"R": s.g.reshape(*lead, 3, 3).copy(), "t": s.t}, "twist": s.twist,
+            "twist_error": ops.real(self.twist_error(s, ops)), "tangent_error": s.tangent_error,
+            "path_length": s.path_length, "path_ratio": self.path_ratio(s, ops),
             "is_success": ops.flag(self.success(s, ops)),
         }
 
