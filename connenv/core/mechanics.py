@@ -191,9 +191,8 @@ def check_system(system):
 
 
 def check_fields(system, q, u):
-    """Where the system gives its own vector_field (and jump_field), each tried at construction: at one state
-    y = (q, 0) and over the batch of samples (each q with each u) at rest, it must return real finite arrays of
-    y's shape, else TypeError or ValueError naming it (not a failure at the first step)."""
+    """The system's own vector_field and jump_field, tried at construction at rest, at one state y = (q, 0) and over the
+    batch of samples (each q with each u): real finite arrays of y's shape, else TypeError or ValueError naming it."""
     q, u = np.repeat(q, len(u), axis=0), np.tile(u, (len(q), 1))
     y = np.concatenate([q, np.zeros_like(q)], axis=-1)
     for method in ("vector_field", "jump_field"):

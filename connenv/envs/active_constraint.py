@@ -47,8 +47,7 @@ CONTROLS = ("position", "velocity")
 
 @dataclass
 class ActiveConstraintState(State):
-    """y = (q, p); the assigned coordinates u; the time t; the stepper's energy error (the change of E = H_u at
-    u̇ = 0 on the segments where u is held, summed since reset)."""
+    """y = (q, p), u, t, and the energy error: the change of E = H_u(u̇ = 0) where u is held, since reset."""
 
     y: np.ndarray
     u: np.ndarray
@@ -60,17 +59,16 @@ class ActiveConstraintEnv(TaskEnv):
     r"""
     ## Description
 
-    Any mechanical system steered by *active constraints* (Bressan): the controller assigns the coordinates
-    u = (u¹…uᵐ) directly, and the free ones q = (q¹…qⁿ), with their conjugate momenta p, obey Hamilton's equations of
+    Any mechanical system steered by *active constraints* (Bressan): the controller assigns the coordinates u = (u¹…uᵐ)
+    directly, and the free ones q = (q¹…qⁿ), with their conjugate momenta p, obey Hamilton's equations of
 
         H_u(q, p) = ½ (p − G12 u̇)ᵀ G11⁻¹ (p − G12 u̇) − ½ u̇ᵀ G22 u̇ + V(q, u),
 
     T = ½ q̇ᵀ G11 q̇ + q̇ᵀ G12 u̇ + ½ u̇ᵀ G22 u̇ being the kinetic energy in the metric blocks G11, G12, G22 and V the
     potential (docs/physics/framework.md). `system` is any object with integer attributes `n`, `m` and methods
-    `metric(q, u) -> (G11, G12, G22)` and `potential(q, u)` broadcasting over leading axes; its own
-    `vector_field(y, u, u_dot)` is used if it has one (else a numerical derivative of H_u). Or build it from sympy
-    expressions with `ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u, **kwargs)`, which derives the
-    equations with exact gradients.
+    `metric(q, u) -> (G11, G12, G22)` and `potential(q, u)` broadcasting over leading axes, and optionally
+    `vector_field(y, u, u_dot)` (else H_u is differentiated numerically); or build it from sympy expressions, with exact
+    gradients, by `ActiveConstraintEnv.from_lagrangian(kinetic, potential, q, u, **kwargs)`.
 
     With A = G11⁻¹, K = A G12 and B = G22 − G12ᵀ A G12, the system's class `env.unwrapped.jump_class`
     (`connenv.core.JumpClass`) decides which controls are admissible:
@@ -83,38 +81,34 @@ class ActiveConstraintEnv(TaskEnv):
 
     ## Action Space
 
-    `Box(-1, 1, (m,), float32)`.
+    `Box(-1, 1, (m,), float32)`, by `control`:
 
-    - `control="position"`: the commanded u = u_low + (a + 1)/2 (u_high − u_low). u jumps there at the start of the
-      step or, with `max_control_speed`, moves toward it at that speed (each coordinate) and stops there. Needs finite
-      bounds and a fit or strongly fit system (or `max_control_speed`).
-    - `control="velocity"`: u̇ = a · max_control_speed through the step; a coordinate that meets a finite bound stops
-      there. Needs `max_control_speed`. The control for a coordinate that winds (infinite bounds).
+    - `control="position"`: u jumps at the step's start, or heads at `max_control_speed` (per coordinate), to the
+      command u_low + (a + 1)/2 (u_high − u_low); needs finite bounds and, without that speed, a (strongly) fit system.
+    - `control="velocity"`, for a coordinate that winds (infinite bounds): u̇ = a · max_control_speed through the step,
+      a coordinate stopping at a finite bound. Needs `max_control_speed`.
 
     ## Observation Space
 
-    Default: (q, p, u), `Box(-inf, inf, (2n + m,), float32)`; a step that would take an entry beyond float32's range
-    (±3.4e38) raises `connenv.core.StepperError`. With a task that has `observation(state)`, its value as float32
-    (finite, of one shape) in its `observation_space` if it has one, else in an unbounded Box of its shape.
+    Default: (q, p, u), `Box(-inf, inf, (2n + m,), float32)`; a step taking an entry past float32's range (±3.4e38)
+    raises `connenv.core.StepperError`. With a task that has `observation(state)`, its value as float32 (finite, of one
+    shape) in its `observation_space` (else an unbounded Box).
 
     ## Rewards
 
-    Default 0. With `task`, `task.reward(state, next_state)` on the state dicts before and after the step: a finite
-    real number, else TypeError or ValueError naming it.
+    Default 0; with `task`, `task.reward(state, next_state)` on the state dicts before and after the step (finite).
 
     ## Starting State
 
-    Default q = 0, p = 0, u at the midpoint of finite bounds (0 on a coordinate with an infinite bound), t = 0. With
-    `task`, `task.reset(np_random)` returns a state dict with any of q, p, u (the rest default).
-    `reset(options={"state": {...}})` sets any of these exactly (every entry within ±1e3, beyond which a user's system
-    may outrun any stepper; a number stands for a vector of one entry):
+    Default q = 0, p = 0, u at the midpoint of finite bounds (else 0, within them), t = 0, or any of them from
+    `task.reset(np_random)`'s state dict. `reset(options={"state": {...}})` sets any exactly (a number stands for a
+    vector of one entry; within ±1e3, beyond which a user's system may outrun any stepper):
 
     ## Episode End
 
-    Default: never terminates. With `task`, terminated when `task.terminated(state)`. `info["is_success"]` is
-    `task.is_success(state)` for a task that has it, else False (an end is not always a success).
-    `gym.make("connenv/ActiveConstraint-v0", ...)` truncates after 1000 steps (the registration's time limit;
-    `max_episode_steps=` to change it).
+    Default: never terminates; with `task`, when `task.terminated(state)`. `info["is_success"]` is
+    `task.is_success(state)` if the task has it, else False (an end is not always a success). The registration truncates
+    after 1000 steps (`gym.make("connenv/ActiveConstraint-v0", max_episode_steps=...)` changes it).
 
     ## Arguments
 
@@ -131,23 +125,18 @@ class ActiveConstraintEnv(TaskEnv):
     | draw | None | `draw(state, canvas)`: draws a state dict on a `connenv.envs.rendering.Canvas` |
     | render_mode | None | "human", "rgb_array" |
 
-    The default integrator is "exact" for a system that gives its closed-form step (`exact_segment(y, u, u̇, τ)` at
-    constant u̇ or `exact_flow(y, u, τ)` where u is held, as the bead on a bar's does), else DOP853 at rtol 1e-10, atol
-    1e-12: a generic system's time scales are unknown, so the step adapts to them (`python -m connenv.bench generic`
-    compares the candidates). Diverged: an energy error (of E = ½ pᵀ A p + V) past 1e-2 (1 + |E|), or a segment that
-    needs more evaluations of the vector field than its budget (a stall, as where the metric turns singular ahead, fails
-    in seconds): 1000 on a numerical gradient of H (scipy.differentiate), 100 000 on a system's own `vector_field`
-    (faster and exact, as `from_lagrangian` gives).
+    The default integrator is "exact" for a system with a closed-form step (`exact_segment(y, u, u̇, τ)` at constant u̇,
+    or `exact_flow(y, u, τ)` where u is held), else DOP853 at rtol 1e-10, atol 1e-12, adapting to a generic system's
+    unknown time scales (`python -m connenv.bench generic` compares the candidates). Diverged: an energy error
+    (of E = ½ pᵀ A p + V) past 1e-2 (1 + |E|), or a segment needing more evaluations of the vector field than its
+    budget, 1000 on a numerical gradient of H (scipy.differentiate), 100 000 on a system's own `vector_field` (exact and
+    faster; `from_lagrangian` gives one), so a stall (say, where the metric turns singular ahead) fails in seconds.
 
-    The system's functions are tried at construction, at the samples of q and u that decide its class: one that
-    raises, returns no real numbers, the wrong shape or non-finite values is a ValueError or TypeError naming it there.
-
-    Every `info` has `"state"`: `{"q": array(n), "p": array(n), "u": array(m), "t": float}` and `"is_success"`.
-
-    A `task`'s methods (`connenv.envs.user_task`) take state dicts as `info["state"]`; its optional `observation_space`
-    bounds its observation. Without reset, reward and terminated it is a TypeError at construction; an answer of the
-    wrong kind is a TypeError or ValueError naming the method. The vector env calls it row by row.
-    docs/guides/own-system.md gives one: turn a body with a rotor to a target angle.
+    The system's functions are tried at construction, at the samples of (q, u) deciding its class: one raising or
+    returning no real numbers, the wrong shape or non-finite values is a ValueError or TypeError naming it. Every `info`
+    has `"state"`: `{"q": array(n), "p": array(n), "u": array(m), "t": float}`, and `"is_success"`. A `task`'s methods
+    take such state dicts, row by row in the vector env; `connenv.envs.user_task` checks them (at construction) and
+    every answer, naming the method. docs/guides/own-system.md gives one (a rotor turns a body to a target angle).
     """
 
     renderer = CoordinatePlot
@@ -213,9 +202,8 @@ class ActiveConstraintEnv(TaskEnv):
 
     @classmethod
     def from_lagrangian(cls, kinetic, potential, q, u, **kwargs):
-        """The env of the system with kinetic energy T and potential V, sympy expressions in q, u (lists of
-        Symbols) and their velocities (the Symbol named s.name + "_dot" for a coordinate s); see
-        connenv.core.lagrangian.LagrangianSystem. kwargs: the env's."""
+        """The env of kinetic energy T, potential V, sympy expressions in the Symbol lists q, u and their velocities
+        (named s.name + "_dot" for a coordinate s; connenv.core.lagrangian.LagrangianSystem); kwargs: the env's."""
         from connenv.core.lagrangian import LagrangianSystem
 
         return cls(LagrangianSystem(kinetic, potential, q, u), **kwargs)
@@ -259,8 +247,7 @@ class ActiveConstraintEnv(TaskEnv):
         return control
 
     def _samples(self):
-        """Points (q, u) at which the metric is checked and, for a system without its own, the class decided: q
-        at 0 and ±0.5 on every coordinate; u at the start, and at the finite bounds or ±1 around the start."""
+        """The (q, u) at which the metric is checked and, for a system without its own, the class decided."""
         q = np.array([0.0, 0.5, -0.5])[:, None] * np.ones(self.n)
         low = np.where(np.isfinite(self.u_low), self.u_low, self.u_start - 1.0)
         high = np.where(np.isfinite(self.u_high), self.u_high, self.u_start + 1.0)
@@ -284,8 +271,8 @@ class ActiveConstraintEnv(TaskEnv):
         return self.u_low + 0.5 * (a + 1.0) * (self.u_high - self.u_low)
 
     def segments(self, u, command, ops=SCALAR):
-        """(y's jump or None, control segments, u at the end) of a step from u under the command: one state
-        (ops=SCALAR), or rows, each with its own segments where its u stops at a bound."""
+        """(y's jump or None, control segments, u at the end) of a step from u under the command: one state, or rows,
+        each with its own segments where its u stops at a bound."""
         if self.control == "position" and self.max_control_speed is None:
             return command - u, [(command, np.zeros_like(command), self.dt)], command
         if self.control == "position":
@@ -298,8 +285,7 @@ class ActiveConstraintEnv(TaskEnv):
         return None, segments, u_end
 
     def advance(self, s, command, stepper, ops=SCALAR):
-        """The state after a step under the command, by these steppers of the segments and of a fit system's jump:
-        the single env's step (ops=SCALAR), and the vector env's over its rows (its batched steppers, ops=BATCH)."""
+        """The state after a step under the command, by this stepper after a fit system's jump: one state, or rows."""
         delta, segments, u_end = self.segments(s.u, command, ops)
         y = s.y
         if delta is not None and self.jump_class is JumpClass.FIT and np.any(delta.real != 0.0):
@@ -311,8 +297,7 @@ class ActiveConstraintEnv(TaskEnv):
         return self.at(y, u_end, s.t + self.dt, s.energy_error + change)
 
     def held_energy(self, y, u, u_dot):
-        """E = ½ pᵀ A p + V(q, u) on the states whose u is held (u̇ = 0, of the real parts on a Jacobian's rows), 0
-        where u moves."""
+        """E = ½ pᵀ A p + V(q, u) where u is held (u̇ = 0, by the real parts on a Jacobian's rows), 0 where u moves."""
         held = np.all(u_dot.real == 0.0, axis=-1)
         if not np.any(held):
             return 0.0 if np.ndim(held) == 0 else np.zeros(held.shape)
@@ -328,8 +313,7 @@ class ActiveConstraintEnv(TaskEnv):
 
     @staticmethod
     def check_observable(y, u):
-        """StepperError where (q, p) or u (one state or a batch) has left float32's range, in which the default
-        observation holds them: a step that would make it ±inf raises, and leaves the state as it was."""
+        """StepperError, the state kept, where (q, p) or u (one state or rows) left the observation's float32 range."""
         check_observable("(q, p)", y)
         check_observable("u", u)
 

@@ -54,7 +54,7 @@ class ConnectionEnv(TaskEnv):
         ξ = −A(s) ṡ,    ġ = g ξ^ (frame="body"),    ġ = ξ^ g (frame="space").
 
     A falling cat, a swimmer at zero momentum, a satellite with rotors, a rolling ball: a closed loop of shapes moves g
-    by the connection's holonomy, whatever the speed at which it is run (docs/physics/connections.md). `group` is one of
+    by the connection's holonomy however fast it is run (docs/physics/connections.md). `group` is one of
 
     | group | g (in `info["state"]["g"]`) | ξ |
     |---|---|---|
@@ -63,38 +63,34 @@ class ConnectionEnv(TaskEnv):
     | "SO3" | 3×3 rotation | (ω₁, ω₂, ω₃), ω̂ v = ω × v |
     | "R2" | the vector (x, y) | (v₁, v₂) |
 
-    and `connection(s)` returns A(s) as an array of shape (dim 𝔤, k) for a shape s of shape (k,). A connection that is
-    the same at every shape (the rolling ball's, the beanie's, a tube's) may be given as that array A.
+    and `connection(s)` returns A(s), shape (dim 𝔤, k), for a shape s of shape (k,); one that is the same at every shape
+    (the rolling ball's, the beanie's, a tube's) may be given as that array A.
 
     ## Action Space
 
-    `Box(-1, 1, (k,), float32)`: the shape velocity ṡ = action · max_shape_speed, constant over the step; a coordinate
-    that reaches a finite bound stops there for the rest of the step. Infinite bounds are allowed (a coordinate that
-    winds, such as a rotor's angle).
+    `Box(-1, 1, (k,), float32)`: the shape velocity ṡ = action · max_shape_speed, constant over the step, a coordinate
+    stopping at a finite bound; infinite bounds are allowed (a coordinate that winds, as a rotor's angle).
 
     ## Observation Space
 
-    Default: `Box(-inf, inf, (n + k,), float32)`, g flattened (4 numbers for SO2, 9 for SE2 and SO3, 2 for R2) followed
-    by s; a step that would take an entry beyond float32's range (±3.4e38) raises `connenv.core.StepperError`. With a
-    `task` that has `observation(state)`, its value as float32 (finite, of one shape), in the task's
-    `observation_space` if it has one, else in an unbounded Box of its shape.
+    Default: g flattened (SO2: 4 entries, SE2, SO3: 9, R2: 2) and s, `Box(-inf, inf, (n + k,), float32)`; a step taking
+    an entry past float32's range (±3.4e38) raises `connenv.core.StepperError`. A `task`'s `observation(state)`, if it
+    has one, as float32 (finite, of one shape) in its `observation_space` (else an unbounded Box).
 
     ## Rewards
 
-    Default 0. With a `task`: `task.reward(state, next_state)`, the states as in `info["state"]`: a finite real number,
-    else TypeError or ValueError naming it.
+    Default 0; with a `task`, `task.reward(state, next_state)` on the states as in `info["state"]` (finite).
 
     ## Starting State
 
-    g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0. With a
-    `task`: `task.reset(np_random)` returns a dict with any of "g" and "s". `reset(options={"state": {...}})`
-    sets either exactly:
+    g = identity, s at the midpoint of its bounds where both are finite, else the finite bound or 0, t = 0, or either
+    from `task.reset(np_random)`'s dict. `reset(options={"state": {...}})` sets either exactly:
 
     ## Episode End
 
     Never terminates by default; with a `task`, when `task.terminated(state)`. `info["is_success"]` is
-    `task.is_success(state)` for a task that has it, else False. `gym.make("connenv/Connection-v0", ...)` truncates
-    after 1000 steps (the registration's time limit; `max_episode_steps=` to change it).
+    `task.is_success(state)` if the task has it, else False. The registration truncates after 1000 steps
+    (`gym.make("connenv/Connection-v0", max_episode_steps=...)` changes it).
 
     ## Arguments
 
@@ -110,28 +106,22 @@ class ConnectionEnv(TaskEnv):
     | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
     | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the steps call it once per batch |
     | exact_segment | None | callable (g, s, ṡ, τ) -> g after a segment at constant ṡ, in closed form (below) |
-    | integrator | "exact" where it applies, else "magnus" | "exact" (with exact_segment or a constant A), "magnus", |
-    | | | "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
+    | integrator | below | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | atol (magnus: 1e-10) / substeps, rtol, atol | | the stepper's |
 
-    The default step, "magnus" (`connenv.core.lie.Magnus`), keeps g on its group to rounding with closed-form
-    exponentials, its substeps chosen per segment for an error ≤ atol; where A is constant along the path it is one
-    exponential, the exact flow. Diverged: g further than 1e-9 from its group, or a segment that needs more than 4096
-    substeps (a pole of A on the shape's path).
+    The default step is "exact" for a constant A or with an `exact_segment`, else "magnus" (`connenv.core.lie.Magnus`),
+    which keeps g on its group to rounding by closed-form exponentials, substeps per segment chosen for an error ≤ atol,
+    one (the exact flow) where A is constant along the path. A system that knows its flow gives it as
+    `exact_segment(g, s, ṡ, τ)`, g's coordinates after a segment of length τ at constant ṡ from s, for one state or rows
+    (τ a float or one per row), stepped by `connenv.core.lie.ExactConnection`; a row of NaN goes to the generic
+    integrator, an infinite one raises StepperError. Diverged: g over 1e-9 off its group, or a segment needing over 4096
+    substeps (a pole of A on the path). A callable connection and an exact_segment are tried at construction (at two
+    shapes within the bounds; the segment over dt at rest and at top speed), the segment's answer again at every step:
+    one that raises or returns no finite real numbers of the right shape is a ValueError or TypeError naming it.
 
-    A system that knows its flow gives it as `exact_segment(g, s, ṡ, τ)`: g's coordinates after a segment of length τ at
-    constant ṡ from s, for one state or a batch of rows (τ a float or one per row); it is then the default step
-    (`connenv.core.lie.ExactConnection`). A row of NaN is stepped by the generic integrator instead, an infinite one
-    raises StepperError. A callable connection and an exact_segment are tried at construction (at the start shape and
-    a quarter of the way between the bounds; the segment over dt at rest and at top speed): one that raises or returns
-    no finite real numbers of the right shape is a ValueError or TypeError naming it. Every step checks the segment's
-    answer again.
-
-    Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}` and `"is_success"`.
-
-    A `task`'s methods (`connenv.envs.user_task`) take state dicts as `info["state"]`; its optional `observation_space`
-    bounds its observation. Without reset, reward and terminated it is a TypeError at construction; an answer of the
-    wrong kind is a TypeError or ValueError naming the method. The vector env calls it row by row.
+    Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`, and `"is_success"`. A `task`'s methods take
+    such state dicts, row by row in the vector env; `connenv.envs.user_task` checks them (at construction) and every
+    answer, naming the method.
     """
 
     renderer = ConnectionRenderer
@@ -191,8 +181,7 @@ class ConnectionEnv(TaskEnv):
         return np.where(low & high, middle, np.where(low, self.low, np.where(high, self.high, 0.0)))
 
     def sample_shapes(self):
-        """Two shapes within the bounds at which a callable connection is tried: the start shape, and a quarter of
-        the way from the low bound to the high one (± 0.5 from the start where a bound is infinite)."""
+        """The shapes the connection is tried at: the start, and a quarter up the bounds (start ± 0.5 if infinite)."""
         low = np.where(np.isfinite(self.low), self.low, self.start_shape() - 0.5)
         high = np.where(np.isfinite(self.high), self.high, self.start_shape() + 0.5)
         return np.stack([self.start_shape(), 0.75 * low + 0.25 * high])
@@ -227,9 +216,8 @@ class ConnectionEnv(TaskEnv):
         return a * self.max_shape_speed
 
     def advance(self, state, s_dot, stepper, ops=SCALAR):
-        """The state after a step at the shape velocity ṡ, stopped where s meets a bound, by this stepper: the
-        single env's step (ops=SCALAR), and the vector env's over its rows, each with its own segments (its batched
-        stepper, ops=BATCH)."""
+        """The state after a step at the shape velocity ṡ, stopped where s meets a bound, by this stepper: one state, or
+        rows, each with its own segments."""
         cut = bounded_segments if ops is SCALAR else bounded_segments_batch
         segments, s, _ = cut(state.s, s_dot, self.low, self.high, self.dt)
         g, _ = run_segments(stepper, self.system, state.g, segments)
@@ -240,15 +228,13 @@ class ConnectionEnv(TaskEnv):
 
     @staticmethod
     def check_observable(g, s):
-        """StepperError where the coordinates of g or s (one state or a batch) have left float32's range, in which
-        the default observation holds them (SE2's and R2's position, s; an angle that large has lost all
-        precision): a step that would make it ±inf raises, and leaves the state as it was."""
+        """StepperError, keeping the state, where g's coordinates or s (one state or rows) left float32's range, the
+        observation's (SE2's and R2's position, s; an angle that large has lost all precision)."""
         check_observable("g", g)
         check_observable("s", s)
 
     def check_group(self, g):
-        """StepperError if g (any row of a batch) has left its group by more than GROUP_BOUND (SO3's matrices; the
-        other groups' coordinates are on the group by construction)."""
+        """StepperError if g (any row) left its group by more than GROUP_BOUND (SO3's matrices; the others cannot)."""
         if self.group.name != "SO3":
             return
         off = np.max(self.group.off_group(self.group.matrix(g)))

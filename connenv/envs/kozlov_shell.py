@@ -37,9 +37,8 @@ def disc_inertia(args):
 
 @dataclass
 class ShellState(State):
-    """The pose (x, y, θ); the body momentum (P₁, P₂, Π), 0 in the reduced model; the mass position u; the
-    target (x, y); the time t; full: whether the state steps the full model (else the reduced one); and the
-    spatial momentum at reset, which the full model conserves."""
+    """The pose (x, y, θ), body momentum (P₁, P₂, Π) (0 in the reduced model), mass position u, target (x, y), time t;
+    full: whether it steps the full model, which conserves momentum0, the spatial momentum at reset."""
 
     components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "u": ("u1", "u2"), "target": ("target_x", "target_y")}
 
@@ -56,25 +55,23 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     r"""
     ## Description
 
-    An elliptic shell, semi-axes a along its body x and b along its body y, floats in an unbounded planar ideal fluid at
-    rest at infinity (Kozlov & Ramodanov 2001). A point mass m inside sits at the body-frame position u, which the
-    controller assigns: an *active constraint* (Bressan). Moving the mass moves the shell, through the fluid's added
-    masses λ₁ = ρπb², λ₂ = ρπa², λ₃ = ρπ(a² − b²)²/8 (docs/physics/kozlov-shell.md). With g = (x, y, θ) the
-    shell's pose and μ = (P₁, P₂, Π) the body momentum of shell, fluid and mass: from rest, the default, μ stays 0 and
-    the motion is geometric (a mechanical connection), so the env integrates the reduced state (x, y, θ), and a closed
-    loop of u moves the shell alike however fast it is run (loops turn it, figure-eights translate it). A nonzero
-    initial momentum (a reset option) switches that episode to the full model (Kirchhoff's equations),
-    (x, y, θ, P₁, P₂, Π), whose spatial momentum is conserved. The goal is to bring the shell's centre within
-    `success_radius` of a target.
+    An elliptic shell, semi-axes a along body x, b along body y, floats in an unbounded planar ideal fluid at rest at
+    infinity (Kozlov & Ramodanov 2001); the controller assigns the body-frame position u of a point mass m inside (an
+    *active constraint*, Bressan), which moves the shell through the fluid's added masses λ₁ = ρπb², λ₂ = ρπa²,
+    λ₃ = ρπ(a² − b²)²/8 (docs/physics/kozlov-shell.md). With g = (x, y, θ) the pose and μ = (P₁, P₂, Π) the body
+    momentum of shell, fluid and mass: from rest (the default) μ stays 0 and the motion is geometric (a mechanical
+    connection), integrated on (x, y, θ) alone, a closed loop of u moving the shell alike at any speed (loops turn it,
+    figure-eights translate it); a nonzero initial momentum switches the episode to the full (Kirchhoff) model on
+    (x, y, θ, μ), conserving the spatial momentum. Goal: the shell's centre within `success_radius` of a target.
 
     ## Action Space
 
     `Box([-1, -1], [1, 1], float32)`: the commanded mass position u* = (action[0] · u1_max, action[1] · u2_max) in the
-    body frame. Over the step the mass moves from u to u* along the straight segment, u̇ = (u* − u)/dt.
+    body frame, to which the mass moves straight over the step, u̇ = (u* − u)/dt.
 
     ## Observation Space
 
-    `Box(9,) float32`, the target and the momentum clipped to their bounds (the momentum is 0 in the reduced model):
+    `Box(9,) float32` (M, J: the shell's mass and inertia), target and momentum (0 in the reduced model) clipped:
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -90,35 +87,29 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     ## Rewards
 
-    With d the distance from the shell's centre to the target before the step and d′ after it:
+    With d the distance from the shell's centre to the target before the step and d′ after it, progress in units of the
+    success radius (one per 5 cm at the default) and a cost of time:
 
-        reward = (d − d′) / success_radius − 0.01
-
-    Progress in units of the success radius (one per 5 cm at the default) and a cost of time. Summed to success:
-    (d₀ − d_T)/success_radius − 0.01·steps.
+        reward = (d − d′) / success_radius − 0.01    (summed to success: (d₀ − d_T) / success_radius − 0.01 · steps)
 
     ## Starting State
 
-    At rest, μ = 0, at the origin with θ = 0 and the mass at the centre, u = 0, t = 0; the target at a distance uniform
-    in [0.5, 1.0] m in a uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of
-    these and the target (within ±100 m) exactly:
+    At rest (μ = 0, u = 0) at the origin, θ = 0, t = 0; the target a uniform [0.5, 1.0] m away in a uniform direction
+    (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target (±100 m) exactly:
 
     ## Episode End
 
     Terminated when the shell's centre is within `success_radius` of the target at the end of a step
-    (`info["is_success"]`). Truncated after 300 steps (30 s at the default dt) by the registration's time limit; the
-    gait planner (`agents.controllers.kozlov_shell`) needs at most 103 steps on seeds 0–99, and 111 on targets 1 m
-    away in 90 directions.
+    (`info["is_success"]`); truncated after 300 steps (30 s at the default dt) by the registration's time limit, ample
+    for the gait planner (`agents.controllers.kozlov_shell`).
 
     ## Arguments
 
-    The default steps the reduced model by the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule fixed
-    at construction as the cheapest that meets atol on every motion of the mass the box admits in one dt, and the full
-    model, which has no connection, by DOP853. Semi-implicit Euler is explicit Euler on the reduced model. Diverged: in
-    the full model, a spatial momentum moved by more than 0.1 of its norm since reset.
-
-    Every `info` has `"state"` (`x`, `y`, `theta`, `u` (2), `momentum` (P₁, P₂, Π, body frame), `t`, in SI),
-    `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m), `"model"`
+    By default the reduced model takes the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule the
+    cheapest meeting atol on every one-dt motion of the mass (chosen at construction), the full model (no connection) by
+    DOP853; semi-implicit Euler is explicit Euler on the reduced model. Diverged: the full model's spatial momentum
+    moved over 0.1 of its norm since reset. Every `info` has `"state"` (`x`, `y`, `theta`, `u`, `momentum` (μ), `t`, in
+    SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m), `"model"`
     ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
     """
 
@@ -182,8 +173,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         return {**super().parameters(), "m/(M + λ₁)": ratio, "model": "full" if self.state.full else "reduced"}
 
     def start(self, options):
-        """At rest at the origin, or options['state']; the target drawn by np_random, or options['target']. The
-        model follows the momentum: reduced at zero, full otherwise."""
+        """The Starting State above; the model follows the momentum, reduced at zero and full otherwise."""
         check_keys("reset options", options, {"state", "target"})
         distance, angle = self.np_random.uniform(*TARGET_DISTANCES), self.np_random.uniform(-math.pi, math.pi)
         target = distance * np.array([math.cos(angle), math.sin(angle)])
@@ -196,8 +186,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
     def advance(self, s, u_cmd, stepper, ops=SCALAR):
-        """The mass moves from u to u_cmd at constant speed over dt; the full model checks its spatial momentum. One
-        state, or rows with the vector env's stepper and ops=BATCH."""
+        """The mass moves straight to u_cmd over dt: one state, or rows with the vector env's stepper and ops=BATCH."""
         segments = [(s.u, (u_cmd - s.u) / self.dt, self.dt)]
         pose, momentum = self.swim(s, segments, segments, stepper, ops)
         return ShellState(pose, momentum, u_cmd, s.target, s.t + self.dt, s.full, s.momentum0)
@@ -215,9 +204,8 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
 @functools.cache
 def shell_rule(system, u_max, dt, atol):
-    """The Lie-group step's rule (pieces, points) for the shell's reduced model: the cheapest that meets atol on
-    every step the env admits, judged on the straight motions in one step between any two of the box's corners,
-    edge midpoints and centre (corner to corner the fastest and the worst); see `connenv.core.lie.fixed_rule`."""
+    """The reduced model's Lie-group rule (pieces, points; `connenv.core.lie.fixed_rule`), judged on the straight
+    motions in one step between any two of the box's corners, edge midpoints and centre (corner to corner the worst)."""
     grid = [np.array([i * u_max[0], j * u_max[1]]) for i in (-1, 0, 1) for j in (-1, 0, 1)]
     segments = [(a, (b - a) / dt, dt) for a in grid for b in grid if np.any(a != b)]
     return fixed_rule(system, segments, atol)

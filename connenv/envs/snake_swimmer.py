@@ -40,9 +40,8 @@ def thinnest(args):
 
 @dataclass
 class SnakeState(State):
-    """The middle link's pose (x, y, θ); the body momentum (P₁, P₂, Π), 0 in the reduced model; the joint angles
-    s = (α, β); the target (x, y); the time t; full: whether the state steps the full model (else the reduced
-    one); and the spatial momentum at reset, which the full model conserves."""
+    """The middle link's pose (x, y, θ), body momentum (0 in the reduced model), joint angles s = (α, β), target (x, y),
+    time t; full: whether it steps the full model, which conserves momentum0, the spatial momentum at reset."""
 
     components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "s": ("alpha", "beta"), "target": ("target_x", "target_y")}
 
@@ -56,12 +55,10 @@ class SnakeState(State):
 
 
 def joint_path(s, s_cmd, dt: float, max_speed: float):
-    """The joints' motion over one step toward the command: along the straight segment from s to s_cmd, the faster
-    joint at max_speed, then held at s_cmd for the rest of the step if it got there. Returns (ṡ, the duration of
-    the motion, the joints at the end of the step); over a batch (rows on the first axis) the duration is one per
-    row, and a row that does not move has ṡ = 0 and duration 0. A move so small that max_speed / (its length)
-    overflows (a subnormal command from rest) is none: the joints take the command, ṡ = 0, duration 0; the body
-    would move by less than any float resolves."""
+    """(ṡ, the duration of the motion, the joints at the end) of a step toward s_cmd: along the straight segment, the
+    faster joint at max_speed, held at s_cmd once there; over a batch (rows on axis 0) a duration per row, 0 with ṡ = 0
+    for a row that does not move. A move so small that max_speed / its length overflows (a subnormal command from rest)
+    is none: the joints take the command, ṡ = 0, duration 0 (the body would not move in floats)."""
     if np.ndim(s) == 1:  # one state on floats, the same arithmetic: several times faster than numpy on two numbers
         return _joint_path_floats(s.tolist(), s_cmd.tolist(), dt, max_speed)
     delta = s_cmd - s
@@ -77,8 +74,7 @@ def joint_path(s, s_cmd, dt: float, max_speed: float):
 
 
 def _largest(delta):
-    """max |δ_k| over the last axis; on complex rows (a Jacobian's), the entry the real parts pick, with its
-    derivative."""
+    """max |δ_k| on the last axis; on complex rows (a Jacobian's) the entry the real parts pick, with its derivative."""
     if not np.iscomplexobj(delta):
         return np.max(np.abs(delta), axis=-1)
     magnitude = ARRAYS.abs(delta)
@@ -103,27 +99,22 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     ## Description
 
     Three identical rigid elliptic links, semi-axes a along the link and b across it, hinged tip to tip, float in an
-    unbounded planar ideal fluid at rest at infinity (Kanso, Marsden, Rowley & Melli-Huber 2005); each link's fluid is
-    that of the link alone, and there is no drag. The controller assigns the two joint angles s = (α, β), an *active
-    constraint* (Bressan), and closed loops of (α, β) make the chain swim (docs/physics/SnakeSwimmer.md). With
-    g = (x, y, θ) the middle link's pose and μ = (P₁, P₂, Π) the body momentum of chain and fluid: from rest, the
-    default, μ stays 0 and the motion is geometric (a mechanical connection), so the env integrates the reduced state
-    (x, y, θ), and a closed loop of (α, β) moves the chain alike however fast it is run. A nonzero initial momentum (a
-    reset option) switches that episode to the full model (Kirchhoff's equations), (x, y, θ, P₁, P₂, Π), whose spatial
-    momentum is conserved. The goal is to bring the middle link's centre within `success_radius` of a target 1 to 2
-    body lengths away (a body length is 6a, the straight chain's length).
+    unbounded planar ideal fluid at rest at infinity (Kanso, Marsden, Rowley & Melli-Huber 2005), each link's fluid that
+    of the link alone, without drag; the controller assigns the joint angles s = (α, β) (an *active constraint*,
+    Bressan; docs/physics/SnakeSwimmer.md). With g = (x, y, θ) the middle link's pose and μ = (P₁, P₂, Π) the body
+    momentum of chain and fluid: from rest μ stays 0 and the motion is geometric (a mechanical connection), integrated
+    on (x, y, θ) alone, a closed loop of (α, β) swimming the chain alike at any speed; a nonzero initial momentum
+    switches the episode to the full (Kirchhoff) model on (x, y, θ, μ), conserving the spatial momentum. Goal: the
+    middle link's centre within `success_radius` of a target. A body length: 6a, the straight chain's.
 
     ## Action Space
 
-    `Box([-1, -1], [1, 1], float32)`: the commanded joint angles (α*, β*) = action · 2π/3 (rear, front). Within the
-    step the joints move toward them along the straight segment, the one with further to go at `max_joint_speed` and
-    the other in proportion, and hold there once they arrive; if they cannot arrive within dt they stop where they got
-    to.
+    `Box([-1, -1], [1, 1], float32)`: the commanded joint angles (α*, β*) = action · 2π/3 (rear, front), toward which
+    they move straight, the one with further to go at `max_joint_speed`, holding on arrival or stopping at dt.
 
     ## Observation Space
 
-    `Box(9,) float32`, with L = 6a the body length and 𝕀_loc(0) the straight chain's locked inertia; the target and the
-    momentum (0 in the reduced model) clipped to their bounds:
+    `Box(9,) float32` (𝕀_loc(0): the straight chain's locked inertia), target and momentum (0 if reduced) clipped:
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -139,34 +130,30 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
 
     ## Rewards
 
-    With d the distance from the middle link's centre to the target before the step and d′ after it:
+    With d the distance from the middle link's centre to the target before the step and d′ after it, progress in units
+    of the success radius and a cost of time:
 
-        reward = (d − d′) / success_radius − 0.01
-
-    Progress in units of the success radius and a cost of time. Summed to success: (d₀ − d_T)/success_radius −
-    0.01·steps.
+        reward = (d − d′) / success_radius − 0.01    (summed to success: (d₀ − d_T) / success_radius − 0.01 · steps)
 
     ## Starting State
 
-    At rest, μ = 0, straight (α = β = 0), at the origin with θ = 0, t = 0; the target at a distance uniform in [1, 2]
-    body lengths in a uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of
-    these and the target (within ±100 m) exactly:
+    At rest, straight (μ = 0, α = β = 0) at the origin, θ = 0, t = 0; the target a uniform [1, 2] body lengths away in a
+    uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target
+    (±100 m) exactly:
 
     ## Episode End
 
     Terminated when the middle link's centre is within `success_radius` of the target at the end of a step
-    (`info["is_success"]`). Truncated after 1000 steps (50 s at the default dt) by the registration's time limit.
+    (`info["is_success"]`); truncated after 1000 steps (50 s at the default dt) by the registration's time limit.
 
     ## Arguments
 
-    The default steps the reduced model by the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule fixed
-    at construction as the cheapest that meets atol on every joint motion at top speed, and the full model, which has
-    no connection, by DOP853. Thinner links than a/b = 100 would need a rule of tens of pieces, minutes to choose.
-    Diverged: in the full model, a spatial momentum moved by more than 0.1 of its norm since reset.
-
-    Every `info` has `"state"` (`x`, `y`, `theta` (the middle link), `alpha`, `beta`, `momentum` (P₁, P₂, Π, body
-    frame), `t`, in SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"`
-    (m), `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
+    By default the reduced model takes the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule the
+    cheapest meeting atol on every joint motion at top speed (chosen at construction; for links thinner than a/b = 100
+    it would take minutes), the full model (no connection) by DOP853. Diverged: the full model's spatial momentum moved
+    over 0.1 of its norm since reset. Every `info` has `"state"` (`x`, `y`, `theta`, `alpha`, `beta`, `momentum` (μ),
+    `t`, in SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m),
+    `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
     """
 
     renderer = SnakeSwimmerRenderer
@@ -220,8 +207,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return {**super().parameters(), "model": "full" if self.state.full else "reduced"}
 
     def start(self, options):
-        """At rest, straight, at the origin, or options['state']; the target drawn by np_random, or
-        options['target']. The model follows the momentum: reduced at zero, full otherwise."""
+        """The Starting State above; the model follows the momentum, reduced at zero and full otherwise."""
         check_keys("reset options", options, {"state", "target"})
         distance = self.np_random.uniform(*TARGET_DISTANCES) * self.body_length
         angle = self.np_random.uniform(-math.pi, math.pi)
@@ -236,8 +222,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
     def advance(self, s, s_cmd, stepper, ops=SCALAR):
-        """The joints move toward s_cmd (`joint_path`); the full model also drifts with its momentum while they
-        hold, and checks its spatial momentum. One state, or rows with the vector env's stepper and ops=BATCH."""
+        """The joints follow `joint_path`, the full model drifting while they hold: one state, or rows (ops=BATCH)."""
         s_dot, ramp, s_end = joint_path(s.s, s_cmd, self.dt, self.max_joint_speed)
         moving = (s.s, s_dot, ramp)  # held joints do not move the chain at zero momentum
         full = [moving, (s_end, np.zeros(s_dot.shape), self.dt - ramp)]
@@ -258,10 +243,8 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
 
 @functools.cache
 def snake_rule(system, max_speed, dt, atol):
-    """The Lie-group step's rule (pieces, points) for the reduced model: the cheapest that meets atol on every
-    step the env admits, judged on the motions at top speed in the eight directions (the faster joint at
-    max_speed) from a 3 × 3 grid of joint angles, each for dt or until a joint reaches its limit; see
-    `connenv.core.lie.fixed_rule`."""
+    """The reduced model's Lie-group rule (pieces, points; `connenv.core.lie.fixed_rule`), judged on the motions at top
+    speed in the eight directions from a 3 × 3 grid of joint angles, each for dt or until a joint meets its limit."""
     grid = np.linspace(-JOINT_LIMIT, JOINT_LIMIT, 3)
     segments = []
     for start in (np.array([p, q]) for p in grid for q in grid):

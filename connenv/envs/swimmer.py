@@ -1,6 +1,5 @@
-"""What the planar swimmers in an ideal fluid share, Kozlov's shell and the snake: a pose (x, y, θ) on SE(2),
-a body momentum (P₁, P₂, Π) in the full (Kirchhoff) model, whose spatial momentum is conserved, and the task of
-reaching a target point."""
+"""What the planar swimmers in an ideal fluid, Kozlov's shell and the snake, share: a pose (x, y, θ) on SE(2), a body
+momentum (P₁, P₂, Π) in the full (Kirchhoff) model, which conserves its spatial momentum, and a target to reach."""
 
 from __future__ import annotations
 
@@ -26,8 +25,7 @@ def momentum_bound(env, values):
 
 
 def swimmer_state(*shape: Field) -> Fields:
-    """A swimmer's declared reset state (`connenv.core.state`): its pose x, y, θ, its shape's keys, and its body
-    momentum (nonzero: the full model)."""
+    """A swimmer's reset state (`connenv.core.state`): x, y, θ, its shape, its body momentum (≠ 0: the full model)."""
     return Fields(
         number("x", "m", bound=POSITION_BOUND),
         number("y", "m", bound=POSITION_BOUND),
@@ -39,17 +37,14 @@ def swimmer_state(*shape: Field) -> Fields:
 
 
 class PlanarSwimmer:
-    """Task code of a TaskEnv whose states have ``pose``, ``momentum``, ``target``, ``t``, ``full`` and
-    ``momentum0``, and which has ``full_system`` and ``reduced_system``, ``stepper``, ``success_radius``,
-    ``momentum_bounds`` (the observed momentum's scales); ``target_unit`` (the length the observed target is
-    measured in) and ``shape_bounds`` (the observed shape's scales), with ``shape(state)`` (its assigned
-    coordinates) and ``shape_info(state, ops)`` (their entries of ``info["state"]``)."""
+    """Task code of a TaskEnv whose states have `pose`, `momentum`, `target`, `t`, `full`, `momentum0`, and which has
+    `full_system`, `reduced_system`, `stepper`, `success_radius`, observation scales `target_unit`, `momentum_bounds`,
+    `shape_bounds`, and `shape(state)`, `shape_info(state, ops)`: the assigned coordinates, their `info["state"]`
+    entries."""
 
     def swim(self, s, full_segments, reduced_segments, stepper, ops=SCALAR):
-        """(pose, momentum) after a step: the full model across its control segments where s.full, its spatial
-        momentum checked; the reduced model across its segments elsewhere (the momentum stays 0). One state (its
-        segments of zero length left out), or rows (segments of arrays over them; each row skips its zero-length
-        ones)."""
+        """(pose, momentum) after a step: the full model across its control segments where s.full, its spatial momentum
+        checked, the reduced one elsewhere (the momentum stays 0); zero-length segments skipped per row."""
         if ops is SCALAR:
             if s.full:
                 y = np.concatenate([s.pose, s.momentum])
@@ -74,8 +69,7 @@ class PlanarSwimmer:
         return momentum if ops is SCALAR else np.stack(momentum, axis=-1)
 
     def check_momentum(self, y, momentum0):
-        """StepperError if the full model's spatial momentum (of any row of a batch) has moved from its value at
-        reset by more than MOMENTUM_ERROR_BOUND of its norm. Of the real parts on complex rows (a Jacobian's)."""
+        """StepperError where the spatial momentum moved over MOMENTUM_ERROR_BOUND of its norm (any row; real parts)."""
         drift = np.linalg.norm(np.real(self.full_system.spatial_momentum(y) - momentum0), axis=-1)
         norm = np.linalg.norm(np.real(momentum0), axis=-1)
         check_drift(self.stepper, "the spatial momentum", drift, MOMENTUM_ERROR_BOUND, norm=norm)

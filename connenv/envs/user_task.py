@@ -2,18 +2,15 @@
 
 A task is any object with ``reset(np_random) -> state dict``, ``reward(state, next_state) -> float`` and
 ``terminated(state) -> bool``, and optionally ``observation(state) -> array``, ``is_success(state) -> bool`` and an
-``observation_space`` (a Gymnasium space), all on the state dicts of ``info["state"]``. `UserTask` holds it for
-both builders alike: the interface is checked at construction (``task=3`` is a TypeError naming ``task`` and what
-it needs), and every answer where it is used, so that a task's mistake is an error naming the task's method, never
-a NaN reward or an infinite observation passed on to the learner:
+``observation_space`` (a Gymnasium space), all on the state dicts of ``info["state"]``. Its interface is checked at
+construction (``task=3`` is a TypeError naming ``task`` and what it needs), and every answer where the step uses it,
+after the step's physics (the env's state is the new one), row by row in the vector env: a task's mistake is an error
+naming its method, never a NaN reward or an infinite observation passed on to the learner:
 
 - ``reset``: a mapping of the builder's state keys (ValueError otherwise; the builder checks the values);
 - ``reward``: a real number, finite (TypeError, ValueError);
 - ``terminated``, ``is_success``: a bool, a number or a 0-d array (TypeError); without ``is_success`` it is False;
 - ``observation``: real numbers, finite in float32, of the shape it had at construction (TypeError, ValueError).
-
-The vector env calls the task's methods row by row, with the same checks. An answer is checked where the step
-uses it, after the step's physics: the error names the task's method, and the env's state is the new one.
 """
 
 from __future__ import annotations
@@ -37,8 +34,7 @@ OPTIONAL = {"observation": "observation(state) -> array", "is_success": "is_succ
 
 
 class UserTask:
-    """A user's task object (see the module), behind the builders' task functions; ``keys`` are the builder's state
-    keys that ``reset`` may give."""
+    """The task (see the module) as the builders call it; ``keys``: the builder's state keys ``reset`` may give."""
 
     def __init__(self, task, keys):
         missing = [name for name in REQUIRED if not callable(getattr(task, name, None))]
@@ -81,8 +77,7 @@ class UserTask:
         return each_row(self._observation, [state], ops)
 
     def observation_space(self, first):
-        """The task's observation_space, else an unbounded float32 Box of the shape of ``first`` (an observation at
-        construction), which every later observation must have."""
+        """The task's, else an unbounded float32 Box of the shape of ``first``, which every observation must have."""
         self.shape = first.shape
         space = getattr(self.task, "observation_space", None)
         return space if space is not None else spaces.Box(-np.inf, np.inf, first.shape, np.float32)
