@@ -2,32 +2,25 @@
 
 from __future__ import annotations
 
-import dataclasses
 import functools
-import math
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from gymnasium import spaces
 
 from connenv.core.backend import SCALAR
-from connenv.core.integrators import make_stepper
-from connenv.core.lie import Magnus, fixed_rule
+from connenv.core.lie import fixed_rule
 from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.state import vector
-from connenv.core.validation import check_keys, check_vector
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, POSITION_BOUND, TARGET_BOUND, PlanarSwimmer, swimmer_state
+from connenv.envs.swimmer import INTEGRATORS, PlanarSwimmer, swimmer_state
 from connenv.envs.vector import vector_env
 from connenv.rendering.kozlov_shell import KozlovShellRenderer
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
-TARGET_DISTANCES = (0.5, 1.0)  # m from the start, uniform, in a uniform direction
 DEFAULT_INTEGRATOR = "magnus"
-DEFAULT_TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}  # DOP853's in the full model; atol is the Lie-group step's too
 
 
 def disc_inertia(args):
@@ -114,6 +107,9 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     """
 
     renderer = KozlovShellRenderer
+    state_class = ShellState
+    TARGET_DISTANCES = (0.5, 1.0)  # m
+    TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
@@ -150,40 +146,15 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
             )
         self.u_max = np.array([a.u1_max, a.u2_max])
         params = {key: getattr(a, key) for key in ("a", "b", "shell_mass", "rho", "mass", "shell_inertia")}
-        self.full_system, self.reduced_system = KozlovShell(**params), ReducedKozlovShell(**params)
-        self.success_radius = a.success_radius
-        if a.integrator in ("magnus", "dop853"):
-            stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
-        self.stepper = make_stepper(a.integrator, self.full_system, **stepper_options)
-        if isinstance(self.stepper, Magnus):
-            pieces, points = shell_rule(self.reduced_system, tuple(self.u_max), self.dt, self.stepper.atol)
-            self.stepper = dataclasses.replace(self.stepper, pieces=pieces, points=points)
-
-        self.momentum_scale = np.diag(self.full_system.locked_inertia(np.zeros(2)))  # M + m + λ₁, M + m + λ₂, J + λ₃
-        self.shape_bounds, self.momentum_bounds = self.u_max.tolist(), self.momentum_scale.tolist()  # as floats
-        self.target_unit, self.reach = 1.0, TARGET_DISTANCES[1]  # m; the farthest target, which the view takes in
-        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
-        high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
-        self.observation_space = spaces.Box(-high, high, dtype=np.float32)
-        self.state = ShellState(np.zeros(3), np.zeros(3), np.zeros(2), np.zeros(2), 0.0, False, np.zeros(3))
+        reduced = ReducedKozlovShell(**params)
+        self.success_radius, self.target_unit, self.shape_bounds = a.success_radius, 1.0, self.u_max.tolist()  # m
+        self.build(KozlovShell(**params), reduced, a.integrator, stepper_options,
+                   lambda atol: shell_rule(reduced, tuple(self.u_max), self.dt, atol))  # fmt: skip
 
     def parameters(self):
         system = self.full_system
         ratio = round(system.mass / (system.shell_mass + system.added_masses[0]), 12)
         return {**super().parameters(), "m/(M + λ₁)": ratio, "model": "full" if self.state.full else "reduced"}
-
-    def start(self, options):
-        """The Starting State above; the model follows the momentum, reduced at zero and full otherwise."""
-        check_keys("reset options", options, {"state", "target"})
-        distance, angle = self.np_random.uniform(*TARGET_DISTANCES), self.np_random.uniform(-math.pi, math.pi)
-        target = distance * np.array([math.cos(angle), math.sin(angle)])
-        if "target" in options:
-            target = check_vector("target", options["target"], 2, -POSITION_BOUND, POSITION_BOUND)
-        state = self.STATE.check(self, options.get("state", {}))
-        pose, u, momentum = np.array([state["x"], state["y"], state["theta"]]), state["u"], state["momentum"]
-        full = bool(momentum.any())
-        state = ShellState(pose, momentum if full else np.zeros(3), u, target, 0.0, full, np.zeros(3))
-        return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
     def advance(self, s, u_cmd, stepper, ops=SCALAR):
         """The mass moves straight to u_cmd over dt: one state, or rows with the vector env's stepper and ops=BATCH."""
@@ -197,6 +168,9 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     def shape(self, s):
         return s.u
+
+    def start_shape(self, values):
+        return values["u"]
 
     def shape_info(self, s, ops=SCALAR):
         return {"u": ops.vector(s.u)}

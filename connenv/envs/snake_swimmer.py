@@ -2,33 +2,28 @@
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from gymnasium import spaces
 
 from connenv.core.backend import ARRAYS, SCALAR
-from connenv.core.integrators import make_stepper
-from connenv.core.lie import Magnus, fixed_rule
+from connenv.core.lie import fixed_rule
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.state import number
-from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector, decimal
+from connenv.core.validation import MAGNITUDE_BOUND, decimal
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.swimmer import INTEGRATORS, MOMENTUM_BOUND, POSITION_BOUND, TARGET_BOUND, PlanarSwimmer, swimmer_state
+from connenv.envs.swimmer import INTEGRATORS, PlanarSwimmer, swimmer_state
 from connenv.envs.vector import vector_env
 from connenv.rendering.snake_swimmer import SnakeSwimmerRenderer
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
 DT_MAX = 0.25  # s: the longest dt; longer steps (joint moves up to the whole range) make the Lie-group rule's choice
 # at construction take seconds
-TARGET_DISTANCES = (1.0, 2.0)  # body lengths from the start, uniform, in a uniform direction
 DEFAULT_INTEGRATOR = "magnus"
-DEFAULT_TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}  # DOP853's in the full model; atol is the Lie-group step's too
 ASPECT_MAX = 100.0  # the largest aspect ratio a/b of a link (see SnakeSwimmerEnv)
 SIZE_MIN = 1e-6  # the least a (m) and link_density: the link mass link_density · πab stays positive, so rho may be 0
 
@@ -157,6 +152,9 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     """
 
     renderer = SnakeSwimmerRenderer
+    state_class = SnakeState
+    TARGET_DISTANCES = (1.0, 2.0)  # body lengths
+    TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
@@ -175,51 +173,23 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     )
 
     STATE = swimmer_state(
-        number("alpha", "rad", "the front joint", bound=JOINT_LIMIT),
-        number("beta", "rad", "the rear joint", bound=JOINT_LIMIT),
+        number("alpha", "rad", "the rear joint", bound=JOINT_LIMIT),
+        number("beta", "rad", "the front joint", bound=JOINT_LIMIT),
     )
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
         super().__init__(render_mode, a.dt)
         params = {key: getattr(a, key) for key in ("a", "b", "link_density", "rho")}
-        self.full_system, self.reduced_system = SnakeSwimmer(**params), ReducedSnakeSwimmer(**params)
-        self.body_length, self.max_joint_speed = 6.0 * a.a, a.max_joint_speed
+        reduced = ReducedSnakeSwimmer(**params)
+        self.body_length, self.max_joint_speed, self.joint_limit = 6.0 * a.a, a.max_joint_speed, JOINT_LIMIT
         self.success_radius = 0.1 * self.body_length if a.success_radius is None else a.success_radius
-        if a.integrator in ("magnus", "dop853"):
-            stepper_options = {**DEFAULT_TOLERANCES, **stepper_options}
-        self.stepper = make_stepper(a.integrator, self.full_system, **stepper_options)
-        if isinstance(self.stepper, Magnus):
-            pieces, points = snake_rule(self.reduced_system, self.max_joint_speed, self.dt, self.stepper.atol)
-            self.stepper = dataclasses.replace(self.stepper, pieces=pieces, points=points)
-
-        self.joint_limit = JOINT_LIMIT
-        self.momentum_scale = np.diag(self.full_system.locked_inertia(np.zeros(2)))
-        self.momentum_bounds = self.momentum_scale.tolist()
         self.target_unit, self.shape_bounds = self.body_length, (JOINT_LIMIT, JOINT_LIMIT)
-        self.reach = TARGET_DISTANCES[1] * self.body_length  # the farthest target, which the view takes in
-        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
-        high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
-        self.observation_space = spaces.Box(-high, high, dtype=np.float32)
-        self.state = SnakeState(np.zeros(3), np.zeros(3), np.zeros(2), np.zeros(2), 0.0, False, np.zeros(3))
+        self.build(SnakeSwimmer(**params), reduced, a.integrator, stepper_options,
+                   lambda atol: snake_rule(reduced, self.max_joint_speed, self.dt, atol))  # fmt: skip
 
     def parameters(self):
         return {**super().parameters(), "model": "full" if self.state.full else "reduced"}
-
-    def start(self, options):
-        """The Starting State above; the model follows the momentum, reduced at zero and full otherwise."""
-        check_keys("reset options", options, {"state", "target"})
-        distance = self.np_random.uniform(*TARGET_DISTANCES) * self.body_length
-        angle = self.np_random.uniform(-math.pi, math.pi)
-        target = distance * np.array([math.cos(angle), math.sin(angle)])
-        if "target" in options:
-            target = check_vector("target", options["target"], 2, -POSITION_BOUND, POSITION_BOUND)
-        state = self.STATE.check(self, options.get("state", {}))
-        pose, s = np.array([state["x"], state["y"], state["theta"]]), np.array([state["alpha"], state["beta"]])
-        momentum = state["momentum"]
-        full = bool(momentum.any())
-        state = SnakeState(pose, momentum if full else np.zeros(3), s, target, 0.0, full, np.zeros(3))
-        return state.replace(momentum0=np.array(self.spatial_momentum(state)))
 
     def advance(self, s, s_cmd, stepper, ops=SCALAR):
         """The joints follow `joint_path`, the full model drifting while they hold: one state, or rows (ops=BATCH)."""
@@ -235,6 +205,9 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
 
     def shape(self, s):
         return s.s
+
+    def start_shape(self, values):
+        return np.array([values["alpha"], values["beta"]])
 
     def shape_info(self, s, ops=SCALAR):
         alpha, beta = ops.components(s.s)

@@ -3,12 +3,19 @@ momentum (P₁, P₂, Π) in the full (Kirchhoff) model, which conserves its spa
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 import numpy as np
+from gymnasium import spaces
 
 from connenv.core.backend import SCALAR, components
+from connenv.core.integrators import make_stepper
+from connenv.core.lie import Magnus
 from connenv.core.params import Bound
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.state import Field, Fields, angle, number, vector
+from connenv.core.validation import check_keys, check_vector
 from connenv.systems import ideal_fluid
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -37,10 +44,50 @@ def swimmer_state(*shape: Field) -> Fields:
 
 
 class PlanarSwimmer:
-    """Task code of a TaskEnv whose states have `pose`, `momentum`, `target`, `t`, `full`, `momentum0`, and which has
-    `full_system`, `reduced_system`, `stepper`, `success_radius`, observation scales `target_unit`, `momentum_bounds`,
-    `shape_bounds`, and `shape(state)`, `shape_info(state, ops)`: the assigned coordinates, their `info["state"]`
-    entries."""
+    """Task code of a TaskEnv whose states (``state_class``) are (pose, momentum, shape, target, t, full, momentum0),
+    and which has `success_radius`, observation scales `target_unit` and `shape_bounds`, and `shape(state)`,
+    `start_shape(values)` (from the reset state's values), `shape_info(state, ops)`: the assigned coordinates, their
+    `info["state"]` entries. ``TARGET_DISTANCES`` (in target units) bound the target's distance from the start, drawn
+    uniform in a uniform direction; ``TOLERANCES`` are DOP853's in the full model, atol the Lie-group step's too."""
+
+    state_class: type
+    TARGET_DISTANCES: tuple[float, float]
+    TOLERANCES: dict
+
+    def build(self, full_system, reduced_system, integrator, options, rule):
+        """The two models; the stepper of the full one (TOLERANCES by default for "magnus" and "dop853"; the Lie-group
+        step with the quadrature rule ``rule(atol) -> (pieces, points)`` fixed once for the reduced one); the momentum's
+        observed scales (the locked inertia's diagonal at the straight shape), the spaces and the view's reach."""
+        self.full_system, self.reduced_system = full_system, reduced_system
+        if integrator in ("magnus", "dop853"):
+            options = {**self.TOLERANCES, **options}
+        self.stepper = make_stepper(integrator, full_system, **options)
+        if isinstance(self.stepper, Magnus):
+            pieces, points = rule(self.stepper.atol)
+            self.stepper = dataclasses.replace(self.stepper, pieces=pieces, points=points)
+        self.momentum_scale = np.diag(full_system.locked_inertia(np.zeros(2)))  # M + m + λ₁, M + m + λ₂, J + λ₃
+        self.momentum_bounds = self.momentum_scale.tolist()  # as floats
+        self.reach = self.TARGET_DISTANCES[1] * self.target_unit  # the farthest target, which the view takes in
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        high = np.array([TARGET_BOUND] * 2 + [1.0] * 4 + [MOMENTUM_BOUND] * 3, np.float32)
+        self.observation_space = spaces.Box(-high, high, dtype=np.float32)
+        self.state = self.state_class(*(np.zeros(n) for n in (3, 3, 2, 2)), 0.0, False, np.zeros(3))
+
+    def start(self, options):
+        """At rest at the origin, or options['state']; the target drawn by np_random, or options['target']. The model
+        follows the momentum: reduced at zero, full otherwise."""
+        check_keys("reset options", options, {"state", "target"})
+        distance = self.np_random.uniform(*self.TARGET_DISTANCES) * self.target_unit
+        angle = self.np_random.uniform(-math.pi, math.pi)
+        target = distance * np.array([math.cos(angle), math.sin(angle)])
+        if "target" in options:
+            target = check_vector("target", options["target"], 2, -POSITION_BOUND, POSITION_BOUND)
+        values = self.STATE.check(self, options.get("state", {}))
+        pose, momentum = np.array([values["x"], values["y"], values["theta"]]), values["momentum"]
+        full = bool(momentum.any())
+        s = self.state_class(pose, momentum if full else np.zeros(3), self.start_shape(values), target, 0.0, full,
+                             np.zeros(3))  # fmt: skip
+        return s.replace(momentum0=np.array(self.spatial_momentum(s)))
 
     def swim(self, s, full_segments, reduced_segments, stepper, ops=SCALAR):
         """(pose, momentum) after a step: the full model across its control segments where s.full, its spatial momentum
@@ -99,11 +146,8 @@ class PlanarSwimmer:
         state = {"x": x, "y": y, "theta": theta, **self.shape_info(s, ops), "momentum": ops.vector(s.momentum),
                  "t": s.t}  # fmt: skip
         return {
-            "state": state,
-            "spatial_momentum": self.spatial_momentum(s, ops),
-            "target": ops.vector(s.target),
-            "distance": distance,
-            "model": ops.where(s.full, "full", "reduced"),
+            "state": state, "spatial_momentum": self.spatial_momentum(s, ops), "target": ops.vector(s.target),
+            "distance": distance, "model": ops.where(s.full, "full", "reduced"),
             "is_success": ops.flag(distance <= self.success_radius),
         }
 

@@ -26,8 +26,7 @@ from connenv.core.validation import check_keys, check_returned
 from connenv.envs.base import each_row
 
 REQUIRED = {
-    "reset": "reset(np_random) -> state dict",
-    "reward": "reward(state, next_state) -> float",
+    "reset": "reset(np_random) -> state dict", "reward": "reward(state, next_state) -> float",
     "terminated": "terminated(state) -> bool",
 }
 OPTIONAL = {"observation": "observation(state) -> array", "is_success": "is_success(state) -> bool"}
