@@ -35,7 +35,6 @@ from connenv.core.validation import check_dt
 from connenv.core.backend import BATCH, SCALAR
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from throwaway.point_rendering import PointRenderer
 from throwaway.point_system import flow
 
@@ -96,7 +95,7 @@ class PointEnv(TaskEnv):
 
 SPECS = (
     Spec(
-        "throwaway/Point-v0", PointEnv, vector_env(PointEnv), max_episode_steps=50, dt_max=DT_MAX, physics="point.md",
+        "throwaway/Point-v0", PointEnv, max_episode_steps=50, dt_max=DT_MAX, physics="point.md",
         measure=Measure("time to target", "s", "time_to_success"), controllers=("toward",),
         golden=(("point", {"max_episode_steps": 20}, None),),
     ),

@@ -36,7 +36,6 @@ from connenv.core.validation import (
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
-from connenv.envs.vector import vector_env
 from connenv.rendering import CoordinatePlot
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -147,21 +146,9 @@ class ActiveConstraintEnv(TaskEnv):
         vector("u", "m", about="the assigned coordinates", scalar=True, **within("u_low", "u_high", MAGNITUDE_BOUND)),
     )
 
-    def __init__(
-        self,
-        system=None,
-        u_low=None,
-        u_high=None,
-        *,
-        dt: float = 0.05,
-        control: str | None = None,
-        max_control_speed: float | None = None,
-        integrator: str | None = None,
-        task=None,
-        render_mode: str | None = None,
-        draw=None,
-        **stepper_options,
-    ):
+    def __init__(self, system=None, u_low=None, u_high=None, *, dt: float = 0.05, control: str | None = None,
+                 max_control_speed: float | None = None, integrator: str | None = None, task=None,
+                 render_mode: str | None = None, draw=None, **stepper_options):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
         check_system(system)
         self.system, self.n, self.m = system, int(system.n), int(system.m)
@@ -343,7 +330,7 @@ class ActiveConstraintEnv(TaskEnv):
 
 SPECS = (
     Spec(
-        "connenv/ActiveConstraint-v0", ActiveConstraintEnv, vector_env(ActiveConstraintEnv), max_episode_steps=1000,
+        "connenv/ActiveConstraint-v0", ActiveConstraintEnv, max_episode_steps=1000,
         dt_max=DT_MAX, physics="framework.md", example=examples.swing,
         # the swing at rest at the bottom stays there whatever its radius does: pumping grows a swing, cannot start one
         animation_start={"state": {"q": [0.5]}},

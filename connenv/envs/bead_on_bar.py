@@ -20,7 +20,6 @@ from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env'
     ActiveConstraintState,
 )
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.bead_on_bar import BeadRenderer
 
 OMEGA_MAX = 500.0  # rad/s: the largest omega_max; at the longest dt the bead's growth, cosh(omega_max dt), stays finite
@@ -244,8 +243,8 @@ BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,
         "variants": ({}, {"g": 0.0}), "option_keys": {"target": 0},
         "fast_start": {"state": {"r_dot": 1000.0}}}
 SPECS = (
-    Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, vector_env(BeadOnBarEnv), **BEAD,
+    Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, **BEAD,
          golden=(("bead", {"max_episode_steps": 60}, None),), bench="bead"),
-    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, vector_env(BeadOnBarEnv), kwargs={"omega_max": 1.0},
+    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, kwargs={"omega_max": 1.0},
          **BEAD),  # see Version History
 )

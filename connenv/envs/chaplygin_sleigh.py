@@ -18,7 +18,6 @@ from connenv.core.state import Fields, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.chaplygin_sleigh import SleighRenderer
 from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 
@@ -265,7 +264,7 @@ class ChaplyginSleighEnv(TaskEnv):
 
 SPECS = (
     Spec(
-        "connenv/ChaplyginSleigh-v0", ChaplyginSleighEnv, vector_env(ChaplyginSleighEnv), max_episode_steps=1000,
+        "connenv/ChaplyginSleigh-v0", ChaplyginSleighEnv, max_episode_steps=1000,
         dt_max=DT_MAX, physics="ChaplyginSleigh.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("planner", "tail_first"),
         variants=({}, {"offset": 0.0, "box": 0.0}),  # general: u̇ commanded; fit: u commanded

@@ -26,7 +26,6 @@ from connenv.core.validation import (
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
 from connenv.envs.user_task import UserTask
-from connenv.envs.vector import vector_env
 from connenv.rendering.connection import ConnectionRenderer
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -132,23 +131,9 @@ class ConnectionEnv(TaskEnv):
                **within("low", "high", MAGNITUDE_BOUND, ("shape_low", "shape_high"))),
     )
 
-    def __init__(
-        self,
-        group: str,
-        connection,
-        shape_low,
-        shape_high,
-        dt: float = 0.1,
-        frame: str = "body",
-        max_shape_speed: float = 1.0,
-        task=None,
-        render_mode: str | None = None,
-        draw=None,
-        vectorized: bool = False,
-        integrator: str | None = None,
-        exact_segment=None,
-        **stepper_options,
-    ):
+    def __init__(self, group: str, connection, shape_low, shape_high, dt: float = 0.1, frame: str = "body",
+                 max_shape_speed: float = 1.0, task=None, render_mode: str | None = None, draw=None,
+                 vectorized: bool = False, integrator: str | None = None, exact_segment=None, **stepper_options):
         super().__init__(render_mode, check_dt(dt, DT_MAX))
         if group not in GROUPS:
             raise ValueError(f"group={group!r} is not one of {list(GROUPS)}")
@@ -296,7 +281,7 @@ class ConnectionEnv(TaskEnv):
 
 SPECS = (
     Spec(
-        "connenv/Connection-v0", ConnectionEnv, vector_env(ConnectionEnv), max_episode_steps=1000, dt_max=DT_MAX,
+        "connenv/Connection-v0", ConnectionEnv, max_episode_steps=1000, dt_max=DT_MAX,
         physics="connections.md", example=examples.beanie,
         variants=(examples.beanie, examples.rolling_ball),  # a flat and a curved connection
         fast_start={"state": {"s": [1000.0]}},

@@ -16,7 +16,6 @@ from connenv.core.state import Fields, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.elroys_beanie import BeanieRenderer
 from connenv.systems import elroys_beanie
 
@@ -191,7 +190,7 @@ class ElroysBeanieEnv(ConnectionEnv):
 
 SPECS = (
     Spec(
-        "connenv/ElroysBeanie-v0", ElroysBeanieEnv, vector_env(ElroysBeanieEnv), max_episode_steps=200, dt_max=DT_MAX,
+        "connenv/ElroysBeanie-v0", ElroysBeanieEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="ElroysBeanie.md", measure=Measure("time to hold", "s", "time_to_success"), controllers=("dead_beat",),
         option_keys={"target": 0},
         golden=(("beanie", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),),

@@ -16,7 +16,6 @@ from connenv.core.state import Fields, rotation, vector
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, decimal
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.falling_cat import CatRenderer
 from connenv.systems import falling_cat
 
@@ -222,7 +221,7 @@ class FallingCatEnv(ConnectionEnv):
 
 SPECS = (
     Spec(
-        "connenv/FallingCat-v0", FallingCatEnv, vector_env(FallingCatEnv), max_episode_steps=60, dt_max=DT_MAX,
+        "connenv/FallingCat-v0", FallingCatEnv, max_episode_steps=60, dt_max=DT_MAX,
         physics="FallingCat.md", measure=Measure("roll error at landing", "rad", "roll_error"),
         controllers=("kane_scher",),
         golden=(("cat", {"max_episode_steps": 60, "fall_time": 0.4, "max_bend": 0.5}, None),),

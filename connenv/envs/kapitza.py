@@ -17,7 +17,6 @@ from connenv.core.state import Fields, angle, number, vector
 from connenv.core.validation import check_keys
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.kapitza import KapitzaRenderer
 from connenv.systems.kapitza import KapitzaPendulum
 
@@ -360,7 +359,7 @@ PENDULUM = {"dt_max": DT_MAX, "physics": "kapitza.md",
             "fast_start": {"state": {"theta": math.pi}}}  # on the separatrix: the exact step's RK4 branch
 SPECS = (
     Spec(
-        "connenv/KapitzaPendulum-v0", KapitzaPendulumEnv, vector_env(KapitzaPendulumEnv), max_episode_steps=2000,
+        "connenv/KapitzaPendulum-v0", KapitzaPendulumEnv, max_episode_steps=2000,
         **PENDULUM, measure=Measure("max deviation", "rad", "max_deviation"), controllers=("kapitza", "damped"),
         variants=({}, {"pivot": "planar"}),
         golden=(
@@ -370,7 +369,7 @@ SPECS = (
         bench="kapitza", single_target=1.5, vector_target=0.1,
     ),
     Spec(
-        "connenv/KapitzaSwingUp-v0", KapitzaSwingUpEnv, vector_env(KapitzaSwingUpEnv), max_episode_steps=6000,
+        "connenv/KapitzaSwingUp-v0", KapitzaSwingUpEnv, max_episode_steps=6000,
         **PENDULUM,
         measure=Measure("time to target", "s", "time_to_success"), controllers=("swingup",),
         golden=(("swingup", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),),

@@ -15,7 +15,6 @@ from connenv.core.state import vector
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.swimmer import INTEGRATORS, PlanarSwimmer, swimmer_state
-from connenv.envs.vector import vector_env
 from connenv.rendering.kozlov_shell import KozlovShellRenderer
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
@@ -187,7 +186,7 @@ def shell_rule(system, u_max, dt, atol):
 
 SPECS = (
     Spec(
-        "connenv/KozlovShell-v0", KozlovShellEnv, vector_env(KozlovShellEnv), max_episode_steps=300, dt_max=DT_MAX,
+        "connenv/KozlovShell-v0", KozlovShellEnv, max_episode_steps=300, dt_max=DT_MAX,
         physics="kozlov-shell.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
         starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
         option_keys={"target": 2},

@@ -17,7 +17,7 @@ from connenv.core.state import Fields, number, rotation
 from connenv.core.validation import check_keys, check_rotation, finite_action, ndim
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import TaskVectorEnv, vector_env
+from connenv.envs.vector import TaskVectorEnv
 from connenv.rendering.rolling_ball import RollingBallRenderer
 from connenv.systems.rolling_ball import (
     RollingBall,
@@ -373,20 +373,20 @@ BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse",
         "rotations": ((("target",), "target"),)}
 SPECS = (
     Spec(
-        "connenv/RollingBall-v0", RollingBallEnv, RollingBallVectorEnv, max_episode_steps=200, **BALL,
+        "connenv/RollingBall-v0", RollingBallEnv, vector_base=RollingBallVectorEnv, max_episode_steps=200, **BALL,
         measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
         golden=(("ball", {"max_episode_steps": 50, "tolerance": 1.5}, None),), bench="ball",
         single_target=1.5, vector_target=0.1,
     ),
     Spec(
-        "connenv/RollingBallPose-v0", RollingBallPoseEnv, vector_env(RollingBallPoseEnv, RollingBallVectorEnv),
+        "connenv/RollingBallPose-v0", RollingBallPoseEnv, vector_base=RollingBallVectorEnv,
         max_episode_steps=300, **BALL,
         measure=Measure("path length", "m", "path_length"), controllers=("holonomy",),
         golden=(("ball_pose", {"max_episode_steps": 50, "tolerance": 2.5, "position_tolerance": 0.3}, None),),
         single_target=1.5,
     ),
     Spec(
-        "connenv/RollingBallGoal-v0", RollingBallGoalEnv, vector_env(RollingBallGoalEnv, RollingBallVectorEnv),
+        "connenv/RollingBallGoal-v0", RollingBallGoalEnv, vector_base=RollingBallVectorEnv,
         max_episode_steps=200, **BALL,
         measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
         golden=(("ball_goal", {"max_episode_steps": 50, "tolerance": 1.5}, None),),

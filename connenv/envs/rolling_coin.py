@@ -16,7 +16,6 @@ from connenv.core.state import Fields, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.rolling_coin import CoinRenderer
 from connenv.systems import rolling_coin
 
@@ -181,7 +180,7 @@ class RollingCoinEnv(ConnectionEnv):
 
 SPECS = (
     Spec(
-        "connenv/RollingCoin-v0", RollingCoinEnv, vector_env(RollingCoinEnv), max_episode_steps=200, dt_max=DT_MAX,
+        "connenv/RollingCoin-v0", RollingCoinEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="RollingCoin.md", measure=Measure("time to park", "s", "time_to_success"),
         controllers=("turn_roll_turn",), variants=({}, {"integrator": "magnus"}),
         option_keys={"target": 3},

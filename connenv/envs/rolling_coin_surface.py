@@ -17,7 +17,6 @@ from connenv.core.state import Fields, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.rolling_coin_surface import CoinSurfaceRenderer
 from connenv.systems.rolling_coin_surface import RollingCoinPlane, RollingCoinSurface
 from connenv.systems.surfaces import LENGTH_MIN, check_surface, make_surface
@@ -280,7 +279,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
 SPECS = (
     Spec(
-        "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv, vector_env(RollingCoinSurfaceEnv),
+        "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv,
         max_episode_steps=200, dt_max=DT_MAX, physics="RollingCoinSurface.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("steer",), variants=({}, {"surface": "plane"}),
         option_keys={"target": 2},

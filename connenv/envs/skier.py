@@ -17,7 +17,6 @@ from connenv.core.state import Fields, number
 from connenv.core.validation import check_keys, check_number
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.skier import SkierRenderer
 from connenv.systems.skier import Skier, check_curvature
 from connenv.systems.trails import make_trail
@@ -323,7 +322,7 @@ class SkierEnv(TaskEnv):
 
 SPECS = (
     Spec(
-        "connenv/Skier-v0", SkierEnv, vector_env(SkierEnv), max_episode_steps=1000, dt_max=DT_MAX, physics="skier.md",
+        "connenv/Skier-v0", SkierEnv, max_episode_steps=1000, dt_max=DT_MAX, physics="skier.md",
         measure=Measure("time to target", "s", "time_to_success"), controllers=("pumping",),
         play="space", space_action=1.0,  # held: the skier rises (h_max)
         variants=(

@@ -17,7 +17,6 @@ from connenv.core.validation import MAGNITUDE_BOUND, decimal
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.swimmer import INTEGRATORS, PlanarSwimmer, swimmer_state
-from connenv.envs.vector import vector_env
 from connenv.rendering.snake_swimmer import SnakeSwimmerRenderer
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
@@ -230,7 +229,7 @@ def snake_rule(system, max_speed, dt, atol):
 
 SPECS = (
     Spec(
-        "connenv/SnakeSwimmer-v0", SnakeSwimmerEnv, vector_env(SnakeSwimmerEnv), max_episode_steps=1000, dt_max=DT_MAX,
+        "connenv/SnakeSwimmer-v0", SnakeSwimmerEnv, max_episode_steps=1000, dt_max=DT_MAX,
         physics="SnakeSwimmer.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
         starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
         option_keys={"target": 2},

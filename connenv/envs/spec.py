@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 
 from gymnasium.envs.registration import register as gym_register
 
+from connenv.envs.vector import TaskVectorEnv, vector_env
+
 registry: dict[str, Spec] = {}
 """Every registered connenv id's Spec, in registration order (the modules' alphabetical order, then each module's)."""
 
@@ -41,9 +43,10 @@ KwargsOrMaker = dict | Callable[[], dict]
 class Spec:
     """An env id and everything about it that tools and tests read.
 
-    Registration (Gymnasium's EnvSpec): ``id`` ("connenv/Name-vN"), ``env`` and ``vector_env`` (the single env's
-    class and its native vector env's, entry points "module:Class"), ``max_episode_steps``, ``kwargs`` (the id's
-    make kwargs: a later version may be the same class with other kwargs).
+    Registration (Gymnasium's EnvSpec): ``id`` ("connenv/Name-vN"), ``env`` (the single env's class), ``max_episode_steps``,
+    ``kwargs`` (the id's make kwargs: a later version may be the same class with other kwargs); the spec makes the
+    native vector env, ``vector_env`` (`connenv.envs.vector.vector_env`, of ``vector_base`` where the env's vector env
+    adds to TaskVectorEnv's). Both register as "module:Class" entry points.
 
     The env: ``dt_max`` (s, the longest dt its make kwargs take, documented in its Arguments table); ``physics``
     (its physics page under docs/physics/); ``example`` (make kwargs for an id that cannot be made without them: the
@@ -69,7 +72,6 @@ class Spec:
 
     id: str
     env: type
-    vector_env: type | None
     max_episode_steps: int
     dt_max: float
     physics: str
@@ -89,6 +91,11 @@ class Spec:
     bench: str | None = None
     single_target: float | None = None
     vector_target: float | None = None
+    vector_base: type = TaskVectorEnv
+    vector_env: type = field(init=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "vector_env", vector_env(self.env, self.vector_base))
 
     @property
     def name(self) -> str:
@@ -109,7 +116,7 @@ def register(*specs: Spec):
     for spec in specs:
         gym_register(
             id=spec.id, entry_point=entry_point(spec.env),
-            vector_entry_point=entry_point(spec.vector_env) if spec.vector_env else None,
+            vector_entry_point=entry_point(spec.vector_env),
             max_episode_steps=spec.max_episode_steps, kwargs=dict(spec.kwargs),
         )
         if spec.env not in {known.env for known in registry.values()}:  # the class's first id names it in errors

@@ -17,7 +17,6 @@ from connenv.core.state import Fields, angle, number
 from connenv.core.validation import check_keys
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.swing import SwingRenderer
 from connenv.systems.swing import Swing
 
@@ -204,7 +203,7 @@ class SwingEnv(TaskEnv):
 
 SPECS = (
     Spec(
-        "connenv/Swing-v0", SwingEnv, vector_env(SwingEnv), max_episode_steps=500, dt_max=DT_MAX, physics="swing.md",
+        "connenv/Swing-v0", SwingEnv, max_episode_steps=500, dt_max=DT_MAX, physics="swing.md",
         measure=Measure("time to target", "s", "time_to_success"), controllers=("pumping",),
         play="space", space_action=-1.0,  # held: the child stands (r_min)
         variants=({}, {"integrator": "rk4", "substeps": 4}),

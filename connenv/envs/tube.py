@@ -15,7 +15,6 @@ from connenv.core.state import Fields, rotation
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
-from connenv.envs.vector import vector_env
 from connenv.rendering.tube import TubeRenderer
 from connenv.systems.tube import BEND_CONNECTION, tangent_angle, twist
 
@@ -182,7 +181,7 @@ class TubeTwistEnv(ConnectionEnv):
 
 SPECS = (
     Spec(
-        "connenv/TubeTwist-v0", TubeTwistEnv, vector_env(TubeTwistEnv), max_episode_steps=200, dt_max=DT_MAX,
+        "connenv/TubeTwist-v0", TubeTwistEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="TubeTwist.md", measure=Measure("bend / shortest loop", "", "path_ratio"), controllers=("cap", "square"),
         play="mouse", variants=({}, {"integrator": "magnus"}), option_keys={"target": 0},
         golden=(("tube", {"max_episode_steps": 40, "tolerance": 0.6}, None),),
