@@ -160,8 +160,8 @@ def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):
 
 
 def control_path(u, u_cmd, dt: float, max_speed: float | None, ops=SCALAR):
-    """One assigned coordinate's control segments over a step toward the command u_cmd (``connenv.core.segments``:
-    a jump to it, or with max_speed a ramp and a hold), with u and u̇ as columns (…, 1), as a system takes them; and
+    """One assigned coordinate's control segments over a step toward the command u_cmd (`control_segments`: a jump
+    to it, or with max_speed a ramp and a hold), with u and u̇ as columns (…, 1), as a system takes them; and
     u at the end of the step. One state (floats) or rows (arrays over them, ops=BATCH)."""
     if ops is SCALAR:
         cuts = control_segments(u, u_cmd, dt, max_speed)

@@ -99,7 +99,7 @@ class ActiveConstraintEnv(TaskEnv):
 
     ## Starting State
 
-    Default q = 0, p = 0, u at the midpoint of finite bounds (else 0, within them), t = 0, or any of them from
+    Default q = 0, p = 0, u at the midpoint of finite bounds (else 0 clipped into them), t = 0, or any of them from
     `task.reset(np_random)`'s state dict. `reset(options={"state": {...}})` sets any exactly (a number stands for a
     vector of one entry; within ±1e3, beyond which a user's system may outrun any stepper):
 
@@ -134,8 +134,9 @@ class ActiveConstraintEnv(TaskEnv):
     The system's functions are tried at construction, at the samples of (q, u) deciding its class: one raising or
     returning no real numbers, the wrong shape or non-finite values is a ValueError or TypeError naming it. Every `info`
     has `"state"`: `{"q": array(n), "p": array(n), "u": array(m), "t": float}`, and `"is_success"`. A `task`'s methods
-    take such state dicts, row by row in the vector env; `connenv.envs.user_task` checks them (at construction) and
-    every answer, naming the method. docs/guides/own-system.md gives one (a rotor turns a body to a target angle).
+    take such state dicts, row by row in the vector env; `connenv.envs.user_task` checks them (at construction: without
+    reset, reward and terminated, a TypeError) and every answer, naming the method. docs/guides/own-system.md gives one
+    (a rotor turns a body to a target angle).
     """
 
     renderer = CoordinatePlot

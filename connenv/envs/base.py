@@ -127,6 +127,8 @@ class TaskEnv(gym.Env):
             return None
         if self._renderer is None:
             self._renderer = self.renderer(self)
+        if self.trace is None and self.renderer.point is not None:  # a render before the first reset
+            self.trace = [self.renderer.point(self)]
         return self._renderer.draw(self)
 
     def __getstate__(self):

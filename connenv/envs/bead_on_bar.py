@@ -66,7 +66,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     ## Observation Space
 
-    `Box(6,) float32`, clipped to bounds leaving room beyond the bar (|r/L| ≤ 1, |(r* − r)/L| ≤ 2) for the step off it:
+    `Box(6,) float32`, clipped to bounds that leave room beyond the bar (on it, |r/L| ≤ 1 and |(r* − r)/L| ≤ 2):
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -208,12 +208,14 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         theta, L = s.u.T[0], self.half_length
         hold = ops.clip(s.hold / self.hold_needed, 0.0, 1.0) if self.hold_needed > 0.0 else 0.0 * s.hold
         high = OBSERVATION_HIGH
-        return ops.pack(
-            [
-                ops.clip(r / L, -high[0], high[0]), ops.clip((s.target - r) / L, -high[1], high[1]),
-                ops.clip(p / (self.mass * L), -high[2], high[2]), ops.sin(theta), ops.cos(theta), hold,
-            ]
-        )
+        return ops.pack([
+            ops.clip(r / L, -high[0], high[0]),
+            ops.clip((s.target - r) / L, -high[1], high[1]),
+            ops.clip(p / (self.mass * L), -high[2], high[2]),
+            ops.sin(theta),
+            ops.cos(theta),
+            hold,
+        ])
 
     def describe(self, s, ops=SCALAR):
         r, p = s.y.T
@@ -245,6 +247,5 @@ BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,
 SPECS = (
     Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, **BEAD,
          golden=(("bead", {"max_episode_steps": 60}, None),), bench="bead"),
-    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, kwargs={"omega_max": 1.0},
-         **BEAD),  # see Version History
+    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, kwargs={"omega_max": 1.0}, **BEAD),  # see Version History
 )

@@ -119,8 +119,8 @@ class ConnectionEnv(TaskEnv):
     one that raises or returns no finite real numbers of the right shape is a ValueError or TypeError naming it.
 
     Every `info` has `"state"`: `{"g": ..., "s": array (k,), "t": float}`, and `"is_success"`. A `task`'s methods take
-    such state dicts, row by row in the vector env; `connenv.envs.user_task` checks them (at construction) and every
-    answer, naming the method.
+    such state dicts, row by row in the vector env; `connenv.envs.user_task` checks them (at construction: without
+    reset, reward and terminated, a TypeError) and every answer, naming the method.
     """
 
     renderer = ConnectionRenderer

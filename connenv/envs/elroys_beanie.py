@@ -120,8 +120,9 @@ class ElroysBeanieEnv(ConnectionEnv):
         self.max_beanie_speed, self.hold_time = a.max_beanie_speed, a.hold_time
         inertias = {"body_inertia": self.body_inertia, "beanie_inertia": self.beanie_inertia}
         super().__init__(
-            "SO2", functools.partial(elroys_beanie.connection, **inertias), [-math.inf], [math.inf], dt=a.dt,
-            max_shape_speed=self.max_beanie_speed, render_mode=render_mode, vectorized=True, integrator=a.integrator,
+            "SO2", functools.partial(elroys_beanie.connection, **inertias), shape_low=[-math.inf],
+            shape_high=[math.inf], dt=a.dt, max_shape_speed=self.max_beanie_speed, render_mode=render_mode,
+            vectorized=True, integrator=a.integrator,
             exact_segment=functools.partial(elroys_beanie.exact_segment, **inertias), **stepper_options,
         )
         self.state = BeanieState(np.zeros(1), np.zeros(1), 0.0, MOMENTUM_RANGE[0], 0.0, 0.0)

@@ -123,9 +123,9 @@ class FallingCatEnv(ConnectionEnv):
         longest = min(math.sqrt(2) * a.max_bend_speed * a.dt, 2 * self.max_bend)  # a segment's longest bend
         pieces = falling_cat.pieces_for(longest, a.transverse_inertia, a.axial_inertia)
         super().__init__(
-            "SO3", functools.partial(falling_cat.connection, **self.inertias), [-self.max_bend] * 2,
-            [self.max_bend] * 2, dt=a.dt, frame="body", max_shape_speed=a.max_bend_speed, render_mode=render_mode,
-            vectorized=True, integrator=a.integrator,
+            "SO3", functools.partial(falling_cat.connection, **self.inertias), shape_low=[-self.max_bend] * 2,
+            shape_high=[self.max_bend] * 2, dt=a.dt, frame="body", max_shape_speed=a.max_bend_speed,
+            render_mode=render_mode, vectorized=True, integrator=a.integrator,
             exact_segment=functools.partial(falling_cat.exact_segment, **self.inertias, pieces=pieces),
             **stepper_options,
         )

@@ -310,7 +310,7 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
 
     Terminated on success (`info["is_success"]`): held within `tolerance` of inverted for the last `hold_time` seconds
     (rounded up to whole steps). Truncated after 6000 steps (30 s at the default dt). `info` has KapitzaPendulum-v0's
-    keys, with `"upright_time"` (s held so without a break) in place of `"max_deviation"`.
+    keys, with `"upright_time"` (s held within `tolerance` without a break) in place of `"max_deviation"`.
 
     ## Open Challenge
 
@@ -369,8 +369,7 @@ SPECS = (
         bench="kapitza", single_target=1.5, vector_target=0.1,
     ),
     Spec(
-        "connenv/KapitzaSwingUp-v0", KapitzaSwingUpEnv, max_episode_steps=6000,
-        **PENDULUM,
+        "connenv/KapitzaSwingUp-v0", KapitzaSwingUpEnv, max_episode_steps=6000, **PENDULUM,
         measure=Measure("time to target", "s", "time_to_success"), controllers=("swingup",),
         golden=(("swingup", {"max_episode_steps": 100, "hold_time": 0.05, "tolerance": 3.07}, None),),
         single_target=1.5, vector_target=0.1,

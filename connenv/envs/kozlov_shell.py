@@ -30,7 +30,7 @@ def disc_inertia(args):
 @dataclass
 class ShellState(State):
     """The pose (x, y, θ), body momentum (P₁, P₂, Π) (0 in the reduced model), mass position u, target (x, y), time t;
-    full: whether it steps the full model, which conserves momentum0, the spatial momentum at reset."""
+    full: whether it steps the full model, whose spatial momentum stays at momentum0, its value at reset."""
 
     components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "u": ("u1", "u2"), "target": ("target_x", "target_y")}
 
@@ -108,7 +108,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     renderer = KozlovShellRenderer
     state_class = ShellState
     TARGET_DISTANCES = (0.5, 1.0)  # m
-    TOLERANCES = {"rtol": 1e-8, "atol": 1e-10}
+    TOLERANCES: ClassVar[dict] = {"rtol": 1e-8, "atol": 1e-10}
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
@@ -146,7 +146,8 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
         self.u_max = np.array([a.u1_max, a.u2_max])
         params = {key: getattr(a, key) for key in ("a", "b", "shell_mass", "rho", "mass", "shell_inertia")}
         reduced = ReducedKozlovShell(**params)
-        self.success_radius, self.target_unit, self.shape_bounds = a.success_radius, 1.0, self.u_max.tolist()  # m
+        self.success_radius, self.shape_bounds = a.success_radius, self.u_max.tolist()
+        self.target_unit = 1.0  # m
         self.build(KozlovShell(**params), reduced, a.integrator, stepper_options,
                    lambda atol: shell_rule(reduced, tuple(self.u_max), self.dt, atol))  # fmt: skip
 

@@ -108,8 +108,8 @@ class RollingCoinEnv(ConnectionEnv):
         self.radius, self.rates = a.radius, np.array([a.max_steer_rate, a.max_roll_rate])
         self.position_tolerance, self.heading_tolerance = a.position_tolerance, a.heading_tolerance
         super().__init__(
-            "R2", functools.partial(rolling_coin.connection, radius=self.radius), [-math.inf, -math.inf],
-            [math.inf, math.inf], dt=a.dt, render_mode=render_mode, vectorized=True, integrator=a.integrator,
+            "R2", functools.partial(rolling_coin.connection, radius=self.radius), shape_low=[-math.inf, -math.inf],
+            shape_high=[math.inf, math.inf], dt=a.dt, render_mode=render_mode, vectorized=True, integrator=a.integrator,
             exact_segment=functools.partial(rolling_coin.exact_segment, radius=self.radius), **stepper_options,
         )
         self.state = CoinState(np.zeros(2), np.zeros(2), 0.0, np.array([0.0, 1.0, 0.0]))

@@ -70,8 +70,9 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
     ## Observation Space
 
-    `Box(9,) float32`, clipped (x and y only off the arena, which ends the episode); D = `target_distance`, L the
-    arena's half-width, G its steepest slope and v* = √(4 g Δz/3) the speed after a drop of Δz, its height range:
+    `Box(9,) float32`, each entry clipped to its bounds (x and y reach theirs only off the arena, which ends the
+    episode); D = `target_distance`, L the arena's half-width, G its steepest slope and v* = √(4 g Δz/3) the speed
+    after a drop of Δz = z_max − z_min over |x|, |y| ≤ L:
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -257,15 +258,17 @@ class RollingCoinSurfaceEnv(TaskEnv):
         x, y, v = s.y.T[0], s.y.T[1], self.system.radius * s.y.T[3]
         _, z_x, z_y = self.surface.height(x, y)
         reach, scale = 2.0 * self.arena / self.target_distance, 1.0 / max(self.slope_bound, 1e-300)
-        return ops.pack(
-            [
-                ops.clip(x / self.arena, -1.0, 1.0), ops.clip(y / self.arena, -1.0, 1.0),
-                ops.clip((s.target.T[0] - x) / self.target_distance, -reach, reach),
-                ops.clip((s.target.T[1] - y) / self.target_distance, -reach, reach), ops.sin(s.theta), ops.cos(s.theta),
-                ops.clip(v / self.speed_scale, -SPEED_BOUND, SPEED_BOUND), ops.clip(z_x * scale, -1.0, 1.0),
-                ops.clip(z_y * scale, -1.0, 1.0),
-            ]
-        )
+        return ops.pack([
+            ops.clip(x / self.arena, -1.0, 1.0),
+            ops.clip(y / self.arena, -1.0, 1.0),
+            ops.clip((s.target.T[0] - x) / self.target_distance, -reach, reach),
+            ops.clip((s.target.T[1] - y) / self.target_distance, -reach, reach),
+            ops.sin(s.theta),
+            ops.cos(s.theta),
+            ops.clip(v / self.speed_scale, -SPEED_BOUND, SPEED_BOUND),
+            ops.clip(z_x * scale, -1.0, 1.0),
+            ops.clip(z_y * scale, -1.0, 1.0),
+        ])
 
     def describe(self, s, ops=SCALAR):
         state = {"x": s.y.T[0], "y": s.y.T[1], "theta": s.theta, "phi": s.y.T[2], "phi_dot": s.y.T[3],
@@ -279,8 +282,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
 SPECS = (
     Spec(
-        "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv,
-        max_episode_steps=200, dt_max=DT_MAX, physics="RollingCoinSurface.md", measure=Measure("time to target", "s", "time_to_success"),
+        "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv, max_episode_steps=200, dt_max=DT_MAX,
+        physics="RollingCoinSurface.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("steer",), variants=({}, {"surface": "plane"}),
         option_keys={"target": 2},
         golden=(

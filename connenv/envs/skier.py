@@ -91,7 +91,8 @@ class SkierEnv(TaskEnv):
 
     ## Observation Space
 
-    `Box(6,) float32`, k* = max |κ| h_max on the trail; speed clipped, and position past the domain (after success).
+    `Box(6,) float32`, k* = max |κ| h_max on the trail; speed and position clipped, the position only once it has left
+    the domain (after success).
 
     | Num | Observation | Min | Max |
     |-----|-------------|-----|-----|
@@ -300,13 +301,14 @@ class SkierEnv(TaskEnv):
         mid, half = 0.5 * (self.trail.hi + self.trail.lo), 0.5 * (self.trail.hi - self.trail.lo)
         h_mid, h_half = 0.5 * (self.h_max + self.h_min), 0.5 * (self.h_max - self.h_min)
         speed = sigma * s.x_dot / self.speed_scale
-        return ops.pack(
-            [
-                ops.clip((x - mid) / half, -1.0, 1.0), s.f1 / sigma, 1.0 / sigma,
-                ops.clip(speed, -SPEED_BOUND, SPEED_BOUND), (h - h_mid) / h_half,
-                ops.clip(s.kappa * self.h_max, -self.kappa_bound, self.kappa_bound),
-            ]
-        )
+        return ops.pack([
+            ops.clip((x - mid) / half, -1.0, 1.0),
+            s.f1 / sigma,
+            1.0 / sigma,
+            ops.clip(speed, -SPEED_BOUND, SPEED_BOUND),
+            (h - h_mid) / h_half,
+            ops.clip(s.kappa * self.h_max, -self.kappa_bound, self.kappa_bound),
+        ])
 
     def describe(self, s, ops=SCALAR):
         x, p = ops.components(s.y)

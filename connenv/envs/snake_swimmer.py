@@ -35,7 +35,7 @@ def thinnest(args):
 @dataclass
 class SnakeState(State):
     """The middle link's pose (x, y, θ), body momentum (0 in the reduced model), joint angles s = (α, β), target (x, y),
-    time t; full: whether it steps the full model, which conserves momentum0, the spatial momentum at reset."""
+    time t; full: whether it steps the full model, whose spatial momentum stays at momentum0, its value at reset."""
 
     components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "s": ("alpha", "beta"), "target": ("target_x", "target_y")}
 
@@ -153,7 +153,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     renderer = SnakeSwimmerRenderer
     state_class = SnakeState
     TARGET_DISTANCES = (1.0, 2.0)  # body lengths
-    TOLERANCES = {"rtol": 1e-10, "atol": 1e-12}
+    TOLERANCES: ClassVar[dict] = {"rtol": 1e-10, "atol": 1e-12}
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 

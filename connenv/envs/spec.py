@@ -43,10 +43,10 @@ KwargsOrMaker = dict | Callable[[], dict]
 class Spec:
     """An env id and everything about it that tools and tests read.
 
-    Registration (Gymnasium's EnvSpec): ``id`` ("connenv/Name-vN"), ``env`` (the single env's class), ``max_episode_steps``,
-    ``kwargs`` (the id's make kwargs: a later version may be the same class with other kwargs); the spec makes the
-    native vector env, ``vector_env`` (`connenv.envs.vector.vector_env`, of ``vector_base`` where the env's vector env
-    adds to TaskVectorEnv's). Both register as "module:Class" entry points.
+    Registration (Gymnasium's EnvSpec): ``id`` ("connenv/Name-vN"), ``env`` (the single env's class),
+    ``max_episode_steps``, ``kwargs`` (the id's make kwargs: a later version may be the same class with other kwargs);
+    the spec makes the native vector env, ``vector_env`` (`connenv.envs.vector.vector_env`, of ``vector_base`` where
+    the env's vector env adds to TaskVectorEnv's). Both register as "module:Class" entry points.
 
     The env: ``dt_max`` (s, the longest dt its make kwargs take, documented in its Arguments table); ``physics``
     (its physics page under docs/physics/); ``example`` (make kwargs for an id that cannot be made without them: the

@@ -181,8 +181,8 @@ class TubeTwistEnv(ConnectionEnv):
 
 SPECS = (
     Spec(
-        "connenv/TubeTwist-v0", TubeTwistEnv, max_episode_steps=200, dt_max=DT_MAX,
-        physics="TubeTwist.md", measure=Measure("bend / shortest loop", "", "path_ratio"), controllers=("cap", "square"),
+        "connenv/TubeTwist-v0", TubeTwistEnv, max_episode_steps=200, dt_max=DT_MAX, physics="TubeTwist.md",
+        measure=Measure("bend / shortest loop", "", "path_ratio"), controllers=("cap", "square"),
         play="mouse", variants=({}, {"integrator": "magnus"}), option_keys={"target": 0},
         golden=(("tube", {"max_episode_steps": 40, "tolerance": 0.6}, None),),
         bench="tube",

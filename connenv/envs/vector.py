@@ -225,10 +225,14 @@ class TaskVectorEnv(VectorEnv):
 def vector_env(single_env: type, base: type = TaskVectorEnv) -> type:
     """The native vector env of a task class: a subclass of base (TaskVectorEnv, or the vector env of the class
     the task extends) that steps the rows by the task's own ``advance`` with the batched stepper. Named after the
-    task and placed in its module, so that its "module:Class" entry point and pickles find it."""
+    task and placed in its module, so that its "module:Class" entry point and pickles find it: one per task class,
+    made once for all its ids (ValueError where a class of that name, or another base, is there already)."""
     name, module = single_env.__name__.removesuffix("Env") + "VectorEnv", sys.modules[single_env.__module__]
-    if getattr(getattr(module, name, None), "single_env", None) is single_env:  # made for another id of the class
-        return getattr(module, name)
+    existing = getattr(module, name, None)
+    if existing is not None:
+        if getattr(existing, "single_env", None) is single_env and issubclass(existing, base):
+            return existing
+        raise ValueError(f"{module.__name__}.{name} exists, and is no vector env of {single_env.__name__} on {base}")
     doc = f"{single_env.__name__} over a batch: the single env's advance over the rows (see connenv.envs.vector)."
     attributes = {"single_env": single_env, "__module__": single_env.__module__, "__qualname__": name, "__doc__": doc}
     cls = type(name, (base,), attributes)

@@ -1,6 +1,6 @@
 """pygame drawing for the envs, as in Gymnasium's classic control (pygame is an optional dependency): the Canvas
 every renderer draws on, and one module per env module (connenv.rendering.swing draws connenv.envs.swing's envs),
-which the env imports on its first render."""
+which the env names as its renderer; pygame loads on the first render."""
 
 from __future__ import annotations
 
@@ -76,7 +76,8 @@ class Canvas:
 class Renderer:
     """Base of the renderers: an env makes its renderer on its first render, ``renderer(env)``, which then draws the
     env's state, ``draw(env)``, on its ``canvas`` (closing closes it). A renderer that draws a track behind the body
-    gives ``point(env)``: while rendering, the env keeps the point of each state since reset (``env.trace``)."""
+    gives a static ``point(env)`` (called on the class, before any renderer exists): while rendering, the env keeps
+    the point of each state since reset (``env.trace``)."""
 
     canvas: Canvas
     point = None

@@ -16,14 +16,14 @@ class SleighRenderer(Renderer):
     def __init__(self, env):
         self.offset, self.rail, self.box, self.tolerance = env.system.offset, env.rail, env.box, env.tolerance
         self.canvas = Canvas(env, 3.0)
-        self.track = []
+
+    @staticmethod
+    def point(env):
+        return tuple(env.state.y[:2])
 
     def draw(self, env):
         c, pg, s = self.canvas, self.canvas.pygame, env.state
         (x, y, phi), u, target, t = s.y[:3], s.u, s.target, s.t
-        if t == 0.0:
-            self.track = []
-        self.track.append((x, y))
         e1, e2 = np.array([math.cos(phi), math.sin(phi)]), np.array([-math.sin(phi), math.cos(phi)])
         P = np.array([x, y])
         C = P + self.offset * e1
@@ -31,8 +31,8 @@ class SleighRenderer(Renderer):
         c.scale = SIZE / (2.0 * max(2.5, 0.6 * float(np.hypot(*(P - target))) + 1.0))
         c.screen.fill((255, 255, 255))
         c.target(target, self.tolerance)
-        if len(self.track) > 1:
-            pg.draw.lines(c.screen, (110, 110, 110), False, [c.px(*p) for p in self.track], c.pt(1))
+        if len(env.trace) > 1:
+            pg.draw.lines(c.screen, (110, 110, 110), False, [c.px(*p) for p in env.trace], c.pt(1))
         half = 1.2 * self.rail
         front = self.offset + 1.2 * max(self.box, 0.1)
         corners = [P - 0.1 * e1 + half * e2, P + front * e1 + half * e2, P + front * e1 - half * e2,
