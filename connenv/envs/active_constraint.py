@@ -29,13 +29,12 @@ from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
     check_dt,
-    check_keys,
     check_number,
     check_stepper_options,
 )
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
-from connenv.envs.user_task import UserTask
+from connenv.envs.user_task import BuilderTask
 from connenv.rendering import CoordinatePlot
 
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -54,7 +53,7 @@ class ActiveConstraintState(State):
     energy_error: float
 
 
-class ActiveConstraintEnv(TaskEnv):
+class ActiveConstraintEnv(BuilderTask, TaskEnv):
     r"""
     ## Description
 
@@ -176,17 +175,10 @@ class ActiveConstraintEnv(TaskEnv):
         default = "exact" if isinstance(self.field, (ExactSegment, ExactFlow)) else "dop853"
         self.stepper = make_stepper(integrator or default, self.field, **stepper_options)
         self.jump = JumpFlow(system)
-        if draw is not None and not callable(draw):
-            raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
-        self.task, self.draw = (None if task is None else UserTask(task, ("q", "p", "u"))), draw
+        self.adopt(task, draw, ("q", "p", "u"))
         self.action_space = spaces.Box(-1.0, 1.0, (self.m,), np.float32)
         self.state = self.at(np.zeros(2 * self.n), self.u_start.copy(), 0.0, 0.0)
-        if self.task is not None and self.task.has_observation:
-            self.observation_space = self.task.observation_space(self.observe(self.state))
-        else:
-            self.observation_space = spaces.Box(-np.inf, np.inf, (2 * self.n + self.m,), np.float32)
-        own = self.task is not None and self.task.has_observation
-        self.observes_state = type(self).observe is ActiveConstraintEnv.observe and not own  # (q, p, u) as float32
+        self.observation_space = self._observation_space()
 
     @classmethod
     def from_lagrangian(cls, kinetic, potential, q, u, **kwargs):
@@ -245,11 +237,7 @@ class ActiveConstraintEnv(TaskEnv):
         return ActiveConstraintState(y, u, t, energy_error)
 
     def start(self, options):
-        check_keys("reset options", options, {"state"})
-        defaults = {"u": self.u_start.copy()}
-        if self.task is not None:
-            defaults = self.STATE.check(self, self.task.reset(self.np_random), defaults, "the state of task.reset")
-        values = self.STATE.check(self, options.get("state", {}), defaults)
+        values = self.start_values(options, {"u": self.u_start.copy()})
         return self.at(np.concatenate([values["q"], values["p"]]), values["u"], 0.0, 0.0)
 
     def command(self, a):
@@ -310,23 +298,9 @@ class ActiveConstraintEnv(TaskEnv):
         q, p = s.y[..., :n].copy(), s.y[..., n:].copy()
         return {"q": q, "p": p, "u": np.array(s.u, float), "t": ops.real(s.t)}
 
-    def observe(self, s, ops=SCALAR):
-        if self.task is not None and self.task.has_observation:
-            return self.task.observation(self.state_dict(s, ops), ops)
+    def raw_observation(self, s):
+        """(q, p, u) as float32."""
         return np.concatenate([s.y, s.u], axis=-1).astype(np.float32)
-
-    def reward(self, before, after, info, ops=SCALAR):
-        if self.task is None:
-            return ops.real(0.0 * after.t)
-        return self.task.reward(self.state_dict(before, ops), info["state"], ops)
-
-    def describe(self, s, ops=SCALAR):
-        state = self.state_dict(s, ops)
-        success = ops.flag(0.0 * s.t != 0.0) if self.task is None else self.task.is_success(state, ops)
-        return {"state": state, "is_success": success}
-
-    def terminated(self, s, info, ops=SCALAR):
-        return info["is_success"] if self.task is None else self.task.terminated(info["state"], ops)
 
 
 SPECS = (

@@ -18,14 +18,13 @@ from connenv.core.validation import (
     MAGNITUDE_BOUND,
     check_bounds,
     check_dt,
-    check_keys,
     check_number,
     check_stepper_options,
     real_array,
 )
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Spec
-from connenv.envs.user_task import UserTask
+from connenv.envs.user_task import BuilderTask
 from connenv.rendering.connection import ConnectionRenderer
 
 DT_MAX = 100.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -43,7 +42,7 @@ class ConnectionState(State):
     t: float
 
 
-class ConnectionEnv(TaskEnv):
+class ConnectionEnv(BuilderTask, TaskEnv):
     r"""
     ## Description
 
@@ -142,11 +141,9 @@ class ConnectionEnv(TaskEnv):
         self.group = GROUPS[group]
         self.low, self.high = check_bounds("shape_low", shape_low, "shape_high", shape_high)
         self.max_shape_speed = check_number("max_shape_speed", max_shape_speed, 0.0, MAGNITUDE_BOUND, open_low=True)
-        if draw is not None and not callable(draw):
-            raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
         if not isinstance(vectorized, (bool, np.bool_)):
             raise TypeError(f"vectorized={vectorized!r} must be True or False")
-        self.task, self.draw = (None if task is None else UserTask(task, ("g", "s"))), draw
+        self.adopt(task, draw, ("g", "s"))
         self.system = connection_system(group, frame, connection, bool(vectorized), exact_segment,
                                         self.sample_shapes(), self.dt, self.max_shape_speed)  # fmt: skip
         check_stepper_options(self.name, stepper_options, type(self))
@@ -156,8 +153,6 @@ class ConnectionEnv(TaskEnv):
         self.state = ConnectionState(np.array(self.group.identity()), self.start_shape(), 0.0)
         self.action_space = spaces.Box(-1.0, 1.0, self.low.shape, np.float32)
         self.observation_space = self._observation_space()
-        own = self.task is not None and self.task.has_observation
-        self.observes_state = type(self).observe is ConnectionEnv.observe and not own  # (g, s) as float32
 
     def start_shape(self):
         """The default s: the midpoint of finite bounds, else the finite bound, else 0."""
@@ -171,12 +166,6 @@ class ConnectionEnv(TaskEnv):
         high = np.where(np.isfinite(self.high), self.high, self.start_shape() + 0.5)
         return np.stack([self.start_shape(), 0.75 * low + 0.25 * high])
 
-    def _observation_space(self):
-        if self.task is not None and self.task.has_observation:
-            return self.task.observation_space(self.observe(self.state))
-        shape = self.observe(self.state).shape
-        return spaces.Box(-np.inf, np.inf, shape, np.float32)
-
     @property
     def components(self) -> dict:
         """The state's names for the model: g's coordinates (x, y, theta for SE2, R's entries for SO3), s₁…s_k."""
@@ -189,12 +178,8 @@ class ConnectionEnv(TaskEnv):
         return {**own, **super().parameters()}
 
     def start(self, options):
-        check_keys("reset options", options, {"state"})
-        defaults = {"g": np.array(self.group.identity()), "s": self.start_shape()}
-        if self.task is not None:
-            defaults = self.STATE.check(self, self.task.reset(self.np_random), defaults, "the state of task.reset")
-        state = self.STATE.check(self, options.get("state", {}), defaults)
-        return ConnectionState(state["g"], state["s"], 0.0)
+        values = self.start_values(options, {"g": np.array(self.group.identity()), "s": self.start_shape()})
+        return ConnectionState(values["g"], values["s"], 0.0)
 
     def command(self, a):
         """ṡ of action a."""
@@ -250,33 +235,14 @@ class ConnectionEnv(TaskEnv):
             raise ValueError(f"state g={value!r} is {off:.3g} off {self.group.name}; it must be on it to {ON_GROUP}")
         return self.group.coordinates(g)
 
-    def state_dict(self, state):
+    def state_dict(self, state, ops=SCALAR):
         """The state as `info["state"]`: g as a matrix (a vector for R2), s, t."""
         return {"g": self.group.matrix(state.g), "s": np.array(state.s), "t": state.t}
 
-    def observe(self, state, ops=SCALAR):
-        if self.task is not None and self.task.has_observation:
-            return self.task.observation(self.state_dict(state), ops)
+    def raw_observation(self, state):
+        """g's matrix entries (R2: the vector) and s, as float32."""
         g = self.group.matrix(state.g)
         return np.concatenate([g.reshape(*np.shape(state.s)[:-1], -1), state.s], axis=-1).astype(np.float32)
-
-    def describe(self, state, ops=SCALAR):
-        info = {"state": self.state_dict(state)}
-        if self.task is None:
-            info["is_success"] = False if ops is SCALAR else np.zeros(len(state.t), bool)
-        else:
-            info["is_success"] = self.task.is_success(info["state"], ops)
-        return info
-
-    def reward(self, before, after, info, ops=SCALAR):
-        if self.task is None:
-            return ops.real(0.0) if ops is SCALAR else np.zeros(len(after.t))
-        return self.task.reward(self.state_dict(before), info["state"], ops)
-
-    def terminated(self, state, info, ops=SCALAR):
-        if self.task is None:
-            return False if ops is SCALAR else np.zeros(len(state.t), bool)
-        return self.task.terminated(info["state"], ops)
 
 
 SPECS = (

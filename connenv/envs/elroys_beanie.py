@@ -185,9 +185,6 @@ class ElroysBeanieEnv(ConnectionEnv):
             "held": ops.real(state.held), "is_success": ops.flag(self.success(state, ops)),
         }
 
-    def terminated(self, state, info, ops=SCALAR):
-        return info["is_success"]
-
 
 SPECS = (
     Spec(

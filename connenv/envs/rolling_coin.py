@@ -174,9 +174,6 @@ class RollingCoinEnv(ConnectionEnv):
             "is_success": ops.flag(self.success(distance, heading)),
         }
 
-    def terminated(self, state, info, ops=SCALAR):
-        return info["is_success"]
-
 
 SPECS = (
     Spec(

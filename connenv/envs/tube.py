@@ -160,9 +160,6 @@ class TubeTwistEnv(ConnectionEnv):
     def success(self, s, ops=SCALAR):
         return (s.tangent_error <= self.tolerance) & (abs(self.twist_error(s, ops)) <= self.tolerance)
 
-    def terminated(self, state, info, ops=SCALAR):
-        return info["is_success"]
-
     def path_ratio(self, s, ops=SCALAR):
         """path_length over the shortest loop that does the task, a circle of area |ψ*| (1 for ψ* = 0)."""
         area = abs(s.target)

@@ -11,6 +11,8 @@ naming its method, never a NaN reward or an infinite observation passed on to th
 - ``reward``: a real number, finite (TypeError, ValueError);
 - ``terminated``, ``is_success``: a bool, a number or a 0-d array (TypeError); without ``is_success`` it is False;
 - ``observation``: real numbers, finite in float32, of the shape it had at construction (TypeError, ValueError).
+
+`UserTask` wraps the task; `BuilderTask` is the task code both builders share around it.
 """
 
 from __future__ import annotations
@@ -91,6 +93,57 @@ class UserTask:
             raise ValueError(f"{name} returned shape {observation.shape}; it was {self.shape} at construction")
         return observation
 
+
+
+class BuilderTask:
+    """The task code both builders share, on the state dicts of their ``state_dict(state, ops)``: a user's task
+    (`UserTask`) and draw callback taken at construction (`adopt`), the reset state's values (`start_values`), and
+    ``observe`` (the task's observation, else the builder's ``raw_observation``), ``reward``, ``describe`` and
+    ``terminated`` (without a task: reward 0, no success, no end)."""
+
+    task: UserTask | None = None
+
+    def adopt(self, task, draw, keys):
+        """The user's task (checked) and draw callback, ``keys`` the state keys its reset may give; and whether the env
+        observes its raw state (not a task's or a subclass's observation), which each step keeps in float32's range."""
+        if draw is not None and not callable(draw):
+            raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
+        self.task, self.draw = (None if task is None else UserTask(task, keys)), draw
+        self.observes_state = type(self).observe is BuilderTask.observe and not self.observes_task
+
+    @property
+    def observes_task(self) -> bool:
+        return self.task is not None and self.task.has_observation
+
+    def _observation_space(self):
+        """The task's observation space (of its observation of the start state), else an unbounded float32 Box of the
+        raw observation's shape."""
+        if self.observes_task:
+            return self.task.observation_space(self.observe(self.state))
+        return spaces.Box(-np.inf, np.inf, self.raw_observation(self.state).shape, np.float32)
+
+    def start_values(self, options, defaults):
+        """The reset state's values: options["state"] over the task's reset (where there is a task) over defaults."""
+        check_keys("reset options", options, {"state"})
+        if self.task is not None:
+            defaults = self.STATE.check(self, self.task.reset(self.np_random), defaults, "the state of task.reset")
+        return self.STATE.check(self, options.get("state", {}), defaults)
+
+    def observe(self, s, ops=SCALAR):
+        return self.task.observation(self.state_dict(s, ops), ops) if self.observes_task else self.raw_observation(s)
+
+    def reward(self, before, after, info, ops=SCALAR):
+        if self.task is None:
+            return ops.real(0.0 * after.t)
+        return self.task.reward(self.state_dict(before, ops), info["state"], ops)
+
+    def describe(self, s, ops=SCALAR):
+        state = self.state_dict(s, ops)
+        success = ops.flag(0.0 * s.t != 0.0) if self.task is None else self.task.is_success(state, ops)
+        return {"state": state, "is_success": success}
+
+    def terminated(self, s, info, ops=SCALAR):
+        return info["is_success"] if self.task is None else self.task.terminated(info["state"], ops)
 
 def _real(name, value) -> float:
     """value as a finite float: a real number or a 0-d array of one, else TypeError or ValueError naming it."""
