@@ -169,3 +169,12 @@ def control_path(u, u_cmd, dt: float, max_speed: float | None, ops=SCALAR):
         return [(np.array([a]), np.array([v]), duration) for a, v, duration in cuts], u + u_dot * tau
     cuts, u_end = control_segments_batch(u, u_cmd, dt, max_speed)
     return [(a[:, None], v[:, None], duration) for a, v, duration in cuts], u_end
+
+
+def held_energy(energy, y, u, u_dot):
+    """energy(y, u) where the one assigned coordinate u is held (u̇ = 0, where E is conserved), 0 where it moves: one
+    state on Python floats, or rows. `run_segments`' energy as ``functools.partial(held_energy, system.energy)``."""
+    if y.ndim == 1:
+        (u,), (u_dot,) = u.tolist(), u_dot.tolist()
+        return energy(y, u) if u_dot == 0.0 else 0.0
+    return np.where(u_dot[..., 0] == 0.0, energy(y, u[..., 0]), 0.0)

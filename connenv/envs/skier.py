@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -12,7 +13,7 @@ from gymnasium import spaces
 from connenv.core.backend import SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, options, scale, step
-from connenv.core.segments import check_drift, control_path, run_segments
+from connenv.core.segments import check_drift, control_path, held_energy, run_segments
 from connenv.core.state import Fields, number
 from connenv.core.validation import check_keys, check_number
 from connenv.envs.base import State, TaskEnv
@@ -176,6 +177,7 @@ class SkierEnv(TaskEnv):
         self.trail = make_trail(a.trail, a.trail_params)
         check_curvature(self.trail, self.h_max)
         self.system = Skier(self.trail, mass=a.mass, g=a.g)
+        self.held_energy = functools.partial(held_energy, self.system.energy)  # E where h is held
         self.scaled_dt = self.dt * math.sqrt(self.system.g / G_REFERENCE)  # the step in the time of g = 9.81 m/s²
         if self.scaled_dt > DT_MAX:
             raise ValueError(
@@ -265,13 +267,6 @@ class SkierEnv(TaskEnv):
         y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, h, s.t + self.dt, s.side, s.energy_error + change, ops)
-
-    def held_energy(self, y, h, h_dot):
-        """E where the height is held (where E is conserved), 0 where it moves: one state, or rows."""
-        if y.ndim == 1:  # one state, on Python floats: its energy only where it is conserved
-            (h,), (h_dot,) = h.tolist(), h_dot.tolist()
-            return self.system.energy(y, h) if h_dot == 0.0 else 0.0
-        return np.where(h_dot[..., 0] == 0.0, self.system.energy(y, h[..., 0]), 0.0)
 
     def check_energy_error(self, energy_error):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -12,7 +13,7 @@ from gymnasium import spaces
 from connenv.core.backend import BATCH, SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
-from connenv.core.segments import check_drift, control_path, run_segments
+from connenv.core.segments import check_drift, control_path, held_energy, run_segments
 from connenv.core.state import Fields, angle, number
 from connenv.core.validation import check_keys
 from connenv.envs.base import State, TaskEnv
@@ -134,6 +135,7 @@ class SwingEnv(TaskEnv):
         self.r_min, self.r_max, self.target_amplitude = a.r_min, a.r_max, a.target_amplitude
         self.max_radial_speed, self.system = a.max_radial_speed, Swing(mass=a.mass, g=a.g)
         self.stepper = make_stepper(a.integrator, self.system, **stepper_options)
+        self.held_energy = functools.partial(held_energy, self.system.energy)  # E where r is held
 
         self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / self.r_min)
         self.target_lift = 1.0 - math.cos(self.target_amplitude)
@@ -163,13 +165,6 @@ class SwingEnv(TaskEnv):
         y, change = run_segments(stepper, self.system, s.y, segments, self.held_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, r, s.t + self.dt, s.energy_error + change, ops)
-
-    def held_energy(self, y, r, r_dot):
-        """E where the radius is held (where E is conserved), 0 where it moves: one state, or rows."""
-        if y.ndim == 1:  # one state, on Python floats: its energy only where it is conserved
-            (r,), (r_dot,) = r.tolist(), r_dot.tolist()
-            return self.system.energy(y, r) if r_dot == 0.0 else 0.0
-        return np.where(r_dot[..., 0] == 0.0, self.system.energy(y, r[..., 0]), 0.0)
 
     def check_energy_error(self, energy_error):
         """StepperError if |the stepper's energy error| (of any row of a batch) passes its bound."""
