@@ -178,3 +178,44 @@ def held_energy(energy, y, u, u_dot):
         (u,), (u_dot,) = u.tolist(), u_dot.tolist()
         return energy(y, u) if u_dot == 0.0 else 0.0
     return np.where(u_dot[..., 0] == 0.0, energy(y, u[..., 0]), 0.0)
+
+
+def straight_path(s, s_cmd, dt: float, max_speed: float):
+    """(ṡ, the duration of the motion, s at the end) of a step of several assigned coordinates s (a swimmer's joints)
+    toward s_cmd: along the straight segment, the fastest coordinate at max_speed, held at s_cmd once there; over a
+    batch (rows on axis 0) a duration per row, 0 with ṡ = 0 for a row that does not move. A move so small that
+    max_speed / its length overflows (a subnormal command from rest) is none: s takes the command, ṡ = 0, duration 0
+    (the body would not move in floats)."""
+    if np.ndim(s) == 1:  # one state on floats, the same arithmetic: several times faster than numpy on two numbers
+        return _straight_path_floats(s.tolist(), s_cmd.tolist(), dt, max_speed)
+    delta = s_cmd - s
+    largest = _largest(delta)
+    reach = largest / max_speed
+    with np.errstate(divide="ignore", over="ignore"):
+        scale = max_speed / largest
+    moves = np.real(scale) < math.inf  # a move, resolved: largest > 0 and max_speed / largest finite
+    s_dot = np.where(moves[..., None], delta * np.where(moves, scale, 0.0)[..., None], 0.0)
+    ramp = np.where(moves, ARRAYS.minimum(reach, dt), 0.0)
+    end = np.where((np.real(reach) <= dt)[..., None], s_cmd, s + s_dot * dt)
+    return s_dot, ramp, end
+
+
+def _largest(delta):
+    """max |δ_k| on the last axis; on complex rows (a Jacobian's) the entry the real parts pick, with its derivative."""
+    if not np.iscomplexobj(delta):
+        return np.max(np.abs(delta), axis=-1)
+    magnitude = ARRAYS.abs(delta)
+    return np.take_along_axis(magnitude, np.argmax(np.real(magnitude), axis=-1)[..., None], axis=-1)[..., 0]
+
+
+def _straight_path_floats(s, s_cmd, dt, max_speed):
+    """straight_path of one state, its coordinates as lists of floats."""
+    delta = [b - a for a, b in zip(s, s_cmd)]
+    largest = max(abs(d) for d in delta)
+    reach = largest / max_speed
+    scale = max_speed / largest if largest > 0.0 else math.inf
+    if scale == math.inf:  # no move, or one below what floats resolve (see straight_path)
+        return np.zeros(len(s)), 0.0, np.array(s_cmd)
+    s_dot = [d * scale for d in delta]
+    end = s_cmd if reach <= dt else [a + d * dt for a, d in zip(s, s_dot)]
+    return np.array(s_dot), min(reach, dt), np.array(end)

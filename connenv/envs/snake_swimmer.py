@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
-from connenv.core.backend import ARRAYS, SCALAR
+from connenv.core.backend import SCALAR
 from connenv.core.lie import fixed_rule
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
+from connenv.core.segments import straight_path
 from connenv.core.state import number
 from connenv.core.validation import MAGNITUDE_BOUND, decimal
 from connenv.envs.base import State, TaskEnv
@@ -46,46 +46,6 @@ class SnakeState(State):
     t: float
     full: bool
     momentum0: np.ndarray
-
-
-def joint_path(s, s_cmd, dt: float, max_speed: float):
-    """(ṡ, the duration of the motion, the joints at the end) of a step toward s_cmd: along the straight segment, the
-    faster joint at max_speed, held at s_cmd once there; over a batch (rows on axis 0) a duration per row, 0 with ṡ = 0
-    for a row that does not move. A move so small that max_speed / its length overflows (a subnormal command from rest)
-    is none: the joints take the command, ṡ = 0, duration 0 (the body would not move in floats)."""
-    if np.ndim(s) == 1:  # one state on floats, the same arithmetic: several times faster than numpy on two numbers
-        return _joint_path_floats(s.tolist(), s_cmd.tolist(), dt, max_speed)
-    delta = s_cmd - s
-    largest = _largest(delta)
-    reach = largest / max_speed
-    with np.errstate(divide="ignore", over="ignore"):
-        scale = max_speed / largest
-    moves = np.real(scale) < math.inf  # a move, resolved: largest > 0 and max_speed / largest finite
-    s_dot = np.where(moves[..., None], delta * np.where(moves, scale, 0.0)[..., None], 0.0)
-    ramp = np.where(moves, ARRAYS.minimum(reach, dt), 0.0)
-    end = np.where((np.real(reach) <= dt)[..., None], s_cmd, s + s_dot * dt)
-    return s_dot, ramp, end
-
-
-def _largest(delta):
-    """max |δ_k| on the last axis; on complex rows (a Jacobian's) the entry the real parts pick, with its derivative."""
-    if not np.iscomplexobj(delta):
-        return np.max(np.abs(delta), axis=-1)
-    magnitude = ARRAYS.abs(delta)
-    return np.take_along_axis(magnitude, np.argmax(np.real(magnitude), axis=-1)[..., None], axis=-1)[..., 0]
-
-
-def _joint_path_floats(s, s_cmd, dt, max_speed):
-    """joint_path of one state, its joints as lists of floats."""
-    delta = [b - a for a, b in zip(s, s_cmd)]
-    largest = max(abs(d) for d in delta)
-    reach = largest / max_speed
-    scale = max_speed / largest if largest > 0.0 else math.inf
-    if scale == math.inf:  # no move, or one below what floats resolve (see joint_path)
-        return np.zeros(2), 0.0, np.array(s_cmd)
-    s_dot = [d * scale for d in delta]
-    end = s_cmd if reach <= dt else [a + d * dt for a, d in zip(s, s_dot)]
-    return np.array(s_dot), min(reach, dt), np.array(end)
 
 
 class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
@@ -191,8 +151,8 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return {**super().parameters(), "model": "full" if self.state.full else "reduced"}
 
     def advance(self, s, s_cmd, stepper, ops=SCALAR):
-        """The joints follow `joint_path`, the full model drifting while they hold: one state, or rows (ops=BATCH)."""
-        s_dot, ramp, s_end = joint_path(s.s, s_cmd, self.dt, self.max_joint_speed)
+        """The joints follow `straight_path`, the full model drifting while they hold: one state, or rows (ops=BATCH)."""
+        s_dot, ramp, s_end = straight_path(s.s, s_cmd, self.dt, self.max_joint_speed)
         moving = (s.s, s_dot, ramp)  # held joints do not move the chain at zero momentum
         full = [moving, (s_end, np.zeros(s_dot.shape), self.dt - ramp)]
         pose, momentum = self.swim(s, full, [moving], stepper, ops)
