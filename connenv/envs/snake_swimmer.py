@@ -151,7 +151,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
         return {**super().parameters(), "model": "full" if self.state.full else "reduced"}
 
     def advance(self, s, s_cmd, stepper, ops=SCALAR):
-        """The joints follow `straight_path`, the full model drifting while they hold: one state, or rows (ops=BATCH)."""
+        """The joints follow their `straight_path`, the full model drifting while they hold: one state, or rows."""
         s_dot, ramp, s_end = straight_path(s.s, s_cmd, self.dt, self.max_joint_speed)
         moving = (s.s, s_dot, ramp)  # held joints do not move the chain at zero momentum
         full = [moving, (s_end, np.zeros(s_dot.shape), self.dt - ramp)]
