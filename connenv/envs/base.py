@@ -224,6 +224,7 @@ class TaskEnv(gym.Env):
         """While rendering, after a reset or a step: the state's point on the trace (if the renderer draws one), and
         in human mode the frame shown, as in classic control."""
         if self.renderer.point is not None:
+            self.trace = [] if self.trace is None else self.trace  # a step before the first reset, on the class itself
             self.trace.append(self.renderer.point(self))
         if self.render_mode == "human":
             self.render()
