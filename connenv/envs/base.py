@@ -89,7 +89,7 @@ class TaskEnv(gym.Env):
     context: Context | None = None
     """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
     _model = None  # the model, made on first use
-    trace: list | None = None
+    trace: list
     """While rendering: the renderer's ``point(env)`` of each state since reset, the track drawn behind the body."""
     reports_params = False  # whether info carries "params" (and the observation them, if observed): where they vary,
     # or a reset set them
@@ -119,7 +119,7 @@ class TaskEnv(gym.Env):
         self.render_mode = render_mode
         self.dt = dt
         self.metadata = {**self.metadata, "render_fps": round(1.0 / dt)}
-        self._renderer = None
+        self._renderer, self.trace = None, []
 
     def render(self):
         if self.render_mode is None:
@@ -127,8 +127,8 @@ class TaskEnv(gym.Env):
             return None
         if self._renderer is None:
             self._renderer = self.renderer(self)
-        if self.trace is None and self.renderer.point is not None:  # a render before the first reset
-            self.trace = [self.renderer.point(self)]
+        if not self.trace and self.renderer.point is not None:  # a render before the first reset or step
+            self.trace.append(self.renderer.point(self))
         return self._renderer.draw(self)
 
     def __getstate__(self):
@@ -224,7 +224,6 @@ class TaskEnv(gym.Env):
         """While rendering, after a reset or a step: the state's point on the trace (if the renderer draws one), and
         in human mode the frame shown, as in classic control."""
         if self.renderer.point is not None:
-            self.trace = [] if self.trace is None else self.trace  # a step before the first reset, on the class itself
             self.trace.append(self.renderer.point(self))
         if self.render_mode == "human":
             self.render()

@@ -28,7 +28,8 @@ from connenv.core.validation import check_keys, check_returned
 from connenv.envs.base import each_row
 
 REQUIRED = {
-    "reset": "reset(np_random) -> state dict", "reward": "reward(state, next_state) -> float",
+    "reset": "reset(np_random) -> state dict",
+    "reward": "reward(state, next_state) -> float",
     "terminated": "terminated(state) -> bool",
 }
 OPTIONAL = {"observation": "observation(state) -> array", "is_success": "is_success(state) -> bool"}
@@ -94,7 +95,6 @@ class UserTask:
         return observation
 
 
-
 class BuilderTask:
     """The task code both builders share, on the state dicts of their ``state_dict(state, ops)``: a user's task
     (`UserTask`) and draw callback taken at construction (`adopt`), the reset state's values (`start_values`), and
@@ -109,11 +109,8 @@ class BuilderTask:
         if draw is not None and not callable(draw):
             raise ValueError(f"draw={draw!r} must be a callable draw(state, canvas) or None")
         self.task, self.draw = (None if task is None else UserTask(task, keys)), draw
+        self.observes_task = self.task is not None and self.task.has_observation
         self.observes_state = type(self).observe is BuilderTask.observe and not self.observes_task
-
-    @property
-    def observes_task(self) -> bool:
-        return self.task is not None and self.task.has_observation
 
     def _observation_space(self):
         """The task's observation space (of its observation of the start state), else an unbounded float32 Box of the
@@ -144,6 +141,7 @@ class BuilderTask:
 
     def terminated(self, s, info, ops=SCALAR):
         return info["is_success"] if self.task is None else self.task.terminated(info["state"], ops)
+
 
 def _real(name, value) -> float:
     """value as a finite float: a real number or a 0-d array of one, else TypeError or ValueError naming it."""
