@@ -80,7 +80,7 @@ class TaskEnv(gym.Env):
     metadata: ClassVar[dict] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
     renderer: ClassVar[type]
     name: ClassVar[str] = "this env"
-    """How errors name the env: its first registered id without the namespace (`connenv.envs.spec.register`)."""
+    """How errors name the env: its id without the namespace, or its versions' stem (`connenv.envs.spec.register`)."""
     ARGS: ClassVar[Args]
     """The make kwargs (`connenv.core.params`): their checks, the docstring's Arguments table, `parameters()`."""
     state: State

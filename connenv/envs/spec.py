@@ -112,15 +112,16 @@ def entry_point(cls: type) -> str:
 
 
 def register(*specs: Spec):
-    """Register each spec with Gymnasium and in `registry`, and name its env class (``name``) after its first id."""
+    """Register each spec with Gymnasium and in `registry`, and name its env class (``name``) after its id, or after
+    the stem its ids share ("BeadOnBar") where a class has several versions."""
     for spec in specs:
         gym_register(
             id=spec.id, entry_point=entry_point(spec.env),
             vector_entry_point=entry_point(spec.vector_env),
             max_episode_steps=spec.max_episode_steps, kwargs=dict(spec.kwargs),
         )
-        if spec.env not in {known.env for known in registry.values()}:  # the class's first id names it in errors
-            spec.env.name = spec.name
+        versions = [known for known in registry.values() if known.env is spec.env]
+        spec.env.name = spec.name.rpartition("-v")[0] if versions else spec.name  # of several ids: their shared stem
         registry[spec.id] = spec
 
 
