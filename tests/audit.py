@@ -109,24 +109,24 @@ class Declared(Mapping):
         return len(registry)
 
 
-def state_keys(env_id, env):
-    """The numbers and vectors of the env's declared reset state: the number of entries of each (0: a number)."""
-    shapes = env.STATE.shapes(env)
-    numeric = [key for key, field in env.STATE.fields.items() if field.kind in ("number", "vector")]
-    return {key: (shapes[key] or (0,))[0] for key in numeric}
+def numeric_keys(fields, env):
+    """The numbers and vectors of declared reset keys (`connenv.core.state`): the number of entries of each (0: a
+    number)."""
+    shapes = fields.shapes(env)
+    return {key: (shapes[key] or (0,))[0] for key, field in fields.fields.items() if field.kind in ("number", "vector")}
 
 
 def rotations(env_id, env):
     """Reset arguments that take a rotation matrix, (path in the options, name in the message): the declared reset
-    state's rotations, then the spec's reset options'."""
+    state's rotations, then the declared options'."""
     state = [(("state", key), f"state {key}") for key, field in env.STATE.fields.items() if field.kind == "rotation"]
-    return state + list(spec(env_id).rotations)
+    return state + [((key,), key) for key, field in env.OPTIONS.fields.items() if field.kind == "rotation"]
 
 
-STATE_KEYS = Declared(state_keys)
+STATE_KEYS = Declared(lambda env_id, env: numeric_keys(env.STATE, env))
 """Reset state keys of each id (its env's declared state): the number of entries of each (0: a number)."""
-OPTION_KEYS = {spec.id: spec.option_keys for spec in registry.values() if spec.option_keys}
-"""Reset options beside "state"."""
+OPTION_KEYS = Declared(lambda env_id, env: numeric_keys(env.OPTIONS, env))
+"""Reset options beside "state" (its env's declared options), alike."""
 ROTATIONS = Declared(rotations)
 """Reset arguments that take a rotation matrix: (path in the options, name in the message)."""
 NOT_NUMERIC = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",

@@ -75,7 +75,7 @@ class PointEnv(TaskEnv):
 
     def start(self, options):
         x = self.np_random.uniform(-1.0, 0.0)
-        return PointState(self.STATE.check(self, options.get("state", {}), {"x": x})["x"], 0.0)
+        return PointState(self.reset_values(options, {"x": x})["x"], 0.0)
 
     def command(self, a):
         return (SCALAR if a.ndim == 1 else BATCH).components(a)[0]

@@ -2,7 +2,8 @@
 its name, size, unit, valid range and meaning. One declaration, `Fields`, checks the given state (a ValueError
 naming the key, its value and its range, as `connenv.core.validation` words it, before anything is set), writes the
 table of the docstring's "## Starting State" (`document_state`) and names the keys with their shapes in one fixed
-order, the order they are checked in (`names`, `shapes`).
+order, the order they are checked in (`names`, `shapes`). The reset options beside "state" (a target) are declared
+the same way, as the env's ``OPTIONS``: checked, tabled and named alike.
 
 A field is a number (`number`, `angle`), a vector (`vector`: n entries, n a number or the name of an env attribute),
 a rotation matrix (`rotation`) or a key its env checks (`given`: a method of the env). A range is an interval (its
@@ -65,9 +66,9 @@ class Field:
             return -bound, bound
         return end(self.low, env, values), end(self.high, env, values)
 
-    def check(self, value, env, values: dict):
-        """value checked against its range (values: those checked before it), or ValueError."""
-        name = f"state {self.name}"
+    def check(self, value, env, values: dict, prefix: str = "state "):
+        """value checked against its range (values: those checked before it), or ValueError naming prefix + name."""
+        name = prefix + self.name
         if self.kind == "given":
             return getattr(env, self.check_with)(value)
         if self.kind == "rotation":
@@ -139,6 +140,9 @@ def given(name, size, check_with, range_text, about="") -> Field:
 class Fields:
     """An env's declared reset state, in order: a later field's range may refer to an earlier one's value."""
 
+    prefix = "state "  # what errors put before a key: "state x"
+    column = "key"  # the table's first column
+
     def __init__(self, *fields: Field, either: tuple[tuple[str, ...], ...] = ()):
         self.fields = {f.name: f for f in fields}
         self.either = either
@@ -164,7 +168,7 @@ class Fields:
         defaults, values = defaults or {}, {}
         for key, field in self.fields.items():
             if key in state:
-                values[key] = field.check(state[key], env, values)
+                values[key] = field.check(state[key], env, values, self.prefix)
             elif not self.left_out(key, state):
                 default = defaults[key] if key in defaults else field.default(env)
                 if default is not None:
@@ -178,22 +182,34 @@ class Fields:
 
     def table(self) -> list[str]:
         """The Starting State's table of the keys, then a line per group of alternatives."""
-        rows = ["| key | shape | unit | range |", "|---|---|---|---|", *(f.row() for f in self.fields.values())]
+        rows = [f"| {self.column} | shape | unit | range |", "|---|---|---|---|"]
+        rows += [f.row() for f in self.fields.values()]
         for group in self.either:
             rows += ["", f"{' or '.join(f'`{k}`' for k in group)}, not both."]
         return rows
 
 
+class Options(Fields):
+    """An env's declared reset options beside "state" (a target): checked and tabled as the state's keys, errors
+    naming them alone ("target")."""
+
+    prefix = ""
+    column = "option"
+
+
 def document_state(cls: type) -> None:
-    """cls's own ``STATE`` (if it has one): its table ends the docstring's "## Starting State" section."""
-    state = cls.__dict__.get("STATE")
+    """cls's ``STATE`` and ``OPTIONS``, where it declares either: their tables end the docstring's "## Starting State"
+    section."""
+    if "STATE" not in cls.__dict__ and "OPTIONS" not in cls.__dict__:
+        return
     doc = cls.__dict__.get("__doc__") or ""
     lines = doc.split("\n")
     heading = next((i for i, line in enumerate(lines) if line.strip() == "## Starting State"), None)
-    if state is None or heading is None:
+    if heading is None:
         return
     indent = lines[heading][: len(lines[heading]) - len(lines[heading].lstrip())]
     after = next((i for i in range(heading + 1, len(lines)) if lines[i].strip().startswith("## ")), len(lines))
     last = max(i for i in range(heading, after) if lines[i].strip())
-    table = [indent + row if row else "" for row in state.table()]
+    rows = cls.STATE.table() + (["", *cls.OPTIONS.table()] if cls.OPTIONS.fields else [])
+    table = [indent + row if row else "" for row in rows]
     cls.__doc__ = "\n".join([*lines[: last + 1], "", *table, *lines[last + 1:]])

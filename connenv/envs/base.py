@@ -29,9 +29,9 @@ from connenv.core.backend import SCALAR
 from connenv.core.context import Context
 from connenv.core.model import Model
 from connenv.core.params import Args, document
-from connenv.core.state import Fields, document_state
+from connenv.core.state import Fields, Options, document_state
 from connenv.core.steppers import StepperError
-from connenv.core.validation import check_action, check_mapping
+from connenv.core.validation import check_action, check_keys, check_mapping
 
 
 @dataclasses.dataclass
@@ -86,6 +86,8 @@ class TaskEnv(gym.Env):
     state: State
     STATE: ClassVar[Fields] = Fields()
     """The reset state's keys (`connenv.core.state`): their checks in ``start``, the docstring's table of them."""
+    OPTIONS: ClassVar[Options] = Options()
+    """The reset options beside "state" and "params" (a target), declared as the state is."""
     context: Context | None = None
     """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
     _model = None  # the model, made on first use
@@ -227,6 +229,15 @@ class TaskEnv(gym.Env):
             self.trace.append(self.renderer.point(self))
         if self.render_mode == "human":
             self.render()
+
+    def reset_values(self, options: dict, defaults: dict | None = None) -> dict:
+        """The values of the reset state's keys and of the other options (`STATE`, `OPTIONS`): those given checked,
+        the others their defaults (``defaults``, else the fields'). A bad key or value is a ValueError naming it,
+        before anything is set."""
+        check_keys("reset options", options, {"state", *self.OPTIONS.names})
+        others = {key: value for key, value in options.items() if key != "state"}
+        return self.STATE.check(self, options.get("state", {}), defaults) | self.OPTIONS.check(
+            self, others, defaults, "reset options")
 
     def check_action(self, action):
         """The action as a finite float array of the space's shape, clipped into the space (else ValueError)."""

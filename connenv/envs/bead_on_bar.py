@@ -12,8 +12,8 @@ from gymnasium import spaces
 from connenv.core.backend import SCALAR
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import check_drift
-from connenv.core.state import Fields, angle, number
-from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number
+from connenv.core.state import Fields, Options, angle, number
+from connenv.core.validation import MAGNITUDE_BOUND
 from connenv.envs.active_constraint import (  # DT_MAX: the builder's, this env's too
     DT_MAX,
     ActiveConstraintEnv,
@@ -91,7 +91,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     At rest, θ = 0, t = 0. With g > 0: r₀ and r* uniform on [−0.8, 0.8] L, r* at least 0.2 L from r₀. With g = 0: |r₀|
     uniform on [0.1, 0.6] L either side of the pivot, r* on the same side, 0.2–0.3 L farther out.
-    `reset(options={"state": {...}, "target": r*})` sets any of these and r* ∈ [−L, L] exactly, others drawn as above:
+    `reset(options={"state": {...}, "target": r*})` sets any of these exactly, others drawn as above:
 
     ## Episode End
 
@@ -134,6 +134,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         number("r_dot", "m/s", bound=MAGNITUDE_BOUND),
         angle("theta", "the bar's angle"),
     )
+    OPTIONS = Options(number("target", "m", "r*", bound="half_length"))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -152,13 +153,10 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         self.state = self.track(self.state, 0.0, None)
 
     def start(self, options):
-        check_keys("reset options", options, {"state", "target"})
         r, target = self.draw_start()
-        state = self.STATE.check(self, options.get("state", {}), {"r": r})
-        L = self.half_length
-        target = check_number("target", options.get("target", target), -L, L)
-        s = self.at(np.array([state["r"], self.mass * state["r_dot"]]), np.array([state["theta"]]), 0.0, 0.0)
-        return self.track(s, target, None)
+        values = self.reset_values(options, {"r": r, "target": target})
+        s = self.at(np.array([values["r"], self.mass * values["r_dot"]]), np.array([values["theta"]]), 0.0, 0.0)
+        return self.track(s, float(values["target"]), None)
 
     def draw_start(self):
         """(r₀, r*) drawn from np_random as the docstring's Starting State says."""
@@ -242,7 +240,7 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
 BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,
         "measure": Measure("time to target", "s", "time_to_success"), "controllers": ("tilt",),
-        "variants": ({}, {"g": 0.0}), "option_keys": {"target": 0},
+        "variants": ({}, {"g": 0.0}),
         "fast_start": {"state": {"r_dot": 1000.0}}}
 SPECS = (
     Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, **BEAD,

@@ -14,8 +14,8 @@ from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JUMP_ROWS, JUMP_STEPPER, JumpClass, JumpFlow
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
-from connenv.core.state import Fields, angle, number
-from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
+from connenv.core.state import Fields, Options, angle, number, vector
+from connenv.core.validation import MAGNITUDE_BOUND
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.chaplygin_sleigh import SleighRenderer
@@ -103,7 +103,7 @@ class ChaplyginSleighEnv(TaskEnv):
     ## Starting State
 
     At rest at the origin heading along x, the mass at C (u = u̇ = 0), t = 0; the target uniform at 1 to 2 m in any
-    direction. `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target (±1e3 m) exactly:
+    direction. `reset(options={"state": {...}, "target": (x, y)})` sets any of these exactly:
 
     ## Episode End
 
@@ -147,6 +147,7 @@ class ChaplyginSleighEnv(TaskEnv):
         number("u_along", "m", "u₁", bound="box"),
         number("u_along_dot", "m/s", bound=Bound(along_speed, "max_mass_speed (0 with box=0)")),
     )
+    OPTIONS = Options(vector("target", 2, "m", "(x, y)", bound=MAGNITUDE_BOUND))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -180,17 +181,14 @@ class ChaplyginSleighEnv(TaskEnv):
         self.state = SleighState(np.zeros(5), np.zeros(2), np.zeros(2), np.array([1.0, 0.0]), 0.0, 0.0)
 
     def start(self, options):
-        check_keys("reset options", options, {"state", "target"})
-        values = self.STATE.check(self, options.get("state", {}))
         distance = self.np_random.uniform(*TARGET_DISTANCE)
         bearing = self.np_random.uniform(-math.pi, math.pi)
         target = np.array([distance * math.cos(bearing), distance * math.sin(bearing)])
-        if "target" in options:
-            target = check_vector("target", options["target"], 2, -MAGNITUDE_BOUND, MAGNITUDE_BOUND)
+        values = self.reset_values(options, {"target": target})
         u, u_dot = np.array([values["u_along"], values["u"]]), np.array([values["u_along_dot"], values["u_dot"]])
         p = self.system.momenta(values["v"], values["omega"], u, u_dot)
         y = np.array([values["x"], values["y"], values["phi"], *p])
-        return SleighState(y, u, u_dot, target, 0.0, 0.0)
+        return SleighState(y, u, u_dot, values["target"], 0.0, 0.0)
 
     def command(self, a):
         """u̇ (velocity control) or the commanded u (position control) of action a (one or a batch)."""
@@ -268,7 +266,6 @@ SPECS = (
         dt_max=DT_MAX, physics="ChaplyginSleigh.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("planner", "tail_first"),
         variants=({}, {"offset": 0.0, "box": 0.0}),  # general: u̇ commanded; fit: u commanded
-        option_keys={"target": 2},
         golden=(
             ("sleigh", {"max_episode_steps": 60, "tolerance": 0.5}, None),
             ("sleigh_fit", {"max_episode_steps": 60, "offset": 0.0, "box": 0.0}, None),

@@ -12,8 +12,8 @@ from gymnasium import spaces
 
 from connenv.core.backend import SCALAR
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
-from connenv.core.state import Fields, angle, number
-from connenv.core.validation import MAGNITUDE_BOUND, check_angle, check_keys
+from connenv.core.state import Fields, Options, angle, number
+from connenv.core.validation import MAGNITUDE_BOUND
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.elroys_beanie import BeanieRenderer
@@ -79,7 +79,7 @@ class ElroysBeanieEnv(ConnectionEnv):
 
     θ = 0, ψ = 0, t = 0; |μ| uniform in [0.25, 1] kg m²/s with a uniform sign (the body drifts at up to 0.8 rad/s;
     holding needs |ψ̇| = |μ|/I₂ ≤ 4 rad/s, within the 4π rad/s bound); θ* uniform in [−π, π).
-    `reset(options={"state": {...}, "target": θ*})` sets any of these and θ* (within [−2π, 2π]) exactly:
+    `reset(options={"state": {...}, "target": θ*})` sets any of these exactly:
 
     ## Episode End
 
@@ -113,6 +113,7 @@ class ElroysBeanieEnv(ConnectionEnv):
         number("momentum", "kg m²/s", "μ; else the body could not be held",
                bound=Bound(lambda env, values: env.momentum_bound(), "0.9 I₂ · max_beanie_speed")),
     )
+    OPTIONS = Options(angle("target", "θ*"))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -137,14 +138,10 @@ class ElroysBeanieEnv(ConnectionEnv):
         return 0.9 * self.beanie_inertia * self.max_beanie_speed
 
     def start(self, options):
-        check_keys("reset options", options, {"state", "target"})
         rng = self.np_random
         momentum = rng.uniform(*MOMENTUM_RANGE) * rng.choice((-1.0, 1.0))
-        target = rng.uniform(-math.pi, math.pi)
-        state = self.STATE.check(self, options.get("state", {}), {"momentum": momentum})
-        theta, psi, momentum = state["theta"], state["psi"], state["momentum"]
-        if "target" in options:
-            target = check_angle("target", options["target"])
+        values = self.reset_values(options, {"momentum": momentum, "target": rng.uniform(-math.pi, math.pi)})
+        theta, psi, momentum, target = (values[key] for key in ("theta", "psi", "momentum", "target"))
         return BeanieState(np.array([theta]), np.array([psi]), 0.0, float(momentum), float(target), 0.0)
 
     def advance(self, state, s_dot, stepper, ops=SCALAR):
@@ -190,7 +187,6 @@ SPECS = (
     Spec(
         "connenv/ElroysBeanie-v0", ElroysBeanieEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="ElroysBeanie.md", measure=Measure("time to hold", "s", "time_to_success"), controllers=("dead_beat",),
-        option_keys={"target": 0},
         golden=(("beanie", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),),
         bench="beanie",
     ),

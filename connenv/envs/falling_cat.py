@@ -13,7 +13,7 @@ from connenv.core.backend import BATCH, SCALAR
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.state import Fields, rotation, vector
-from connenv.core.validation import MAGNITUDE_BOUND, check_keys, decimal
+from connenv.core.validation import MAGNITUDE_BOUND, decimal
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.falling_cat import CatRenderer
@@ -136,9 +136,7 @@ class FallingCatEnv(ConnectionEnv):
         return spaces.Box(-1.0, 1.0, (12,), np.float32)
 
     def start(self, options):
-        check_keys("reset options", options, {"state"})
-        given = options.get("state", {})
-        state = self.STATE.check(self, given)
+        state, given = self.reset_values(options), options.get("state", {})
         s = state["bend"]
         if math.hypot(*s) > self.max_bend:
             raise ValueError(f"state bend={s.tolist()} has β = {math.hypot(*s):.6g} > max_bend={self.max_bend}")

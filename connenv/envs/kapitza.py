@@ -14,7 +14,6 @@ from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, choice, integrator, interval, options, scale, step
 from connenv.core.segments import bounded_segments, bounded_segments_batch, check_drift, run_segments
 from connenv.core.state import Fields, angle, number, vector
-from connenv.core.validation import check_keys
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.kapitza import KapitzaRenderer
@@ -204,8 +203,7 @@ class KapitzaPendulumEnv(TaskEnv):
         return math.pi + self.np_random.uniform(-HOLD_START, HOLD_START)
 
     def start(self, options):
-        check_keys("reset options", options, {"state"})
-        state = self.STATE.check(self, options.get("state", {}), {"theta": self.start_angle()})
+        state = self.reset_values(options, {"theta": self.start_angle()})
         theta, u, u_dot = state["theta"], state["u"], state["u_dot"]
         p = state["p"] if "p" in state else float(self.system.momentum(np.float64(theta), state["theta_dot"], u_dot))
         y = np.array([theta, p])

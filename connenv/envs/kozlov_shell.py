@@ -87,7 +87,7 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
     ## Starting State
 
     At rest (μ = 0, u = 0) at the origin, θ = 0, t = 0; the target a uniform [0.5, 1.0] m away in a uniform direction
-    (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target (±100 m) exactly:
+    (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of these exactly:
 
     ## Episode End
 
@@ -190,7 +190,6 @@ SPECS = (
         "connenv/KozlovShell-v0", KozlovShellEnv, max_episode_steps=300, dt_max=DT_MAX,
         physics="kozlov-shell.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
         starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
-        option_keys={"target": 2},
         fast_start={"state": {"momentum": (27.0, 20.0, 5.0)}},
         golden=(
             ("shell", {"max_episode_steps": 60, "success_radius": 0.3}, None),

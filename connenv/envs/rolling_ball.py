@@ -13,8 +13,8 @@ from connenv.core.backend import ARRAYS, SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.segments import run_segments
-from connenv.core.state import Fields, number, rotation
-from connenv.core.validation import check_keys, check_rotation, finite_action, ndim
+from connenv.core.state import Fields, Options, number, rotation
+from connenv.core.validation import finite_action, ndim
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.envs.vector import TaskVectorEnv
@@ -99,7 +99,7 @@ class RollingBallEnv(TaskEnv):
     ## Starting State
 
     R = I at the origin, t = 0, and R* uniform on SO(3) (scipy's `Rotation.random` on np_random).
-    `reset(options={"state": {...}, "target": R*})` sets any of these and R* (a rotation matrix, as R) exactly:
+    `reset(options={"state": {...}, "target": R*})` sets any of these exactly:
 
     ## Episode End
 
@@ -134,6 +134,7 @@ class RollingBallEnv(TaskEnv):
         number("y", "m", bound=Bound(position_bound, "12πρ")),
         rotation("R"),
     )
+    OPTIONS = Options(rotation("target", "R*"))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -157,13 +158,8 @@ class RollingBallEnv(TaskEnv):
         return BallState(R, R_target, position, error, ops.real(rotation_angle(error)), t, path_length, distance)
 
     def start(self, options):
-        check_keys("reset options", options, {"state", "target"})
-        state = self.STATE.check(self, options.get("state", {}))
-        R, position = state["R"], np.array([state["x"], state["y"]])
-        R_target = Rotation.random(rng=self.np_random).as_matrix()
-        if "target" in options:
-            R_target = check_rotation("target", options["target"])
-        s = self.at(R, R_target, position, 0.0, 0.0, math.nan)
+        values = self.reset_values(options, {"target": Rotation.random(rng=self.np_random).as_matrix()})
+        s = self.at(values["R"], values["target"], np.array([values["x"], values["y"]]), 0.0, 0.0, math.nan)
         if not self.measures_distance:
             return s
         return s.replace(distance=self.system.optimal_arc(Rotation.from_matrix(s.error)).length)
@@ -369,8 +365,7 @@ class RollingBallVectorEnv(TaskVectorEnv):
         self.env.measures_distance = bool(measure_distance)
 
 
-BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse",
-        "rotations": ((("target",), "target"),)}
+BALL = {"dt_max": DT_MAX, "physics": "rolling-ball.md", "play": "mouse"}
 SPECS = (
     Spec(
         "connenv/RollingBall-v0", RollingBallEnv, vector_base=RollingBallVectorEnv, max_episode_steps=200, **BALL,

@@ -11,9 +11,9 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.backend import SCALAR
-from connenv.core.params import Args, integrator, options, scale, step
-from connenv.core.state import Fields, angle, number
-from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
+from connenv.core.params import Args, Bound, integrator, options, scale, step
+from connenv.core.state import Fields, Options, angle, number, vector
+from connenv.core.validation import ANGLE_BOUND, MAGNITUDE_BOUND
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState  # DT_MAX: its dt range
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.rolling_coin import CoinRenderer
@@ -23,6 +23,7 @@ TIME_COST = 0.01  # reward paid per step until success
 SUCCESS_BONUS = 1.0  # reward on the step that parks
 TARGET_DISTANCE = (1.0, 3.0)  # m: the target's distance from the start is drawn uniformly in this range
 OFFSET_BOUND = 10.0  # m: the observed offsets are clipped here
+TARGET_BOUND = Bound(lambda env, values: np.array([MAGNITUDE_BOUND, MAGNITUDE_BOUND, ANGLE_BOUND]), "(1e3, 1e3, 2π)")
 
 
 @dataclass
@@ -66,8 +67,7 @@ class RollingCoinEnv(ConnectionEnv):
     ## Starting State
 
     The coin at the origin, θ = φ = 0, t = 0; the target in a uniform direction at a distance uniform in [1, 3] m, its
-    heading θ* uniform in [−π, π). `reset(options={"state": {...}, "target": (x*, y*, θ*)})` sets any of these and the
-    target (x*, y* in ±1e3, θ* in [−2π, 2π]) exactly:
+    heading θ* uniform in [−π, π). `reset(options={"state": {...}, "target": (x*, y*, θ*)})` sets any of these exactly:
 
     ## Episode End
 
@@ -102,6 +102,7 @@ class RollingCoinEnv(ConnectionEnv):
         angle("theta", "the heading"),
         number("phi", "rad", "the roll angle", bound=MAGNITUDE_BOUND),
     )
+    OPTIONS = Options(vector("target", 3, "m, m, rad", "(x*, y*, θ*)", bound=TARGET_BOUND))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -119,16 +120,12 @@ class RollingCoinEnv(ConnectionEnv):
         return spaces.Box(-high, high, dtype=np.float32)
 
     def start(self, options):
-        check_keys("reset options", options, {"state", "target"})
-        state = self.STATE.check(self, options.get("state", {}))
         rng = self.np_random
         distance, direction = rng.uniform(*TARGET_DISTANCE), rng.uniform(-math.pi, math.pi)
         target = np.array([distance * math.sin(direction), distance * math.cos(direction), rng.uniform(-math.pi, math.pi)])
-        if "target" in options:
-            bound = [MAGNITUDE_BOUND, MAGNITUDE_BOUND, 2 * math.pi]
-            target = check_vector("target", options["target"], 3, np.negative(bound), bound)
-        g = np.array([state["x"], state["y"]])
-        return CoinState(g, np.array([state["theta"], state["phi"]]), 0.0, target)
+        values = self.reset_values(options, {"target": target})
+        g = np.array([values["x"], values["y"]])
+        return CoinState(g, np.array([values["theta"], values["phi"]]), 0.0, values["target"])
 
     def command(self, a):
         """(θ̇, φ̇) of action a (one (2,) or a batch (N, 2))."""
@@ -180,7 +177,6 @@ SPECS = (
         "connenv/RollingCoin-v0", RollingCoinEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="RollingCoin.md", measure=Measure("time to park", "s", "time_to_success"),
         controllers=("turn_roll_turn",), variants=({}, {"integrator": "magnus"}),
-        option_keys={"target": 3},
         golden=(("coin", {"max_episode_steps": 60, "position_tolerance": 0.5}, None),),
         bench="coin",
     ),

@@ -13,8 +13,8 @@ from connenv.core.backend import SCALAR
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, interval, options, step
 from connenv.core.segments import check_drift, run_segments
-from connenv.core.state import Fields, angle, number
-from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_vector
+from connenv.core.state import Fields, Options, angle, number, vector
+from connenv.core.validation import MAGNITUDE_BOUND
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.rolling_coin_surface import CoinSurfaceRenderer
@@ -95,8 +95,8 @@ class RollingCoinSurfaceEnv(TaskEnv):
     At rest, φ = 0, at the origin ((0, −4) on the bowl), θ uniform in [−π, π). The target: `target_distance` from the
     start, in a direction uniform within ±`target_angle` of the steepest descent (all checked at construction to be
     reachable: in the arena, below the start); by default 4 m downhill, up to 1 m aside.
-    `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target (in the arena) exactly; one
-    above the coin's energy cannot be reached:
+    `reset(options={"state": {...}, "target": (x, y)})` sets any of these exactly; a target above the coin's energy
+    cannot be reached:
 
     ## Episode End
 
@@ -144,6 +144,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
         angle("phi", "the roll angle"),
         number("phi_dot", "rad/s", "|R φ̇| ≤ 3 v*", bound=Bound(roll_rate_bound, "3 v*/R")),
     )
+    OPTIONS = Options(vector("target", 2, "m", "(x, y), in the arena", bound="arena"))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -208,16 +209,13 @@ class RollingCoinSurfaceEnv(TaskEnv):
         return state.replace(miss=self.closest_approach(state, ops))
 
     def start(self, options):
-        check_keys("reset options", options, {"state", "target"})
         theta = self.np_random.uniform(-math.pi, math.pi)
         angle = self.downhill + self.np_random.uniform(-self.target_angle, self.target_angle)
         x0, y0 = self.start_point
         target = np.array([x0 + self.target_distance * math.sin(angle), y0 + self.target_distance * math.cos(angle)])
-        state = self.STATE.check(self, options.get("state", {}), {"x": x0, "y": y0, "theta": theta})
-        y, theta = np.array([state["x"], state["y"], state["phi"], state["phi_dot"]]), state["theta"]
-        if "target" in options:
-            target = check_vector("target", options["target"], 2, -self.arena, self.arena)
-        return self.at(y, theta, target, 0.0, None, None)
+        values = self.reset_values(options, {"x": x0, "y": y0, "theta": theta, "target": target})
+        y = np.array([values["x"], values["y"], values["phi"], values["phi_dot"]])
+        return self.at(y, values["theta"], values["target"], 0.0, None, None)
 
     def advance(self, s, rate, stepper, ops=SCALAR):
         """The state after a step at θ̇ = rate (one, or one per row with ops=BATCH and a batched stepper)."""
@@ -285,7 +283,6 @@ SPECS = (
         "connenv/RollingCoinSurface-v0", RollingCoinSurfaceEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="RollingCoinSurface.md", measure=Measure("time to target", "s", "time_to_success"),
         controllers=("steer",), variants=({}, {"surface": "plane"}),
-        option_keys={"target": 2},
         golden=(
             ("coin_surface", {"max_episode_steps": 40, "tolerance": 1.0}, None),
             ("coin_plane", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"}, None),

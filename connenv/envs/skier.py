@@ -15,7 +15,7 @@ from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, options, scale, step
 from connenv.core.segments import check_drift, control_path, held_energy, run_segments
 from connenv.core.state import Fields, number
-from connenv.core.validation import check_keys, check_number
+from connenv.core.validation import check_number
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.skier import SkierRenderer
@@ -247,10 +247,9 @@ class SkierEnv(TaskEnv):
         return SkierState(y, h, t, side, energy, energy_error, x_dot, f1, sigma, kappa)
 
     def start(self, options):
-        check_keys("reset options", options, {"state"})
         offset = self.np_random.uniform(*START_OFFSETS) * self.np_random.choice([-1.0, 1.0])
         x0 = min(max(self.x_bottom + offset, self.trail.lo), self.trail.hi)
-        state = self.STATE.check(self, options.get("state", {}), {"x": x0, "h": self.h_min})
+        state = self.reset_values(options, {"x": x0, "h": self.h_min})
         x, h = state["x"], state["h"]
         if "p" in state:
             p = state["p"]

@@ -92,8 +92,7 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     ## Starting State
 
     At rest, straight (μ = 0, α = β = 0) at the origin, θ = 0, t = 0; the target a uniform [1, 2] body lengths away in a
-    uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of these and the target
-    (±100 m) exactly:
+    uniform direction (np_random). `reset(options={"state": {...}, "target": (x, y)})` sets any of these exactly:
 
     ## Episode End
 
@@ -192,7 +191,6 @@ SPECS = (
         "connenv/SnakeSwimmer-v0", SnakeSwimmerEnv, max_episode_steps=1000, dt_max=DT_MAX,
         physics="SnakeSwimmer.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
         starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
-        option_keys={"target": 2},
         golden=(
             ("snake", {"max_episode_steps": 60, "success_radius": 2.9}, None),
             ("snake_full", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),

@@ -58,12 +58,9 @@ class Spec:
     "space" with ``space_action`` the action while the space bar is held).
 
     Tests: ``variants`` (make kwargs worth the contract tests, one code path each), ``starts`` (reset options worth
-    them); ``option_keys`` (the reset options' keys beside "state", each with its number of entries, 0 for a number:
-    the bad-input audit, which reads the reset state's keys off the env's declared ``STATE``, `connenv.core.state`);
-    ``rotations`` (reset options beside "state" that take a rotation matrix: (path in the options, name in the error
-    message)); ``fast_start`` (the fastest reset allowed, where a
-    step of dt_max costs the stepper most); ``golden`` (golden trajectories: (name, make kwargs with
-    max_episode_steps, reset options)).
+    them); ``fast_start`` (the fastest reset allowed, where a step of dt_max costs the stepper most); ``golden``
+    (golden trajectories: (name, make kwargs with max_episode_steps, reset options)). The bad-input audit reads the
+    reset state's and options' keys off the env's declared ``STATE`` and ``OPTIONS`` (`connenv.core.state`).
 
     Benchmarks: ``bench`` (the key of its cases in connenv.bench's tables); ``single_target`` and
     ``vector_target`` (connenv.throughput's targets, issue 20: the largest ratio of its step time to Pendulum-v1's,
@@ -84,8 +81,6 @@ class Spec:
     space_action: float = 1.0
     variants: tuple[KwargsOrMaker, ...] = ({},)
     starts: tuple[dict | None, ...] = (None,)
-    option_keys: dict[str, int] = field(default_factory=dict)
-    rotations: tuple[tuple[tuple[str, ...], str], ...] = ()
     fast_start: dict | None = None
     golden: tuple[tuple[str, dict, dict | None], ...] = ()
     bench: str | None = None

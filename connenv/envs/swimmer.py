@@ -14,8 +14,7 @@ from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus
 from connenv.core.params import Bound
 from connenv.core.segments import check_drift, run_segments
-from connenv.core.state import Field, Fields, angle, number, vector
-from connenv.core.validation import check_keys, check_vector
+from connenv.core.state import Field, Fields, Options, angle, number, vector
 from connenv.systems import ideal_fluid
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -53,6 +52,7 @@ class PlanarSwimmer:
     state_class: type
     TARGET_DISTANCES: tuple[float, float]
     TOLERANCES: dict
+    OPTIONS = Options(vector("target", 2, "m", "(x, y)", bound=POSITION_BOUND))
 
     def build(self, full_system, reduced_system, integrator, options, rule):
         """The two models; the stepper of the full one (TOLERANCES by default for "magnus" and "dop853"; the Lie-group
@@ -76,16 +76,12 @@ class PlanarSwimmer:
     def start(self, options):
         """At rest at the origin, or options['state']; the target drawn by np_random, or options['target']. The model
         follows the momentum: reduced at zero, full otherwise."""
-        check_keys("reset options", options, {"state", "target"})
         distance = self.np_random.uniform(*self.TARGET_DISTANCES) * self.target_unit
         angle = self.np_random.uniform(-math.pi, math.pi)
-        target = distance * np.array([math.cos(angle), math.sin(angle)])
-        if "target" in options:
-            target = check_vector("target", options["target"], 2, -POSITION_BOUND, POSITION_BOUND)
-        values = self.STATE.check(self, options.get("state", {}))
+        values = self.reset_values(options, {"target": distance * np.array([math.cos(angle), math.sin(angle)])})
         pose, momentum = np.array([values["x"], values["y"], values["theta"]]), values["momentum"]
         full = bool(momentum.any())
-        s = self.state_class(pose, momentum if full else np.zeros(3), self.start_shape(values), target, 0.0, full,
+        s = self.state_class(pose, momentum if full else np.zeros(3), self.start_shape(values), values["target"], 0.0, full,
                              np.zeros(3))  # fmt: skip
         return s.replace(momentum0=np.array(self.spatial_momentum(s)))
 

@@ -15,7 +15,6 @@ from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import check_drift, control_path, held_energy, run_segments
 from connenv.core.state import Fields, angle, number
-from connenv.core.validation import check_keys
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.swing import SwingRenderer
@@ -151,9 +150,8 @@ class SwingEnv(TaskEnv):
         return SwingState(y, r, t, energy, (energy + weight) / weight, energy_error)  # lift as Swing.lift
 
     def start(self, options):
-        check_keys("reset options", options, {"state"})
         theta = self.np_random.uniform(0.05, 0.1) * self.np_random.choice([-1.0, 1.0])
-        state = self.STATE.check(self, options.get("state", {}), {"theta": theta, "r": self.r_max})
+        state = self.reset_values(options, {"theta": theta, "r": self.r_max})
         r = state["r"]
         p = state["p"] if "p" in state else self.system.mass * r**2 * state["theta_dot"]
         y = np.array([state["theta"], p])

@@ -11,8 +11,8 @@ from gymnasium import spaces
 from connenv.core.backend import SCALAR
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import run_segments
-from connenv.core.state import Fields, rotation
-from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number
+from connenv.core.state import Fields, Options, number, rotation
+from connenv.core.validation import MAGNITUDE_BOUND
 from connenv.envs.connection import DT_MAX, ConnectionEnv, ConnectionState
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.tube import TubeRenderer
@@ -76,7 +76,7 @@ class TubeTwistEnv(ConnectionEnv):
     ## Starting State
 
     R = R₀ = I, s = 0, t = 0, and ψ* uniform in [0.3, 3] rad. `reset(options={"state": {...}, "target": ψ*})` sets
-    either (ψ* in [−π, π]):
+    either:
 
     ## Episode End
 
@@ -105,6 +105,7 @@ class TubeTwistEnv(ConnectionEnv):
     )
 
     STATE = Fields(rotation("R", "R₀, the tube's frame"))
+    OPTIONS = Options(number("target", "rad", "ψ*", bound=math.pi))
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
@@ -128,13 +129,9 @@ class TubeTwistEnv(ConnectionEnv):
         return TubeState(g, s, t, R0, target, error, ops.real(psi), ops.real(theta), path_length)
 
     def start(self, options):
-        check_keys("reset options", options, {"state", "target"})
-        R0 = self.STATE.check(self, options.get("state", {}))["R"]
-        target = float(self.np_random.uniform(*TARGET_RANGE))
-        if "target" in options:
-            target = check_number("target", options["target"], -math.pi, math.pi)
-        g = R0.ravel().copy()
-        return self.at(g, np.zeros(2), 0.0, g.copy(), target, 0.0)
+        values = self.reset_values(options, {"target": float(self.np_random.uniform(*TARGET_RANGE))})
+        g = values["R"].ravel().copy()
+        return self.at(g, np.zeros(2), 0.0, g.copy(), values["target"], 0.0)
 
     def advance(self, state, kappa, stepper, ops=SCALAR):
         """The state after bending at the rates κ for dt (one state, or rows with ops=BATCH)."""
@@ -180,7 +177,7 @@ SPECS = (
     Spec(
         "connenv/TubeTwist-v0", TubeTwistEnv, max_episode_steps=200, dt_max=DT_MAX, physics="TubeTwist.md",
         measure=Measure("bend / shortest loop", "", "path_ratio"), controllers=("cap", "square"),
-        play="mouse", variants=({}, {"integrator": "magnus"}), option_keys={"target": 0},
+        play="mouse", variants=({}, {"integrator": "magnus"}),
         golden=(("tube", {"max_episode_steps": 40, "tolerance": 0.6}, None),),
         bench="tube",
     ),
