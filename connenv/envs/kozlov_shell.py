@@ -13,8 +13,8 @@ from connenv.core.lie import fixed_rule
 from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.state import vector
 from connenv.envs.base import State, TaskEnv
-from connenv.envs.spec import Measure, Spec
-from connenv.envs.swimmer import INTEGRATORS, PlanarSwimmer, swimmer_state
+from connenv.envs.spec import Spec
+from connenv.envs.swimmer import INTEGRATORS, SWIMMER, PlanarSwimmer, swimmer_state
 from connenv.rendering.kozlov_shell import KozlovShellRenderer
 from connenv.systems.kozlov_shell import KozlovShell, ReducedKozlovShell
 
@@ -188,9 +188,7 @@ def shell_rule(system, u_max, dt, atol):
 SPECS = (
     Spec(
         "connenv/KozlovShell-v0", KozlovShellEnv, max_episode_steps=300, dt_max=DT_MAX,
-        physics="kozlov-shell.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
-        starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
-        fast_start={"state": {"momentum": (27.0, 20.0, 5.0)}},
+        physics="kozlov-shell.md", **SWIMMER, fast_start={"state": {"momentum": (27.0, 20.0, 5.0)}},
         golden=(
             ("shell", {"max_episode_steps": 60, "success_radius": 0.3}, None),
             (

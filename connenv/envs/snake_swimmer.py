@@ -15,8 +15,8 @@ from connenv.core.segments import straight_path
 from connenv.core.state import number
 from connenv.core.validation import MAGNITUDE_BOUND, decimal
 from connenv.envs.base import State, TaskEnv
-from connenv.envs.spec import Measure, Spec
-from connenv.envs.swimmer import INTEGRATORS, PlanarSwimmer, swimmer_state
+from connenv.envs.spec import Spec
+from connenv.envs.swimmer import INTEGRATORS, SWIMMER, PlanarSwimmer, swimmer_state
 from connenv.rendering.snake_swimmer import SnakeSwimmerRenderer
 from connenv.systems.snake_swimmer import JOINT_LIMIT, ReducedSnakeSwimmer, SnakeSwimmer
 
@@ -189,8 +189,7 @@ def snake_rule(system, max_speed, dt, atol):
 SPECS = (
     Spec(
         "connenv/SnakeSwimmer-v0", SnakeSwimmerEnv, max_episode_steps=1000, dt_max=DT_MAX,
-        physics="SnakeSwimmer.md", measure=Measure("steps to target", "", "steps_to_target"), controllers=("gaits",),
-        starts=(None, {"state": {"momentum": (0.2, 0.0, -0.1)}}),  # with a momentum: the full (Kirchhoff) model
+        physics="SnakeSwimmer.md", **SWIMMER,
         golden=(
             ("snake", {"max_episode_steps": 60, "success_radius": 2.9}, None),
             ("snake_full", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),

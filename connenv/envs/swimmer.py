@@ -15,6 +15,7 @@ from connenv.core.lie import Magnus
 from connenv.core.params import Bound
 from connenv.core.segments import check_drift, run_segments
 from connenv.core.state import Field, Fields, Options, angle, number, vector
+from connenv.envs.spec import Measure
 from connenv.systems import ideal_fluid
 
 TIME_COST = 0.01  # reward paid per step until success
@@ -23,6 +24,9 @@ TARGET_BOUND = 3.0  # the observed target, in units of target_unit, is clipped h
 MOMENTUM_BOUND = 10.0  # the observed momentum, in velocity units, is clipped here
 INTEGRATORS = ("magnus", "dop853", "euler", "semi_implicit_euler", "rk4", "rk45", "lsoda", "radau")  # a swimmer's
 POSITION_BOUND = 100.0  # m: |x|, |y| of a swimmer and of its target given at reset
+SWIMMER = {"measure": Measure("steps to target", "", "steps_to_target"), "controllers": ("gaits",),
+           "starts": (None, {"state": {"momentum": (0.2, 0.0, -0.1)}})}  # with a momentum: the full (Kirchhoff) model
+"""What the swimmers' specs share: the reference table's measure, the gait controller, a start in each model."""
 
 
 def momentum_bound(env, values):
