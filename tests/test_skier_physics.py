@@ -11,7 +11,7 @@ import connenv  # noqa: F401  (registers the envs)
 from agents.controllers.skier import SkierPumping
 from connenv.core import JumpClass, classify, make_stepper
 from connenv.core.mechanics import vector_field
-from connenv.systems.skier import Skier
+from connenv.systems.skier import Skier, barycentre_height, reach
 from connenv.systems.swing import Swing
 from connenv.systems.trails import Halfpipe, Trail, Valley, make_trail
 
@@ -196,3 +196,13 @@ def test_a_barycentre_past_the_centre_of_curvature_is_refused_at_the_worst_point
     """The valley's bottom has radius of curvature 2/(H k²) = 2.43 m: h_max = 2.5 passes it, at x = 0."""
     with pytest.raises(ValueError, match=r"h_max=2.5 .* at x=0 .*radius 2.43"):
         make(h_max=2.5)
+
+
+def test_the_reach_of_a_halfpipe_is_its_circle():
+    """On a circle of radius R, κ = 1/R everywhere: the lever 1 − κ h_max is 1 − h_max/R, |κ| h_max = h_max/R, the
+    lowest point is x = 0 and there the barycentre stands h_min above the bottom."""
+    R, h_min, h_max = 5.0, 0.5, 1.5
+    x_bottom, z_floor, kappa_bound, min_lever = reach(Halfpipe(R), h_min, h_max)
+    assert x_bottom == pytest.approx(0.0, abs=1e-12) and z_floor == pytest.approx(h_min, rel=1e-12)
+    assert kappa_bound == pytest.approx(h_max / R, rel=1e-12) and min_lever == pytest.approx(1 - h_max / R, rel=1e-12)
+    assert barycentre_height(Halfpipe(R), np.array(3.0), h_min) == pytest.approx(R - 4.0 + h_min * 4.0 / R, rel=1e-12)

@@ -19,7 +19,7 @@ from connenv.core.validation import check_number
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from connenv.rendering.skier import SkierRenderer
-from connenv.systems.skier import Skier, check_curvature
+from connenv.systems.skier import Skier, barycentre_height, reach
 from connenv.systems.trails import make_trail
 
 DT_MAX = 10.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
@@ -175,7 +175,7 @@ class SkierEnv(TaskEnv):
         if a.trail_params is not None and not isinstance(a.trail_params, dict):
             raise ValueError(f"trail_params={a.trail_params!r} must be a dict or None")
         self.trail = make_trail(a.trail, a.trail_params)
-        check_curvature(self.trail, self.h_max)
+        self.x_bottom, self.z_floor, self.kappa_bound, self.min_lever = reach(self.trail, self.h_min, self.h_max)
         self.system = Skier(self.trail, mass=a.mass, g=a.g)
         self.held_energy = functools.partial(held_energy, self.system.energy)  # E where h is held
         self.scaled_dt = self.dt * math.sqrt(self.system.g / G_REFERENCE)  # the step in the time of g = 9.81 m/s²
@@ -184,14 +184,8 @@ class SkierEnv(TaskEnv):
                 f"g={a.g!r} with dt={a.dt!r} is out of range: the step in the time of 9.81 m/s², dt √(g/9.81) = "
                 f"{self.scaled_dt:.6g} s, must be at most {DT_MAX} s"
             )
-
-        xs = self.trail.grid()
-        f, f1, f2, _ = self.trail.profile(xs)
-        sigma = np.sqrt(1.0 + f1**2)
-        self.x_bottom = float(xs[np.argmin(f)])
         self.goals = self._goals(a.target_x)
-        self.z_floor = float(np.min(f + self.h_min / sigma))
-        self.z_goal = min(self._crouched_height(x) for x in self.goals)
+        self.z_goal = min(float(barycentre_height(self.trail, np.array(x), self.h_min)) for x in self.goals)
         least = CLIMB_MIN * max(abs(self.z_floor), abs(self.z_goal))
         if not self.z_goal - self.z_floor >= least:
             raise ValueError(
@@ -200,8 +194,6 @@ class SkierEnv(TaskEnv):
                 f"{least:.3g} m (the energy check is relative to Δz)"
             )
         self.speed_scale = math.sqrt(2.0 * self.system.g * (self.z_goal - self.z_floor))
-        self.kappa_bound = float(np.max(np.abs(f2 / sigma**3))) * self.h_max
-        self.min_lever = float(np.min(1.0 - f2 / sigma**3 * self.h_max))  # min of 1 − κ h_max on the trail
         integrator, stepper_options = self._default_stepper(a.integrator, stepper_options)
         self.stepper = make_stepper(integrator, self.system, **stepper_options)
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
@@ -217,7 +209,8 @@ class SkierEnv(TaskEnv):
             integrator = "rk8_energy" if self.min_lever >= RK8_MIN_LEVER else "dop853"
         if integrator == "rk8_energy":
             energy_scale = self.system.mass * self.system.g * (self.z_goal - self.z_floor)  # m g Δz
-            options = {"substeps": math.ceil(self.scaled_dt / MAX_SUBSTEP), "atol": ENERGY_TOLERANCE * energy_scale, **options}
+            substeps = math.ceil(self.scaled_dt / MAX_SUBSTEP)
+            options = {"substeps": substeps, "atol": ENERGY_TOLERANCE * energy_scale, **options}
         elif integrator == "dop853":
             options = {**DOP853_TOLERANCES, **options}
         return integrator, options
@@ -235,11 +228,6 @@ class SkierEnv(TaskEnv):
                 raise ValueError("this trail has no rims: give target_x, a point of its domain to reach")
             return (self.trail.lo, self.trail.hi)
         return (check_number("target_x", target_x, self.trail.lo, self.trail.hi),)
-
-    def _crouched_height(self, x):
-        """Height of the barycentre at rest at x with h = h_min: f + h_min cos φ."""
-        f, f1, _, _ = self.trail.profile(np.array(x))
-        return float(f + self.h_min / math.sqrt(1.0 + f1**2))
 
     def at(self, y, h, t, side, energy_error, ops=SCALAR):
         """The state at (y, h, t), with its energy."""

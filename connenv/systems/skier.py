@@ -21,6 +21,7 @@ States are y = (x, p) on the last axis; everything broadcasts over leading axes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -97,11 +98,29 @@ class Skier:
         return 0.5 * p * x_dot + self.mass * self.g * (f + h / sigma), x_dot, f1, sigma, kappa
 
 
-def check_curvature(trail: Trail, h_max: float):
-    """Raise ValueError where 1 − κ h_max ≤ 0 on the trail's domain, naming the worst point."""
+def barycentre_height(trail: Trail, x, h):
+    """The barycentre's height at x at height h above the trail: f + h cos φ = f + h/σ (over x's axes)."""
+    f, f1, _, _ = trail.profile(x)
+    return f + h / np.sqrt(1.0 + f1**2)
+
+
+class Reach(NamedTuple):
+    """What a skier of heights [h_min, h_max] meets over a trail's grid: its lowest point x_bottom, the barycentre's
+    lowest height z_floor (at h_min), the largest |κ| h_max and the least lever 1 − κ h_max."""
+
+    x_bottom: float
+    z_floor: float
+    kappa_bound: float
+    min_lever: float
+
+
+def reach(trail: Trail, h_min: float, h_max: float) -> Reach:
+    """The trail's Reach for heights [h_min, h_max]; ValueError where 1 − κ h_max ≤ 0 (the barycentre would reach the
+    centre of curvature, where w = 0 and the metric degenerates), naming the worst point."""
     xs = trail.grid()
-    _, f1, f2, _ = trail.profile(xs)
-    kappa = f2 / (1.0 + f1 * f1) ** 1.5
+    f, f1, f2, _ = trail.profile(xs)
+    sigma = np.sqrt(1.0 + f1**2)
+    kappa = f2 / sigma**3
     worst = int(np.argmax(kappa))
     if 1.0 - kappa[worst] * h_max <= 0.0:
         raise ValueError(
@@ -109,3 +128,5 @@ def check_curvature(trail: Trail, h_max: float):
             f"{kappa[worst]:.6g}/m (radius {1 / kappa[worst]:.6g} m), so 1 − κ h_max = {1 - kappa[worst] * h_max:.3g} "
             f"≤ 0 and the metric degenerates; h_max must stay below {1 / kappa[worst]:.6g} m on this trail"
         )
+    z_floor, kappa_bound = float(np.min(f + h_min / sigma)), float(np.max(np.abs(kappa))) * h_max
+    return Reach(float(xs[np.argmin(f)]), z_floor, kappa_bound, float(np.min(1.0 - kappa * h_max)))
