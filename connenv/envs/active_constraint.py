@@ -120,7 +120,7 @@ class ActiveConstraintEnv(BuilderTask, TaskEnv):
     | integrator | below | "exact", "euler", "semi_implicit_euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
     | substeps / rtol, atol | | the stepper's |
     | task | None | an object with reset, reward, terminated and optionally observation, is_success (above) |
-    | draw | None | `draw(state, canvas)`: draws a state dict on a `connenv.envs.rendering.Canvas` |
+    | draw | None | `draw(state, canvas)`: draws a state dict on a `connenv.rendering.Canvas` |
     | render_mode | None | "human", "rgb_array" |
 
     The default integrator is "exact" for a system with a closed-form step (`exact_segment(y, u, u̇, τ)` at constant u̇,

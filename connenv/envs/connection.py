@@ -101,7 +101,7 @@ class ConnectionEnv(BuilderTask, TaskEnv):
     | frame | "body" | "body", "space" |
     | max_shape_speed | 1.0 | (0, 1e3] |
     | task | None | an object with reset, reward, terminated and optionally observation, is_success (above) |
-    | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.envs.rendering.Canvas` |
+    | draw | None | callable draw(state, canvas) rendering a frame on a `connenv.rendering.Canvas` |
     | vectorized | False | True if connection(s) maps shapes (N, k) to (N, dim 𝔤, k): the steps call it once per batch |
     | exact_segment | None | callable (g, s, ṡ, τ) -> g after a segment at constant ṡ, in closed form (below) |
     | integrator | below | "exact", "magnus", "euler", "rk4", "dop853", "rk45", "lsoda", "radau" |
