@@ -146,6 +146,7 @@ class Fields:
     def __init__(self, *fields: Field, either: tuple[tuple[str, ...], ...] = ()):
         self.fields = {f.name: f for f in fields}
         self.either = either
+        self.group = {key: group for group in either for key in group}  # each alternative's group
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -177,7 +178,7 @@ class Fields:
 
     def left_out(self, key: str, state) -> bool:
         """Whether an alternative key takes no default: another of its group is given, or it is not the first."""
-        group = next((g for g in self.either if key in g), None)
+        group = self.group.get(key)
         return group is not None and (key != group[0] or any(k in state for k in group))
 
     def table(self) -> list[str]:

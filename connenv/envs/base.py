@@ -235,9 +235,11 @@ class TaskEnv(gym.Env):
         the others their defaults (``defaults``, else the fields'). A bad key or value is a ValueError naming it,
         before anything is set."""
         check_keys("reset options", options, {"state", *self.OPTIONS.names})
-        others = {key: value for key, value in options.items() if key != "state"}
-        return self.STATE.check(self, options.get("state", {}), defaults) | self.OPTIONS.check(
-            self, others, defaults, "reset options")
+        values = self.STATE.check(self, options.get("state", {}), defaults)
+        if self.OPTIONS.fields:
+            others = {key: value for key, value in options.items() if key != "state"}
+            values |= self.OPTIONS.check(self, others, defaults, "reset options")
+        return values
 
     def check_action(self, action):
         """The action as a finite float array of the space's shape, clipped into the space (else ValueError)."""
