@@ -428,7 +428,8 @@ def action_cases(ids, quick=False):
         single, vector = make(env_id), make_vector(env_id)
         for action in action_values(single.action_space.shape):
             yield Case(env_id, f"step {action!r}", ("action",), lambda e=single, a=action: step_from(e, a))
-            rows = np.broadcast_to(action, (VECTOR_ROWS, *np.shape(action))) if isinstance(action, np.ndarray) else action
+            given = isinstance(action, np.ndarray)
+            rows = np.broadcast_to(action, (VECTOR_ROWS, *np.shape(action))) if given else action
             yield Case(env_id, f"vector step {action!r}", ("action",), lambda e=vector, a=rows: step_from(e, a))
 
 

@@ -50,7 +50,8 @@ class SleighState(State):
     """y = (x, y, φ, p₁, p₂) (P, heading, Bressan's momenta: `connenv.systems.chaplygin_sleigh`); the mass offset u and
     u̇ at the step's end (along, across); the target; t; the energy error (T's change where u is held, since reset)."""
 
-    components: ClassVar[dict] = {"y": ("x", "y", "phi", "p1", "p2"), "u": ("u1", "u2"), "u_dot": ("u1_dot", "u2_dot"), "target": ("target_x", "target_y")}
+    components: ClassVar[dict] = {"y": ("x", "y", "phi", "p1", "p2"), "u": ("u1", "u2"), "u_dot": ("u1_dot", "u2_dot"),
+                                  "target": ("target_x", "target_y")}
     phase: ClassVar[tuple] = ("phi", "p2", "u1", "u2")
 
     y: np.ndarray
@@ -161,8 +162,8 @@ class ChaplyginSleighEnv(TaskEnv):
         self.control = "velocity" if self.jump_class is JumpClass.GENERAL else "position"
         if a.max_mass_speed is None and self.control == "velocity":
             raise ValueError(
-                f"max_mass_speed=None would jump the mass, which this sleigh (offset={self.system.offset}, box={self.box}"
-                f", class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not admit; give a "
+                f"max_mass_speed=None would jump the mass, which this sleigh (offset={self.system.offset}, "
+                f"box={self.box}, class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not admit; give a "
                 "speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
             )
         if a.max_mass_speed is not None and a.max_mass_speed * self.dt > TRAVEL_MAX:

@@ -32,7 +32,8 @@ class ShellState(State):
     """The pose (x, y, θ), body momentum (P₁, P₂, Π) (0 in the reduced model), mass position u, target (x, y), time t;
     full: whether it steps the full model, whose spatial momentum stays at momentum0, its value at reset."""
 
-    components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "u": ("u1", "u2"), "target": ("target_x", "target_y")}
+    components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "u": ("u1", "u2"),
+                                  "target": ("target_x", "target_y")}
 
     pose: np.ndarray
     momentum: np.ndarray

@@ -30,7 +30,8 @@ TARGET_BOUND = Bound(lambda env, values: np.array([MAGNITUDE_BOUND, MAGNITUDE_BO
 class CoinState(ConnectionState):
     """ConnectionState with g = (x, y), s = (θ, φ), and the target (x*, y*, θ*)."""
 
-    components: ClassVar[dict] = {"g": ("x", "y"), "s": ("theta", "phi"), "target": ("target_x", "target_y", "target_theta")}
+    components: ClassVar[dict] = {"g": ("x", "y"), "s": ("theta", "phi"),
+                                  "target": ("target_x", "target_y", "target_theta")}
 
     target: np.ndarray
 
@@ -122,7 +123,8 @@ class RollingCoinEnv(ConnectionEnv):
     def start(self, options):
         rng = self.np_random
         distance, direction = rng.uniform(*TARGET_DISTANCE), rng.uniform(-math.pi, math.pi)
-        target = np.array([distance * math.sin(direction), distance * math.cos(direction), rng.uniform(-math.pi, math.pi)])
+        heading = rng.uniform(-math.pi, math.pi)
+        target = np.array([distance * math.sin(direction), distance * math.cos(direction), heading])
         values = self.reset_values(options, {"target": target})
         g = np.array([values["x"], values["y"]])
         return CoinState(g, np.array([values["theta"], values["phi"]]), 0.0, values["target"])

@@ -41,7 +41,8 @@ class CoinSurfaceState(State):
     """y = (x, y, φ, φ̇); the heading θ; the target (x, y); t; E and E₀ (at reset); where the last step started (x, y)
     and its chord's closest approach to the target, m."""
 
-    components: ClassVar[dict] = {"y": ("x", "y", "phi", "phi_dot"), "target": ("target_x", "target_y"), "previous": ("previous_x", "previous_y")}
+    components: ClassVar[dict] = {"y": ("x", "y", "phi", "phi_dot"), "target": ("target_x", "target_y"),
+                                  "previous": ("previous_x", "previous_y")}
     phase: ClassVar[tuple] = ("phi", "phi_dot", "theta")
 
     y: np.ndarray

@@ -37,7 +37,8 @@ class SnakeState(State):
     """The middle link's pose (x, y, θ), body momentum (0 in the reduced model), joint angles s = (α, β), target (x, y),
     time t; full: whether it steps the full model, whose spatial momentum stays at momentum0, its value at reset."""
 
-    components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "s": ("alpha", "beta"), "target": ("target_x", "target_y")}
+    components: ClassVar[dict] = {"pose": ("x", "y", "theta"), "momentum": ("P1", "P2", "Pi"), "s": ("alpha", "beta"),
+                                  "target": ("target_x", "target_y")}
 
     pose: np.ndarray
     momentum: np.ndarray

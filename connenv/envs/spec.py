@@ -107,16 +107,19 @@ def entry_point(cls: type) -> str:
 
 
 def register(*specs: Spec):
-    """Register each spec with Gymnasium and in `registry`, and name its env class (``name``) after its id, or after
-    the stem its ids share ("BeadOnBar") where a class has several versions."""
+    """Register each spec with Gymnasium and in `registry`, and name its env class (``name``) after its first id, or
+    after their stem ("BeadOnBar") where a class is registered as several versions."""
     for spec in specs:
         gym_register(
             id=spec.id, entry_point=entry_point(spec.env),
             vector_entry_point=entry_point(spec.vector_env),
             max_episode_steps=spec.max_episode_steps, kwargs=dict(spec.kwargs),
         )
-        versions = [known for known in registry.values() if known.env is spec.env]
-        spec.env.name = spec.name.rpartition("-v")[0] if versions else spec.name  # of several ids: their shared stem
+        first = next((known for known in registry.values() if known.env is spec.env), None)
+        if first is None:
+            spec.env.name = spec.name
+        elif first.name.rpartition("-v")[0] == spec.name.rpartition("-v")[0]:  # another version: their shared stem
+            spec.env.name = spec.name.rpartition("-v")[0]
         registry[spec.id] = spec
 
 

@@ -85,8 +85,8 @@ class PlanarSwimmer:
         values = self.reset_values(options, {"target": distance * np.array([math.cos(angle), math.sin(angle)])})
         pose, momentum = np.array([values["x"], values["y"], values["theta"]]), values["momentum"]
         full = bool(momentum.any())
-        s = self.state_class(pose, momentum if full else np.zeros(3), self.start_shape(values), values["target"], 0.0, full,
-                             np.zeros(3))  # fmt: skip
+        momentum, shape = momentum if full else np.zeros(3), self.start_shape(values)
+        s = self.state_class(pose, momentum, shape, values["target"], 0.0, full, np.zeros(3))
         return s.replace(momentum0=np.array(self.spatial_momentum(s)))
 
     def swim(self, s, full_segments, reduced_segments, stepper, ops=SCALAR):
