@@ -163,8 +163,8 @@ class ChaplyginSleighEnv(TaskEnv):
         if a.max_mass_speed is None and self.control == "velocity":
             raise ValueError(
                 f"max_mass_speed=None would jump the mass, which this sleigh (offset={self.system.offset}, "
-                f"box={self.box}, class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not admit; give a "
-                "speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
+                f"box={self.box}, class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not "
+                "admit; give a speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
             )
         if a.max_mass_speed is not None and a.max_mass_speed * self.dt > TRAVEL_MAX:
             raise ValueError(
