@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.state import Fields, number
-from connenv.core.validation import check_dt
 from connenv.core.backend import BATCH, SCALAR
+from connenv.core.params import Args, step
+from connenv.core.state import Fields, Options, number
 from connenv.envs.base import State, TaskEnv
 from connenv.envs.spec import Measure, Spec
 from throwaway.point_rendering import PointRenderer
@@ -44,53 +44,53 @@ DT_MAX = 1.0
 @dataclass
 class PointState(State):
     x: float
+    target: float
     t: float
 
 
 class PointEnv(TaskEnv):
     """## Description
 
-    A point on a line, its velocity assigned.
+    A point on a line, its velocity assigned, to bring to a target.
 
     ## Starting State
 
-    x uniform in [−1, 0], t = 0. `reset(options={"state": {...}})` sets x exactly:
+    x uniform in [−1, 0], the target x* = 1, t = 0. `reset(options={"state": {...}, "target": x*})` sets either:
 
     ## Arguments
-
-    | name | default | range |
-    |---|---|---|
-    | dt | 0.1 | [1e-06, 1] s |
     """
 
     renderer = PointRenderer
+    ARGS = Args(step(0.1, DT_MAX))
     STATE = Fields(number("x", "m", bound=10.0))
+    OPTIONS = Options(number("target", "m", "x*", bound=5.0))
 
-    def __init__(self, render_mode=None, dt=0.1):
-        super().__init__(render_mode, check_dt(dt, DT_MAX))
+    def __init__(self, render_mode=None, **kwargs):
+        a, _ = self.check_args(kwargs)
+        super().__init__(render_mode, a.dt)
         self.stepper = None  # the flow is exact
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         self.observation_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
-        self.state = PointState(0.0, 0.0)
+        self.state = PointState(0.0, 1.0, 0.0)
 
     def start(self, options):
-        x = self.np_random.uniform(-1.0, 0.0)
-        return PointState(self.reset_values(options, {"x": x})["x"], 0.0)
+        values = self.reset_values(options, {"x": self.np_random.uniform(-1.0, 0.0), "target": 1.0})
+        return PointState(values["x"], values["target"], 0.0)
 
     def command(self, a):
         return (SCALAR if a.ndim == 1 else BATCH).components(a)[0]
 
     def advance(self, s, u, stepper, ops=SCALAR):
-        return PointState(ops.clip(flow(s.x, u, self.dt), -10.0, 10.0), s.t + self.dt)
+        return PointState(ops.clip(flow(s.x, u, self.dt), -10.0, 10.0), s.target, s.t + self.dt)
 
     def observe(self, s, ops=SCALAR):
-        return ops.pack([ops.clip((1.0 - s.x) / 10.0, -1.0, 1.0)])
+        return ops.pack([ops.clip((s.target - s.x) / 10.0, -1.0, 1.0)])
 
     def describe(self, s, ops=SCALAR):
-        return {"state": {"x": s.x, "t": s.t}, "is_success": ops.flag(abs(1.0 - s.x) < 0.05)}
+        return {"state": {"x": s.x, "t": s.t}, "target": s.target, "is_success": ops.flag(abs(s.target - s.x) < 0.05)}
 
     def reward(self, before, after, info, ops=SCALAR):
-        return abs(1.0 - before.x) - abs(1.0 - after.x)
+        return abs(before.target - before.x) - abs(after.target - after.x)
 
 
 SPECS = (
@@ -153,7 +153,7 @@ def load(name, path):
 register(*discover("throwaway"))  # as import connenv does for connenv.envs
 load("agents.controllers.point", CONTROLLER)  # where agents/controllers/point.py would be found
 sys.path.insert(0, "tests")
-import agents.controllers, audit, test_contract
+import agents.controllers, audit, test_contract, test_fuzz, test_hardening
 from golden import record
 from agents import baselines
 docs_site = load("docs_site", "docs/site.py")
@@ -183,17 +183,19 @@ print(json.dumps({
     "controllers": agents.controllers.controller_names(ID),
     "contract": [case.env_id for case in test_contract.CASES].count(ID),
     "golden": [case[0] for case in record.CASES if case[1] == ID],
-    "audit": audit.STATE_KEYS[ID],
+    "audit": [audit.STATE_KEYS[ID], audit.OPTION_KEYS[ID]],
+    "fuzz, hardening": [ID in test_fuzz.IDS, ID in test_hardening.IDS],
     "dt_max": registry[ID].dt_max,
     "docs_page": docs_site.page(ID).splitlines()[0],
+    "tables": [line for line in docs_site.page(ID).splitlines() if line.startswith(("| dt ", "| `x` ", "| `target` "))],
     "model": bool((model.step(x, [0.5]) == model.pack(model_env.state)).all()) and B[model.state_names.index("x"), 0],
 }))
 """
 
 
 def test_an_env_declared_in_its_own_files_is_registered_checked_and_tabled(tmp_path):
-    """The throwaway Point-v0: its system, env module (with its SPECS), renderer and controller module are all it
-    takes."""
+    """The throwaway Point-v0: its system, env module (with its ARGS, STATE, OPTIONS and SPECS), renderer and
+    controller module are all it takes; the declarations write its page's tables and the audit's."""
     package = tmp_path / "throwaway"
     package.mkdir()
     (package / "__init__.py").write_text("")
@@ -213,8 +215,10 @@ def test_an_env_declared_in_its_own_files_is_registered_checked_and_tabled(tmp_p
         "controllers": ["analytic", "toward"],
         "contract": 1,
         "golden": ["point"],
-        "audit": {"x": 0},
+        "audit": [{"x": 0}, {"target": 0}],
+        "fuzz, hardening": [True, True],
         "dt_max": 1.0,
         "docs_page": "# Point-v0",
+        "tables": ["| `x` | number | m | ±10 |", "| `target` | number | m | ±5; x* |", "| dt | 0.1 | [1e-12, 1] s |"],
         "model": 0.1,  # ∂x′/∂a = dt · speed: the step is the env's, and its Jacobian the exact flow's
     }
