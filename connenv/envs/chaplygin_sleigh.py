@@ -24,7 +24,7 @@ from connenv.systems.chaplygin_sleigh import ChaplyginSleigh
 DT_MAX = 1.0  # s: the longest dt, within which the default stepper keeps up from every allowed reset state
 TRAVEL_MAX = 2.0  # m: the longest travel of the mass in one step, max_mass_speed · dt (the default speed at DT_MAX)
 DEFAULT_INTEGRATOR = "rk4"
-DEFAULT_SUBSTEPS = 2  # RK4 × 2: cheaper than DOP853 for the accuracy the task needs (docs/physics/ChaplyginSleigh.md)
+DEFAULT_SUBSTEPS = 2  # RK4 × 2, chosen on the work–precision chart (python -m connenv.bench precision --env sleigh)
 ENERGY_ERROR_BOUND = 1e-2  # |the stepper's energy error| / (1 + E) past which it has diverged: StepperError
 TARGET_DISTANCE = (1.0, 2.0)  # m from the start, any direction
 SPEED_BOUND = 10.0  # |v| (m/s) given at reset

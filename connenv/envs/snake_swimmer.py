@@ -103,8 +103,8 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
     ## Arguments
 
     By default the reduced model takes the Lie-group step on SE(2) (`connenv.core.lie`), its quadrature rule the
-    cheapest meeting atol on every joint motion at top speed (chosen at construction; for links thinner than a/b = 100
-    it would take minutes), the full model (no connection) by DOP853. Diverged: the full model's spatial momentum moved
+    cheapest meeting atol on every joint motion at top speed (chosen at construction, which thinner links than a/b =
+    100 would make slow), the full model (no connection) by DOP853. Diverged: the full model's spatial momentum moved
     over 0.1 of its norm since reset. Every `info` has `"state"` (`x`, `y`, `theta`, `alpha`, `beta`, `momentum` (μ),
     `t`, in SI), `"spatial_momentum"` ((R(θ)P, Π + x P_y − y P_x), conserved), `"target"` (x, y), `"distance"` (m),
     `"model"` ("reduced" or "full") and `"is_success"`. The evaluation table averages the final `"distance"`.
