@@ -120,11 +120,12 @@ class BuilderTask:
         return spaces.Box(-np.inf, np.inf, self.raw_observation(self.state).shape, np.float32)
 
     def start_values(self, options, defaults):
-        """The reset state's values: options["state"] over the task's reset (where there is a task) over defaults."""
-        check_keys("reset options", options, {"state"})
+        """The reset state's values: options["state"] over the task's reset (where there is a task) over defaults
+        (`TaskEnv.reset_values`); the options' keys checked first, before the task's reset draws."""
+        check_keys("reset options", options, {"state", *self.OPTIONS.names})
         if self.task is not None:
             defaults = self.STATE.check(self, self.task.reset(self.np_random), defaults, "the state of task.reset")
-        return self.STATE.check(self, options.get("state", {}), defaults)
+        return self.reset_values(options, defaults)
 
     def observe(self, s, ops=SCALAR):
         return self.task.observation(self.state_dict(s, ops), ops) if self.observes_task else self.raw_observation(s)
