@@ -125,6 +125,10 @@ vars(ARRAYS).update(
     round=complex_step(np.round, lambda re, im: 0.0 * re[0]),
     isnan=lambda x: np.isnan(np.real(x)),
     abs=complex_step(np.abs, lambda re, im: np.sign(re[0]) * im[0]),
+    stack=np.stack,
+    zeros_like=np.zeros_like,
+    real_part=np.real,
+    traced=False,
 )
 """numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module)."""
 
@@ -139,8 +143,36 @@ def floats(a) -> np.ndarray:
 
 
 def namespace(x):
-    """The operations for x: FLOATS for a Python float (one state), numpy for an array over rows."""
-    return FLOATS if isinstance(x, float) else ARRAYS
+    """The operations for x, as array_api_compat's array_namespace asks an array for its own: FLOATS for a Python
+    float (one state), ARRAYS for numpy's arrays over rows, and ``connenv.jax.namespace.JAX`` for a JAX array or
+    tracer (imported only then: ``import connenv`` does not import jax)."""
+    if isinstance(x, float):
+        return FLOATS
+    if type(x) is np.ndarray or "jax" not in type(x).__module__:
+        return ARRAYS
+    if "jax" not in ANSWERED:
+        raise TypeError(f"connenv's physics on a JAX array ({type(x).__name__}) needs connenv.jax imported, which "
+                        "adds its namespace")
+    return ANSWERED["jax"]
+
+
+ANSWERED: dict = {}
+"""The namespaces of other array libraries, by name, added by the package that runs the physics on them
+(``connenv.jax`` adds "jax"), so that this module imports none of them."""
+
+
+def traced(ops) -> bool:
+    """Whether ops is a tracing namespace (JAX's), which computes every branch and reports failures as data."""
+    return getattr(ops, "traced", False)
+
+
+def vector(*entries):
+    """One state's entries as an array: numpy's float64 array, or JAX's stack where an entry is traced (a reset traced
+    by ``connenv.jax``)."""
+    for entry in entries:
+        if not isinstance(entry, float) and traced(namespace(entry)):
+            return namespace(entry).stack([namespace(entry).real_part(e) * 1.0 for e in entries])
+    return np.array(entries, float)
 
 
 def components(a):
@@ -178,6 +210,10 @@ BATCH = operations(
     flag=lambda x: np.asarray(np.real(x), bool),
     vector=lambda a: BATCH.real(np.array(a)),
     components=lambda a: [a[..., i] for i in range(a.shape[-1])],
+    stack=np.stack,
+    zeros_like=np.zeros_like,
+    real_part=np.real,
+    traced=False,
 )
 """The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names (``ARRAYS``,
 safe on the complex rows of the model's Jacobians), and the task's. ``components`` splits the last axis: Python floats of one state, arrays over the rows of a batch."""

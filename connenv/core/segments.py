@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from connenv.core.backend import ARRAYS, SCALAR, floats
+from connenv.core.backend import ARRAYS, SCALAR, floats, namespace, traced
 from connenv.core.steppers import StepperError
 
 
@@ -27,6 +27,8 @@ def run_segments(stepper, system, y, segments, conserved=None):
     it). One state: every segment is stepped. A batch (τ an array over the rows): each row skips its segments of
     length 0."""
     change = 0.0
+    if traced(namespace(y)):
+        return _run_segments_traced(stepper, system, y, segments, conserved, namespace(y))
     for u, u_dot, tau in segments:
         if not isinstance(tau, np.ndarray) or tau.ndim == 0:  # one state; np.ndim(float) raises inside numpy: slow
             before = None if conserved is None else conserved(y, u, u_dot)
@@ -52,11 +54,36 @@ def run_segments(stepper, system, y, segments, conserved=None):
     return y, change
 
 
+def _run_segments_traced(stepper, system, y, segments, conserved, ops):
+    """run_segments on traced rows: every row is stepped across every segment, and a row whose segment has length 0
+    keeps its y (and its change) by ``where``, the rows the numpy path skips."""
+    change = 0.0
+    for u, u_dot, tau in segments:
+        if isinstance(tau, float):  # a length fixed by the task (dt), not by the rows
+            if tau > 0.0:
+                before = None if conserved is None else conserved(y, u, u_dot)
+                y = stepper(system, y, u, u_dot, tau)
+                change = change if conserved is None else change + (conserved(y, u, u_dot) - before)
+            continue
+        stepped = stepper(system, y, u, u_dot, tau)
+        moving = ops.real_part(tau) > 0.0
+        if conserved is not None:
+            change = change + ops.where(moving, conserved(stepped, u, u_dot) - conserved(y, u, u_dot), 0.0)
+        y = ops.where(moving[..., None], stepped, y)
+    return y, change
+
+
 def check_drift(stepper, quantity: str, drift, bound: float, unit: str = "", norm=None):
     """StepperError if |drift| (of any row of a batch) passes bound: the stepper has diverged on a quantity the
     flow conserves (the energy at held u, the spatial momentum). With norm (the quantity's norm, per row), the
     bound is relative: a row fails where |drift| > bound · norm, and the error names the first such row's. A
-    Jacobian's complex rows are checked on their real parts."""
+    Jacobian's complex rows are checked on their real parts. Traced rows (JAX's) report the failure as data
+    (``ops.fail``) instead of raising."""
+    ops = namespace(drift)
+    if traced(ops):
+        limit = bound if norm is None else bound * ops.abs(norm)
+        ops.fail(~(ops.abs(drift) <= limit), f"{stepper} diverged: {quantity} past its bound")
+        return
     if type(drift) is not float:  # one state's drift is a Python float; rows (complex on a Jacobian's) an array
         drift = np.real(drift)
     if norm is not None:
@@ -93,13 +120,14 @@ def control_segments_batch(u, u_cmd, dt: float, max_speed: float | None = None):
     """control_segments over a batch of commands (arrays of one shape): the ramp and the hold, each as
     (u at the start, u̇, duration) with arrays of that shape, a duration 0 where a row has no such segment; and u at
     the end of the step. Without max_speed, one segment held at the command for dt."""
+    ops = namespace(u_cmd)
     if max_speed is None:
-        return [(u_cmd, np.zeros_like(u_cmd), dt)], u_cmd
+        return [(u_cmd, ops.zeros_like(u_cmd), dt)], u_cmd
     distance = u_cmd - u
-    ramp = ARRAYS.minimum(dt, ARRAYS.abs(distance) / max_speed)
-    u_dot = ARRAYS.copysign(max_speed, distance)
-    u_after = np.where(np.real(ramp) < dt, u_cmd, u + u_dot * ramp)  # where the step ends, the hold or not
-    return [(u, u_dot, ramp), (u_after, np.zeros_like(u_dot), dt - ramp)], u_after
+    ramp = ops.minimum(dt, ops.abs(distance) / max_speed)
+    u_dot = ops.copysign(max_speed, distance)
+    u_after = ops.where(ops.real_part(ramp) < dt, u_cmd, u + u_dot * ramp)  # where the step ends, the hold or not
+    return [(u, u_dot, ramp), (u_after, ops.zeros_like(u_dot), dt - ramp)], u_after
 
 
 def bounded_segments(u, u_dot_cmd, low, high, dt: float):
@@ -177,7 +205,7 @@ def held_energy(energy, y, u, u_dot):
     if y.ndim == 1:
         (u,), (u_dot,) = u.tolist(), u_dot.tolist()
         return energy(y, u) if u_dot == 0.0 else 0.0
-    return np.where(u_dot[..., 0] == 0.0, energy(y, u[..., 0]), 0.0)
+    return namespace(y).where(u_dot[..., 0] == 0.0, energy(y, u[..., 0]), 0.0)
 
 
 def straight_path(s, s_cmd, dt: float, max_speed: float):

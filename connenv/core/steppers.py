@@ -163,17 +163,27 @@ class ExplicitRungeKutta:
         return check_finite(substeps(system.vector_field, y, u, u_dot, h, h_b, held, self.substeps), self)
 
 
-@functools.cache
 def compiled_substeps(tableau: Tableau, floats: bool):
     """The tableau's substeps as a Python function, compiled once: ``substeps(field, y, u, u̇, h, h_b, held, n)``
     takes n steps of length h (h_b = h/divisor) from y, an array (one state or rows), or with ``floats`` a list of
     one state's floats, each sum then taken component by component. Its code is `substeps_source`'s, the tableau's
     sums written out, because a loop over the stages costs more than their arithmetic on a small state (a list of
     stages, a call per sum, a product by each weight of 1)."""
+    return _compiled(tableau, floats)["substeps"]
+
+
+def compiled_substep(tableau: Tableau):
+    """Substep i alone on arrays, ``substep(field, y, u, u̇, h, h_b, held, i)``: the body of `compiled_substeps`'
+    loop, the same arithmetic, for a loop primitive (JAX's fori_loop) to run n times."""
+    return _compiled(tableau, False)["substep"]
+
+
+@functools.cache
+def _compiled(tableau: Tableau, floats: bool) -> dict:
     namespace = {}
     code = compile(substeps_source(tableau, floats), "<Runge-Kutta substeps>", "exec")
     exec(code, namespace)  # noqa: S102 (code made here from a tableau of numbers, not from input)
-    return namespace["substeps"]
+    return namespace
 
 
 def substeps_source(tableau: Tableau, floats: bool) -> str:
@@ -197,11 +207,13 @@ def substeps_source(tableau: Tableau, floats: bool) -> str:
         return f"[y_ + {factor} * {terms} for y_, {names} in zip(y, {stages})]"
 
     nodes = list(dict.fromkeys(c for c, _ in tableau.stages))  # the distinct c: stages at one node share its u
-    lines = ["def substeps(field, y, u, u_dot, h, h_b, held, n):", "    for i in range(n):"]
-    lines += [f"        u{m} = u if held else u + (i * h + {c!r} * h) * u_dot" for m, c in enumerate(nodes)]
+    body = [f"        u{m} = u if held else u + (i * h + {c!r} * h) * u_dot" for m, c in enumerate(nodes)]
     for s, (c, row) in enumerate(tableau.stages):
-        lines.append(f"        k{s} = field({combined('h', row) if row else 'y'}, u{nodes.index(c)}, u_dot)")
-    lines += [f"        y = {combined('h_b', tableau.weights)}", "    return y"]
+        body.append(f"        k{s} = field({combined('h', row) if row else 'y'}, u{nodes.index(c)}, u_dot)")
+    body.append(f"        y = {combined('h_b', tableau.weights)}")
+    lines = ["def substeps(field, y, u, u_dot, h, h_b, held, n):", "    for i in range(n):", *body, "    return y"]
+    if not floats:  # the loop's body alone, substep i (compiled_substep)
+        lines += ["", "def substep(field, y, u, u_dot, h, h_b, held, i):", *(line[4:] for line in body), "    return y"]
     return "\n".join(lines) + "\n"
 
 

@@ -65,6 +65,9 @@ class Spec:
     Benchmarks: ``bench`` (the key of its cases in connenv.bench's tables); ``single_target`` and
     ``vector_target`` (connenv.throughput's targets, issue 20: the largest ratio of its step time to Pendulum-v1's,
     and the smallest fraction of CartPole-v1's native vector env-steps/s at N = 4096; None: no target).
+
+    JAX: ``jax`` (the make kwargs whose step ``connenv.jax`` traces, each checked against the numpy env in the
+    tests; empty: no JAX version yet, and ``connenv.jax.make`` refuses the id).
     """
 
     id: str
@@ -86,6 +89,7 @@ class Spec:
     bench: str | None = None
     single_target: float | None = None
     vector_target: float | None = None
+    jax: tuple[dict, ...] = ()
     vector_base: type = TaskVectorEnv
     vector_env: type = field(init=False)
 

@@ -10,7 +10,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import BATCH, SCALAR
+from connenv.core.backend import BATCH, SCALAR, vector
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import check_drift, control_path, held_energy, run_segments
@@ -149,13 +149,12 @@ class SwingEnv(TaskEnv):
         energy, weight = ops.real(self.system.energy(y, r)), self.system.mass * self.system.g * r
         return SwingState(y, r, t, energy, (energy + weight) / weight, energy_error)  # lift as Swing.lift
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):
         theta = self.np_random.uniform(0.05, 0.1) * self.np_random.choice([-1.0, 1.0])
         state = self.reset_values(options, {"theta": theta, "r": self.r_max})
         r = state["r"]
         p = state["p"] if "p" in state else self.system.mass * r**2 * state["theta_dot"]
-        y = np.array([state["theta"], p])
-        return self.at(y, r, 0.0, 0.0)
+        return self.at(vector(state["theta"], p), r, 0.0, 0.0, ops)
 
     def advance(self, s, r_cmd, stepper, ops=SCALAR):
         """The state after a step toward the commanded radius; rows with the vector env's stepper and ops=BATCH."""
@@ -206,5 +205,6 @@ SPECS = (
             ("swing_ramp", {"max_episode_steps": 60, "max_radial_speed": 2.0}, None),
         ),
         bench="swing", single_target=1.5, vector_target=0.35,
+        jax=({}, {"integrator": "rk4", "substeps": 4}),
     ),
 )

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipeinc, ellipj, ellipk
 
-from connenv.core.backend import ARRAYS, FLOATS, floats, is_complex
+from connenv.core.backend import FLOATS, floats, is_complex, namespace, traced
 from connenv.core.validation import ndim
 
 try:  # scipy's ellipj on one float without the ufunc's per-call machinery: the same function, the same bits
@@ -52,15 +52,15 @@ class Swing:
 
     def vector_field(self, y, u, u_dot):
         """Hand-derived (θ̇, ṗ); u_dot is accepted for the common interface and drops out."""
-        theta, p, r = y[..., 0], y[..., 1], u[..., 0]
-        return np.stack([p / (self.mass * r**2), -self.mass * self.g * r * np.sin(theta)], axis=-1)
+        theta, p, r, ops = y[..., 0], y[..., 1], u[..., 0], namespace(y)
+        return ops.stack([p / (self.mass * r**2), -self.mass * self.g * r * ops.sin(theta)], axis=-1)
 
     def energy(self, y, r):
         """E = p²/(2 m r²) − m g r cos θ (zero at pivot height): one state on Python floats, rows as arrays."""
         if type(y) is np.ndarray and y.ndim == 1 and (type(r) is float or ndim(r) == 0):  # one state
             (theta, p), ops = y.tolist(), FLOATS
         else:
-            theta, p, ops = y[..., 0], y[..., 1], np
+            theta, p, ops = y[..., 0], y[..., 1], namespace(y)
         return p**2 / (2 * self.mass * r**2) - self.mass * self.g * r * ops.cos(theta)
 
     def hamiltonian(self, y, u):
@@ -92,7 +92,9 @@ class Swing:
         if ndim(y) == 1 and ndim(r) == 1:  # one state (the env's case)
             theta, p = y.tolist() if type(y) is np.ndarray else map(float, y)
             return np.array(self.pendulum_flow(theta, p, float(r[0]), tau, FLOATS))
-        return np.stack(self.pendulum_flow(y[..., 0], y[..., 1], floats(r)[..., 0], tau, ARRAYS), axis=-1)
+        ops = namespace(y)
+        r = r[..., 0] if traced(ops) else floats(r)[..., 0]
+        return ops.stack(self.pendulum_flow(y[..., 0], y[..., 1], r, tau, ops), axis=-1)
 
     def pendulum_flow(self, theta, p, r, tau, ops):
         """exact_flow's (θ, p) of the state (θ, p) at radius r, as components: Python floats for one state with
@@ -112,7 +114,7 @@ class Swing:
         w = ops.sqrt(stretch) * omega * tau
         sn1, cn1 = ops.sin(phi), ops.cos(phi)
         dn1 = ops.sqrt(1.0 - m * sn1 * sn1)
-        sn2, cn2, dn2, _ = ellipj_one(w, m) if one else jacobi_elliptic(w, m)  # outside the Array API: scipy's
+        sn2, cn2, dn2, _ = ellipj_one(w, m) if one else getattr(ops, "ellipj", jacobi_elliptic)(w, m)  # scipy's
         if one:
             sn2, cn2, dn2 = float(sn2), float(cn2), float(dn2)
         outside = abs(k2.real - 1.0) < SEPARATRIX_BAND
@@ -124,7 +126,8 @@ class Swing:
         half = ops.atan2(k * sn, dn)  # libration: θ/2
         if ops.any(rotating):  # am = atan2(sn, cn) plus the whole turns
             wrapped_am = ops.atan2(sn, cn)
-            mean_am = phi + math.pi / 2 * w / ellipk(ops.where(rotating, m.real, 0.0))  # only rounded: its real part
+            complete = getattr(ops, "ellipk", ellipk)  # scipy's, or the namespace's traceable one
+            mean_am = phi + math.pi / 2 * w / complete(ops.where(rotating, m.real, 0.0))  # only rounded: its real part
             turns = ops.round((mean_am - wrapped_am) / (2 * math.pi))
             half = ops.where(rotating, s * (wrapped_am + 2 * math.pi * turns), half)
         theta_dot = 2 * k * omega * ops.where(rotating, s * dn, cn)

@@ -1,0 +1,170 @@
+"""The functional env: an env's model traced by JAX, with gymnax's interface.
+
+``env.reset(key, params) -> (obs, state)`` and ``env.step(key, state, action, params) -> (obs, state, reward,
+terminated, truncated, info)`` are pure functions of arrays: jit them, vmap them over keys, states and actions, and
+differentiate them. The state is `EnvState`: the model's flat task state ``x`` (``model.state_names``; float64)
+and the steps taken in the episode; ``model.pack``/``unpack`` carry a state between the numpy env and this one.
+``step`` resets an episode that has ended (terminated or truncated) from its key, as gymnax's does, and gives the
+ended episode's last observation and state in ``info["final_observation"]`` and ``info["final_x"]``; ``step_env``
+and ``reset_env`` are the step and the reset alone.
+
+The step is the numpy env's own code, traced: the task's ``command``, ``advance``, ``observe``, ``describe``,
+``reward`` and ``terminated`` run with ops = ``connenv.jax.namespace.JAX_TASK`` on rows of one (the numpy vector
+env's path), and the physics asks its arrays for their namespace. A step whose stepper fails (where the numpy env
+raises StepperError) holds the state, reports ``info["stepper_failed"]`` and ends the episode as truncated.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from connenv.jax.namespace import JAX_TASK, failures
+from connenv.jax.random import KeyGenerator
+from connenv.jax.spaces import Box, space_of
+from connenv.jax.steppers import traced_stepper
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class EnvState:
+    """The model's flat task state x (n,) and the steps taken in the episode."""
+
+    x: jax.Array
+    time: jax.Array
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class EnvParams:
+    """The episode's time limit (gymnax's ``max_steps_in_episode``, a traced leaf) and the physical parameters (the
+    model's Params; static: a change of them compiles the step anew, as ``model.with_params`` builds a model)."""
+
+    max_steps_in_episode: Any
+    physical: Any = dataclasses.field(metadata=dict(static=True))
+
+
+class FunctionalEnv:
+    """A registered env's step and reset as pure JAX functions (see the module); made by ``connenv.jax.make``."""
+
+    def __init__(self, env, max_episode_steps: int):
+        self.env = copy.deepcopy(env)
+        self.model = self.env.model
+        self.name = self.env.name
+        self.max_episode_steps = max_episode_steps
+        self.stepper = traced_stepper(self.env.stepper, self.env.system, self.name)
+        self.entries = self.model.entries
+        self.state_names = self.model.state_names
+        self.num_actions = self.model.m
+        self._action_space = space_of(self.env.action_space)
+        self._observation_space = space_of(self.env.observation_space)
+        self._low = jnp.asarray(self.env.action_space.low, float)
+        self._high = jnp.asarray(self.env.action_space.high, float)
+        self._models = {self.model.params: self}
+
+    def __repr__(self):
+        return f"connenv.jax FunctionalEnv({self.name}, n={self.model.n}, m={self.model.m})"
+
+    @property
+    def default_params(self) -> EnvParams:
+        return EnvParams(self.max_episode_steps, self.model.params)
+
+    def action_space(self, params: EnvParams | None = None) -> Box:
+        return self._action_space
+
+    def observation_space(self, params: EnvParams | None = None) -> Box:
+        return self._observation_space
+
+    # -- the state vector ------------------------------------------------------
+
+    def state_of(self, X):
+        """The task State of rows X (N, n)."""
+        return type(self.env.state)(**{e.name: e.rows(X) for e in self.entries})
+
+    def flatten(self, state) -> jax.Array:
+        """Rows (N, n) of a task State of rows, float64."""
+        fields = state.fields()
+        parts = []
+        for e in self.entries:
+            value = jnp.asarray(fields[e.name])
+            parts.append(jnp.reshape(value, (value.shape[0], -1)).astype(float))
+        return jnp.concatenate(parts, axis=1)
+
+    # -- the functional face ---------------------------------------------------
+
+    def _for(self, params: EnvParams | None) -> FunctionalEnv:
+        """The functional env of these physical parameters (built once per value, as ``model.with_params``)."""
+        if params is None or params.physical == self.model.params:
+            return self
+        if params.physical not in self._models:
+            other = FunctionalEnv(self.model.with_params(params.physical).env, self.max_episode_steps)
+            other._models = self._models
+            self._models[params.physical] = other
+        return self._models[params.physical]
+
+    def transition(self, x, action, params: EnvParams | None = None):
+        """(x_next, reward, terminated, info, failed) of one state x (n,) under action: the numpy env's step."""
+        env = self._for(params)
+        return env._transition(x, action)
+
+    def _transition(self, x, action):
+        X = jnp.asarray(x, float)[None]
+        a = jnp.asarray(action, float).reshape(1, *self._action_space.shape)
+        a = jnp.minimum(jnp.maximum(a, self._low), self._high)
+        before = self.state_of(X)
+        with failures() as failed:
+            after = self.env.advance(before, self.env.command(a), self.stepper, JAX_TASK)
+            X_next = self.flatten(after)
+        stalled = jnp.zeros((), bool)
+        for condition, _ in failed:
+            stalled = stalled | jnp.any(condition)
+        info = self.env.describe(after, JAX_TASK)
+        reward = self.env.reward(before, after, info, JAX_TASK)
+        terminated = self.env.terminated(after, info, JAX_TASK)
+        obs = self.env.observe(after, JAX_TASK)
+        first = lambda v: jnp.asarray(v)[0] if jnp.ndim(v) > 0 else jnp.asarray(v)  # noqa: E731
+        info = jax.tree_util.tree_map(first, info)
+        return X_next[0], first(obs), first(reward), first(terminated) & ~stalled, info, stalled
+
+    def step_env(self, key, state: EnvState, action, params: EnvParams | None = None):
+        """One step without autoreset: (obs, state, reward, terminated, truncated, info)."""
+        params = self.default_params if params is None else params
+        x_next, obs, reward, terminated, info, failed = self.transition(state.x, action, params)
+        x_next = jnp.where(failed, state.x, x_next)  # a failed step holds the state
+        time = state.time + 1
+        truncated = (time >= params.max_steps_in_episode) | failed
+        info = {**info, "stepper_failed": failed}
+        return obs, EnvState(x_next, time), reward.astype(float), terminated, truncated & ~terminated, info
+
+    def reset_env(self, key, params: EnvParams | None = None):
+        """The starting state of the task's own distribution (its ``start``, drawing from the key): (obs, state)."""
+        env = self._for(params).env
+        task = copy.copy(env)
+        task._np_random = KeyGenerator(key)
+        start = task.start({}, JAX_TASK)
+        X = self.flatten(self._rows(start))
+        obs = env.observe(self.state_of(X), JAX_TASK)[0]
+        return obs, EnvState(X[0], jnp.zeros((), jnp.int32))
+
+    def _rows(self, state):
+        """A State of one (its fields traced scalars and arrays) as a State of rows of one."""
+        return type(state)(**{k: jnp.asarray(v, float)[None] for k, v in state.fields().items()})
+
+    def reset(self, key, params: EnvParams | None = None):
+        return self.reset_env(key, params)
+
+    def step(self, key, state: EnvState, action, params: EnvParams | None = None):
+        """step_env, then a reset from the key where the episode ended; info["final_observation"] and
+        info["final_x"] hold the ended step's observation and state (gymnax's autoreset)."""
+        key_step, key_reset = jax.random.split(key)
+        obs, after, reward, terminated, truncated, info = self.step_env(key_step, state, action, params)
+        obs_reset, fresh = self.reset_env(key_reset, params)
+        done = terminated | truncated
+        info = {**info, "final_observation": obs, "final_x": after.x}
+        state = jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), fresh, after)
+        return jnp.where(done, obs_reset, obs), state, reward, terminated, truncated, info

@@ -1,0 +1,160 @@
+"""The third namespace: the operations of `connenv.core.backend` on JAX arrays, so that the physics and task code
+written once for Python floats (FLOATS, SCALAR) and numpy rows (ARRAYS, BATCH) traces under jit, vmap and grad.
+
+``JAX`` answers the physics' names (``connenv.core.backend.NAMES``, the Array API standard's) with jax.numpy's, and
+the rows' seams that numpy code reached outside ``ops`` before: ``stack``, ``real_part`` (the real part a decision
+reads; JAX differentiates by its own forward mode, so there are no complex rows and it is the value itself),
+``any`` (whether a branch that only some rows take must be computed: always, as a trace cannot look at values; the
+rows that do not take it are left by ``where``), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below)
+and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
+
+**Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
+non-finite state, an invariant past its bound), the JAX physics calls ``fail(condition, message)``, which records
+the traced condition in the `failures` collector of the step being traced; `connenv.jax.env` turns them into
+``info["stepper_failed"]``, holds the state and truncates the episode.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+
+import jax
+import jax.numpy as jnp
+
+from connenv.core.backend import ANSWERED, NAMES, operations
+
+MACHEP = 1.11022302462515654042e-16  # cephes' machine epsilon (2⁻⁵³), the AGM's stopping threshold
+AGM_LEVELS = 8  # cephes' ellpj stops after 8 AGM levels; the fixed trip count here
+
+
+def ellipj(u, m):
+    """(sn, cn, dn, φ) of u at parameter m, scipy.special.ellipj's algorithm (cephes' ellpj: the arithmetic-geometric
+    mean's descending Landen scale, DLMF 22.20(ii), with cephes' series for m < 1e-9 and m ≥ 1 − 1e-10) written
+    branch-free with a fixed trip count: every AGM level is computed and the levels past cephes' stop (|c/a| ≤ MACHEP)
+    are left out by ``where``, so that a converged row gets cephes' own arithmetic. Differentiable by JAX's forward
+    and reverse modes through the recurrence."""
+    u, m = jnp.asarray(u, float), jnp.asarray(m, float)
+    # the AGM scale: levels 0..AGM_LEVELS, and the number of levels cephes takes (its loop's i at the end)
+    a, b, c = [jnp.ones_like(m)], jnp.sqrt(1.0 - m), [jnp.sqrt(m)]
+    taken = jnp.zeros(jnp.shape(m), int)
+    going = jnp.abs(c[0] / a[0]) > MACHEP
+    for _ in range(AGM_LEVELS):
+        ai = a[-1]
+        c.append((ai - b) / 2.0)
+        t = jnp.sqrt(ai * b)
+        a.append((ai + b) / 2.0)
+        b = jnp.where(going, t, b)
+        taken = taken + going
+        going = going & (jnp.abs(c[-1] / a[-1]) > MACHEP)
+    twon = 2.0 ** taken.astype(float)
+    a_last = sum(jnp.where(taken == i, a[i], 0.0) for i in range(AGM_LEVELS + 1))
+    phi = twon * a_last * u
+    last = phi
+    for i in range(AGM_LEVELS, 0, -1):  # the backward recurrence, over the levels taken
+        use = i <= taken
+        t = c[i] * jnp.sin(phi) / a[i]
+        last = jnp.where(use, phi, last)
+        phi = jnp.where(use, (jnp.arcsin(jnp.clip(t, -1.0, 1.0)) + phi) / 2.0, phi)
+    sn, cn = jnp.sin(phi), jnp.cos(phi)
+    dnfix = cn / jnp.cos(phi - last)
+    # cephes takes dn = cn / cos(φ₁ − φ₀) unless it is small (DLMF 22.20.5's discussion); the quotient of two small
+    # numbers near cn = 0 loses digits, where scipy's dn agrees with √(1 − m sn²): that is taken there too
+    dn = jnp.where((jnp.abs(dnfix) < 0.1) | (jnp.abs(cn) < 0.1), jnp.sqrt(1.0 - m * sn * sn), dnfix)
+    # cephes' series at the ends of [0, 1]
+    t, bb = jnp.sin(u), jnp.cos(u)
+    ai = 0.25 * m * (u - t * bb)
+    small = (t - ai * bb, bb + ai * t, 1.0 - 0.5 * m * t * t, u - ai)
+    ai = 0.25 * (1.0 - m)
+    bb, t = jnp.cosh(u), jnp.tanh(u)
+    inverse, twon = 1.0 / bb, bb * jnp.sinh(u)
+    aj = ai * t * inverse
+    near_one = (t + ai * (twon - u) / (bb * bb), inverse - aj * (twon - u), inverse + aj * (twon + u),
+                2.0 * jnp.arctan(jnp.exp(u)) - math.pi / 2 + ai * (twon - u) / bb)
+    is_small, is_one = m < 1e-9, m >= 0.9999999999
+    return tuple(jnp.where(is_small, s, jnp.where(is_one, o, x)) for s, o, x in zip(small, near_one, (sn, cn, dn, phi)))
+
+
+def ellipk(m):
+    """K(m), the complete elliptic integral of the first kind, as π / (2 AGM(1, √(1 − m))) at a fixed trip count
+    (the AGM converges quadratically: six levels reach rounding for m ≤ 1 − 1e-12). Used where the numpy code rounds
+    with scipy's ellipk (a rotation's whole turns), not where its value enters a state."""
+    a, b = jnp.ones_like(m), jnp.sqrt(1.0 - m)
+    for _ in range(10):
+        a, b = (a + b) / 2.0, jnp.sqrt(a * b)
+    return math.pi / (2.0 * a)
+
+
+_collectors: list[list] = []
+
+
+@contextlib.contextmanager
+def failures():
+    """Collect the failures ``fail`` records while a step is traced: the list of (condition, message)."""
+    _collectors.append([])
+    try:
+        yield _collectors[-1]
+    finally:
+        _collectors.pop()
+
+
+def fail(condition, message: str):
+    """Record that the step has failed where condition holds (an array over rows; traced). Outside a step being
+    traced by connenv.jax, where no one would read it, a RuntimeError."""
+    if not _collectors:
+        raise RuntimeError(f"{message}: a failure of connenv physics traced outside connenv.jax's step, which carries "
+                           "it out as info['stepper_failed']; trace the physics through connenv.jax.make's env")
+    _collectors[-1].append((jnp.asarray(condition), message))
+
+
+def _where(condition, a, b):
+    return jnp.where(condition, a, b)
+
+
+JAX = operations(
+    "JAX",
+    sin=jnp.sin,
+    cos=jnp.cos,
+    atan2=jnp.arctan2,
+    sqrt=jnp.sqrt,
+    log=jnp.log,
+    acos=jnp.arccos,
+    hypot=jnp.hypot,
+    abs=jnp.abs,
+    copysign=jnp.copysign,
+    isnan=jnp.isnan,
+    maximum=jnp.maximum,
+    minimum=jnp.minimum,
+    where=_where,
+    round=jnp.round,
+    any=lambda x: True,  # see the module: a trace computes the branch, where keeps the rows that take it
+    stack=jnp.stack,
+    zeros_like=jnp.zeros_like,
+    real_part=lambda x: x,
+    ellipj=ellipj,
+    ellipk=ellipk,
+    fail=fail,
+    traced=True,
+)
+"""The physics' operations on JAX arrays (see the module)."""
+
+assert set(NAMES) <= set(vars(JAX)), "JAX must answer every name of FLOATS"
+ANSWERED["jax"] = JAX
+
+JAX_TASK = operations(
+    "JAX_TASK",
+    **{name: value for name, value in vars(JAX).items() if not name.startswith("__")},
+    clip=lambda x, low, high: jnp.minimum(jnp.maximum(x, low), high),
+    column=lambda x: x[..., None],
+    pack=lambda parts: jnp.stack(jnp.broadcast_arrays(*parts), axis=-1).astype(jnp.float32),
+    real=lambda x: jnp.asarray(x, float),
+    flag=lambda x: jnp.asarray(x, bool),
+    vector=lambda a: jnp.asarray(a, float),
+    components=lambda a: [a[..., i] for i in range(a.shape[-1])],
+)
+"""The task's operations on JAX rows (BATCH's names), beside the physics'."""
+
+
+def is_jax(x) -> bool:
+    """Whether x is a JAX array or tracer."""
+    return isinstance(x, jax.Array)

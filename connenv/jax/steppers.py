@@ -1,0 +1,105 @@
+"""The steppers of the numpy envs, run on traced rows: the same arithmetic where it has no data-dependent branch,
+and branch-free stand-ins where it has one, each named with how far it may differ from the numpy stepper.
+
+- The explicit Runge–Kutta methods (Euler, RK4, RK8) are the numpy rows' own code (``compiled_substeps``): the
+  control is evaluated at u + c h u̇ on every stage, which where u is held (u̇ = 0) is u itself.
+- The exact step runs the system's closed form on every row; where the closed form declines (NaN: the swing's
+  separatrix band) or where u moves under a system that has only a held flow, the numpy stepper calls scipy's
+  adaptive DOP853, which does not trace: there the JAX step takes DOP853's eighth-order formula at FALLBACK_SUBSTEPS
+  fixed substeps instead, agreeing with it to the adaptive method's tolerance rather than to rounding.
+- A non-finite state is a failure (``ops.fail``), not an exception.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+
+from connenv.core.steppers import (
+    ExactFlow,
+    ExactSegment,
+    Exact,
+    ExplicitRungeKutta,
+    RK8,
+    compiled_substep,
+    compiled_substeps,
+    conforms,
+)
+from connenv.jax.namespace import fail
+
+FALLBACK_SUBSTEPS = 64  # RK8 substeps standing in for scipy's DOP853 (the exact step's fallback) on a segment
+
+
+def _column(tau):
+    """A segment length per row as a column (…, 1), as the numpy rows' ColumnTau hands it to a fixed-step method."""
+    return tau if jnp.ndim(tau) == 0 else jnp.asarray(tau)[..., None]
+
+
+def _finite(y, stepper):
+    fail(~jnp.all(jnp.isfinite(y), axis=-1), f"{stepper} produced a non-finite value")
+    return y
+
+
+@dataclasses.dataclass(frozen=True)
+class TracedRungeKutta:
+    """An explicit Runge–Kutta method's numpy code on traced rows."""
+
+    stepper: ExplicitRungeKutta
+
+    def __call__(self, system, y, u, u_dot, tau):
+        return _finite(self.unchecked(system, y, u, u_dot, tau), self.stepper)
+
+    def unchecked(self, system, y, u, u_dot, tau):
+        """The step without its check (inside a branch of lax.cond, whose failures the caller checks)."""
+        tableau, n = self.stepper.tableau, self.stepper.substeps
+        h = _column(tau) / n
+        h_b = h / tableau.divisor
+        if n == 1:
+            return compiled_substeps(tableau, floats=False)(system.vector_field, y, u, u_dot, h, h_b, False, 1)
+        substep = compiled_substep(tableau)
+        return jax.lax.fori_loop(0, n, lambda i, y: substep(system.vector_field, y, u, u_dot, h, h_b, False, i), y)
+
+    def __repr__(self):
+        return repr(self.stepper)
+
+
+@dataclasses.dataclass(frozen=True)
+class TracedExact:
+    """The system's closed-form step on every row (see the module), RK8 where it declines."""
+
+    stepper: Exact
+    fallback: TracedRungeKutta = TracedRungeKutta(RK8(FALLBACK_SUBSTEPS))
+
+    def __call__(self, system, y, u, u_dot, tau):
+        if conforms(system, ExactSegment):
+            flow = system.exact_segment(y, u, u_dot, tau)
+            declined = jnp.any(jnp.isnan(flow), axis=-1)
+        else:
+            flow = system.exact_flow(y, u, tau)
+            declined = jnp.any(jnp.isnan(flow), axis=-1) | jnp.any(u_dot != 0.0, axis=-1)
+
+        def fall_back(flow):
+            numeric = self.fallback.unchecked(system, jnp.where(declined[..., None], y, jnp.zeros_like(y)), u, u_dot,
+                                    jnp.where(declined, tau, 0.0))
+            return jnp.where(declined[..., None], numeric, flow)
+
+        # run only where some row declines: on rows under jit a real branch; under vmap JAX computes both
+        flow = jax.lax.cond(jnp.any(declined), fall_back, lambda flow: flow, flow)
+        return _finite(flow, self.stepper)
+
+    def __repr__(self):
+        return repr(self.stepper)
+
+
+def traced_stepper(stepper, system, name: str):
+    """The traced stepper of a numpy env's stepper, or a TypeError naming what is missing."""
+    if isinstance(stepper, ExplicitRungeKutta):
+        return TracedRungeKutta(stepper)
+    if isinstance(stepper, Exact) and (conforms(system, ExactFlow) or conforms(system, ExactSegment)):
+        return TracedExact(stepper)
+    raise TypeError(
+        f"{name}'s stepper {stepper!r} has no JAX version yet (connenv.jax runs the exact step and the fixed-step "
+        "Runge–Kutta methods: make it with integrator='exact', 'euler', 'rk4' or 'rk8')"
+    )

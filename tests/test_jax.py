@@ -1,0 +1,158 @@
+"""The same physics on JAX: for every id whose spec declares JAX make kwargs, the traced step (connenv.jax) is the
+numpy env's step to rounding, its forward-mode Jacobians are the model's complex-step ones, a failing step is
+reported as data, and the functional interface keeps gymnax's conventions."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+jax = pytest.importorskip("jax")
+jax.config.update("jax_enable_x64", True)  # noqa: E402  (connenv.jax asks for float64; tests run in their own process)
+import jax.numpy as jnp  # noqa: E402
+import scipy.special  # noqa: E402
+
+import connenv.jax as cj  # noqa: E402
+from connenv.envs.spec import registry  # noqa: E402
+from connenv.core.steppers import StepperError  # noqa: E402
+from connenv.jax.namespace import ellipj  # noqa: E402
+
+CASES = [(spec.id, kwargs) for spec in registry.values() for kwargs in spec.jax]
+IDS = [f"{i.removeprefix('connenv/')}{''.join(f'-{k}={v}' for k, v in kw.items())}" for i, kw in CASES]
+SEEDS, STEPS = 20, 1000
+STEP_RTOL = 1e-12
+"""|x_jax − x_numpy| ≤ STEP_RTOL · max(1, |x_numpy|) entry by entry after one step: XLA's sin, cos, atan2 and its
+order of operations round differently from libm and numpy by an ulp or so, which a step's few dozen operations grow
+to a few times 1e-16; the floor of 1 stands for quantities that are all roundoff (an exact step's energy error)."""
+JACOBIAN_RTOL = 1e-10
+
+
+def trajectories(env_id, kwargs):
+    """States, actions and what the numpy env did from them: SEEDS episodes of up to STEPS steps of random actions
+    (an episode that ends is followed by the next seed's)."""
+    env = gym.make(env_id, **kwargs).unwrapped
+    model = env.model
+    rng = np.random.default_rng(0)
+    X, A, X1, R, T, O = [], [], [], [], [], []
+    for seed in range(SEEDS):
+        env.reset(seed=seed)
+        for _ in range(STEPS // 10 if SEEDS * STEPS > 2000 and seed % 2 else STEPS):
+            a = rng.uniform(env.action_space.low, env.action_space.high).astype(np.float32)
+            X.append(model.pack(env.state))
+            obs, reward, terminated, _, _ = env.step(a)
+            A.append(a), X1.append(model.pack(env.state)), R.append(reward), T.append(terminated), O.append(obs)
+            if terminated:
+                break
+    return env, *(np.array(v) for v in (X, A, X1, R, T, O))
+
+
+@pytest.fixture(scope="module", params=CASES, ids=IDS)
+def case(request):
+    env_id, kwargs = request.param
+    jenv, params = cj.make(env_id, **kwargs)
+    return jenv, params, trajectories(env_id, kwargs)
+
+
+def test_the_traced_step_is_the_numpy_step_to_rounding(case):
+    jenv, params, (env, X, A, X1, R, T, O) = case
+    step = jax.jit(jax.vmap(lambda x, a: jenv.transition(x, a)))
+    x1, obs, reward, terminated, info, failed = step(jnp.asarray(X), jnp.asarray(A))
+    x1 = np.asarray(x1)
+    worst = np.max(np.abs(x1 - X1) / np.maximum(1.0, np.abs(X1)))
+    print(f"{jenv.name}: {len(X)} states, largest difference {worst:.2g} of max(1, |x|)")
+    assert worst <= STEP_RTOL
+    assert not np.any(failed)
+    np.testing.assert_array_equal(np.asarray(terminated), T)
+    np.testing.assert_allclose(np.asarray(reward), R, rtol=STEP_RTOL, atol=STEP_RTOL)
+    np.testing.assert_allclose(np.asarray(obs), O, rtol=2 * np.finfo(np.float32).eps, atol=1e-7)  # float32's rounding
+    # one state, not vmapped, gives what the rows give
+    one = jax.jit(jenv.transition)(jnp.asarray(X[7]), jnp.asarray(A[7]))[0]
+    np.testing.assert_array_equal(np.asarray(one), x1[7])
+
+
+def test_forward_mode_jacobians_are_the_models_complex_step_ones(case):
+    jenv, params, (env, X, A, *_) = case
+    pick = np.linspace(0, len(X) - 1, 20).astype(int)
+    jac = jax.jit(jax.vmap(jax.jacfwd(lambda x, a: jenv.transition(x, a)[0], argnums=(0, 1))))
+    JA, JB = (np.asarray(J) for J in jac(jnp.asarray(X[pick]), jnp.asarray(A[pick], float)))
+    MA, MB = env.model.jacobians(X[pick], A[pick])
+    for mine, theirs in ((JA, MA), (JB, MB)):
+        assert np.max(np.abs(mine - theirs) / np.maximum(1.0, np.abs(theirs))) <= JACOBIAN_RTOL
+
+
+def test_a_diverging_step_is_a_flag_with_the_state_held():
+    """Explicit Euler over a 10 s step from the top of a fast swing: the numpy env raises StepperError (its energy
+    error past the bound); the JAX step reports it, holds the state and truncates the episode."""
+    kwargs, start = {"integrator": "euler", "dt": 10.0}, {"state": {"theta": 3.0, "theta_dot": 7.7, "r": 1.6}}
+    env = gym.make("connenv/Swing-v0", **kwargs).unwrapped
+    env.reset(seed=0, options=start)
+    x = env.model.pack(env.state)
+    with pytest.raises(StepperError):
+        env.step(np.array([1.0], np.float32))
+    jenv, params = cj.make("connenv/Swing-v0", **kwargs)
+    state = cj.EnvState(jnp.asarray(x), jnp.int32(0))
+    obs, after, reward, terminated, truncated, info = jax.jit(jenv.step_env)(jax.random.key(0), state, jnp.ones(1),
+                                                                             params)
+    assert bool(info["stepper_failed"]) and bool(truncated) and not bool(terminated)
+    np.testing.assert_array_equal(np.asarray(after.x), x)
+
+
+def test_an_ended_episode_resets_and_hands_over_its_last_observation():
+    """Swing-v0 at its target amplitude (held over the step at r_max): terminated, and step gives
+    the next episode's first observation, the last one in info."""
+    env = gym.make("connenv/Swing-v0", target_amplitude=0.3).unwrapped
+    env.reset(seed=0, options={"state": {"theta": 0.31, "theta_dot": 0.0, "r": 2.0}})
+    jenv, params = cj.make("connenv/Swing-v0", target_amplitude=0.3)
+    x = env.model.pack(env.state)
+    obs_numpy, *_ = env.step(np.array([1.0], np.float32))
+    state = cj.EnvState(jnp.asarray(x), jnp.int32(0))
+    obs, after, reward, terminated, truncated, info = jax.jit(jenv.step)(jax.random.key(3), state, jnp.ones(1), params)
+    assert bool(terminated) and not bool(truncated)
+    np.testing.assert_allclose(np.asarray(info["final_observation"]), obs_numpy, atol=1e-7)
+    assert int(after.time) == 0 and abs(float(after.x[0])) <= 0.1  # a fresh start: |θ₀| in [0.05, 0.1]
+
+
+def test_the_time_limit_truncates():
+    jenv, params = cj.make("connenv/Swing-v0")
+    obs, state = jenv.reset(jax.random.key(0), params)
+    state = cj.EnvState(state.x, jnp.int32(params.max_steps_in_episode - 1))
+    *_, terminated, truncated, info = jenv.step_env(jax.random.key(1), state, jnp.zeros(1), params)
+    assert bool(truncated) and not bool(terminated)
+
+
+def test_the_reset_draws_the_numpy_envs_distribution():
+    """Swing-v0 starts at rest at r_max with |θ₀| uniform on [0.05, 0.1] and either sign, from a key."""
+    jenv, params = cj.make("connenv/Swing-v0")
+    obs, states = jax.vmap(jenv.reset, (0, None))(jax.random.split(jax.random.key(0), 4000), params)
+    theta, p, r = (np.asarray(states.x[:, i]) for i in range(3))
+    assert np.all((np.abs(theta) >= 0.05) & (np.abs(theta) <= 0.1)) and np.all(p == 0.0) and np.all(r == 2.0)
+    assert abs(np.mean(theta > 0) - 0.5) < 0.05 and abs(np.mean(np.abs(theta)) - 0.075) < 0.002
+
+
+def test_the_traced_jacobi_elliptic_functions_are_scipys():
+    """sn, cn, dn and am by cephes' descending Landen recurrence at a fixed trip count, against scipy's ellipj over
+    the whole parameter range and the series at its ends (largest absolute difference measured: 3.4e-14, in dn)."""
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-20.0, 20.0, 20000)
+    m = np.concatenate([rng.uniform(0.0, 1.0, 19990), [0.0, 1e-12, 1e-10, 1e-9, 1e-5, 0.5, 1 - 1e-9, 1 - 1e-10,
+                                                       1 - 1e-12, 1.0]])
+    for mine, theirs in zip(ellipj(jnp.asarray(u), jnp.asarray(m)), scipy.special.ellipj(u, m)):
+        assert np.max(np.abs(np.asarray(mine) - theirs)) <= 1e-13
+
+
+def test_float64_is_asked_for_not_switched_on():
+    jax.config.update("jax_enable_x64", False)
+    try:
+        with pytest.raises(RuntimeError, match="jax_enable_x64"):
+            cj.make("connenv/Swing-v0")
+    finally:
+        jax.config.update("jax_enable_x64", True)
+
+
+def test_an_id_without_a_jax_version_is_refused_by_name():
+    missing = next(i for i, spec in registry.items() if not spec.jax)
+    with pytest.raises(NotImplementedError, match=missing):
+        cj.make(missing)
