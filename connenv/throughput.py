@@ -4,6 +4,7 @@ native CartPole-v1 vector env and SyncVectorEnv, and SB3 PPO training steps/s ag
     python -m connenv.throughput [--envs ID ...] [--sizes 1 64 1024 4096] [--sync-max 1024] [--seconds 0.5]
                                  [--breakdown] [--training] [--bounds] [--write docs/throughput.md]
     python -m connenv.throughput --rigid-body [--single-steps 3000]
+    python -m connenv.throughput --backend jax [--envs ID ...] [--sizes ...] [--write docs/throughput-jax.md]
 
 Single envs: each env from ``gym.make(id)`` (its registered wrappers included) and Pendulum-v1 from
 ``gym.make("Pendulum-v1")`` are stepped alternately with random actions, each step timed alone, resets left out
@@ -34,6 +35,9 @@ largest N against CartPole-v1's vector step, and the batched RK8 step of the swi
 
 ``--write PATH`` writes what was printed as a Markdown page (docs/throughput.md): regenerate it with the command, do
 not edit it.
+
+``--backend jax``: the JAX envs (``connenv.jax``; the ``jax`` extra) instead, each id's jit-ed rollouts beside its
+numpy vector env and Gymnasium's functional JAX Pendulum in the same run (``connenv/jax/throughput.py`` says how).
 
 ``--rigid-body``: the free rigid body (connenv.systems.rigid_body, a system without an env): its default step,
 ``advance`` by the exact flow over dt = 0.1 s from a seeded random momentum, timed alternately with Pendulum-v1's
@@ -540,6 +544,8 @@ def main(argv=None):
         "against Pendulum-v1 and CartPole-v1's native vector env, at the largest N",
     )
     parser.add_argument("--rigid-body", action="store_true", help="only the free rigid body's step against Pendulum-v1")
+    parser.add_argument("--backend", choices=["numpy", "jax"], default="numpy",
+                        help="numpy: the envs; jax: connenv.jax's rollouts beside the numpy vector env (the jax extra)")
     args = parser.parse_args(argv)
     if args.rigid_body:
         body, pendulum = rigid_body_step_times(args.single_steps)
@@ -556,6 +562,13 @@ def main(argv=None):
         f"gymnasium {gym.__version__}, commit {commit()}"
     )
     misses = []
+    if args.backend == "jax":
+        from connenv.jax.throughput import table
+
+        sizes = args.sizes if args.sizes != list(SIZES) else [1, 64, 1024, 4096, 65536]
+        table(report, args.envs, sizes, args.seconds, misses)
+        args.skip_single = args.skip_vector = True
+        report.note("Targets missed: " + ("; ".join(misses) if misses else "none") + ".")
     if not args.skip_single:
         single_table(report, args.envs, args.single_steps, misses)
     if not args.skip_vector:

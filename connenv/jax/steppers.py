@@ -5,7 +5,7 @@ and branch-free stand-ins where it has one, each named with how far it may diffe
   control is evaluated at u + c h u̇ on every stage, which where u is held (u̇ = 0) is u itself.
 - The exact step runs the system's closed form on every row; where the closed form declines (NaN: the swing's
   separatrix band) or where u moves under a system that has only a held flow, the numpy stepper calls scipy's
-  adaptive DOP853, which does not trace: there the JAX step takes DOP853's eighth-order formula at FALLBACK_SUBSTEPS
+  adaptive DOP853, which does not trace: there the JAX step takes DOP853's eighth-order formula at FALLBACK_SUBSTEPS (8)
   fixed substeps instead, agreeing with it to the adaptive method's tolerance rather than to rounding.
 - A non-finite state is a failure (``ops.fail``), not an exception.
 """
@@ -29,7 +29,8 @@ from connenv.core.steppers import (
 )
 from connenv.jax.namespace import fail
 
-FALLBACK_SUBSTEPS = 64  # RK8 substeps standing in for scipy's DOP853 (the exact step's fallback) on a segment
+FALLBACK_SUBSTEPS = 8  # RK8 substeps standing in for scipy's DOP853 (the exact step's fallback) on a segment: under vmap
+# both sides of the fallback's branch are computed for every row, so its cost is paid on every step
 
 
 def _column(tau):
