@@ -601,7 +601,7 @@ def main(argv: list[str] | None = None):
     elif args.command == "unseen":
         unseen(args.env, args.algo, args.jobs, Path(args.runs), args.pretrained)
     elif args.command == "score":
-        print(score.write(json.loads(UNSEEN.read_text()), DOCS, score.latest(list(ENVS + UNTRAINED)), ALGOS))
+        print(score.write(score.load(UNSEEN), DOCS, score.latest(list(ENVS + UNTRAINED)), ALGOS))
     else:
         print(table(args.jobs, args.env))
 

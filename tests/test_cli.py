@@ -312,3 +312,32 @@ def test_an_existing_page_is_overwritten_when_its_command_regenerates_it(tmp_pat
         cli.writable_dir(str(page))
     with pytest.raises(argparse.ArgumentTypeError, match="is a directory"):
         cli.writable_file(str(tmp_path))
+
+
+UNSEEN_RUN = {"algo": "ppo", "seed": 0, "returns": [1.0], "successes": [True]}
+UNSEEN_ENTRY = {"random": {"returns": [0.0], "successes": [False]},
+                "analytic": {"name": "arc", "returns": [2.0], "successes": [True]}, "runs": [UNSEEN_RUN]}  # fmt: skip
+BROKEN_UNSEEN = [
+    ({"first_seed": 1}, "no key 'envs'"),
+    ({"envs": {SWING: UNSEEN_ENTRY}}, "no key 'first_seed'"),
+    ({"first_seed": 1, "envs": {}}, "'envs' holds no env"),
+    ({"first_seed": 1, "envs": {SWING: {"analytic": UNSEEN_ENTRY["analytic"]}}}, f"no key envs['{SWING}']['random']"),
+    ({"first_seed": 1, "envs": {SWING: {**UNSEEN_ENTRY, "random": {"returns": []}}}}, "['random']['successes']"),
+    ({"first_seed": 1, "envs": {SWING: {**UNSEEN_ENTRY, "runs": [{"algo": "ppo"}]}}}, "['runs'][0]['seed']"),
+    ("{not json", "not JSON"),
+]
+
+
+@pytest.mark.parametrize(("data", "named"), BROKEN_UNSEEN, ids=[named for _, named in BROKEN_UNSEEN])
+def test_score_names_the_file_and_the_key_it_misses(data, named, tmp_path, monkeypatch, capsys):
+    """`python -m agents.baselines score` on a results file without a key it reads: one line naming the file and
+    the key (it ended in KeyError 'envs', StopIteration or KeyError 'random')."""
+    path = tmp_path / "unseen.json"
+    path.write_text(data if isinstance(data, str) else json.dumps(data))
+    monkeypatch.setattr(baselines, "UNSEEN", path)
+    monkeypatch.setattr(baselines, "DOCS", tmp_path)
+    with pytest.raises(SystemExit) as exit_:
+        cli.run(baselines.main, baselines.PROG, ["score"])
+    line = one_line_error(capsys.readouterr().err, baselines.PROG)
+    assert exit_.value.code == 2 and str(path) in line and named in line
+    assert not (tmp_path / "score.md").exists()
