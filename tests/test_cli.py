@@ -341,3 +341,24 @@ def test_score_names_the_file_and_the_key_it_misses(data, named, tmp_path, monke
     line = one_line_error(capsys.readouterr().err, baselines.PROG)
     assert exit_.value.code == 2 and str(path) in line and named in line
     assert not (tmp_path / "score.md").exists()
+
+
+def test_an_old_version_is_made_without_gymnasiums_notice(work):
+    """On BeadOnBar-v0 (v1 exists) the commands printed Gymnasium's DeprecationWarning, two lines each time the env
+    was made, above their one-line error: the project keeps old versions on purpose."""
+    environment = {**os.environ, "PYTHONPATH": str(ROOT)}
+    commands = {
+        "python -m connenv.geometry": ["-m", "connenv.geometry", "connenv/BeadOnBar-v0"],
+        "python -m agents.identify": ["-m", "agents.identify", "--env", "connenv/BeadOnBar-v0", "--true", "bogus=1"],
+    }
+    processes = {
+        prog: subprocess.Popen([sys.executable, *argv], cwd=work, env=environment, stderr=subprocess.PIPE, text=True)
+        for prog, argv in commands.items()
+    }
+    for prog, process in processes.items():
+        try:
+            _, err = process.communicate(timeout=60)
+        finally:
+            process.kill()
+        assert process.returncode == 2 and "DeprecationWarning" not in err, err
+        one_line_error(err, prog)
