@@ -18,11 +18,12 @@ from pathlib import Path
 
 import pytest
 
-from agents import baselines, evaluate, imitate, tune
+from agents import baselines, evaluate, imitate, randomized, tune
 from connenv import bench, cli, play, throughput
 
 ROOT = Path(__file__).resolve().parents[1]
 SWING, ACTIVE = "connenv/Swing-v0", "connenv/ActiveConstraint-v0"
+RANDOMIZED = ["--env", SWING, "--runs", "."]  # a later --runs replaces it
 TUNE = ["--env", SWING, "--algo", "sac", "--samples", "1", "--timesteps", "10"]
 FACTORIES = """
 import sympy as sp
@@ -155,6 +156,13 @@ CASES = [
     ("play", [SWING, "--kwargs", "dt=-1"], ["--kwargs dt=-1", "dt=-1.0 is out of range"]),
     ("play", [SWING, "--kwargs", "nokey"], ["--kwargs", "'nokey'"]),
     ("play", [SWING, "--kwargs", "bogus=1"], ["--kwargs bogus=1", "'bogus'"]),
+    ("randomized", [*RANDOMIZED, "--randomize", "[1, 2]"], ["--randomize", "'[1, 2]'", "{name: [low, high]}"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": "79"}'], ["--randomize", "'{\"g\": \"79\"}'"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"bogus": [1, 2]}'], ["--randomize", "'bogus'"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": [12, 7]}'], ["--randomize", "low must be at most high"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": [7, 12]}', "--runs", "a_file"], ["--runs", "'a_file'"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": [7, 12]}', "--runs", "empty_runs"], ["--runs", "Swing-v0_ppo_s"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": [7, 12]}', "--runs", "no_model"], ["--runs", "best_model.zip"]),
     ("bench", ["nosuch"], ["'nosuch'"]),
     ("bench", ["precision", "--env", "nope"], ["--env", "'nope'"]),
     ("bench", ["stability", "--env", "nope"], ["--env", "'nope'"]),
@@ -183,6 +191,7 @@ def work(tmp_path_factory):
         archive.writestr("a.txt", "hello")
     (folder / "a_file").write_text("")
     (folder / "empty_runs").mkdir()
+    (folder / "no_model" / "Swing-v0_ppo_s0").mkdir(parents=True)
     (folder / "cli_factories.py").write_text(FACTORIES)
     return folder
 
@@ -198,6 +207,7 @@ def mains(train):
         "play": (play.main, play.PROG),
         "bench": (bench.main, bench.PROG),
         "imitate": (imitate.main, imitate.PROG),
+        "randomized": (randomized.main, randomized.PROG),
     }
 
 
@@ -211,6 +221,7 @@ def one_line_error(err: str, prog: str) -> str:
 def test_bad_input_ends_a_command_in_one_line_naming_it(program, argv, named, mains, work, monkeypatch, capsys):
     main, prog = mains[program]
     monkeypatch.chdir(work)
+    monkeypatch.setattr(randomized, "success", lambda *args: pytest.fail("an evaluation ran before the check"))
     start = time.perf_counter()
     with pytest.raises(SystemExit) as exit_:
         cli.run(main, prog, argv)
