@@ -81,8 +81,10 @@ def identify(env_id: str, data, names: list[str], **kwargs) -> dict:
     except StepperError as error:
         at = ", ".join(f"{n} = {v:.6g}" for n, v in zip(names, np.exp(tried)))
         where = " (the make values, where the fit starts)" if np.array_equal(tried, start) else ""
-        raise ValueError(f"{', '.join(names)} cannot be identified on {env_id} by one-step prediction: the model at "
-                         f"{at}{where} rejects the states recorded with the true values ({error})") from error  # fmt: skip
+        raise ValueError(
+            f"{', '.join(names)} cannot be identified on {env_id} by one-step prediction: the model at {at}{where} "
+            f"rejects the states recorded with the true values ({error})"
+        ) from error
     if not fit.success:
         raise ValueError(f"the fit of {', '.join(names)} on {env_id} did not converge: {fit.message}")
     columns = np.linalg.norm(fit.jac, axis=0)
