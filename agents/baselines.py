@@ -47,6 +47,7 @@ import yaml
 
 import connenv
 from agents import cluster, score
+from agents.progress import progress
 from agents.controllers import CONTROLLERS
 from agents.evaluate import PRETRAINED, compare, evaluate, load_model, make_policy, pretrained_models
 from connenv import cli
@@ -267,12 +268,10 @@ def collect(envs: list[str], algos: list[str], runs: Path = RUNS, seeds=SEEDS):
     record_path, curves_path = PRETRAINED / "runs.json", DOCS / "curves.csv"
     shipped = json.loads(record_path.read_text()) if record_path.is_file() else {}
     collected = {}
-    for env_id in envs:
-        for algo in algos:
-            collected[env_id, algo] = collect_pair(env_id, algo, shipped.get(env_id, {}).get(algo), runs, seeds)
-            print(
-                f"{short(env_id)} {algo}: pretrained seed {collected[env_id, algo][0]['pretrained_seed']}", flush=True
-            )
+    pairs = [(env_id, algo) for env_id in envs for algo in algos]
+    for env_id, algo in progress(pairs, len(pairs), "pairs", "collect"):
+        collected[env_id, algo] = collect_pair(env_id, algo, shipped.get(env_id, {}).get(algo), runs, seeds)
+        print(f"{short(env_id)} {algo}: pretrained seed {collected[env_id, algo][0]['pretrained_seed']}", flush=True)
     # read again after the evaluations, which take minutes: another collect may have written meanwhile
     record, rows = json.loads(record_path.read_text()) if record_path.is_file() else {}, []
     if curves_path.is_file():

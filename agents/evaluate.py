@@ -37,6 +37,7 @@ from gymnasium.wrappers import RenderCollection
 import connenv  # noqa: F401  (registers the envs)
 from agents.controllers import CONTROLLERS, controller, controller_names
 from agents.mpc import PLANNERS, check_planner, planner
+from agents.progress import progress
 from connenv import cli
 from connenv.cli import positive_int, seed_int, writable_file
 
@@ -315,15 +316,15 @@ def evaluate(
     video: str | Path | None = None,
     env_kwargs: dict | None = None,
     trace: Trace | None = None,
+    desc: str | None = None,
 ) -> list[Episode]:
     """Episodes reset with seeds seed, seed + 1, ...; with `video`, the first is also written as a GIF; with
-    `trace`, the first is recorded in it."""
+    `trace`, the first is recorded in it; with `desc`, their progress is shown on stderr under that name."""
     env_kwargs = env_kwargs or {}
     env = gym.make(env_id, **env_kwargs)
     first_env = RenderCollection(gym.make(env_id, render_mode="rgb_array", **env_kwargs)) if video else env
-    results = [
-        run_episode(first_env if i == 0 else env, policy, seed + i, trace if i == 0 else None) for i in range(episodes)
-    ]
+    indices = range(episodes) if desc is None else progress(range(episodes), episodes, "episodes", desc)
+    results = [run_episode(first_env if i == 0 else env, policy, seed + i, trace if i == 0 else None) for i in indices]
     if video:
         save_gif(first_env.render(), video, env.metadata["render_fps"])
     env.close()
@@ -376,7 +377,7 @@ def compare(
         trace = Trace() if plot else None
         if plot:  # a policy given twice is drawn twice
             traces[f"{label} ({i + 1})" if label in traces else label] = trace
-        episodes_run = evaluate(env_id, policy, episodes, seed, video if i == 0 else None, env_kwargs, trace)
+        episodes_run = evaluate(env_id, policy, episodes, seed, video if i == 0 else None, env_kwargs, trace, label)
         rows.append(summarize(label, episodes_run))
     if plot:
         from agents.plots import draw
