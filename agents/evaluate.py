@@ -382,7 +382,7 @@ def compare(
     if plot:
         from agents.plots import draw
 
-        draw(env_id, traces, plot, env_kwargs)
+        draw(env_id, traces, plot, env_kwargs, seed, episodes)
     return {"env": env_id, "seed": seed, "episodes": episodes, "policies": rows}
 
 
@@ -433,13 +433,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)
     parser.add_argument("--seed", type=seed_int, default=0, help="episode i is reset with seed + i")
-    parser.add_argument("--json", type=writable_file, help="default: runs/eval_{env}_s{seed}.json")
+    parser.add_argument(
+        "--json", type=writable_file, help="default: runs/eval_{env}_s{seed}.json, with --plot FILE.png FILE.json"
+    )
     parser.add_argument("--video", type=gif_file, help="GIF of the first policy's first episode")
     parser.add_argument(
         "--plot",
         type=png_file,
         metavar="FILE.png",
-        help="draw each policy's first episode in one figure (agents.plots): for an env with a mechanical connection "
+        help="draw each policy's first episode (reset seed --seed) in one figure (agents.plots): for an env with a mechanical connection "
         "the shape path over the curvature map and the net motion beside its prediction, for an active-constraint "
         "env the phase portrait coloured by the control and the energy (or the env's measure) against time",
     )
@@ -455,8 +457,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
         if args.algo not in ALGOS:
             parser.error(f"argument --algo: invalid choice: {args.algo!r} (choose from {', '.join(sorted(ALGOS))})")
-    if args.json is None:
-        args.json = f"runs/eval_{args.env.split('/')[-1]}_s{args.seed}.json"
+    if args.json is None:  # a figure's report beside it: the default file may hold the README's 100 episodes
+        default = f"runs/eval_{args.env.split('/')[-1]}_s{args.seed}.json"
+        args.json = str(Path(args.plot).with_suffix(".json")) if args.plot else default
         if reason := cli.unwritable(Path(args.json), directory=False):
             parser.error(f"argument --json: the default {args.json!r} {reason}")
     return args
