@@ -47,6 +47,7 @@ import yaml
 
 import connenv
 from agents import cluster, score
+from agents.progress import progress
 from agents.controllers import CONTROLLERS
 from agents.evaluate import PRETRAINED, compare, evaluate, load_model, make_policy, pretrained_models
 from connenv import cli
@@ -230,13 +231,19 @@ def seed_record(folder: Path, env_id: str, algo: str) -> tuple[dict, list[dict]]
     return record, rows
 
 
-def collect_pair(env_id: str, algo: str, entry: dict | None, runs: Path = RUNS, seeds=SEEDS) -> tuple[dict, list[dict]]:
-    """The runs.json entry and curve rows of an (env, algo) whose seeds (in runs) finished with the current
-    hyperparameters; its best model copied to agents/pretrained/ unless the same file is there already."""
+def check_finished(env_id: str, algo: str, runs: Path, seeds) -> list[Path]:
+    """The run folders of an (env, algo), each finished with the current hyperparameters, else FileNotFoundError."""
     folders = [run_folder(env_id, algo, seed, runs) for seed in seeds]
     for folder in folders:
         if not finished(folder) or run_config(folder, env_id) != hyperparams(algo, env_id):
             raise FileNotFoundError(f"{folder}: not finished with the current hyperparameters; run train first")
+    return folders
+
+
+def collect_pair(env_id: str, algo: str, entry: dict | None, runs: Path = RUNS, seeds=SEEDS) -> tuple[dict, list[dict]]:
+    """The runs.json entry and curve rows of an (env, algo) whose seeds (in runs) finished with the current
+    hyperparameters; its best model copied to agents/pretrained/ unless the same file is there already."""
+    folders = check_finished(env_id, algo, runs, seeds)
     records, rows = {}, []
     for seed, folder in zip(seeds, folders, strict=True):
         records[seed], seed_rows = seed_record(folder, env_id, algo)
@@ -267,12 +274,12 @@ def collect(envs: list[str], algos: list[str], runs: Path = RUNS, seeds=SEEDS):
     record_path, curves_path = PRETRAINED / "runs.json", DOCS / "curves.csv"
     shipped = json.loads(record_path.read_text()) if record_path.is_file() else {}
     collected = {}
-    for env_id in envs:
-        for algo in algos:
-            collected[env_id, algo] = collect_pair(env_id, algo, shipped.get(env_id, {}).get(algo), runs, seeds)
-            print(
-                f"{short(env_id)} {algo}: pretrained seed {collected[env_id, algo][0]['pretrained_seed']}", flush=True
-            )
+    pairs = [(env_id, algo) for env_id in envs for algo in algos]
+    for env_id, algo in pairs:  # every pair before the first evaluation, which takes minutes
+        check_finished(env_id, algo, runs, seeds)
+    for env_id, algo in progress(pairs, len(pairs), "pairs", "collect"):
+        collected[env_id, algo] = collect_pair(env_id, algo, shipped.get(env_id, {}).get(algo), runs, seeds)
+        print(f"{short(env_id)} {algo}: pretrained seed {collected[env_id, algo][0]['pretrained_seed']}", flush=True)
     # read again after the evaluations, which take minutes: another collect may have written meanwhile
     record, rows = json.loads(record_path.read_text()) if record_path.is_file() else {}, []
     if curves_path.is_file():
@@ -601,7 +608,7 @@ def main(argv: list[str] | None = None):
     elif args.command == "unseen":
         unseen(args.env, args.algo, args.jobs, Path(args.runs), args.pretrained)
     elif args.command == "score":
-        print(score.write(json.loads(UNSEEN.read_text()), DOCS, score.latest(list(ENVS + UNTRAINED)), ALGOS))
+        print(score.write(score.load(UNSEEN), DOCS, score.latest(list(ENVS + UNTRAINED)), ALGOS))
     else:
         print(table(args.jobs, args.env))
 

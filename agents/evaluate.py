@@ -37,6 +37,7 @@ from gymnasium.wrappers import RenderCollection
 import connenv  # noqa: F401  (registers the envs)
 from agents.controllers import CONTROLLERS, controller, controller_names
 from agents.mpc import PLANNERS, check_planner, planner
+from agents.progress import progress
 from connenv import cli
 from connenv.cli import positive_int, seed_int, writable_file
 
@@ -315,15 +316,15 @@ def evaluate(
     video: str | Path | None = None,
     env_kwargs: dict | None = None,
     trace: Trace | None = None,
+    desc: str | None = None,
 ) -> list[Episode]:
     """Episodes reset with seeds seed, seed + 1, ...; with `video`, the first is also written as a GIF; with
-    `trace`, the first is recorded in it."""
+    `trace`, the first is recorded in it; with `desc`, their progress is shown on stderr under that name."""
     env_kwargs = env_kwargs or {}
     env = gym.make(env_id, **env_kwargs)
     first_env = RenderCollection(gym.make(env_id, render_mode="rgb_array", **env_kwargs)) if video else env
-    results = [
-        run_episode(first_env if i == 0 else env, policy, seed + i, trace if i == 0 else None) for i in range(episodes)
-    ]
+    indices = range(episodes) if desc is None else progress(range(episodes), episodes, "episodes", desc)
+    results = [run_episode(first_env if i == 0 else env, policy, seed + i, trace if i == 0 else None) for i in indices]
     if video:
         save_gif(first_env.render(), video, env.metadata["render_fps"])
     env.close()
@@ -376,12 +377,12 @@ def compare(
         trace = Trace() if plot else None
         if plot:  # a policy given twice is drawn twice
             traces[f"{label} ({i + 1})" if label in traces else label] = trace
-        episodes_run = evaluate(env_id, policy, episodes, seed, video if i == 0 else None, env_kwargs, trace)
+        episodes_run = evaluate(env_id, policy, episodes, seed, video if i == 0 else None, env_kwargs, trace, label)
         rows.append(summarize(label, episodes_run))
     if plot:
         from agents.plots import draw
 
-        draw(env_id, traces, plot, env_kwargs)
+        draw(env_id, traces, plot, env_kwargs, seed, episodes)
     return {"env": env_id, "seed": seed, "episodes": episodes, "policies": rows}
 
 
@@ -432,13 +433,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)
     parser.add_argument("--seed", type=seed_int, default=0, help="episode i is reset with seed + i")
-    parser.add_argument("--json", type=writable_file, help="default: runs/eval_{env}_s{seed}.json")
+    parser.add_argument(
+        "--json", type=writable_file, help="default: runs/eval_{env}_s{seed}.json, with --plot FILE.png FILE.json"
+    )
     parser.add_argument("--video", type=gif_file, help="GIF of the first policy's first episode")
     parser.add_argument(
         "--plot",
         type=png_file,
         metavar="FILE.png",
-        help="draw each policy's first episode in one figure (agents.plots): for an env with a mechanical connection "
+        help="draw each policy's first episode (reset seed --seed) in one figure (agents.plots): for an env with a mechanical connection "
         "the shape path over the curvature map and the net motion beside its prediction, for an active-constraint "
         "env the phase portrait coloured by the control and the energy (or the env's measure) against time",
     )
@@ -454,8 +457,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
         if args.algo not in ALGOS:
             parser.error(f"argument --algo: invalid choice: {args.algo!r} (choose from {', '.join(sorted(ALGOS))})")
-    if args.json is None:
-        args.json = f"runs/eval_{args.env.split('/')[-1]}_s{args.seed}.json"
+    if args.json is None:  # a figure's report beside it: the default file may hold the README's 100 episodes
+        default = f"runs/eval_{args.env.split('/')[-1]}_s{args.seed}.json"
+        args.json = str(Path(args.plot).with_suffix(".json")) if args.plot else default
         if reason := cli.unwritable(Path(args.json), directory=False):
             parser.error(f"argument --json: the default {args.json!r} {reason}")
     return args

@@ -59,6 +59,7 @@ from agents.evaluate import (
     seed_int,
     summarize,
 )
+from agents.progress import progress
 from connenv import cli
 from connenv.envs.spec import registry
 
@@ -402,7 +403,7 @@ def diagnose(envs=DIAGNOSED, jobs: int = 1, out: Path | None = None, plans: dict
     reports = json.loads(write.read_text()) if write and write.is_file() else []
     with ProcessPoolExecutor(jobs) as pool:
         futures = [pool.submit(diagnose_env, env_id, CLONE_SEEDS, out, plans.get(env_id)) for env_id in envs]
-        for future in as_completed(futures):
+        for future in progress(as_completed(futures), len(futures), "envs", "diagnose"):
             report = future.result()
             reports = [r for r in reports if r["env"] != report["env"]] + [report]
             reports.sort(key=lambda r: DIAGNOSED.index(r["env"]) if r["env"] in DIAGNOSED else len(DIAGNOSED))

@@ -20,6 +20,7 @@ import numpy as np
 from agents.baselines import UNSEEN_SEED, statistic
 from agents.evaluate import evaluate, make_policy, summarize
 from agents.mpc import PLANNERS, Planner, budgets, check_planner
+from agents.progress import progress
 from connenv import cli
 from connenv.cli import positive_int, seed_int, writable_file
 from connenv.envs.spec import registry
@@ -148,7 +149,7 @@ def table(args):
     """Evaluate the envs one by one (or --jobs at once) and write the page, each env's report printed as it ends."""
     work = [(env_id, args.episodes, args.seed) for env_id in args.envs]
     with ProcessPoolExecutor(args.jobs) as pool:
-        reports = list(pool.map(evaluate_env, *zip(*work)))
+        reports = list(progress(pool.map(evaluate_env, *zip(*work)), len(work), "envs", "planners"))
     command = " ".join([PROG, *(sys.argv[1:] if args.argv is None else args.argv)])
     page = format_page(reports, command, args.episodes, args.seed)
     print(page)

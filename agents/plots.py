@@ -48,9 +48,10 @@ OUTLINE = [patheffects.withStroke(linewidth=3, foreground="white")]  # paths sta
 state's field y = (q, p) and its field u do not give them."""
 
 
-def draw(env_id: str, traces: dict, path, env_kwargs: dict | None = None):
+def draw(env_id: str, traces: dict, path, env_kwargs: dict | None = None, seed=None, episodes=None):
     """The figure of the traces (label → Trace) of an env, written to path (PNG): `connection_figure` where the
-    env has a mechanical connection, else `active_figure`. Returns its size in pixels (width, height)."""
+    env has a mechanical connection, else `active_figure`; its title says which episode is drawn (reset `seed`, the
+    first of `episodes`). Returns its size in pixels (width, height)."""
     env = gym.make(env_id, **(env_kwargs or {}))
     try:
         local = geometry.local_connection(env)
@@ -59,7 +60,8 @@ def draw(env_id: str, traces: dict, path, env_kwargs: dict | None = None):
     traces = {label: trace for label, trace in traces.items() if trace.states}
     figure = (connection_figure if local else active_figure)(env.unwrapped, local, traces)
     env.close()
-    figure.suptitle(f"{env_id}: the first episode of each policy")
+    which = "" if seed is None else f" (reset seed {seed}" + ("" if episodes is None else f", of {episodes} evaluated") + ")"
+    figure.suptitle(f"{env_id}: each policy's first episode{which}")
     Path(path).parent.mkdir(parents=True, exist_ok=True)  # --plot's check allows missing folders
     figure.savefig(path, dpi=DPI)  # a Figure without pyplot: Agg's canvas, no global state to close
     return tuple(round(float(inches) * DPI) for inches in figure.get_size_inches())
@@ -355,7 +357,7 @@ def measure(env, trace) -> tuple[np.ndarray, str]:
 
 def measure_panel(panel, env, traces, u, colour):
     """The energy (or the env's measure) of every policy against time, its jumps and turns of u marked."""
-    name = None
+    name, drawn = None, {"^": 0, "x": 0}
     for label, trace in traces.items():
         values, name = measure(env, trace)
         t = times(env, trace)
@@ -364,9 +366,10 @@ def measure_panel(panel, env, traces, u, colour):
         jumps, turns = shown(jumps), shown(turns)
         panel.plot(t[jumps], values[jumps], "^", color=colour[label], ms=5, ls="none")
         panel.plot(t[turns], values[turns], "x", color=colour[label], ms=4, ls="none")
-    marks = [Line2D([], [], marker="^", color="0.3", ls="none", label="u jumps"),
-             Line2D([], [], marker="x", color="0.3", ls="none", label="u̇ changes sign")]  # fmt: skip
-    handles = [*panel.get_legend_handles_labels()[0], *marks]
+        drawn["^"], drawn["x"] = drawn["^"] + len(jumps), drawn["x"] + len(turns)
+    marks = [Line2D([], [], marker=marker, color="0.3", ls="none", label=text)
+             for marker, text in (("^", "u jumps"), ("x", "u̇ changes sign")) if drawn[marker]]  # fmt: skip
+    handles = [*panel.get_legend_handles_labels()[0], *marks]  # only the marks drawn
     panel.figure.legend(
         handles=handles, fontsize=8, loc="outside lower center", ncols=min(len(handles), 3), frameon=False
     )  # below the figure: a legend beside the axes would narrow the portraits too

@@ -11,12 +11,14 @@ from the ranges. Success is the mean over seeds, with a 95% bootstrap interval o
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 
+import gymnasium as gym
 import numpy as np
 
-from agents.baselines import EPISODES, PRETRAINED, UNSEEN_SEED, run_seeds, short
+from agents.baselines import ALGOS, EPISODES, PRETRAINED, UNSEEN_SEED, run_seeds, short
 from agents.evaluate import ENV_IDS, evaluate, make_policy
 from agents.imitate import bootstrap_interval
 from connenv import cli
@@ -61,14 +63,47 @@ def markdown(env_id: str, randomize: dict, table: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def ranges(text: str) -> dict:
+    """argparse type: a JSON object {name: [low, high]} of numbers."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError:
+        value = None
+    pair = lambda v: isinstance(v, list) and len(v) == 2 and all(  # noqa: E731
+        isinstance(x, (int, float)) and not isinstance(x, bool) for x in v
+    )
+    if not isinstance(value, dict) or not value or not all(pair(v) for v in value.values()):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a JSON object {{name: [low, high]}} of numbers")
+    return value
+
+
+def check(parser: argparse.ArgumentParser, args: argparse.Namespace):
+    """What the evaluations need, checked before the first: the env takes the ranges, --runs holds the env's
+    randomized runs, and the shipped model exists."""
+    try:
+        gym.make(args.env, randomize=args.randomize).close()
+    except ValueError as error:
+        parser.error(f"argument --randomize: {error}")
+    if not args.runs.is_dir():
+        parser.error(f"argument --runs: {str(args.runs)!r} is no folder")
+    runs = [args.runs / f"{short(args.env)}_{args.algo}_s{seed}" for seed in run_seeds(args.env, args.algo, args.runs)]
+    if not runs:
+        parser.error(f"argument --runs: {str(args.runs)!r} has no run folder {short(args.env)}_{args.algo}_s<SEED>")
+    shipped = PRETRAINED / f"{short(args.env)}_{args.algo}" / "best_model.zip"
+    for path in [*(run / "best_model.zip" for run in runs), shipped]:
+        if not path.is_file():
+            parser.error(f"argument --runs: no model {str(path)!r}")
+
+
 def main(argv: list[str] | None = None) -> str:
     parser = cli.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     parser.add_argument("--env", required=True, choices=ENV_IDS)
-    parser.add_argument("--algo", default="ppo")
-    parser.add_argument("--randomize", required=True, type=json.loads, help="a JSON object {name: [low, high]}")
+    parser.add_argument("--algo", default="ppo", choices=ALGOS)
+    parser.add_argument("--randomize", required=True, type=ranges, help="a JSON object {name: [low, high]}")
     parser.add_argument("--runs", required=True, type=Path, help="the folder of the randomized runs")
     parser.add_argument("--write", type=cli.writable_file, help="the markdown page to write")
     args = parser.parse_args(argv)
+    check(parser, args)
     text = markdown(args.env, args.randomize, rows(args.env, args.algo, args.randomize, args.runs))
     if args.write:
         Path(args.write).write_text(text)

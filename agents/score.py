@@ -20,6 +20,9 @@ samples (paired=False) is the stratified bootstrap, one sample per env; its perc
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 from scipy import stats
 
@@ -263,6 +266,46 @@ def missing(data: dict, envs, algos) -> list[str]:
     """The (env, algo) pairs of the benchmark without runs in unseen.json."""
     have = {(env_id, algo) for env_id, entry in data["envs"].items() for algo in env_scores(entry)}
     return [f"{env_id.split('/')[-1]} {algo.upper()}" for env_id in envs for algo in algos if (env_id, algo) not in have]
+
+
+REFERENCE_KEYS = {"random": ("returns", "successes"), "analytic": ("name", "returns", "successes")}
+RUN_KEYS = ("algo", "seed", "returns", "successes")  # and "of_seeds" in an earlier release's entry
+
+
+def load(path) -> dict:
+    """unseen.json's data, checked (`check`); a file that is no JSON is a ValueError naming it."""
+    try:
+        data = json.loads(Path(path).read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path}: not JSON ({error})") from error
+    return check(data, path)
+
+
+def check(data, path) -> dict:
+    """data, the contents of unseen.json at path, if it has every key `write` reads; else a ValueError naming the file
+    and the first missing key (``envs["connenv/Swing-v0"]["random"]["returns"]``)."""
+
+    def need(mapping, key, where):
+        if not isinstance(mapping, dict) or key not in mapping:
+            raise ValueError(f"{path}: no key {where}[{key!r}]" if where else f"{path}: no key {key!r}")
+        return mapping[key]
+
+    need(data, "first_seed", "")
+    envs = need(data, "envs", "")
+    if not isinstance(envs, dict) or not envs:
+        raise ValueError(f"{path}: 'envs' holds no env")
+    for env_id, entry in envs.items():
+        where = f"envs[{env_id!r}]"
+        for reference, keys in REFERENCE_KEYS.items():
+            for key in keys:
+                need(need(entry, reference, where), key, f"{where}[{reference!r}]")
+            if not need(entry, reference, where)["returns"]:
+                raise ValueError(f"{path}: {where}[{reference!r}]['returns'] is empty")
+        for runs_key in [k for k in entry if k == "runs" or k.startswith("pretrained")]:
+            for i, run in enumerate(entry[runs_key]):
+                for key in RUN_KEYS + (("of_seeds",) if runs_key != "runs" else ()):
+                    need(run, key, f"{where}[{runs_key!r}][{i}]")
+    return data
 
 
 def write(data: dict, docs, envs, algos) -> str:

@@ -14,6 +14,7 @@ import argparse
 import math
 import os
 import sys
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -35,10 +36,18 @@ def one_line(message: str) -> str:
     return " ".join(str(message).split())
 
 
+OLD_VERSION_NOTICE = ".*is out of date. You should consider upgrading"
+"""Gymnasium's DeprecationWarning on making an id of which a newer version is registered: the project keeps its old
+versions on purpose, so a command says nothing of it (as pyproject's filterwarnings for the tests)."""
+
+
 def run(main: Callable, prog: str, argv: list[str] | None = None):
-    """main(argv), its INPUT_ERRORS reported as ``prog: error: message`` on stderr and exit status 2."""
+    """main(argv), its INPUT_ERRORS reported as ``prog: error: message`` on stderr and exit status 2; the envs it
+    makes of an old version make no DeprecationWarning."""
     try:
-        return main(argv)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", OLD_VERSION_NOTICE, DeprecationWarning)
+            return main(argv)
     except INPUT_ERRORS as error:
         sys.stderr.write(f"{prog}: error: {one_line(error)}\n")
         raise SystemExit(2) from error

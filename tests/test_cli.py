@@ -18,11 +18,12 @@ from pathlib import Path
 
 import pytest
 
-from agents import baselines, evaluate, imitate, tune
+from agents import baselines, evaluate, imitate, randomized, tune
 from connenv import bench, cli, play, throughput
 
 ROOT = Path(__file__).resolve().parents[1]
 SWING, ACTIVE = "connenv/Swing-v0", "connenv/ActiveConstraint-v0"
+RANDOMIZED = ["--env", SWING, "--runs", "."]  # a later --runs replaces it
 TUNE = ["--env", SWING, "--algo", "sac", "--samples", "1", "--timesteps", "10"]
 FACTORIES = """
 import sympy as sp
@@ -155,6 +156,13 @@ CASES = [
     ("play", [SWING, "--kwargs", "dt=-1"], ["--kwargs dt=-1", "dt=-1.0 is out of range"]),
     ("play", [SWING, "--kwargs", "nokey"], ["--kwargs", "'nokey'"]),
     ("play", [SWING, "--kwargs", "bogus=1"], ["--kwargs bogus=1", "'bogus'"]),
+    ("randomized", [*RANDOMIZED, "--randomize", "[1, 2]"], ["--randomize", "'[1, 2]'", "{name: [low, high]}"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": "79"}'], ["--randomize", "'{\"g\": \"79\"}'"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"bogus": [1, 2]}'], ["--randomize", "'bogus'"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": [12, 7]}'], ["--randomize", "low must be at most high"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": [7, 12]}', "--runs", "a_file"], ["--runs", "'a_file'"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": [7, 12]}', "--runs", "empty_runs"], ["--runs", "Swing-v0_ppo_s"]),
+    ("randomized", [*RANDOMIZED, "--randomize", '{"g": [7, 12]}', "--runs", "no_model"], ["--runs", "best_model.zip"]),
     ("bench", ["nosuch"], ["'nosuch'"]),
     ("bench", ["precision", "--env", "nope"], ["--env", "'nope'"]),
     ("bench", ["stability", "--env", "nope"], ["--env", "'nope'"]),
@@ -183,6 +191,7 @@ def work(tmp_path_factory):
         archive.writestr("a.txt", "hello")
     (folder / "a_file").write_text("")
     (folder / "empty_runs").mkdir()
+    (folder / "no_model" / "Swing-v0_ppo_s0").mkdir(parents=True)
     (folder / "cli_factories.py").write_text(FACTORIES)
     return folder
 
@@ -198,6 +207,7 @@ def mains(train):
         "play": (play.main, play.PROG),
         "bench": (bench.main, bench.PROG),
         "imitate": (imitate.main, imitate.PROG),
+        "randomized": (randomized.main, randomized.PROG),
     }
 
 
@@ -211,6 +221,7 @@ def one_line_error(err: str, prog: str) -> str:
 def test_bad_input_ends_a_command_in_one_line_naming_it(program, argv, named, mains, work, monkeypatch, capsys):
     main, prog = mains[program]
     monkeypatch.chdir(work)
+    monkeypatch.setattr(randomized, "success", lambda *args: pytest.fail("an evaluation ran before the check"))
     start = time.perf_counter()
     with pytest.raises(SystemExit) as exit_:
         cli.run(main, prog, argv)
@@ -312,3 +323,62 @@ def test_an_existing_page_is_overwritten_when_its_command_regenerates_it(tmp_pat
         cli.writable_dir(str(page))
     with pytest.raises(argparse.ArgumentTypeError, match="is a directory"):
         cli.writable_file(str(tmp_path))
+
+
+UNSEEN_RUN = {"algo": "ppo", "seed": 0, "returns": [1.0], "successes": [True]}
+UNSEEN_ENTRY = {"random": {"returns": [0.0], "successes": [False]},
+                "analytic": {"name": "arc", "returns": [2.0], "successes": [True]}, "runs": [UNSEEN_RUN]}  # fmt: skip
+BROKEN_UNSEEN = [
+    ({"first_seed": 1}, "no key 'envs'"),
+    ({"envs": {SWING: UNSEEN_ENTRY}}, "no key 'first_seed'"),
+    ({"first_seed": 1, "envs": {}}, "'envs' holds no env"),
+    ({"first_seed": 1, "envs": {SWING: {"analytic": UNSEEN_ENTRY["analytic"]}}}, f"no key envs['{SWING}']['random']"),
+    ({"first_seed": 1, "envs": {SWING: {**UNSEEN_ENTRY, "random": {"returns": []}}}}, "['random']['successes']"),
+    ({"first_seed": 1, "envs": {SWING: {**UNSEEN_ENTRY, "runs": [{"algo": "ppo"}]}}}, "['runs'][0]['seed']"),
+    ("{not json", "not JSON"),
+]
+
+
+@pytest.mark.parametrize(("data", "named"), BROKEN_UNSEEN, ids=[named for _, named in BROKEN_UNSEEN])
+def test_score_names_the_file_and_the_key_it_misses(data, named, tmp_path, monkeypatch, capsys):
+    """`python -m agents.baselines score` on a results file without a key it reads: one line naming the file and
+    the key (it ended in KeyError 'envs', StopIteration or KeyError 'random')."""
+    path = tmp_path / "unseen.json"
+    path.write_text(data if isinstance(data, str) else json.dumps(data))
+    monkeypatch.setattr(baselines, "UNSEEN", path)
+    monkeypatch.setattr(baselines, "DOCS", tmp_path)
+    with pytest.raises(SystemExit) as exit_:
+        cli.run(baselines.main, baselines.PROG, ["score"])
+    line = one_line_error(capsys.readouterr().err, baselines.PROG)
+    assert exit_.value.code == 2 and str(path) in line and named in line
+    assert not (tmp_path / "score.md").exists()
+
+
+def test_an_old_version_is_made_without_gymnasiums_notice(work):
+    """On BeadOnBar-v0 (v1 exists) the commands printed Gymnasium's DeprecationWarning, two lines each time the env
+    was made, above their one-line error: the project keeps old versions on purpose."""
+    environment = {**os.environ, "PYTHONPATH": str(ROOT)}
+    commands = {
+        "python -m connenv.geometry": ["-m", "connenv.geometry", "connenv/BeadOnBar-v0"],
+        "python -m agents.identify": ["-m", "agents.identify", "--env", "connenv/BeadOnBar-v0", "--true", "bogus=1"],
+    }
+    processes = {
+        prog: subprocess.Popen([sys.executable, *argv], cwd=work, env=environment, stderr=subprocess.PIPE, text=True)
+        for prog, argv in commands.items()
+    }
+    for prog, process in processes.items():
+        try:
+            _, err = process.communicate(timeout=60)
+        finally:
+            process.kill()
+        assert process.returncode == 2 and "DeprecationWarning" not in err, err
+        one_line_error(err, prog)
+
+
+def test_an_evaluation_shows_its_progress_on_stderr(tmp_path, capsys):
+    """`--policy analytic mpc ilqr --episodes 10` on ChaplyginSleigh-v0 ran 429 s without a line: each policy's
+    episodes are counted on stderr (done of total, elapsed < left), the table alone on stdout."""
+    evaluate.main(["--policy", "random", "--episodes", "3", "--json", str(tmp_path / "e.json")])
+    out, err = capsys.readouterr()
+    assert "random: " in err and "/3 [" in err and "episodes" in err and "<" in err
+    assert "/3 [" not in out

@@ -51,3 +51,23 @@ def test_cli_plot_bad_path(tmp_path, capsys, name, reason):
         main(["--env", "connenv/Swing-v0", "--plot", str(tmp_path / name)])
     error = capsys.readouterr().err
     assert exit_.value.code == 2 and reason in error and len(error.strip().splitlines()) == 1
+
+
+def test_cli_plot_keeps_the_default_report_and_says_what_it_draws(tmp_path, monkeypatch):
+    """--plot wrote runs/eval_{env}_s{seed}.json, over the README's 100-episode report: its report goes beside the
+    figure. The title says which episode is drawn; the legend lists only marks that are drawn."""
+    from matplotlib.figure import Figure
+
+    figures = []
+    monkeypatch.setattr(Figure, "savefig", lambda self, *args, **kwargs: figures.append(self))
+    monkeypatch.chdir(tmp_path)
+    main(["--env", "connenv/Swing-v0", "--policy", "random", "--episodes", "2", "--seed", "5", "--plot", "swing.png",
+          "--env-kwargs", '{"max_episode_steps": 2}'])  # fmt: skip
+    assert not (tmp_path / "runs").exists() and (tmp_path / "swing.json").is_file()
+    (figure,) = figures
+    assert "first episode (reset seed 5, of 2 evaluated)" in figure.get_suptitle()
+    drawn = {line.get_marker() for axes in figure.axes for line in axes.get_lines() if len(line.get_xdata())}
+    for legend in figure.legends:
+        for handle in legend.legend_handles:
+            marker = handle.get_marker() if hasattr(handle, "get_marker") else "None"
+            assert marker in ("None", "", None) or marker in drawn, handle.get_label()
