@@ -179,7 +179,7 @@ def test_rows_with_their_own_params_step_as_the_models_of_those_params():
     ("call", "message"),
     [
         (lambda m: m.step(np.zeros(m.n + 1), np.zeros(1)), "state x of shape"),
-        (lambda m: m.step(np.full(m.n, math.inf), np.zeros(1)), "infinite"),
+        (lambda m: m.step(np.full(m.n, math.inf), np.zeros(1)), r"x\[0\] \(theta\) = inf is not finite"),
         (lambda m: m.with_params({"radius": 1.0}), "not physical parameters"),
         (lambda m: m.step(np.zeros((2, m.n)), np.zeros((2, 1)), params=[{}]), "per-row params"),
     ],
