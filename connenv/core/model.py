@@ -230,9 +230,17 @@ class Model:
         x = self._check_state(x)
         if x.ndim == 1:
             command = self.env.command(self.env.check_action(self._check_action(a, None)))
-            return self.pack(self._advance(self._state(x), command, self.env.stepper, SCALAR, x))
-        command = self.env.command(self._check_actions(self._check_action(a, len(x)), len(x)))
-        return self.pack(self._advance(self._state(x), command, self.row_stepper, BATCH, x))
+            x_next = self.pack(self._advance(self._state(x), command, self.env.stepper, SCALAR, x))
+        else:
+            command = self.env.command(self._check_actions(self._check_action(a, len(x)), len(x)))
+            x_next = self.pack(self._advance(self._state(x), command, self.row_stepper, BATCH, x))
+        lost = ~np.isfinite(x_next) & ~(np.isnan(x_next) & np.isnan(x))
+        if lost.any():  # a state far outside the env's (an attitude of 1e300) that the step's checks do not see
+            j = int(np.argwhere(lost)[0][-1])
+            raise self.env._stepper_error(StepperError(
+                f"the step from a finite x gave {self.state_names[j]} = {float(x_next[..., j].ravel()[0])!r}"),
+                float(np.min(x[..., self.t_column])))
+        return x_next
 
     def jacobians(self, x, a, params=None) -> tuple[np.ndarray, np.ndarray]:
         """(A, B) = (∂x_next/∂x, ∂x_next/∂a) at (x, a), by complex step (see the module): (n, n) and (n, m) for one
@@ -353,11 +361,14 @@ class Model:
     # -- checks ----------------------------------------------------------------
 
     def _advance(self, state, command, stepper, ops, x):
+        """The env's advance; an overflow, which Python floats raise (OverflowError) and numpy's rows are made to
+        raise here (FloatingPointError, not a warning and inf), is a StepperError as a diverged step is."""
         try:
-            return self.env.advance(state, command, stepper, ops)
+            with np.errstate(over="raise"):
+                return self.env.advance(state, command, stepper, ops)
         except StepperError as error:
             raise self.env._stepper_error(error, float(np.min(np.real(x[..., self.t_column])))) from error
-        except OverflowError as error:  # Python floats' (one state); the rows' overflow ends in the stepper's check
+        except (OverflowError, FloatingPointError) as error:
             raise self.env._stepper_error(StepperError(f"the step overflowed ({error})"),
                                           float(np.min(np.real(x[..., self.t_column])))) from error
 
