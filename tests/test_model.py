@@ -206,7 +206,7 @@ def test_rows_with_their_own_params_step_as_the_models_of_those_params():
         (lambda m: m.with_params(None), "params=None must be a dict"),
         (lambda m: m.pack({}), r"state has the fields \[\]; expected those of Swing-v0's SwingState"),
         (lambda m: m.pack("abc"), "state='abc' must be a SwingState of Swing-v0"),
-        (lambda m: m.reward(X(m)[0], np.zeros(1), X(m)), r"x of shape \(7,\) and x_next of shape \(2, 7\)"),
+        (lambda m: m.reward(X(m)[0], np.zeros(1), X(m)), r"state x of shape \(7,\) and state x_next of shape \(2, 7\)"),
         (lambda m: m.terminated(X(m)[0, :3]), r"state x of shape \(3,\)"),
         (lambda m: m.step(np.full(m.n, math.inf), np.zeros(1)), r"x\[0\] \(theta\) = inf is not finite"),
         (lambda m: m.with_params({"radius": 1.0}), "not physical parameters"),

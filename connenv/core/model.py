@@ -277,8 +277,8 @@ class Model:
         states alone (x_next holds what the action did)."""
         x, x_next = self._check_state(x), self._check_state(x_next, "x_next")
         if x.shape != x_next.shape:
-            raise ValueError(f"x of shape {x.shape} and x_next of shape {x_next.shape}: expected one state each, or "
-                             "the same number of rows")
+            raise ValueError(f"state x of shape {x.shape} and state x_next of shape {x_next.shape}: expected one "
+                             "state each, or the same number of rows")
         ops = SCALAR if x.ndim == 1 else BATCH
         after = self._state(x_next)
         return self.env.reward(self._state(x), after, self.env.describe(after, ops), ops)
@@ -368,7 +368,7 @@ class Model:
                 return self.env.advance(state, command, stepper, ops)
         except StepperError as error:
             raise self.env._stepper_error(error, float(np.min(np.real(x[..., self.t_column])))) from error
-        except (OverflowError, FloatingPointError) as error:
+        except (OverflowError, FloatingPointError, ZeroDivisionError) as error:  # a state far outside the env's
             raise self.env._stepper_error(StepperError(f"the step overflowed ({error})"),
                                           float(np.min(np.real(x[..., self.t_column])))) from error
 
@@ -395,6 +395,13 @@ class Model:
                 f" (NaN allowed only in {[n for n, ok in zip(self.state_names, self.nan_allowed) if ok]})"
                 if self.nan_allowed.any() else ""))
         for e in self.entries:
+            if e.dtype != np.float64:  # a float32 copy (a goal), a counter or a flag: a value its type holds
+                top = float(np.finfo(e.dtype).max if e.real else np.iinfo(np.int64).max)
+                values = x[..., e.columns]
+                if (np.abs(values) > top).any():
+                    columns = np.zeros(x.shape, bool)
+                    columns[..., e.columns] = np.abs(values) > top
+                    self._refuse(name, x, columns, f"does not fit its {e.dtype} (|value| ≤ {top:.6g})")
             if e.real:
                 continue
             values = x[..., e.columns]
