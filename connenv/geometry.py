@@ -192,8 +192,8 @@ def curvature(connection, s, group: str | None = None, frame: str = "body") -> C
     s = shapes("s", s, local, ndims=(1, 2))
     A = evaluate(local.connection, s)
     if A.ndim != 3 or A.shape[-1] != s.shape[1]:
-        raise ValueError(f"s has {s.shape[1]} shape coordinates, and the connection A(s) has {np.shape(A)[-1]} "
-                         "columns: give one coordinate per column")
+        raise ValueError(f"s={s.tolist()} has {s.shape[1]} shape coordinates, and the connection A(s) has "
+                         f"{np.shape(A)[-1]} columns: give one coordinate per column")
     D, error, method = derivatives(local.connection, s, A)
     dA = np.swapaxes(D, -1, -2) - D  # [n, d, i, j] = ∂_i A_j − ∂_j A_i (D[n, d, j, i] = ∂_i A_j)
     sign = 1.0 if local.connection.frame == "body" else -1.0
@@ -210,7 +210,7 @@ def shapes(name: str, value, local: LocalConnection, ndims=(1, 2)) -> np.ndarray
                                                                                    f" with k = {k}")
     array = real_array(name, value, expected)
     if array.ndim not in ndims or array.size == 0 or (k is not None and array.shape[-1] != k):
-        raise ValueError(f"{name} of shape {array.shape}: expected {expected}")
+        raise ValueError(f"{name}={value!r} has shape {array.shape}: expected {expected}")
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name}={value!r} is not finite: expected {expected}")
     return np.atleast_2d(array)
@@ -341,7 +341,7 @@ def enclosed(target, loop, apex=None, frame_change=None) -> np.ndarray:
         raise ValueError(f"loop of shape {loop.shape}: expected (M ≥ 2, k) shapes")
     apex = np.mean(loop[:-1], axis=0) if apex is None else shapes("apex", apex, local, ndims=(1,))[0]
     if apex.shape != loop.shape[1:]:
-        raise ValueError(f"apex of shape {apex.shape}: expected one shape of the loop's {loop.shape[1]} coordinates")
+        raise ValueError(f"apex={apex.tolist()}: expected one shape of the loop's {loop.shape[1]} coordinates")
     a, b = loop[:-1] - apex, loop[1:] - apex  # (M, k)
     x, w = np.polynomial.legendre.leggauss(TRIANGLE_NODES)
     u, weights = 0.5 * (x + 1.0), 0.5 * w
