@@ -19,7 +19,8 @@ difference cancels. h lies far below any entry a state holds: an entry near 0 (a
 differentiates the step's own arithmetic: substeps, closed-form flows, projections and all.
 Where the step is not differentiable (a clip, an end stop, a switching surface), the branch the real part takes
 is followed, which is the one-sided derivative; a flag or counter does not move under a small change, so its
-column and row are 0, and so is the column of an action entry the action space clips.
+column and row are 0, and so is the column of an action entry the action space clips. An entry the env rounds to
+float32 (a goal env's goals) is differentiated through the rounding, whose derivative is 1.
 """
 
 from __future__ import annotations
