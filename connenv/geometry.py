@@ -64,6 +64,7 @@ from connenv.core.backend import floats
 from connenv.core.lie import GROUPS, Connection, ConstantConnection, Magnus
 from connenv.core.segments import run_segments
 from connenv.core.steppers import ConnectionSystem, conforms
+from connenv.core.validation import real_array
 from connenv.systems.rolling_ball import RollingBall
 
 PROG = "python -m connenv.geometry"
@@ -77,6 +78,7 @@ SAMPLES = 400  # points of a gait's loop
 DIRECTIONS = {"SO2": ("θ",), "SE2": ("x", "y", "θ"), "SO3": ("ω₁", "ω₂", "ω₃"), "R2": ("x", "y")}
 FIGURE = (4.5, 4.2)  # inches per panel of the curvature map, at DPI
 DPI = 100
+GRID_RANGE = (3, 1025)  # minimum_perturbation's nodes per direction: a centre and a difference need 3, memory the top
 
 
 # -- the connection of an env or a system ------------------------------------------------------------------------
@@ -187,13 +189,31 @@ def curvature(connection, s, group: str | None = None, frame: str = "body") -> C
     a 2-D shape space F[:, :, 0, 1] is one number per group direction; a small counterclockwise loop of area a
     moves g by about exp(−a F₁₂)."""
     local = local_connection(connection, group, frame)
-    s = np.atleast_2d(np.asarray(s, float))
+    s = shapes("s", s, local, ndims=(1, 2))
     A = evaluate(local.connection, s)
+    if A.ndim != 3 or A.shape[-1] != s.shape[1]:
+        raise ValueError(f"s={s.tolist()} has {s.shape[1]} shape coordinates, and the connection A(s) has "
+                         f"{np.shape(A)[-1]} columns: give one coordinate per column")
     D, error, method = derivatives(local.connection, s, A)
     dA = np.swapaxes(D, -1, -2) - D  # [n, d, i, j] = ∂_i A_j − ∂_j A_i (D[n, d, j, i] = ∂_i A_j)
     sign = 1.0 if local.connection.frame == "body" else -1.0
     F = dA - sign * brackets(local.group, A)
     return Curvature(F, np.swapaxes(error, -1, -2) + error, method)
+
+
+def shapes(name: str, value, local: LocalConnection, ndims=(1, 2)) -> np.ndarray:
+    """Shapes as float64 rows (N ≥ 1, k): real, finite, of ``ndims`` dimensions, k the connection's number of shape
+    coordinates where its env says it (the shape box), else ValueError naming ``name``, the value and what is
+    expected. (A standalone connection's k is checked against A's columns, where it is evaluated.)"""
+    k = None if local.low is None else len(local.low)
+    expected = f"finite real shapes, {'(k,) or ' if 1 in ndims else ''}(N ≥ 1, k)" + ("" if k is None else
+                                                                                   f" with k = {k}")
+    array = real_array(name, value, expected)
+    if array.ndim not in ndims or array.size == 0 or (k is not None and array.shape[-1] != k):
+        raise ValueError(f"{name}={value!r} has shape {array.shape}: expected {expected}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name}={value!r} is not finite: expected {expected}")
+    return np.atleast_2d(array)
 
 
 def brackets(group, A) -> np.ndarray:
@@ -281,7 +301,11 @@ def loop_holonomy(target, loop, *, period=None, apex=None, frame_change=None, gr
     for a 2-D shape space its interior (Green's theorem; the triangles from any apex add up to it, signed), for
     k > 2 that spanning surface. ``frame_change``: a `MinimumPerturbation`, whose frame both are given in."""
     local = local_connection(target, group, frame)
-    loop = _closed(np.asarray(loop, float), period)
+    if period is not None:
+        period = float(real_array("period", period, "a positive finite real number"))
+        if not (math.isfinite(period) and period > 0):
+            raise ValueError(f"period={period!r}: expected a positive finite real number")
+    loop = _closed(shapes("loop", loop, local, ndims=(2,)), period)
     segments = [(p, q - p, 1.0) for p, q in itertools.pairwise(loop)]  # the flow is geometric: any speed will do
     y = np.asarray(run_segments(local.stepper, local.system, np.array(local.group.identity()), segments)[0], float)
     net = _net(local.group.name, y)
@@ -312,8 +336,12 @@ def enclosed(target, loop, apex=None, frame_change=None) -> np.ndarray:
     p_{m+1}) of F(a_m, b_m), a_m = p_m − apex, b_m = p_{m+1} − apex, on the collapsed square
     σ(u, v) = apex + u a + u v (b − a), whose area element is u (a ∧ b) du dv; Gauss–Legendre in u and v."""
     local = local_connection(target)
-    loop = np.asarray(loop, float)
-    apex = np.mean(loop[:-1], axis=0) if apex is None else np.asarray(apex, float)
+    loop = shapes("loop", loop, local, ndims=(2,))
+    if len(loop) < 2:
+        raise ValueError(f"loop of shape {loop.shape}: expected (M ≥ 2, k) shapes")
+    apex = np.mean(loop[:-1], axis=0) if apex is None else shapes("apex", apex, local, ndims=(1,))[0]
+    if apex.shape != loop.shape[1:]:
+        raise ValueError(f"apex={apex.tolist()}: expected one shape of the loop's {loop.shape[1]} coordinates")
     a, b = loop[:-1] - apex, loop[1:] - apex  # (M, k)
     x, w = np.polynomial.legendre.leggauss(TRIANGLE_NODES)
     u, weights = 0.5 * (x + 1.0), 0.5 * w
@@ -381,6 +409,10 @@ def minimum_perturbation(target, grid: int = GRID) -> MinimumPerturbation:
     differences along its edges. The two parts separate: the rotation's, |A_θ − ∇β_θ|², is a Poisson problem with
     Neumann boundary conditions (the Helmholtz–Hodge split of A_θ: its gradient part removed), fixed by β_θ = 0 at
     the box's centre; the translation's, |A_p + A_θ J β_p − ∇β_p|², a linear least-squares problem (sparse, lsqr)."""
+    if isinstance(grid, bool) or not isinstance(grid, (int, np.integer)) or not (
+            GRID_RANGE[0] <= grid <= GRID_RANGE[1]):
+        raise ValueError(f"grid={grid!r}: expected a whole number of nodes per direction in [{GRID_RANGE[0]}, "
+                         f"{GRID_RANGE[1]}]")
     local = local_connection(target)
     c = local.connection
     box = None if local.low is None else np.array([local.low, local.high])

@@ -33,6 +33,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import copy
+import dataclasses
 import inspect
 import math
 import re
@@ -433,11 +434,124 @@ def action_cases(ids, quick=False):
             yield Case(env_id, f"vector step {action!r}", ("action",), lambda e=vector, a=rows: step_from(e, a))
 
 
+MODEL_NUMBERS = (math.nan, math.inf, -math.inf, 1e300, -1e300, 0.5)
+"""Values put into one entry of a model's x at a time (0.5: a flag's or a counter's)."""
+
+
+def finite_part(model, x_next):
+    """x_next without its unmeasured entries (the ball's distance, NaN by declaration): what must be finite."""
+    return np.asarray(x_next)[..., ~model.nan_allowed]
+
+
+def model_cases(ids, quick=False):
+    """``env.unwrapped.model``: each entry of x (one state and rows) non-finite, huge or fractional; x complex, of
+    strings, None, of the wrong shape, an empty batch; actions and params that are no real numbers or of the wrong
+    shape, per-row params of the wrong length; ``pack``, ``reward``, ``terminated``, ``info``, ``with_params`` and
+    ``jacobians`` given the same. A huge entry may run (its result finite) or raise StepperError."""
+    for env_id in ids:
+        env = make(env_id).unwrapped
+        env.reset(seed=0)
+        model = env.model
+        x, a = model.pack(env.state), np.zeros(env.action_space.shape)
+        X, A = np.repeat(x[None], VECTOR_ROWS, axis=0), np.zeros((VECTOR_ROWS, *env.action_space.shape))
+        name = next((f.name for f in dataclasses.fields(model.params)), "g")  # an env without any: an unknown name
+        step = lambda y, b, m=model, **kw: finite_part(m, m.step(y, b, **kw))  # noqa: E731
+        for j, entry in enumerate(model.state_names):
+            for value in MODEL_NUMBERS if not quick or j % 3 == 0 else MODEL_NUMBERS[:2]:
+                y, Y = x.copy(), X.copy()
+                y[j], Y[-1, j] = value, value
+                for label, args in (("step", (y, a)), ("rows step", (Y, A))):
+                    yield Case(env_id, f"model {label} x[{entry}]={value!r}", ("state x", "step"),
+                               lambda args=args, f=step: f(*args), (StepperError,))
+                yield Case(env_id, f"model jacobians x[{entry}]={value!r}", ("state x", "step"),
+                           lambda m=model, Y=Y: m.jacobians(Y, A), (StepperError,))
+        states = [x + 1e-3j, X + 1e-3j, x.astype(str), x.tolist()[:-1] + ["0"], None, "x", x[:-1], X[:0], X[..., None],
+                  x.astype(bool), np.zeros((0, model.n)), [[]]]
+        for value in states:
+            for call, label in ((lambda m, v: step(v, a if np.ndim(v) < 2 else A), "step"),
+                                (lambda m, v: m.jacobians(v, a if np.ndim(v) < 2 else A), "jacobians"),
+                                (lambda m, v: m.terminated(v), "terminated"), (lambda m, v: m.info(v), "info"),
+                                (lambda m, v: m.unpack(v), "unpack"),
+                                (lambda m, v: m.reward(x, a, v), "reward x_next")):
+                yield Case(env_id, f"model {label} x={value!r}"[:200], ("state x", "state x_next"),
+                           lambda m=model, v=value, c=call: c(m, v))
+        actions = [None, "0.5", a + 1j, a.astype(str), np.zeros(a.size + 1), A, [], math.nan, np.full(a.shape, math.nan)]
+        for value in actions:
+            yield Case(env_id, f"model step a={value!r}", ("action",), lambda v=value: step(x, v))
+            yield Case(env_id, f"model jacobians a={value!r}", ("action",), lambda m=model, v=value: m.jacobians(x, v))
+            rows = value if not isinstance(value, np.ndarray) or value.shape == A.shape else np.broadcast_to(
+                value, (VECTOR_ROWS, *np.shape(value)))
+            yield Case(env_id, f"model rows step a={rows!r}"[:200], ("action",), lambda v=rows: step(X, v))
+        params = [5, "g", None if False else [], [{}], [{}] * (VECTOR_ROWS + 1), {"bogus": 1.0}, {name: [1, 2]},
+                  {name: "1"}, {name: math.nan}, {name: math.inf}, {name: True}, {name: 1 + 0j}, {name: None},
+                  [{name: "1"}, {}], [5, {}], {name: -1.0}, {name: 1e300}]
+        for value in params:
+            yield Case(env_id, f"model rows step params={value!r}", ("params", name),
+                       lambda v=value: step(X, A, params=v))
+            yield Case(env_id, f"model jacobians params={value!r}", ("params", name),
+                       lambda m=model, v=value: m.jacobians(X, A, params=v))
+            if not isinstance(value, list):
+                yield Case(env_id, f"model with_params({value!r})", ("params", name),
+                           lambda m=model, v=value: m.with_params(v).params)
+        fields = model.unpack(x)
+        for value in ({}, "abc", None, 5, {**fields, "bogus": 1.0}, {k: v for k, v in list(fields.items())[1:]},
+                      {**fields, "t": "0"}):
+            yield Case(env_id, f"model pack({value!r})"[:200], ("state",), lambda m=model, v=value: m.pack(v))
+        yield Case(env_id, "model reward (x, rows)", ("state x",), lambda m=model: m.reward(x, a, X))
+        yield Case(env_id, "model reward (rows, x)", ("state x",), lambda m=model: m.reward(X, A, x))
+
+
+def geometry_cases(ids, quick=False):
+    """``connenv.geometry`` on each id with a connection: shapes, loops and apexes non-finite, complex, of strings,
+    of another number of coordinates, empty; a period that is no positive number; minimum_perturbation's grid out
+    of its range or no whole number. An id without a connection is a ValueError that says so."""
+    from connenv import geometry
+
+    for env_id in ids:
+        try:
+            local = geometry.local_connection(env_id)
+        except ValueError:
+            yield Case(env_id, "geometry curvature of an env without a connection", ("connection",),
+                       lambda e=env_id: geometry.curvature(e, [0.0]))
+            continue
+        k = len(local.low)
+        s = np.full(k, 0.1)
+        square = np.array([s, s + np.eye(k)[0] * 0.1, s + 0.1, s + np.eye(k)[-1] * 0.1, s]) if k > 1 else (
+            np.array([[0.1], [0.2], [0.1]]))
+        bad_shapes = [np.where(np.arange(k) == 0, v, s) for v in NON_FINITE] + [
+            s + 1e-3j, s.astype(str), None, np.zeros(k + 1), np.zeros((0, k)), np.zeros((1, k, 1)), "s",
+            np.zeros(max(k - 1, 0))]
+        for value in bad_shapes:
+            yield Case(env_id, f"geometry curvature s={value!r}", ("s",),
+                       lambda e=env_id, v=value: geometry.curvature(e, v).F)
+        for v in (*NON_FINITE, 1 + 1j):
+            loop = square.astype(complex if isinstance(v, complex) else float)
+            loop[1, 0] = v
+            yield Case(env_id, f"geometry enclosed loop with {v!r}", ("loop",),
+                       lambda e=env_id, lp=loop: geometry.enclosed(e, lp))
+            yield Case(env_id, f"geometry loop_holonomy loop with {v!r}", ("loop",),
+                       lambda e=env_id, lp=loop: geometry.loop_holonomy(e, lp).net)
+            yield Case(env_id, f"geometry enclosed apex {v!r}", ("apex",),
+                       lambda e=env_id, a=np.where(np.arange(k) == 0, v, s): geometry.enclosed(e, square, apex=a))
+        for loop in (square[:2], square[:, :0], square[..., None], "loop", None, np.zeros((4, k + 1))):
+            yield Case(env_id, f"geometry loop_holonomy loop={loop!r}"[:200], ("loop",),
+                       lambda e=env_id, lp=loop: geometry.loop_holonomy(e, lp).net)
+        for period in (math.nan, 0.0, -1.0, "2", 1j):
+            yield Case(env_id, f"geometry loop_holonomy period={period!r}", ("period",),
+                       lambda e=env_id, p=period: geometry.loop_holonomy(e, square, period=p).net)
+        if local.connection.group == "SE2":
+            for grid in (0, 1, 2, 5.5, True, "33", 10**9, -3, None):
+                yield Case(env_id, f"geometry minimum_perturbation grid={grid!r}", ("grid",),
+                           lambda e=env_id, g=grid: geometry.minimum_perturbation(e, g).beta)
+
+
 GENERATORS: list[Callable[[Iterable[str], bool], Iterable[Case]]] = [
     make_kwarg_cases,
     stepper_cases,
     reset_cases,
     action_cases,
+    model_cases,
+    geometry_cases,
 ]
 """The case generators the audit runs, in order: append one to add cases."""
 

@@ -178,3 +178,44 @@ def test_every_connections_small_loops_move_the_body_by_the_enclosed_curvature(e
         assert errors[0] <= 1e-12
     else:
         assert errors[1] <= errors[0] / 2**3.5 + 1e-13
+
+
+SQUARE = [[0.0, 0.0], [0.1, 0.0], [0.1, 0.1], [0.0, 0.1], [0.0, 0.0]]
+
+
+def with_point(point):
+    loop = [list(p) for p in SQUARE]
+    loop[1] = point
+    return loop
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [  # issue 44 §2: each once a NaN, an accepted shape or another exception than a ValueError naming the input
+        (lambda: geometry.curvature("connenv/SnakeSwimmer-v0", [np.nan, 0.0]), r"s=\[nan, 0.0\] is not finite"),
+        (lambda: geometry.curvature("connenv/SnakeSwimmer-v0", [np.inf, 0.0]), r"s=\[inf, 0.0\] is not finite"),
+        (lambda: geometry.curvature("connenv/SnakeSwimmer-v0", [0.1 + 1e-3j, 0.0]), "s=.* is complex"),
+        (lambda: geometry.curvature("connenv/SnakeSwimmer-v0", np.array([0.1, 0.2]) + 0j), "(?s)s=.* is complex"),
+        (lambda: geometry.curvature("connenv/SnakeSwimmer-v0", ["0.1", "0.2"]), "s=.* must be finite real"),
+        (lambda: geometry.curvature("connenv/SnakeSwimmer-v0", np.zeros((0, 2))), r"s=.* has shape \(0, 2\)"),
+        (lambda: geometry.curvature("connenv/RollingBall-v0", [0.1, 0.2, 0.3]), r"s=.* has shape \(3,\).*k = 2"),
+        (lambda: geometry.curvature("connenv/Connection-v0", [0.1, 0.2]), r"s=.* has shape \(2,\).*k = 1"),
+        (lambda: geometry.curvature(lambda s: np.zeros((len(s), 1, 2)), [0.1, 0.2, 0.3], group="SO2"),
+         "s=.* has 3 shape coordinates, and the connection A"),
+        (lambda: geometry.enclosed("connenv/SnakeSwimmer-v0", with_point([np.nan, 0.0])), "loop=.* is not finite"),
+        (lambda: geometry.enclosed("connenv/SnakeSwimmer-v0", SQUARE, apex=[np.nan, 0.0]), "apex=.* is not finite"),
+        (lambda: geometry.enclosed("connenv/SnakeSwimmer-v0", SQUARE, apex=[0.0]), r"apex=\[0.0\] has shape \(1,\)"),
+        (lambda: geometry.loop_holonomy("connenv/SnakeSwimmer-v0", with_point([np.inf, 0.0])),
+         "loop=.* is not finite"),
+        (lambda: geometry.loop_holonomy("connenv/SnakeSwimmer-v0", np.array(SQUARE) * 1j), "(?s)loop=.* is complex"),
+        (lambda: geometry.loop_holonomy("connenv/ElroysBeanie-v0", [[0.0], [1.0], [0.0]], period=math.nan),
+         "period=nan"),
+        (lambda: geometry.minimum_perturbation("connenv/SnakeSwimmer-v0", grid=1), r"grid=1: .*\[3, 1025\]"),
+        (lambda: geometry.minimum_perturbation("connenv/SnakeSwimmer-v0", grid=0), r"grid=0: .*\[3, 1025\]"),
+        (lambda: geometry.minimum_perturbation("connenv/SnakeSwimmer-v0", grid=5.5), r"grid=5.5"),
+        (lambda: geometry.minimum_perturbation("connenv/SnakeSwimmer-v0", grid=True), r"grid=True"),
+    ],
+)
+def test_bad_shapes_loops_and_grids_are_value_errors_naming_them(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()

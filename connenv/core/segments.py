@@ -219,7 +219,7 @@ def straight_path(s, s_cmd, dt: float, max_speed: float):
     delta = s_cmd - s
     largest = _largest(delta)
     reach = largest / max_speed
-    with np.errstate(divide="ignore", over="ignore"):
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):  # invalid: 0/0 on a Jacobian's complex rows
         scale = max_speed / largest
     moves = np.real(scale) < math.inf  # a move, resolved: largest > 0 and max_speed / largest finite
     s_dot = np.where(moves[..., None], delta * np.where(moves, scale, 0.0)[..., None], 0.0)

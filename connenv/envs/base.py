@@ -44,6 +44,9 @@ class State:
     phase: ClassVar[tuple[str, ...]] = ()
     """(q, p, u…): the names, among the model's ``state_names``, of a conjugate pair and the assigned coordinates
     that a phase portrait draws, where they are not y = (q, p) and u."""
+    unmeasured: ClassVar[tuple[str, ...]] = ()
+    """Fields that hold NaN for "not measured" (the ball's distance where it is not solved for): the model takes NaN
+    there, and in no other entry."""
 
     def rows(self, n: int) -> State:
         """A state of n rows shaped and typed like this one's fields, zeroed."""

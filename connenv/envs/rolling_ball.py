@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -52,6 +53,8 @@ class BallState(State):
     t: float
     path_length: float
     distance: float
+
+    unmeasured: ClassVar[tuple[str, ...]] = ("distance",)
 
 
 @dataclass
@@ -349,8 +352,12 @@ class RollingBallGoalEnv(RollingBallEnv):
 
 
 def single_precision(x):
-    """x in float32, as the goals are observed; complex64 on the complex rows of a Jacobian, to keep the derivative."""
-    return x.astype(np.complex64 if np.iscomplexobj(x) else np.float32)
+    """x in float32, as the goals are observed. On the complex rows of a Jacobian the real part is rounded and the
+    imaginary part kept in float64: the rounding's derivative is 1, and complex64 would flush the complex step's
+    i·1e-150 to 0."""
+    if np.iscomplexobj(x):
+        return x.real.astype(np.float32) + 1j * x.imag
+    return x.astype(np.float32)
 
 
 class RollingBallVectorEnv(TaskVectorEnv):
