@@ -175,6 +175,14 @@ def vector(*entries):
     return np.array(entries, float)
 
 
+def concat(parts, axis: int = -1):
+    """np.concatenate of arrays, or the namespace's where a part is traced (``connenv.jax``)."""
+    for part in parts:
+        if type(part) is not np.ndarray and traced(namespace(part)):
+            return namespace(part).concat(parts, axis=axis)
+    return np.concatenate(parts, axis=axis)
+
+
 def components(a):
     """The components along the last axis: Python floats of one state (a 1-D array), arrays over the rows of a
     batch."""
