@@ -204,6 +204,7 @@ SCALAR = operations(
     flag=bool,
     vector=lambda a: tuple(np.asarray(a, float).tolist()),
     components=lambda a: a.tolist(),
+    traced=False,  # read on the single env's path (a task's traced(ops)): an attribute, not getattr's miss
 )
 """Operations on one state, as Python floats (the single env's): the physics' (``connenv.core.backend.FLOATS``)
 and the task's. Several times faster than numpy on one state."""
