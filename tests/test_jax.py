@@ -132,6 +132,23 @@ def test_the_reset_draws_the_numpy_envs_distribution():
     assert abs(np.mean(theta > 0) - 0.5) < 0.05 and abs(np.mean(np.abs(theta)) - 0.075) < 0.002
 
 
+def test_the_ball_reset_draws_a_uniform_target():
+    """RollingBall-v0 starts at R = I at the origin with R* uniform on SO(3) (Haar: E[R*] = 0, E[tr R*] = 0), drawn
+    from a key as a normal quaternion; no distance is measured (NaN: the optimal arc's root search does not trace)."""
+    jenv, params = cj.make("connenv/RollingBall-v0")
+    obs, states = jax.vmap(jenv.reset, (0, None))(jax.random.split(jax.random.key(0), 4000), params)
+    fields = jenv.state_of(np.asarray(states.x))
+    R, target = np.asarray(fields.R), np.asarray(fields.R_target)
+    assert np.all(R == np.eye(3)) and np.all(np.asarray(fields.position) == 0.0)
+    np.testing.assert_allclose(target @ np.swapaxes(target, -1, -2), np.broadcast_to(np.eye(3), target.shape),
+                               atol=1e-14)
+    np.testing.assert_allclose(np.linalg.det(target), 1.0, atol=1e-14)
+    assert np.max(np.abs(target.mean(axis=0))) < 0.05 and abs(np.trace(target, axis1=1, axis2=2).mean()) < 0.05
+    assert np.all(np.isnan(np.asarray(fields.distance)))
+    P = np.swapaxes(target, 1, 2)  # R R*ᵀ at R = I
+    np.testing.assert_array_equal(np.asarray(obs), np.concatenate([P[..., 0], P[..., 1]], -1).astype(np.float32))
+
+
 def test_the_traced_jacobi_elliptic_functions_are_scipys():
     """sn, cn, dn and am by cephes' descending Landen recurrence at a fixed trip count, against scipy's ellipj over
     the whole parameter range and the series at its ends (largest absolute difference measured: 3.4e-14, in dn)."""

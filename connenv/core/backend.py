@@ -177,6 +177,14 @@ def vector(*entries):
     return np.array(entries, float)
 
 
+def concat(parts, axis: int = -1):
+    """np.concatenate of arrays, or the namespace's where a part is traced (``connenv.jax``)."""
+    for part in parts:
+        if type(part) is not np.ndarray and traced(namespace(part)):
+            return namespace(part).concat(parts, axis=axis)
+    return np.concatenate(parts, axis=axis)
+
+
 def components(a):
     """The components along the last axis: Python floats of one state (a 1-D array), arrays over the rows of a
     batch."""
@@ -198,6 +206,7 @@ SCALAR = operations(
     flag=bool,
     vector=lambda a: tuple(np.asarray(a, float).tolist()),
     components=lambda a: a.tolist(),
+    traced=False,  # read on the single env's path (a task's traced(ops)): an attribute, not getattr's miss
 )
 """Operations on one state, as Python floats (the single env's): the physics' (``connenv.core.backend.FLOATS``)
 and the task's. Several times faster than numpy on one state."""

@@ -10,7 +10,7 @@ import numpy as np
 from gymnasium import spaces
 from scipy.spatial.transform import Rotation
 
-from connenv.core.backend import ARRAYS, SCALAR
+from connenv.core.backend import SCALAR, concat, namespace, traced, vector
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.segments import run_segments
@@ -25,6 +25,7 @@ from connenv.systems.rolling_ball import (
     attitude_error,
     check_so3,
     from_six_d,
+    quaternion_matrix,
     rotation_angle,
     six_d,
     six_d_angle,
@@ -160,10 +161,17 @@ class RollingBallEnv(TaskEnv):
         error = attitude_error(R, R_target)
         return BallState(R, R_target, position, error, ops.real(rotation_angle(error)), t, path_length, distance)
 
-    def start(self, options):
-        values = self.reset_values(options, {"target": Rotation.random(rng=self.np_random).as_matrix()})
-        s = self.at(values["R"], values["target"], np.array([values["x"], values["y"]]), 0.0, 0.0, math.nan)
-        if not self.measures_distance:
+    def start(self, options, ops=SCALAR):
+        """R = I at the origin, R* uniform: scipy's Rotation.random on np_random; traced (``connenv.jax``, ops its
+        namespace), a normal quaternion from its key, the same distribution (scipy's own draw), and no distance
+        measured (NaN: the optimal arc's root search does not trace)."""
+        if traced(ops):
+            target = quaternion_matrix(self.np_random.normal(size=4))
+        else:
+            target = Rotation.random(rng=self.np_random).as_matrix()
+        values = self.reset_values(options, {"target": target})
+        s = self.at(values["R"], values["target"], vector(values["x"], values["y"]), 0.0, 0.0, math.nan, ops)
+        if not self.measures_distance or traced(ops):
             return s
         return s.replace(distance=self.system.optimal_arc(Rotation.from_matrix(s.error)).length)
 
@@ -183,13 +191,15 @@ class RollingBallEnv(TaskEnv):
                 a = a / np.max(np.abs(a))
                 length = math.hypot(a[0], a[1])
             return self.v_max * a / max(1.0, length)
+        ops = namespace(a)
         with np.errstate(over="ignore"):
-            length = ARRAYS.hypot(a[:, 0], a[:, 1])
-        huge = np.real(length) == math.inf
-        if huge.any():
-            a = np.where(huge[:, None], a / np.max(np.abs(np.real(a)), axis=1, keepdims=True), a)
-            length = ARRAYS.hypot(a[:, 0], a[:, 1])
-        return self.v_max * a / ARRAYS.maximum(1.0, length)[:, None]
+            length = ops.hypot(a[:, 0], a[:, 1])
+        huge = ops.real_part(length) == math.inf
+        if ops.any(huge):  # every row on JAX's (connenv.jax), the others left by where
+            largest = ops.maximum(ops.abs(ops.real_part(a[:, 0])), ops.abs(ops.real_part(a[:, 1])))  # np.max's
+            a = ops.where(huge[:, None], a / ops.where(huge, largest, 1.0)[:, None], a)
+            length = ops.hypot(a[:, 0], a[:, 1])
+        return self.v_max * a / ops.maximum(1.0, length)[:, None]
 
     def observe(self, s, ops=SCALAR):
         return six_d(s.error).astype(np.float32)
@@ -270,8 +280,11 @@ class RollingBallPoseEnv(RollingBallEnv):
 
     def observe(self, s, ops=SCALAR):
         position = s.position / (4 * math.pi * self.system.radius)
-        scaled = np.minimum(np.maximum(position, -POSITION_BOUND), POSITION_BOUND)  # np.clip's wrapper costs more
-        return np.concatenate([six_d(s.error), scaled], axis=-1).astype(np.float32)
+        if traced(ops):
+            scaled = ops.clip(position, -POSITION_BOUND, POSITION_BOUND)
+        else:
+            scaled = np.minimum(np.maximum(position, -POSITION_BOUND), POSITION_BOUND)  # np.clip's wrapper costs more
+        return concat([six_d(s.error), scaled], axis=-1).astype(np.float32)
 
     def progress(self, s, ops=SCALAR):
         return s.angle_error + ops.hypot(s.position[..., 0], s.position[..., 1]) / self.system.radius
@@ -378,14 +391,14 @@ SPECS = (
         "connenv/RollingBall-v0", RollingBallEnv, vector_base=RollingBallVectorEnv, max_episode_steps=200, **BALL,
         measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
         golden=(("ball", {"max_episode_steps": 50, "tolerance": 1.5}, None),), bench="ball",
-        single_target=1.5, vector_target=0.1,
+        single_target=1.5, vector_target=0.1, jax=({},),
     ),
     Spec(
         "connenv/RollingBallPose-v0", RollingBallPoseEnv, vector_base=RollingBallVectorEnv,
         max_episode_steps=300, **BALL,
         measure=Measure("path length", "m", "path_length"), controllers=("holonomy",),
         golden=(("ball_pose", {"max_episode_steps": 50, "tolerance": 2.5, "position_tolerance": 0.3}, None),),
-        single_target=1.5,
+        single_target=1.5, jax=({},),
     ),
     Spec(
         "connenv/RollingBallGoal-v0", RollingBallGoalEnv, vector_base=RollingBallVectorEnv,

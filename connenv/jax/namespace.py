@@ -130,6 +130,7 @@ JAX = operations(
     any=lambda x: True,  # see the module: a trace computes the branch, where keeps the rows that take it
     stack=jnp.stack,
     zeros_like=jnp.zeros_like,
+    concat=jnp.concatenate,
     real_part=lambda x: x,
     ellipj=ellipj,
     ellipk=ellipk,

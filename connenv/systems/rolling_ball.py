@@ -35,7 +35,7 @@ import numpy as np
 from scipy.optimize import brentq, root
 from scipy.spatial.transform import Rotation
 
-from connenv.core.backend import ARRAYS, floats
+from connenv.core.backend import concat, floats, is_complex, namespace, traced
 from connenv.core.lie.groups import GROUPS
 from connenv.core.steppers import StepperError
 from connenv.core.validation import ndim
@@ -83,6 +83,9 @@ class RollingBall:
 
     def spin(self, v):
         """e_z × v / ρ: the angular velocity of rolling at v, and the rotation vector of a straight roll by v."""
+        if not isinstance(v, (np.ndarray, list, tuple)) and traced(namespace(v)):  # JAX's rows (connenv.jax)
+            ops = namespace(v)
+            return ops.stack([-v[..., 1], v[..., 0], ops.zeros_like(v[..., 0])], axis=-1) / self.radius
         v = floats(v)
         if v.ndim == 1:  # one velocity: Python floats (np.stack costs more than a whole step of the ball)
             vx, vy = v.tolist()
@@ -92,19 +95,27 @@ class RollingBall:
     def vector_field(self, y, u, u_dot):
         """Ṙ = ω̂ R, flattened; u (the centre) does not enter."""
         w = self.spin(u_dot)
-        R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))
-        hat = np.zeros((*w.shape[:-1], 3, 3), w.dtype)
-        hat[..., 0, 2], hat[..., 1, 2], hat[..., 2, 0], hat[..., 2, 1] = w[..., 1], -w[..., 0], -w[..., 1], w[..., 0]
+        R = np.reshape(y, (*np.shape(y)[:-1], 3, 3))  # np.reshape and np.shape ask a JAX array its own
+        ops = namespace(w)
+        if traced(ops):  # JAX's rows: ω̂ built by stacking (its arrays take no assignment)
+            zero = ops.zeros_like(w[..., 0])
+            hat = ops.stack([zero, zero, w[..., 1], zero, zero, -w[..., 0], -w[..., 1], w[..., 0], zero], axis=-1)
+            hat = hat.reshape(*w.shape[:-1], 3, 3)
+        else:
+            hat = np.zeros((*w.shape[:-1], 3, 3), w.dtype)
+            hat[..., 0, 2], hat[..., 1, 2], hat[..., 2, 0], hat[..., 2, 1] = w[..., 1], -w[..., 0], -w[..., 1], w[..., 0]
         return (hat @ R).reshape(np.shape(y))
 
     def exact_segment(self, y, u, u_dot, tau):
         """R ← exp(τ ω̂) R, exact for v held over the segment: scipy's Rotation over a batch; for one state,
         Rodrigues' formula on Python floats (scipy's Rotation costs more than a whole Pendulum-v1 step on one), and on
-        the complex rows of a Jacobian, which scipy's Rotation does not take."""
+        the complex rows of a Jacobian and on JAX's rows (``connenv.jax``), which scipy's Rotation does not take:
+        there Rodrigues' formula in the rows' namespace (`_exp`), equal to scipy's to rounding, not to the bit."""
         if type(y) is np.ndarray and y.ndim == 1 and ndim(tau) == 0:
             return np.array(_rodrigues_times(self.spin(u_dot).tolist(), float(tau), y.tolist()))
         R, rotvec = np.reshape(y, (*np.shape(y)[:-1], 3, 3)), tau * self.spin(u_dot)
-        step = _exp(rotvec) if np.iscomplexobj(rotvec) else Rotation.from_rotvec(rotvec).as_matrix()
+        plain = type(rotvec) is np.ndarray and not is_complex(rotvec)  # numpy's real rows: scipy's, as ever
+        step = Rotation.from_rotvec(rotvec).as_matrix() if plain else _exp(rotvec)
         return (step @ R).reshape(np.shape(y))
 
     def roll(self, displacements) -> Rotation:
@@ -296,26 +307,44 @@ def rotation_angle(P):
     if type(P) is np.ndarray and P.ndim == 2:  # one matrix: Python floats
         (a, b, c), (d, e, f), (g, h, i) = P.tolist()
         return math.atan2(0.5 * math.sqrt((h - f) ** 2 + (c - g) ** 2 + (d - b) ** 2), 0.5 * (a + e + i - 1.0))
-    skew = np.stack([P[..., 2, 1] - P[..., 1, 2], P[..., 0, 2] - P[..., 2, 0], P[..., 1, 0] - P[..., 0, 1]], -1)
-    return ARRAYS.atan2(0.5 * norm(skew), 0.5 * (np.trace(P, axis1=-2, axis2=-1) - 1.0))
+    ops = namespace(P)
+    skew = ops.stack([P[..., 2, 1] - P[..., 1, 2], P[..., 0, 2] - P[..., 2, 0], P[..., 1, 0] - P[..., 0, 1]], -1)
+    trace = P[..., 0, 0] + P[..., 1, 1] + P[..., 2, 2]  # np.trace's sum, in its order
+    return ops.atan2(0.5 * norm(skew), 0.5 * (trace - 1.0))
 
 
 def norm(x, keepdims=False):
     """√(x·x) over the last axis: np.linalg.norm's arithmetic on real rows; on the complex rows of a Jacobian, the
     analytic continuation (the norm's would be the modulus, dropping the derivative's sign)."""
-    return np.sqrt(np.sum(x * x, axis=-1, keepdims=keepdims))
+    return namespace(x).sqrt((x * x).sum(axis=-1, keepdims=keepdims))
 
 
 def _exp(rotvec):
     """The rotation matrices exp(r̂) (..., 3, 3) of rotation vectors r (..., 3) by Rodrigues' formula
-    (`connenv.core.lie.groups`), analytic in r."""
-    entries = GROUPS["SO3"].exp(tuple(np.moveaxis(rotvec, -1, 0)))
-    return np.stack(np.broadcast_arrays(*entries), -1).reshape(*np.shape(rotvec)[:-1], 3, 3)
+    (`connenv.core.lie.groups`), analytic in r, in the namespace of r's rows (numpy's complex ones, JAX's)."""
+    entries = GROUPS["SO3"].exp(tuple(rotvec[..., i] for i in range(3)))
+    ops = namespace(rotvec)
+    entries = entries if traced(ops) else np.broadcast_arrays(*entries)
+    return ops.stack(entries, -1).reshape(*np.shape(rotvec)[:-1], 3, 3)
+
+
+def quaternion_matrix(q):
+    """The rotation matrices (..., 3, 3) of quaternions q (..., 4) = (x, y, z, w), normalized here, in q's
+    namespace: a uniform rotation from a normal draw of q, as scipy's Rotation.random draws it."""
+    ops = namespace(q)
+    q = q / norm(q, keepdims=True)
+    x, y, z, w = (q[..., i] for i in range(4))
+    entries = (
+        1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+        2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+        2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y),
+    )  # fmt: skip
+    return ops.stack(entries, -1).reshape(*q.shape[:-1], 3, 3)
 
 
 def six_d(R):
     """The continuous 6-D form of rotations (Zhou et al. 2019): the first two columns, (..., 6)."""
-    return np.concatenate([R[..., :, 0], R[..., :, 1]], axis=-1)
+    return concat([R[..., :, 0], R[..., :, 1]], axis=-1)
 
 
 def _rodrigues_times(w, tau, R):
@@ -379,9 +408,13 @@ def check_so3(stepper, R):
         gram = [dot3(u, v) - (u is v) for u in columns for v in columns]
         drift = math.sqrt(sum(map(operator.mul, gram, gram)))
     else:  # the six distinct entries of RᵀR − I elementwise over the rows: cheaper than a stacked matmul
-        c = [np.real(R[..., :, k]) for k in range(3)]  # a check: of the real parts on complex rows
+        ops = namespace(R)
+        c = [ops.real_part(R[..., :, k]) for k in range(3)]  # a check: of the real parts on complex rows
         dot = [c[i][..., 0] * c[j][..., 0] + c[i][..., 1] * c[j][..., 1] + c[i][..., 2] * c[j][..., 2] for i, j in PAIRS]
         square = sum((d - (i == j)) ** 2 * (1 if i == j else 2) for d, (i, j) in zip(dot, PAIRS))
+        if traced(ops):  # JAX's rows: the failure as data (connenv.jax)
+            ops.fail(~(ops.sqrt(square) <= DRIFT_LIMIT), f"{stepper} left SO(3): ‖RᵀR − I‖ > {DRIFT_LIMIT}")
+            return
         drift = math.sqrt(float(np.max(square)))
     if not drift <= DRIFT_LIMIT:
         raise StepperError(f"{stepper} left SO(3): ‖RᵀR − I‖ = {drift:.3g} > {DRIFT_LIMIT}")

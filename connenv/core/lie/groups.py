@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.core.backend import ARRAYS, floats
+from connenv.core.backend import ARRAYS, floats, namespace, traced
 
 
 class _Floats:
@@ -52,10 +52,29 @@ class _Arrays:
 
 
 
+class _Traced:
+    """_Arrays' operations in a tracing namespace (``connenv.jax``'s): the same where-guarded sinc, written on ops."""
+
+    def __init__(self, ops):
+        self.ops, self.sin, self.cos, self.sqrt, self.atan2 = ops, ops.sin, ops.cos, ops.sqrt, ops.atan2
+
+    def sinc(self, x):
+        safe = self.ops.where(x == 0.0, 1.0, x)
+        return self.ops.where(x == 0.0, 1.0, self.ops.sin(safe) / safe)
+
+    def sinc_half_squared(self, x):
+        half = self.ops.where(x == 0.0, 1.0, 0.5 * x)
+        return self.ops.where(x == 0.0, 0.5, 0.5 * (self.ops.sin(half) / half) ** 2)
+
+
 def ops_of(component):
     """The operations (sin, cos, sqrt, atan2, sinc, sinc_half_squared) for a component: math's on a Python float,
-    numpy's on an array."""
-    return _Floats if isinstance(component, float) else _Arrays
+    numpy's on an array, a tracing namespace's on its arrays (JAX's)."""
+    if isinstance(component, float):
+        return _Floats
+    if type(component) is np.ndarray or not traced(namespace(component)):
+        return _Arrays
+    return _Traced(namespace(component))
 
 
 @dataclass(frozen=True)
