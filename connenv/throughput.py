@@ -566,7 +566,8 @@ def main(argv=None):
         from connenv.jax.throughput import table
 
         sizes = args.sizes if args.sizes != list(SIZES) else [1, 64, 1024, 4096, 65536]
-        table(report, args.envs, sizes, args.seconds, misses)
+        table(report, args.envs, sizes, misses,
+              lambda env_id, n: vector_rates(env_id, n, args.seconds, sync=False, reference=None)[0])
         args.skip_single = args.skip_vector = True
         report.note("Targets missed: " + ("; ".join(misses) if misses else "none") + ".")
     if not args.skip_single:
