@@ -1,0 +1,62 @@
+"""How long ``import connenv`` takes: fresh interpreters run ``python -X importtime -c "import connenv"``, and the
+median of their cumulative times (connenv's own line, and its heaviest imports) is printed beside the median of
+``import gymnasium`` alone, the floor that registering with Gymnasium costs. Run it on a quiet machine:
+
+    python -m connenv.bench import [--runs N] [--module NAME]
+"""
+
+from __future__ import annotations
+
+import statistics
+import subprocess
+import sys
+
+from connenv import cli
+
+
+def parse_args(argv=None):
+    parser = cli.ArgumentParser(prog="python -m connenv.bench import", description=__doc__.split(":")[0] + ".")
+    parser.add_argument("--runs", type=cli.positive_int, default=15, help="fresh interpreters per module (15)")
+    parser.add_argument("--module", default="connenv", help="the module to time (connenv)")
+    parser.add_argument("--top", type=cli.positive_int, default=5, help="heaviest top-level imports listed (5)")
+    return parser.parse_args(argv)
+
+
+def parse(line: str) -> tuple[str, float]:
+    self_us, total_us, name = line.removeprefix("import time:").split("|")
+    return name.strip(), int(total_us) * 1e-6
+
+
+def medians(module: str, runs: int) -> dict[str, float]:
+    """{imported module: median of its cumulative import time (s)} over runs fresh interpreters."""
+    samples: dict[str, list[float]] = {}
+    for _ in range(runs):
+        done = subprocess.run([sys.executable, "-X", "importtime", "-c", f"import {module}"],
+                              capture_output=True, text=True, check=True)  # fmt: skip
+        seen = {}
+        for line in done.stderr.splitlines():
+            if line.startswith("import time:") and "cumulative" not in line:
+                name, total = parse(line)
+                seen.setdefault(name, total)
+        for name, total in seen.items():
+            samples.setdefault(name, []).append(total)
+    return {name: statistics.median(values + [0.0] * (runs - len(values))) for name, values in samples.items()}
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    found = medians(args.module, args.runs)
+    floor = medians("gymnasium", args.runs)["gymnasium"]
+    print(f"import {args.module}: median {found[args.module] * 1e3:.0f} ms over {args.runs} fresh interpreters "
+          f"(import gymnasium alone: {floor * 1e3:.0f} ms)")  # fmt: skip
+    shown = [n for n in found if n != args.module and ("." not in n or n.startswith("scipy.") and n.count(".") == 1)]
+    heaviest = sorted(((found[n], n) for n in shown), reverse=True)  # top-level packages, and scipy's sub-packages
+    for total, name in heaviest[: args.top]:
+        print(f"  {name:<40} {total * 1e3:7.0f} ms")
+    for heavy in ("scipy", "sympy", "jax", "torch", "agents"):
+        if heavy in found:
+            print(f"  imports {heavy}")
+
+
+if __name__ == "__main__":
+    cli.run(main, "python -m connenv.bench import")
