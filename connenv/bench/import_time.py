@@ -27,26 +27,34 @@ def parse(line: str) -> tuple[str, float]:
     return name.strip(), int(total_us) * 1e-6
 
 
-def medians(module: str, runs: int) -> dict[str, float]:
-    """{imported module: median of its cumulative import time (s)} over runs fresh interpreters."""
-    samples: dict[str, list[float]] = {}
+def one_run(module: str) -> dict[str, float]:
+    """{imported module: cumulative import time (s)} of a fresh interpreter importing module."""
+    done = subprocess.run([sys.executable, "-X", "importtime", "-c", f"import {module}"],
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    seen = {}
+    for line in done.stderr.splitlines():
+        if line.startswith("import time:") and "cumulative" not in line:
+            name, total = parse(line)
+            seen.setdefault(name, total)  # the first line of a name is its import
+    return seen
+
+
+def medians(modules: tuple[str, ...], runs: int) -> list[dict[str, float]]:
+    """For each module, {imported module: median of its cumulative import time (s)} over runs fresh interpreters,
+    the modules' runs taking turns (a load that comes and goes weighs on each alike)."""
+    samples: list[dict[str, list[float]]] = [{} for _ in modules]
     for _ in range(runs):
-        done = subprocess.run([sys.executable, "-X", "importtime", "-c", f"import {module}"],
-                              capture_output=True, text=True, check=True)  # fmt: skip
-        seen = {}
-        for line in done.stderr.splitlines():
-            if line.startswith("import time:") and "cumulative" not in line:
-                name, total = parse(line)
-                seen.setdefault(name, total)
-        for name, total in seen.items():
-            samples.setdefault(name, []).append(total)
-    return {name: statistics.median(values + [0.0] * (runs - len(values))) for name, values in samples.items()}
+        for module, found in zip(modules, samples):
+            for name, total in one_run(module).items():
+                found.setdefault(name, []).append(total)
+    return [{name: statistics.median(values + [0.0] * (runs - len(values))) for name, values in found.items()}
+            for found in samples]  # fmt: skip
 
 
 def main(argv=None):
     args = parse_args(argv)
-    found = medians(args.module, args.runs)
-    floor = medians("gymnasium", args.runs)["gymnasium"]
+    found, floor = medians((args.module, "gymnasium"), args.runs)
+    floor = floor["gymnasium"]
     print(f"import {args.module}: median {found[args.module] * 1e3:.0f} ms over {args.runs} fresh interpreters "
           f"(import gymnasium alone: {floor * 1e3:.0f} ms)")  # fmt: skip
     shown = [n for n in found if n != args.module and ("." not in n or n.startswith("scipy.") and n.count(".") == 1)]
