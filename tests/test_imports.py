@@ -117,3 +117,12 @@ def test_import_connenv_loads_neither_an_env_module_nor_scipy_nor_the_applicatio
         "print(gym.make('connenv/BeadOnBar-v1').unwrapped.name)\n"
     ).split("\n")
     assert loaded[:2] == ["[]", "BeadOnBar"], loaded
+
+
+def test_the_library_never_imports_the_applications():
+    """connenv is the library and agents its applications (controllers, training): no module of connenv imports
+    agents, at its top or inside a function."""
+    found, _ = graph()
+    importers = [f"{name} imports {module}" for name in found if name.partition(".")[0] == "connenv"
+                 for module, *_ in found[name] if module.partition(".")[0] == "agents"]  # fmt: skip
+    assert not importers, importers
