@@ -56,3 +56,19 @@ def test_no_extra_installs_two_pygames():
         found = distributions(extras) & {"pygame", "pygame-ce"}
         assert len(found) <= 1, f"connenv[{','.join(sorted(extras))}] installs {sorted(found)}"
     assert "pygame-ce" in distributions({"test"}), "the tests render: the test extra needs a pygame"
+
+
+def test_a_clone_named_connenv_run_from_the_folder_above_gives_the_package(tmp_path):
+    """The Quick start run in the folder above a clone named connenv makes an env: the clone's root is the package
+    there (its __init__.py loads connenv/connenv), not an empty namespace package."""
+    (tmp_path / "connenv").symlink_to(ROOT, target_is_directory=True)
+    quick_start = (
+        "import gymnasium as gym\n"
+        "import connenv, connenv.envs.swing\n"
+        "env = gym.make('connenv/Swing-v0')\n"
+        "env.reset(seed=0)\n"
+        "print(sorted(connenv.__all__), connenv.__version__, connenv.envs.swing.__file__)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", quick_start], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split()[-1] == str(tmp_path / "connenv" / "connenv" / "envs" / "swing.py"), done.stdout
