@@ -4,7 +4,7 @@ generated from the specs (``python -m connenv.envs.spec`` writes it; a test chec
 env module, no scipy and no sympy; `registry` finds every module of connenv.envs that declares SPECS on first use
 (`discover`). The docs site's map, the baseline tables, the analytic controllers' registry
 (agents.controllers) and the test tables (contract, fuzz, hardening, golden, audit) are read off `registry`, so that
-adding an env is writing its own files (docs/guides/new-env.md).
+adding an env is writing its own files, and the table regenerated (docs/guides/new-env.md).
 
 Gymnasium's registry stays the source users see: ``gym.make("connenv/Name-v0")`` and
 ``gym.make_vec(..., vectorization_mode="vector_entry_point")`` read the `gymnasium.envs.registration.EnvSpec` that
