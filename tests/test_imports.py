@@ -126,3 +126,17 @@ def test_the_library_never_imports_the_applications():
     importers = [f"{name} imports {module}" for name in found if name.partition(".")[0] == "connenv"
                  for module, *_ in found[name] if module.partition(".")[0] == "agents"]  # fmt: skip
     assert not importers, importers
+
+
+def test_the_import_benchmark_prints_the_median_and_refuses_a_bad_module(capsys):
+    import pytest
+
+    from connenv.bench import import_time
+
+    import_time.main(["--runs", "1"])
+    printed = capsys.readouterr().out
+    assert printed.startswith("import connenv: median ") and "import gymnasium alone" in printed
+    assert "imports scipy" not in printed
+    for bad in ("os; print(1)", "no_such_module_here"):
+        with pytest.raises(ValueError, match="--module"):
+            import_time.main(["--module", bad, "--runs", "1"])

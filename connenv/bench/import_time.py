@@ -7,6 +7,7 @@ median of their cumulative times (connenv's own line, and its heaviest imports) 
 
 from __future__ import annotations
 
+import re
 import statistics
 import subprocess
 import sys
@@ -23,14 +24,15 @@ def parse_args(argv=None):
 
 
 def parse(line: str) -> tuple[str, float]:
-    self_us, total_us, name = line.removeprefix("import time:").split("|")
+    _, total_us, name = line.removeprefix("import time:").split("|")
     return name.strip(), int(total_us) * 1e-6
 
 
 def one_run(module: str) -> dict[str, float]:
     """{imported module: cumulative import time (s)} of a fresh interpreter importing module."""
-    done = subprocess.run([sys.executable, "-X", "importtime", "-c", f"import {module}"],
-                          capture_output=True, text=True, check=True)  # fmt: skip
+    done = subprocess.run([sys.executable, "-X", "importtime", "-c", f"import {module}"], capture_output=True, text=True)
+    if done.returncode:
+        raise ValueError(f"--module {module!r}: import {module} fails: {cli.one_line(done.stderr.splitlines()[-1])}")
     seen = {}
     for line in done.stderr.splitlines():
         if line.startswith("import time:") and "cumulative" not in line:
@@ -53,6 +55,8 @@ def medians(modules: tuple[str, ...], runs: int) -> list[dict[str, float]]:
 
 def main(argv=None):
     args = parse_args(argv)
+    if not re.fullmatch(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*", args.module):
+        raise ValueError(f"--module {args.module!r} is no module name (valid: a dotted name, connenv.geometry)")
     found, floor = medians((args.module, "gymnasium"), args.runs)
     floor = floor["gymnasium"]
     print(f"import {args.module}: median {found[args.module] * 1e3:.0f} ms over {args.runs} fresh interpreters "
