@@ -37,7 +37,12 @@ class Registry(MutableMapping):
     def _find(self) -> dict[str, Spec]:
         if not self._found:
             self._found = True  # before discover: an env module imported there may read the registry
-            for spec in discover():
+            try:
+                found = discover()
+            except BaseException:
+                self._found = False  # a module that failed to import: the next read tries again, not a partial table
+                raise
+            for spec in found:
                 self._specs.setdefault(spec.id, spec)
         return self._specs
 
