@@ -1,6 +1,8 @@
 """connenv: Gymnasium environments for mechanical systems steered by active constraints and mechanical connections."""
 
-from connenv.envs.spec import discover, register
+from gymnasium.envs.registration import register as _register
+
+from connenv.envs.ids import IDS as _IDS
 
 __version__ = "0.3.0"
 __all__ = ["ActiveConstraintEnv", "ConnectionEnv"]
@@ -19,4 +21,6 @@ def __getattr__(name):
     raise AttributeError(f"module 'connenv' has no attribute {name!r}")
 
 
-register(*discover())  # every id declared by a module of connenv.envs (its SPECS, beside its classes)
+for _registration in _IDS:  # every id declared by a module of connenv.envs (its SPECS), from the table made of them
+    _register(**_registration)
+del _registration

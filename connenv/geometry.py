@@ -39,7 +39,8 @@ prediction error of circular gaits in both frames:
 
     python -m connenv.geometry --prediction-error ID    # an SE(2) swimmer: SnakeSwimmer, KozlovShell
 
-and ``python -m connenv.geometry ID [--write FILE.png]`` draws an env's curvature map over its shape space.
+and ``python -m connenv.geometry ID [--write FILE.png]`` draws an env's curvature map over its shape space
+(``python -m agents.curvature_map ID``: with its analytic controller's gait, as on the env pages).
 """
 
 from __future__ import annotations
@@ -76,7 +77,8 @@ GRID = 33  # nodes per shape direction of the minimum-perturbation problem (odd:
 AMPLITUDES = (0.1, 0.3, 0.6)  # circular gaits' radii, as fractions of the shape box's half-widths
 SAMPLES = 400  # points of a gait's loop
 DIRECTIONS = {"SO2": ("θ",), "SE2": ("x", "y", "θ"), "SO3": ("ω₁", "ω₂", "ω₃"), "R2": ("x", "y")}
-FIGURE = (4.5, 4.2)  # inches per panel of the curvature map, at DPI
+DIRECTION_UNITS = {"SO2": ("rad",), "SE2": ("m", "m", "rad"), "SO3": ("rad",) * 3, "R2": ("m", "m")}
+FIGURE = (4.5, 4.7)  # inches per panel of the curvature map (and its legend below), at DPI
 DPI = 100
 GRID_RANGE = (3, 1025)  # minimum_perturbation's nodes per direction: a centre and a difference need 3, memory the top
 
@@ -502,28 +504,6 @@ def print_gait_errors(env_id: str, file=None):
 # -- the curvature map -------------------------------------------------------------------------------------------
 
 
-def record_gait(env_id: str, field: str) -> np.ndarray:
-    """The shapes (T, k) the env's analytic controller runs through in an episode from reset(seed=0); none (0, k)
-    for an env without one."""
-    import gymnasium as gym
-
-    from agents.controllers import CONTROLLERS, controller
-    from connenv.envs.spec import spec
-
-    if env_id not in CONTROLLERS:
-        return np.zeros((0, 2))
-    env = gym.make(env_id, **spec(env_id).make_kwargs())
-    policy = controller(env_id, env=env)
-    observation, _ = env.reset(seed=0)
-    shapes, done = [np.array(getattr(env.unwrapped.state, field), float)], False
-    while not done:
-        observation, _, terminated, truncated, _ = env.step(policy.predict(observation, deterministic=True)[0])
-        shapes.append(np.array(getattr(env.unwrapped.state, field), float))
-        done = terminated or truncated
-    env.close()
-    return np.stack(shapes)
-
-
 def window(local: LocalConnection, gait) -> tuple[np.ndarray, np.ndarray]:
     """The shape box drawn: the bounds where finite, else the gait's extent padded (±π without a gait)."""
     low, high = local.low.astype(float), local.high.astype(float)
@@ -534,21 +514,67 @@ def window(local: LocalConnection, gait) -> tuple[np.ndarray, np.ndarray]:
     return low, high
 
 
-def draw(env_id: str, path: str, points: int = 41):
+def shape_axes(env, field: str) -> list[tuple[str, str]]:
+    """(name, unit) of each shape coordinate of an env: the model's names of the state field's entries (its
+    ``components``; a planar contact point ``position`` is (x, y)), and the unit its reset state declares for that
+    name, or for the field, or for its only 2-vector ("" where none does)."""
+    model = env.model
+    entry = next(e for e in model.entries if e.name == field)
+    names = entry.names(model.components)
+    if field == "position" and names == ["position[0]", "position[1]"]:
+        names = ["x", "y"]
+    declared = env.STATE.fields if hasattr(env, "STATE") else {}
+    vectors = [f for f in declared.values() if f.kind == "vector" and f.size == 2]
+    units = []
+    for name in names:
+        by = declared.get(name) or declared.get(field) or (vectors[0] if len(vectors) == 1 else None)
+        units.append(by.unit if by is not None else "")
+    return list(zip(names, units))
+
+
+def per_area(unit: str, shape_units: list[str]) -> str:
+    """The unit of F (a group velocity's unit per shape unit²): m/rad², 1/rad, ..."""
+    u0, u1 = shape_units
+    if not (u0 and u1):
+        return f"{unit} per shape unit²"
+    area = f"{u0}²" if u0 == u1 else f"{u0}·{u1}"
+    return f"1/{u0}" if unit == u0 == u1 else f"{unit}/{area}"
+
+
+def direction_marks(panel, loop, count: int = 4, color="k"):
+    """Arrowheads along a drawn path at count points evenly spaced in its length: the direction it runs."""
+    steps = np.linalg.norm(np.diff(loop, axis=0), axis=1)
+    length = np.concatenate([[0.0], np.cumsum(steps)])
+    if length[-1] == 0.0:
+        return
+    for fraction in (np.arange(count) + 0.5) / count:
+        i = min(int(np.searchsorted(length, fraction * length[-1])), len(loop) - 1)
+        j = max(i - 1, 0)
+        while j > 0 and np.allclose(loop[j], loop[i]):
+            j -= 1
+        if not np.allclose(loop[j], loop[i]):
+            panel.annotate("", xy=loop[i], xytext=loop[j],
+                           arrowprops={"arrowstyle": "-|>", "color": color, "lw": 1.5, "mutation_scale": 16})  # fmt: skip
+
+
+def draw(env_id: str, path: str, points: int = 41, gait=None, gait_label: str = "gait"):
     """The curvature map of an env with a 2-D shape space, written to path (PNG): one panel per group direction that
-    moves (where A or F is not zero), colour the curvature F₁₂ of that direction, arrows the shape velocity −A_d
-    (the row d of −A: along it g moves fastest in +d) and the analytic controller's gait over it."""
+    moves (where A or F is not zero), colour the curvature F₁₂ of that direction (its unit: the direction's per shape
+    unit²), arrows the shape velocity −A_d (the row d of −A: along it g moves fastest in +d), and ``gait``, the shapes
+    (T, 2) a policy ran through (``python -m agents.curvature_map ID`` records the analytic controller's), with
+    arrowheads the way it runs and its start marked."""
     import matplotlib
 
     matplotlib.use("Agg")
     from matplotlib import pyplot as plt
+    from matplotlib.lines import Line2D
 
     local = local_connection(env_id)
     k = local.low.size
     if k != 2:
         flat = " (a 1-D shape space encloses no area: flat, its holonomy topological)" if k == 1 else ""
         raise ValueError(f"{env_id}'s shape space is {k}-D: the curvature map is for 2-D shape spaces{flat}")
-    gait = record_gait(env_id, local.field)
+    gait = np.zeros((0, 2)) if gait is None else np.asarray(gait, float).reshape(-1, 2)
     axes = [np.linspace(lo, hi, points) for lo, hi in zip(*window(local, gait))]
     shapes = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 2)
     F = curvature(local, shapes).F[:, :, 0, 1]
@@ -557,21 +583,34 @@ def draw(env_id: str, path: str, points: int = 41):
     figure, panels = plt.subplots(
         1, len(moving), figsize=(FIGURE[0] * len(moving), FIGURE[1]), squeeze=False, layout="constrained"
     )
-    names, every = DIRECTIONS[local.group.name], max(1, points // 12)
+    (s0, u0), (s1, u1) = shape_axes(_make(env_id).unwrapped, local.field)
+    names, units, every = DIRECTIONS[local.group.name], DIRECTION_UNITS[local.group.name], max(1, points // 12)
+    handles = {}
     for panel, d in zip(panels[0], moving):
         scale = max(np.max(np.abs(F[:, d])), 1e-300)
         image = panel.pcolormesh(*axes, F[:, d].reshape(points, points).T, cmap="RdBu_r", vmin=-scale, vmax=scale,
                                  shading="auto")  # fmt: skip
-        figure.colorbar(image, ax=panel)
+        figure.colorbar(image, ax=panel, label=f"F₁₂ ({names[d]}) [{per_area(units[d], [u0, u1])}]")
         arrows = shapes.reshape(points, points, 2)[::every, ::every].reshape(-1, 2)
         field = -A.reshape(points, points, -1, 2)[::every, ::every, d].reshape(-1, 2)
         if np.any(field):
-            panel.quiver(arrows[:, 0], arrows[:, 1], field[:, 0], field[:, 1], color="0.25")
+            panel.quiver(arrows[:, 0], arrows[:, 1], field[:, 0], field[:, 1], color="0.25", pivot="mid")
+            handles["arrows"] = Line2D([], [], color="0.25", marker=r"$\rightarrow$", markersize=12, lw=0,
+                                       label="arrows −A: the shape velocity that moves it fastest")
         if len(gait):
-            panel.plot(gait[:, 0], gait[:, 1], color="k", lw=1.5)
-        panel.set(title=f"F ({names[d]}), arrows −A ({names[d]})", xlabel=f"{local.field}[0]",
-                  ylabel=f"{local.field}[1]", aspect="auto")  # fmt: skip
-    figure.suptitle(f"{env_id}\ncurvature ({local.connection.group}, {local.connection.frame} frame), analytic gait")
+            (line,) = panel.plot(gait[:, 0], gait[:, 1], color="k", lw=1.5, label=gait_label)
+            direction_marks(panel, gait)
+            (start,) = panel.plot(*gait[0], "o", color="k", markerfacecolor="w", label="its start")
+            handles["gait"], handles["start"] = line, start
+        panel.set(title=f"{names[d]}: F and −A", xlabel=f"{s0} ({u0})" if u0 else s0,
+                  ylabel=f"{s1} ({u1})" if u1 else s1, aspect="auto")  # fmt: skip
+    if handles:
+        wide = len(moving) > 2  # a narrower figure stacks the entries
+        figure.legend(handles=list(handles.values()), loc="outside lower center", ncols=len(handles) if wide else 1,
+                      frameon=False)  # fmt: skip
+    figure.suptitle(f"{env_id}: curvature F of the connection ({local.connection.group}, "
+                    f"{local.connection.frame} frame)\na small counterclockwise loop of ({s0}, {s1}) moves the body "
+                    f"by −F × its area", fontsize="medium")  # fmt: skip
     figure.savefig(path, dpi=DPI)
     plt.close(figure)
 
@@ -583,7 +622,8 @@ def main(argv: list[str] | None = None):
     parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("env_id", metavar="ID", help="a connenv id whose env has a mechanical connection")
     parser.add_argument("--write", type=cli.writable_file, metavar="FILE.png",
-                        help="where the curvature map goes (default: <Env>-curvature.png here)")  # fmt: skip
+                        help="where the curvature map goes (default: <Env>-curvature.png here); "
+                             "python -m agents.curvature_map ID draws it with the analytic controller's gait")  # fmt: skip
     parser.add_argument("--prediction-error", action="store_true",
                         help="print the first-order prediction's error for circular gaits in the env's frame and in "
                              "minimum-perturbation coordinates (SE(2) swimmers) instead of drawing")  # fmt: skip

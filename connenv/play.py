@@ -36,6 +36,7 @@ ARROWS = (("K_LEFT", "K_RIGHT"), ("K_DOWN", "K_UP"))
 """The keys for −1 and +1 of each action component."""
 HELP = {"space": "space: stand / release: squat", "mouse": "move the mouse to roll", "arrows": "arrow keys"}
 PAUSE = 1.0
+STRIP_PAD = 10  # pixels of white around the help lines, in their strip below the frame
 """Seconds an episode's outcome stays on screen before the next episode (a key starts it at once)."""
 
 
@@ -167,14 +168,16 @@ def main(argv: list[str] | None = None) -> Player:
     except (ValueError, TypeError) as error:  # the env's refusal of the kwargs, named as given
         raise ValueError(f"{args.env_id} refuses --kwargs {' '.join(args.kwargs) or '(none)'}: {error}") from error
     size = tuple(round(args.scale * n) for n in player.frame().shape[1::-1])
-    try:
+    pygame.font.init()
+    font, clock = pygame.font.Font(None, 22), pygame.time.Clock()
+    strip = STRIP_PAD + font.get_linesize() * len(player.lines())  # the help's own strip, below the env's frame:
+    try:  # the frame's caption (t, r, ...) stays as the env drew it
         pygame.display.init()
-        screen = pygame.display.set_mode(size)
+        width = max(size[0], 12 + max(font.size(line)[0] for line in player.lines()))  # a small --scale: the help whole
+        screen = pygame.display.set_mode((width, size[1] + strip))
     except pygame.error as error:  # no display: the machine's, not a bug, so an OSError that cli.run reports
         player.close()
         raise OSError(f"no display for the window (SDL: {error}); to run headless: SDL_VIDEODRIVER=dummy") from error
-    pygame.font.init()
-    font, clock = pygame.font.Font(None, 22), pygame.time.Clock()
     pygame.display.set_caption(f"connenv: {args.env_id}")
     frames = 0
     while player.running and (args.frames is None or frames < args.frames):
@@ -182,9 +185,10 @@ def main(argv: list[str] | None = None) -> Player:
             player.handle(event)
         player.tick()
         picture = pygame.surfarray.make_surface(np.ascontiguousarray(player.frame().swapaxes(0, 1)))
-        screen.blit(pygame.transform.smoothscale(picture, size), (0, 0))
+        screen.fill((255, 255, 255))
+        screen.blit(picture if picture.get_size() == size else pygame.transform.smoothscale(picture, size), (0, 0))
         for row, line in enumerate(player.lines()):
-            screen.blit(font.render(line, True, (0, 0, 0), (255, 255, 255)), (6, 6 + 20 * row))
+            screen.blit(font.render(line, True, (0, 0, 0)), (6, size[1] + STRIP_PAD // 2 + font.get_linesize() * row))
         pygame.display.flip()
         if args.screenshot:
             pygame.image.save(screen, args.screenshot)

@@ -238,11 +238,12 @@ def curvature_map(env_id: str) -> Path:
 
 
 def draw_map(env_id: str) -> bool:
-    """Draw the env's curvature map (connenv.geometry.draw) where it has a connection on a 2-D shape space."""
-    from connenv import geometry
+    """Draw the env's curvature map with its analytic gait (agents.curvature_map) where it has a connection on a 2-D
+    shape space."""
+    from agents import curvature_map as maps
 
     try:
-        geometry.draw(env_id, str(curvature_map(env_id)))
+        maps.draw(env_id, str(curvature_map(env_id)))
     except ValueError:  # no connection, or not a 2-D shape space: no map
         return False
     return True

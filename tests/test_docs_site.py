@@ -261,3 +261,20 @@ def test_the_guide_example_makes_a_valid_env_with_a_task_that_a_conserved_quanti
     env.reset(seed=4)
     random_rewards = [env.step(env.action_space.sample())[1] for _ in range(50)]
     assert np.ptp(random_rewards) > 0.01
+
+
+def test_every_page_is_in_the_nav():
+    """mkdocs.yml's nav (its wildcards expanded by docs/nav.py) names every page under docs/: a page left out is
+    only an INFO line of mkdocs build, and the README links docs/baselines/score.md."""
+    import importlib.util
+
+    import yaml
+
+    hook = importlib.util.spec_from_file_location("docs_nav", ROOT / "docs" / "nav.py")
+    nav = importlib.util.module_from_spec(hook)
+    hook.loader.exec_module(nav)
+    config = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
+    docs = ROOT / config["docs_dir"]
+    listed = set(nav.named(nav.on_config({"nav": config["nav"], "docs_dir": str(docs)})["nav"]))
+    pages = {path.relative_to(docs).as_posix() for path in docs.rglob("*.md")}
+    assert not pages - listed, f"not in mkdocs.yml's nav: {sorted(pages - listed)}"

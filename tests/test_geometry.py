@@ -10,6 +10,7 @@ import matplotlib.image
 import numpy as np
 import pytest
 
+from agents import curvature_map
 import connenv  # noqa: F401  (registers the envs)
 from connenv import cli, geometry
 from connenv.core.lie import Connection
@@ -137,7 +138,10 @@ def test_the_command_draws_a_map_and_answers_an_env_without_a_connection(tmp_pat
     geometry.main(["connenv/FallingCat-v0", "--write", str(path)])
     image = matplotlib.image.imread(path)
     assert image.shape[:2] == (round(geometry.FIGURE[1] * geometry.DPI), round(geometry.FIGURE[0] * geometry.DPI))
-    assert np.ptp(image[..., :3]) > 0.5  # drawn: dark arrows and gait on a light ground
+    assert np.ptp(image[..., :3]) > 0.5  # drawn: dark arrows on a light ground
+    gaited = tmp_path / "cat-gait.png"
+    curvature_map.main(["connenv/FallingCat-v0", "--write", str(gaited)])  # with the analytic controller's gait
+    assert np.sum(np.abs(matplotlib.image.imread(gaited) - image)) > 0
     capsys.readouterr()
     with pytest.raises(SystemExit) as exit_:
         cli.run(geometry.main, geometry.PROG, ["connenv/Swing-v0"])
@@ -219,3 +223,23 @@ def with_point(point):
 def test_bad_shapes_loops_and_grids_are_value_errors_naming_them(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+def test_the_map_names_the_shapes_and_units_and_explains_its_marks(monkeypatch, tmp_path):
+    """The curvature map's axes are the system's shape coordinates with their units, each colour bar says F's unit
+    (the direction's unit per shape unit²), and a legend names the arrows, the gait and its start, whose
+    arrowheads show the way it runs."""
+    from matplotlib.figure import Figure
+
+    drawn = []
+    monkeypatch.setattr(Figure, "savefig", lambda figure, *args, **kwargs: drawn.append(figure))
+    gait = np.array([[0.0, 0.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5], [0.0, 0.0]])
+    geometry.draw("connenv/SnakeSwimmer-v0", str(tmp_path / "map.png"), points=9, gait=gait, gait_label="a square")
+    (figure,) = drawn
+    panels = [axes for axes in figure.axes if axes.get_label() != "<colorbar>"]
+    bars = [axes for axes in figure.axes if axes.get_label() == "<colorbar>"]
+    assert [(p.get_xlabel(), p.get_ylabel()) for p in panels] == [("alpha (rad)", "beta (rad)")] * 3
+    assert [bar.get_ylabel() for bar in bars] == ["F₁₂ (x) [m/rad²]", "F₁₂ (y) [m/rad²]", "F₁₂ (θ) [1/rad]"]
+    (legend,) = figure.legends
+    assert [text.get_text() for text in legend.get_texts()][1:] == ["a square", "its start"]
+    assert all(sum(hasattr(child, "arrow_patch") for child in p.get_children()) >= 3 for p in panels)

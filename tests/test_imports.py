@@ -78,3 +78,65 @@ def test_nothing_in_the_packages_imports_the_training_script():
     found, _ = graph()
     importers = [name for name in found for module, *_ in found[name] if module.partition(".")[0] == "train"]
     assert not importers, f"{importers} import the top-level train.py; its logic is agents.train"
+
+
+def fresh(code: str) -> str:
+    """stdout of code run in a fresh interpreter from the repository's root."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
+    return done.stdout
+
+
+def test_import_connenv_registers_every_spec_from_the_generated_table():
+    """connenv/envs/ids.py is Gymnasium's registration of exactly the specs (python -m connenv.envs.spec writes it),
+    and import connenv registers those ids as the specs would."""
+    import gymnasium as gym
+
+    from connenv.envs import spec as specs
+    from connenv.envs.ids import IDS
+
+    assert IDS == [specs.registration(spec) for spec in specs.discover()], "stale: run python -m connenv.envs.spec"
+    assert [entry["id"] for entry in IDS] == list(specs.registry)
+    for entry in IDS:
+        registered = gym.registry[entry["id"]]
+        assert (registered.entry_point, registered.vector_entry_point) == (entry["entry_point"],
+                                                                             entry["vector_entry_point"])
+        assert (registered.max_episode_steps, registered.kwargs) == (entry["max_episode_steps"], entry["kwargs"])
+
+
+def test_import_connenv_loads_neither_an_env_module_nor_scipy_nor_the_applications():
+    """import connenv registers its ids and loads no env module, scipy, sympy, jax or agents (the import's time is
+    python -m connenv.bench import's to print); making an id loads its module and names its class."""
+    loaded = fresh(
+        "import sys, connenv\n"
+        "print(sorted(m for m in sys.modules if m.partition('.')[0] in ('scipy', 'sympy', 'jax', 'agents')\n"
+        "    or m.startswith('connenv.') and m not in ('connenv.envs', 'connenv.envs.ids')))\n"
+        "import gymnasium as gym\n"
+        "print(gym.make('connenv/BeadOnBar-v1').unwrapped.name)\n"
+    ).split("\n")
+    assert loaded[:2] == ["[]", "BeadOnBar"], loaded
+
+
+def test_the_library_never_imports_the_applications():
+    """connenv is the library and agents its applications (controllers, training): no module of connenv imports
+    agents, at its top or inside a function."""
+    found, _ = graph()
+    importers = [f"{name} imports {module}" for name in found if name.partition(".")[0] == "connenv"
+                 for module, *_ in found[name] if module.partition(".")[0] == "agents"]  # fmt: skip
+    assert not importers, importers
+
+
+def test_the_import_benchmark_prints_the_median_and_refuses_a_bad_module(capsys):
+    import pytest
+
+    from connenv.bench import import_time
+
+    import_time.main(["--runs", "1"])
+    printed = capsys.readouterr().out
+    assert printed.startswith("import connenv: median ") and "import gymnasium alone" in printed
+    assert "imports scipy" not in printed
+    for bad in ("os; print(1)", "no_such_module_here"):
+        with pytest.raises(ValueError, match="--module"):
+            import_time.main(["--module", bad, "--runs", "1"])

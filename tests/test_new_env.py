@@ -150,7 +150,7 @@ def load(name, path):
     return module
 
 
-register(*discover("throwaway"))  # as import connenv does for connenv.envs
+register(*discover("throwaway"))  # a package of its own registers its specs (connenv.envs: from its table)
 load("agents.controllers.point", CONTROLLER)  # where agents/controllers/point.py would be found
 sys.path.insert(0, "tests")
 import agents.controllers, audit, test_contract, test_fuzz, test_hardening

@@ -69,7 +69,7 @@ def test_every_env_plays_in_a_window_and_shows_reward_and_success(env_id, tmp_pa
     text = "\n".join(player.lines())
     assert f"{env_id}  step 3  reward " in text and "return " in text and "success: " in text
     pixels = pygame.surfarray.array3d(pygame.image.load(shot))
-    assert pixels.shape[:2] == (250, 250) and len(np.unique(pixels.reshape(-1, 3), axis=0)) > 10
+    assert pixels.shape[1] > 250 and len(np.unique(pixels[:250, :250].reshape(-1, 3), axis=0)) > 10  # the help below
 
 
 def test_r_resets_and_escape_quits():
@@ -102,3 +102,31 @@ def test_unknown_ids_and_bad_kwargs_are_refused_by_name(capsys):
     with pytest.raises(ValueError, match="--kwargs 'dt': expected key=value"):
         play.parse_kwargs(["dt"])
     assert play.parse_kwargs(["dt=0.02", "surface=plane"]) == {"dt": 0.02, "surface": "plane"}
+
+
+def test_the_help_lines_leave_the_envs_frame_and_caption_as_drawn(monkeypatch, tmp_path):
+    """The window is the env's frame with the help in a strip below it: the frame's own caption (t, r) is not
+    drawn over, in the window or its --screenshot."""
+    frames = []
+    drawn = play.Player.frame
+    monkeypatch.setattr(play.Player, "frame", lambda player: frames.append(drawn(player)) or frames[-1])
+    path = tmp_path / "window.png"
+    play.main(["connenv/Swing-v0", "--seed", "0", "--frames", "2", "--fast", "--screenshot", str(path)])
+    window = pygame.surfarray.array3d(pygame.image.load(str(path))).swapaxes(0, 1)
+    height = frames[-1].shape[0]
+    assert window.shape[0] > height  # the help's strip
+    np.testing.assert_array_equal(window[:height, : frames[-1].shape[1]], frames[-1])
+    assert np.any(window[height:] < 128)  # the help, written in it
+
+
+def test_the_swings_reachable_band_is_labelled():
+    """The shaded band of reachable radii carries its label (drawn in the band's text colour above the pivot)."""
+    import gymnasium as gym
+
+    env = gym.make("connenv/Swing-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    frame = env.render()
+    env.close()
+    label = np.all(frame == (90, 90, 120), axis=-1)
+    rows = np.flatnonzero(label.any(axis=1))
+    assert label.sum() > 50 and rows.max() < frame.shape[0] / 2  # text, over the pivot

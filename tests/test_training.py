@@ -119,7 +119,7 @@ def test_resume_in_a_folder_with_no_run_says_it_starts_from_step_0(tmp_path, tra
 @pytest.mark.parametrize(
     ("argv", "every"),
     [
-        (["--env", "connenv/RollingBall-v0", "--algo", "sac", "--timesteps", "20000"], 2000),  # the README's example
+        (["--env", "connenv/RollingBall-v0", "--algo", "sac"], 4000),  # the README's example: the tuned 40 000 steps
         ([], 15_000),  # PPO's 150 000 steps on Swing-v0
         (["--timesteps", "300"], 8 * 256),  # PPO trains one rollout: its policy changes once
     ],
@@ -315,3 +315,17 @@ def test_train_on_a_users_system_named_by_a_factory(tmp_path, monkeypatch, train
     env = gym.make("connenv/ActiveConstraint-v0", **kwargs)
     policy = evaluate.load_model(results["model"], "connenv/ActiveConstraint-v0", env_kwargs=kwargs)
     assert env.action_space.contains(policy.predict(env.reset(seed=0)[0], deterministic=True)[0])
+
+
+def test_the_readmes_training_command_trains_the_reference_tables_budget(train, tmp_path):
+    """A newcomer copies the README's train.py line: it runs the tuned budget (the hyperparameters' n_timesteps,
+    what the reference table's row trained), not a shorter one that learns less than the table shows."""
+    import yaml
+
+    readme = (ROOT / "README.md").read_text().splitlines()
+    commands = [line.split("#")[0].split()[2:] for line in readme if line.strip().startswith("python train.py")]
+    assert commands
+    for command in commands:
+        args = train.parse_args([*command, "--runs", str(tmp_path)])
+        tuned = yaml.safe_load((ROOT / "agents" / "hyperparams" / f"{args.algo}.yml").read_text())[args.env]
+        assert args.timesteps in (None, tuned["n_timesteps"]), f"{command}: {args.timesteps} steps, tuned {tuned}"

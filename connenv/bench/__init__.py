@@ -7,6 +7,7 @@ smoke version of each); every figure the README or docs/ quote is printed by one
     python -m connenv.bench stability [--env NAME ...] [--quick]   stability maps, docs/precision/
     python -m connenv.bench steppers [--env swing|skier|ball]      the energy-drift table that chose the defaults
     python -m connenv.bench generic [--quick]                      ActiveConstraintEnv's steppers on two Lagrangians
+    python -m connenv.bench import [--runs N]                      the median time of `import connenv`
     python -m connenv.bench [--env swing|skier|ball]               the same (the command the older docs quote)
     python -m connenv.bench [--help]                               the list of commands
 
@@ -31,6 +32,7 @@ COMMANDS = {
     "stability": "stability maps of the explicit steppers, docs/precision/",
     "steppers": "the energy-drift table that chose the defaults (also with no command and --env)",
     "generic": f"{bench_spec('generic').name}'s steppers on two Lagrangians",
+    "import": "the median time of `import connenv` in fresh interpreters (python -X importtime)",
 }
 
 
@@ -72,6 +74,8 @@ def main(argv=None):
         from connenv.bench.page import main as run
     elif args.command == "generic":
         from connenv.bench.generic import main as run
+    elif args.command == "import":
+        from connenv.bench.import_time import main as run
     else:
         from connenv.bench.steppers import main as run
     run(argv)

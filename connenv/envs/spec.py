@@ -1,8 +1,10 @@
 """One `Spec` per env id, declared beside its classes as the module's ``SPECS``: what connenv knows of an id beyond
-Gymnasium's registration. ``import connenv`` finds every module of connenv.envs that declares SPECS and registers
-each spec (`register`); the docs site's map, the baseline tables, the analytic controllers' registry
+Gymnasium's registration. ``import connenv`` registers every id with Gymnasium from `connenv.envs.ids`, a table
+generated from the specs (``python -m connenv.envs.spec`` writes it; a test checks it), so that the import loads no
+env module, no scipy and no sympy; `registry` finds every module of connenv.envs that declares SPECS on first use
+(`discover`). The docs site's map, the baseline tables, the analytic controllers' registry
 (agents.controllers) and the test tables (contract, fuzz, hardening, golden, audit) are read off `registry`, so that
-adding an env is writing its own files (docs/guides/new-env.md).
+adding an env is writing its own files, and the table regenerated (docs/guides/new-env.md).
 
 Gymnasium's registry stays the source users see: ``gym.make("connenv/Name-v0")`` and
 ``gym.make_vec(..., vectorization_mode="vector_entry_point")`` read the `gymnasium.envs.registration.EnvSpec` that
@@ -13,15 +15,60 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
-from collections.abc import Callable
+import pprint
+import sys
+from collections.abc import Callable, Iterator, MutableMapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from gymnasium.envs.registration import register as gym_register
 
 from connenv.envs.vector import TaskVectorEnv, vector_env
 
-registry: dict[str, Spec] = {}
+
+class Registry(MutableMapping):
+    """{id: Spec} of every connenv id, filled on first use with the SPECS of connenv.envs' modules (`discover`):
+    ``import connenv`` registers the ids with Gymnasium from the table `connenv.envs.ids` and imports no env module."""
+
+    def __init__(self):
+        self._specs: dict[str, Spec] = {}
+        self._found = False
+
+    def _find(self) -> dict[str, Spec]:
+        if not self._found:
+            self._found = True  # before discover: an env module imported there may read the registry
+            try:
+                found = discover()
+            except BaseException:
+                self._found = False  # a module that failed to import: the next read tries again, not a partial table
+                raise
+            for spec in found:
+                self._specs.setdefault(spec.id, spec)
+        return self._specs
+
+    def __getitem__(self, env_id: str) -> Spec:
+        return self._find()[env_id]
+
+    def __setitem__(self, env_id: str, spec: Spec):
+        self._find()[env_id] = spec
+
+    def __delitem__(self, env_id: str):
+        del self._find()[env_id]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._find())
+
+    def __len__(self) -> int:
+        return len(self._find())
+
+    def __repr__(self) -> str:
+        return f"Registry({list(self)})"
+
+
+registry = Registry()
 """Every registered connenv id's Spec, in registration order (the modules' alphabetical order, then each module's)."""
+
+_first_spec: dict[type, str] = {}  # an env class's first id's name, which names the class (Spec.__post_init__)
 
 
 @dataclass(frozen=True)
@@ -95,6 +142,13 @@ class Spec:
 
     def __post_init__(self):
         object.__setattr__(self, "vector_env", vector_env(self.env, self.vector_base))
+        # the env class's name, which its errors call it by, set as its module declares SPECS: its first id's
+        # name, or their stem ("BeadOnBar") where the class is registered as several versions
+        first = _first_spec.setdefault(self.env, self.name)
+        if first == self.name:
+            self.env.name = self.name
+        elif first.rpartition("-v")[0] == self.name.rpartition("-v")[0]:
+            self.env.name = self.name.rpartition("-v")[0]
 
     @property
     def name(self) -> str:
@@ -110,20 +164,19 @@ def entry_point(cls: type) -> str:
     return f"{cls.__module__}:{cls.__qualname__}"
 
 
+def registration(spec: Spec) -> dict:
+    """Gymnasium's registration of a spec: the keyword arguments of gymnasium.register."""
+    return {
+        "id": spec.id, "entry_point": entry_point(spec.env), "vector_entry_point": entry_point(spec.vector_env),
+        "max_episode_steps": spec.max_episode_steps, "kwargs": dict(spec.kwargs),
+    }  # fmt: skip
+
+
 def register(*specs: Spec):
-    """Register each spec with Gymnasium and in `registry`, and name its env class (``name``) after its first id, or
-    after their stem ("BeadOnBar") where a class is registered as several versions."""
+    """Register each spec with Gymnasium and in `registry` (the ids of a package other than connenv.envs, such as a
+    user's own: connenv's are registered by ``import connenv``)."""
     for spec in specs:
-        gym_register(
-            id=spec.id, entry_point=entry_point(spec.env),
-            vector_entry_point=entry_point(spec.vector_env),
-            max_episode_steps=spec.max_episode_steps, kwargs=dict(spec.kwargs),
-        )
-        first = next((known for known in registry.values() if known.env is spec.env), None)
-        if first is None:
-            spec.env.name = spec.name
-        elif first.name.rpartition("-v")[0] == spec.name.rpartition("-v")[0]:  # another version: their shared stem
-            spec.env.name = spec.name.rpartition("-v")[0]
+        gym_register(**registration(spec))
         registry[spec.id] = spec
 
 
@@ -135,9 +188,30 @@ def discover(package: str = "connenv.envs") -> list[Spec]:
     return found
 
 
+IDS_PATH = Path(__file__).with_name("ids.py")
+
+
+def ids_source() -> str:
+    """The text of connenv/envs/ids.py: Gymnasium's registration of every spec of connenv.envs."""
+    table = pprint.pformat([registration(spec) for spec in discover()], width=120, sort_dicts=False)
+    return (
+        '"""Gymnasium\'s registration of every connenv id, which ``import connenv`` reads (it imports no env module).\n'
+        "Generated from the specs by ``python -m connenv.envs.spec``; tests/test_imports.py checks it. Do not edit.\n"
+        '"""\n\n'
+        f"IDS = {table}\n"
+    )
+
+
 def spec(env_id: str) -> Spec:
     """The Spec of a registered connenv id (KeyError naming the known ids otherwise)."""
     try:
         return registry[env_id]
     except KeyError:
         raise KeyError(f"{env_id!r} is no registered connenv id; known: {sorted(registry)}") from None
+
+
+if __name__ == "__main__":  # python -m connenv.envs.spec: write connenv/envs/ids.py from the specs
+    from connenv.envs import spec as specs  # the module the env modules' specs are made by, not this __main__
+
+    specs.IDS_PATH.write_text(specs.ids_source())
+    sys.stdout.write(f"wrote {specs.IDS_PATH}\n")

@@ -8,7 +8,8 @@ from connenv.rendering import SIZE, Canvas, Renderer
 
 
 class SwingRenderer(Renderer):
-    """Pivot, rod and bob; the reachable radii as a shaded band; the time in the corner."""
+    """Pivot, rod and bob; the reachable radii as a shaded band, labelled over the pivot; the time and radius in the
+    corner."""
 
     def __init__(self, env):
         self.canvas = Canvas(env, 1.15 * env.r_max)
@@ -21,6 +22,8 @@ class SwingRenderer(Renderer):
         r_max = SIZE / (2 * 1.15 * c.scale)
         pg.draw.circle(c.screen, (235, 235, 245), pivot, int(r_max * c.scale), 0)
         pg.draw.circle(c.screen, (255, 255, 255), pivot, int(r_min * c.scale), 0)
+        label = c.font.render(f"reachable r: {r_min:.2f}–{r_max:.2f} m", True, (90, 90, 120))
+        c.screen.blit(label, label.get_rect(center=c.px(0.0, 0.5 * (r_min + r_max))))
         bob = c.px(r * math.sin(theta), -r * math.cos(theta))
         pg.draw.line(c.screen, (60, 60, 60), pivot, bob, c.pt(1.5))
         pg.draw.circle(c.screen, (204, 77, 77), bob, c.pt(6))
