@@ -14,6 +14,7 @@ refused, at make.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
@@ -31,9 +32,13 @@ class Range:
     log: bool
 
     def draw(self, rng: np.random.Generator) -> float:
+        """A value in [low, high], the ends exact: a draw that rounding puts past an end (exp of the logarithms'
+        draw, or the product of a width and a fraction) is that end, and an empty range draws its one value."""
         if self.log:
-            return float(math.exp(rng.uniform(math.log(self.low), math.log(self.high))))
-        return float(rng.uniform(self.low, self.high))
+            value = math.exp(rng.uniform(math.log(self.low), math.log(self.high)))
+        else:
+            value = rng.uniform(self.low, self.high)
+        return min(max(float(value), self.low), self.high)
 
     def normalized(self, value: float) -> float:
         """value on [-1, 1] over the range (of the logarithms for a scale), clipped."""
@@ -61,16 +66,29 @@ class Context:
         self.take(dict(self.base))
         self.kwargs = dict(env.kwargs)  # the make kwargs, without these
         if self.ranges:
-            self._check_fixed_space(env)
+            self._check_corners(env)
 
-    def _check_fixed_space(self, env):
-        """ValueError unless the env made at the ranges' low ends and at their high ends observes in one space."""
-        made = [type(env)(**{**self.kwargs, **{n: getattr(r, end) for n, r in self.ranges.items()}})
-                for end in ("low", "high")]
-        if made[0].observation_space != made[1].observation_space:
-            raise ValueError(f"randomize={ {n: (r.low, r.high) for n, r in self.ranges.items()} } changes "
-                             f"{env.name}'s observation space, which a parameter that varies must not: "
-                             f"{made[0].observation_space} at the low ends, {made[1].observation_space} at the high")
+    def _check_corners(self, env):
+        """ValueError unless the env can be made at every corner of the ranges' box (each parameter at its low or
+        its high end), observing in the env's own spaces there: linked parameters (the snake's b below a, the
+        shell's box inside its ellipse) are checked where they come closest, so that every draw is one a reset
+        takes. The constraints are monotone in each parameter, so the corners bound the box."""
+        names, made_kwargs = list(self.ranges), type(env)(**self.kwargs)
+        for ends in itertools.product(("low", "high"), repeat=len(names)):
+            corner = {name: getattr(self.ranges[name], end) for name, end in zip(names, ends)}
+            try:
+                made = type(env)(**{**self.kwargs, **corner})
+            except ValueError as error:
+                raise ValueError(f"randomize={self.written()} can draw values {env.name} refuses, at {corner}: "
+                                 f"{error}") from None
+            for space in ("observation_space", "action_space"):
+                if getattr(made, space) != getattr(made_kwargs, space):
+                    raise ValueError(f"randomize={self.written()} changes {env.name}'s {space.replace('_', ' ')}, "
+                                     f"which a parameter that varies must not: {getattr(made, space)} at {corner}, "
+                                     f"{getattr(made_kwargs, space)} at the make kwargs")
+
+    def written(self) -> dict:
+        return {name: (r.low, r.high) for name, r in self.ranges.items()}
 
     def _check_ranges(self, env, randomize) -> dict[str, Range]:
         check_mapping("randomize", randomize)
@@ -79,12 +97,10 @@ class Context:
             if name not in self.declared:
                 raise ValueError(f"randomize: {name!r} is not a physical parameter of {env.name}; valid: "
                                  f"{sorted(self.declared)}")
-            try:
-                low, high = (float(b) for b in bounds)
-            except (TypeError, ValueError):
-                raise ValueError(f"randomize[{name!r}]={bounds!r} must be a pair (low, high) of numbers") from None
-            for value in (low, high):
-                self.declared[name].check(value, vars(env.args))
+            ends = bounds.tolist() if isinstance(bounds, np.ndarray) and bounds.ndim == 1 else bounds
+            if not (isinstance(ends, (tuple, list)) and len(ends) == 2 and all(map(is_real, ends))):
+                raise ValueError(f"randomize[{name!r}]={bounds!r} must be a pair (low, high) of real numbers")
+            low, high = (float(b) for b in ends)
             if not low <= high:
                 raise ValueError(f"randomize[{name!r}]=({low!r}, {high!r}): low must be at most high")
             ranges[name] = Range(low, high, self.declared[name].kind == "scale" and low > 0.0)
@@ -115,6 +131,11 @@ class Context:
         observed ones normalized, once per episode rather than every step."""
         self.current, self.moved = values, values != self.base
         self.observed = np.array([r.normalized(values[name]) for name, r in self.ranges.items()], np.float32)
+
+
+def is_real(value) -> bool:
+    """Whether value is a real number: an int or a float (numpy's too), not a bool, a complex or a string."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
 def physical_params(env) -> dict:
