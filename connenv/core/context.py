@@ -106,22 +106,40 @@ class Context:
             ranges[name] = Range(low, high, self.declared[name].kind == "scale" and low > 0.0)
         return ranges
 
+    def check_given(self, given) -> dict:
+        """The values a reset's "params" option gives, as far as they can be checked alone: declared names, each a
+        real number (None where the parameter may be None); their ranges are checked with the others' (`checked`)."""
+        check_mapping('reset option "params"', given)
+        unknown = set(given) - set(self.declared)
+        if unknown:
+            raise ValueError(f'reset option "params": {sorted(unknown)} are not physical parameters; valid: '
+                             f"{sorted(self.declared)}")
+        for name, value in given.items():
+            if not (is_real(value) or value is None and self.declared[name].optional):
+                raise ValueError(f'reset option "params": {name}={value!r} must be a real number in '
+                                 f"{self.declared[name].span()}")
+        return dict(given)
+
     def draw(self, rng, given) -> dict:
         """This episode's values: the make-time ones, the randomized ones drawn (in the order of ``randomize``),
-        then those ``given`` by the reset options."""
+        then those ``given`` by the reset options (`check_given`)."""
         values = {**self.base, **{name: r.draw(rng) for name, r in self.ranges.items()}}
         if given is not None:
-            check_mapping('reset option "params"', given)
-            unknown = set(given) - set(self.declared)
-            if unknown:
-                raise ValueError(f'reset option "params": {sorted(unknown)} are not physical parameters; valid: '
-                                 f"{sorted(self.declared)}")
             values.update(given)
         return values
 
-    def observation_space(self, space: spaces.Box) -> spaces.Box:
-        """space with the observed parameters' [-1, 1] appended."""
+    def checked(self, env, values: dict) -> dict:
+        """values checked as make kwargs are, each against its range given the others (ValueError naming one out
+        of it), as floats: a value equal to the current one is checked too (True and 1 + 0j equal 1.0)."""
+        args, _ = env.ARGS.check(env.name, type(env), {**self.kwargs, **values})
+        return {name: args[name] for name in self.declared}
+
+    def observation_space(self, space: spaces.Box | spaces.Dict) -> spaces.Box | spaces.Dict:
+        """space with the observed parameters' [-1, 1] appended: to the Box, or as a key "params" of a Dict (a
+        goal env's, whose "observation", "achieved_goal" and "desired_goal" stay as they are)."""
         k = len(self.ranges)
+        if isinstance(space, spaces.Dict):
+            return spaces.Dict({**space.spaces, "params": spaces.Box(-1.0, 1.0, (k,), np.float32)})
         low = np.concatenate([space.low, -np.ones(k, np.float32)])
         high = np.concatenate([space.high, np.ones(k, np.float32)])
         return spaces.Box(low, high, dtype=np.float32)

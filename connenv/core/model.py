@@ -27,6 +27,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+from collections.abc import Mapping
 from types import SimpleNamespace
 
 import numpy as np
@@ -34,8 +35,9 @@ from gymnasium.vector.utils import batch_space
 
 from connenv.core.backend import BATCH, SCALAR
 from connenv.core.batched import batched
-from connenv.core.context import physical_params
+from connenv.core.context import is_real, physical_params
 from connenv.core.steppers import StepperError
+from connenv.core.validation import check_mapping
 
 STEP = 1e-150  # far below any entry a state holds (a step's series converges within |entry|), far above 1e-308
 CACHED_MODELS = 64  # models of other parameter values kept by with_params
@@ -173,9 +175,13 @@ class Model:
     def step(self, x, a, params=None) -> np.ndarray:
         """x_next: the env's step from x under action a (the policy's units, clipped as the env clips it); x (n,)
         with a of the action space's shape, or rows (N, n) with a (N, *shape). ``params``: a dict (or Params) of
-        parameter values for all rows, or a sequence of them, one per row."""
+        parameter values for all rows (the model ``with_params(params)``), or a sequence of them, one per row: such
+        rows step as the vector env steps rows whose parameters are their own (``randomize``, or a reset's
+        "params"), each on the single env's path with its own values, to the bit."""
+        if params is not None and not (isinstance(params, Mapping) or dataclasses.is_dataclass(params)):
+            return self._step_rows_of_their_own(params, x, a)
         if params is not None:
-            return self._per_params(params, x, a, lambda model, x, a: model.step(x, a))
+            return self.with_params(params).step(x, a)
         x = self._check_state(x)
         if x.ndim == 1:
             command = self.env.command(self.env.check_action(a))
@@ -231,15 +237,21 @@ class Model:
     # -- parameters ------------------------------------------------------------
 
     def with_params(self, params) -> Model:
-        """The model of the same env with other parameter values (a dict or Params; unnamed ones kept)."""
-        values = {**dataclasses.asdict(self.params), **(dataclasses.asdict(params) if dataclasses.is_dataclass(
-            params) else dict(params))}
+        """The model of the same env with other parameter values (a dict or Params; unnamed ones kept), each a real
+        number (ValueError naming one that is not, or is out of its range)."""
+        given = dataclasses.asdict(params) if dataclasses.is_dataclass(params) else params
+        check_mapping("params", given)
+        names = [f.name for f in dataclasses.fields(self.params)]
+        unknown = set(given) - set(names)
+        if unknown:
+            raise ValueError(f"params {sorted(unknown)} are not physical parameters of {self.env.name}; known: {names}")
+        declared = physical_params(self.env)
+        for name, value in given.items():
+            if not (is_real(value) or value is None and declared[name].optional):
+                raise ValueError(f"params: {name}={value!r} must be a real number in {declared[name].span()}")
+        values = {**dataclasses.asdict(self.params), **given}
         key = self.key(values)
         if key not in self._models:
-            unknown = set(values) - {f.name for f in dataclasses.fields(self.params)}
-            if unknown:
-                raise ValueError(f"params {sorted(unknown)} are not physical parameters of {self.env.name}; "
-                                 f"known: {[f.name for f in dataclasses.fields(self.params)]}")
             env = type(self.env)(**{**self.env.kwargs, **values})
             env.state = self.env.state
             model = Model(env)
@@ -256,13 +268,9 @@ class Model:
 
     def _per_params(self, params, x, a, function, pair=False):
         """function(model, x, a) with the model of params: one set for all, or grouped by row where they differ."""
-        if isinstance(params, dict) or dataclasses.is_dataclass(params):
+        if isinstance(params, Mapping) or dataclasses.is_dataclass(params):
             return function(self.with_params(params), x, a)
-        x, a = np.asarray(x, float), np.asarray(a, float)
-        if x.ndim != 2 or len(params) != len(x):
-            raise ValueError(f"per-row params ({len(params)} of them) need rows x of shape (N, {self.n}) with N "
-                             f"equal to it; x has shape {x.shape}")
-        models = [self.with_params(p) for p in params]
+        x, a, models = self._rows_of(params, x, a)
         groups = {}
         for i, model in enumerate(models):
             groups.setdefault(id(model), (model, []))[1].append(i)
@@ -275,6 +283,26 @@ class Model:
             for o, p in zip(out, parts):
                 o[rows] = p
         return out if pair else out[0]
+
+    def _rows_of(self, params, x, a) -> tuple[np.ndarray, np.ndarray, list[Model]]:
+        """(x, a, the model of each row's params) of per-row params, checked."""
+        x, a = np.asarray(x, float), np.asarray(a, float)
+        if x.ndim != 2 or len(params) != len(x):
+            raise ValueError(f"per-row params ({len(params)} of them) need rows x of shape (N, {self.n}) with N "
+                             f"equal to it; x has shape {x.shape}")
+        return x, a, [self.with_params(p) for p in params]
+
+    def _step_rows_of_their_own(self, params, x, a) -> np.ndarray:
+        """Rows with their own params stepped as the vector env steps them (`connenv.envs.vector`): the actions
+        checked over the batch, then each row on the single env's path by the model of its params."""
+        x, a, models = self._rows_of(params, x, a)
+        actions = self._check_actions(a, len(x))
+        x = self._check_state(x)
+        rows = []
+        for model, row, action in zip(models, x, actions):
+            command = model.env.command(action)
+            rows.append(model.pack(model._advance(model.state(row), command, model.env.stepper, SCALAR, row)))
+        return np.stack(rows)
 
     # -- checks ----------------------------------------------------------------
 
