@@ -3,12 +3,14 @@
 seen by the agent with ``observe_params=True``.
 
 A parameter is one of the env's declared physical numbers (its ARGS marked physical: a length, a mass, g); a value
-is checked against the declared range. A draw is uniform on [low, high], or log-uniform where the parameter is a
-scale (a length, a mass, an inertia: its order of magnitude is what is unknown), from the env's ``np_random``, so
-seeded runs repeat. Observed, each randomized parameter is appended to the observation normalized to [-1, 1] over
-its range (in logarithm for a scale), clipped there; the others stay hidden. The observation space must not depend
-on a parameter that varies: a parameter that would change it (the skier's h_max sets the curvature's bound) is
-refused, at make.
+is a real number checked against the declared range given the others. A range is a pair (low, high) of real numbers;
+a draw is uniform on [low, high], or log-uniform where the parameter is a scale (a length, a mass, an inertia: its
+order of magnitude is what is unknown), from the env's ``np_random``, so seeded runs repeat, and lies in [low, high]
+with the ends exact. Ranges that could draw values the env refuses (linked parameters: the snake's b below a) are
+refused at make, naming the constraint. Observed, each randomized parameter is appended to the observation
+normalized to [-1, 1] over its range (in logarithm for a scale), clipped there (a goal env's Dict observation gets
+them as its key "params"); the others stay hidden. The spaces must not depend on a parameter that varies: a
+parameter that would change them (the skier's h_max sets the curvature's bound) is refused, at make.
 """
 
 from __future__ import annotations

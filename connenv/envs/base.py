@@ -18,7 +18,6 @@ the action, advances, and reports. Nothing in a task sets attributes on the side
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 from types import SimpleNamespace
 from typing import ClassVar
@@ -156,7 +155,7 @@ class TaskEnv(gym.Env):
         """Gymnasium's reset. Everything is checked before anything of the env changes: the options, the
         parameters (drawn and given) and the state are checked on a copy of the generator (and, where the parameters
         change, on the env made with them), and taken only when all are good. A reset that raises leaves the env as
-        it was, its generator included."""
+        it was, its generator included (a seed is taken with the reset; draws from the generator are put back)."""
         check_mapping("reset options", options or {})
         options = dict(options or {})
         given, context = options.pop("params", None), self.context
@@ -164,28 +163,29 @@ class TaskEnv(gym.Env):
             if context is None:
                 raise ValueError(f'reset option "params": {self.name} declares no physical parameters')
             given = context.check_given(given)
-        if seed is not None or self._np_random is None:
-            rng, rng_seed = seeding.np_random(seed)
-        else:
-            rng, rng_seed = copy.deepcopy(self._np_random), None
-        env, values = self, None
-        if context is not None and (given is not None or context.varies or context.moved):
-            values = context.checked(self, context.draw(rng, given))
-            if values != context.current:
-                env = self.made_with(values)
         own = self._np_random
-        env._np_random = rng
+        if seed is not None or own is None:
+            rng, rng_seed, drawn = *seeding.np_random(seed), None
+        else:  # drawn from in place, its state put back if the reset raises: a vector env's row keeps its own
+            rng, rng_seed, drawn = own, None, own.bit_generator.state
+        env, values = self, None
         try:
+            if context is not None and (given is not None or context.varies or context.moved):
+                values = context.checked(self, context.draw(rng, given))
+                if values != context.current:
+                    env = self.made_with(values)
+            env._np_random = rng
             state = env.start(options)
+        except BaseException:
+            if drawn is not None:
+                rng.bit_generator.state = drawn
+            raise
         finally:
-            if env is self:
-                self._np_random = own
+            self._np_random = own
         if env is not self:
             self.take(env, values)
-        if rng_seed is not None or own is None:
+        if rng is not own:
             self._np_random, self._np_random_seed = rng, rng_seed
-        else:  # the same generator, advanced: a vector env's row keeps its own
-            own.bit_generator.state = rng.bit_generator.state
         self.reports_params = given is not None or (context is not None and context.varies)
         self.state = state
         if self.render_mode is not None:
