@@ -130,6 +130,27 @@ OPTION_KEYS = Declared(lambda env_id, env: numeric_keys(env.OPTIONS, env))
 """Reset options beside "state" (its env's declared options), alike."""
 ROTATIONS = Declared(rotations)
 """Reset arguments that take a rotation matrix: (path in the options, name in the message)."""
+
+
+def randomized_ranges(env_id, env):
+    """randomize for an id: each physical parameter within 10 % of its make value, but those that make refuses to
+    vary (a parameter that sets the observation space: the swing's radii, the skier's h_max); {} without any."""
+    if env.context is None:
+        return {}
+    ranges = {}
+    for name, value in env.context.base.items():
+        if isinstance(value, float) and value != 0.0:
+            trial = {**ranges, name: tuple(sorted((0.9 * value, 1.1 * value)))}
+            try:
+                make(env_id, randomize=trial)
+            except ValueError:
+                continue
+            ranges = trial
+    return ranges
+
+
+RANDOMIZED = Declared(randomized_ranges)
+"""randomize of each id with physical parameters: every one that may vary, within 10 % of its make value."""
 NOT_NUMERIC = {"render_mode", "system", "connection", "task", "draw", "trail", "trail_params", "group", "frame",
                "control", "integrator", "pivot", "vectorized", "surface", "surface_params", "measure_distance"}
 

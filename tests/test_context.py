@@ -145,3 +145,54 @@ def test_the_beanies_geometric_phase_follows_the_inertias(body, beanie):
     for _ in range(steps):
         env.step(np.array([1.0]))
     assert env.state.g[0] == pytest.approx(-2 * math.pi * beanie / (body + beanie), abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "randomize", "constraint"),
+    [
+        ("connenv/SnakeSwimmer-v0", {"a": (0.3, 0.6), "b": (0.05, 0.4)}, r"b=0.4 .* a=0.3\)"),
+        ("connenv/FallingCat-v0", {"transverse_inertia": (0.005, 0.02), "axial_inertia": (0.001, 0.008)},
+         r"axial_inertia=0.008 .* transverse_inertia=0.005\)"),
+        ("connenv/KapitzaPendulum-v0", {"length": (0.1, 1.0), "a_max": (0.05, 0.2)}, r"a_max=0.2 .* length=0.1\)"),
+        ("connenv/KapitzaSwingUp-v0", {"length": (0.1, 1.0), "a_max": (0.05, 0.2)}, r"a_max=0.2 .* length=0.1\)"),
+        ("connenv/KozlovShell-v0", {"a": (0.5, 1.0), "b": (0.4, 0.8)}, r"u1_max=0.5, u2_max=0.25: .* corners must lie inside the ellipse"),
+    ],
+)
+def test_linked_ranges_that_some_draws_would_break_are_refused_at_make_naming_the_constraint(
+        env_id, randomize, constraint):
+    """b < a (the snake), I_axial < I (the cat), a_max < l (Kapitza), the box inside the ellipse (the shell): a
+    range is refused at make where one of its draws would be refused at reset, with the corner and the constraint."""
+    with pytest.raises(ValueError, match=f"can draw values {env_id[8:]} refuses, at {{.*}}: {constraint}"):
+        gym.make(env_id, randomize=randomize)
+
+
+def test_linked_ranges_that_never_meet_are_taken_and_every_draw_resets():
+    """b ≤ 0.25 < 0.3 ≤ a: each of the draws is a snake, though b's range lies above the default a/100 ... a."""
+    env = make("connenv/SnakeSwimmer-v0", randomize={"a": (0.3, 0.6), "b": (0.05, 0.25)})
+    for seed in range(50):
+        params = env.reset(seed=seed)[1]["params"]
+        assert 0.3 <= params["a"] <= 0.6 and 0.05 <= params["b"] <= 0.25
+
+
+@pytest.mark.parametrize("bounds", [(9.81, 9.81), (9.81e6, 9.81e6), (9.81e-6, 9.81e-6), (2.0, 9.81e6), (9.81e-6, 3.0)])
+def test_draws_lie_in_the_declared_range_with_its_ends_exact(bounds):
+    """exp(uniform(log low, log high)) rounds past an end (9.81 → 9.809999999999999, 9.81e6 → 9.810000000000013e6,
+    outside g's valid range): a draw is within [low, high], an empty range is its one value."""
+    env = make(randomize={"g": bounds})
+    draws = [env.reset(seed=seed)[1]["params"]["g"] for seed in range(200)]
+    assert bounds[0] <= min(draws) and max(draws) <= bounds[1]
+    if bounds[0] == bounds[1]:
+        assert set(draws) == {bounds[0]}
+
+
+@pytest.mark.parametrize("bounds", ["79", {7: 1, 9: 2}, (True, 2), (7, False), (7.0, 9 + 0j), (7.0,), (7, 8, 9),
+                                    ("7", "9"), np.array([7.0, 9.0, 10.0]), None])
+def test_a_range_is_a_pair_of_real_numbers(bounds):
+    """A string of two digits, a dict's keys, a bool or a complex number are not a range."""
+    with pytest.raises(ValueError, match=r"randomize\['g'\]=.* must be a pair \(low, high\) of real numbers"):
+        make(randomize={"g": bounds})
+
+
+def test_a_range_given_as_a_list_or_array_of_two_numbers_is_taken():
+    for bounds in ([7, 12], np.array([7.0, 12.0]), (np.float32(7.0), np.int64(12))):
+        assert make(randomize={"g": bounds}).context.ranges["g"].high == 12.0

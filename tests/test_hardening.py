@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import copy
 import importlib.metadata
+import math
 import pickle
 import re
 import sys
@@ -22,6 +23,7 @@ from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
 import connenv  # noqa: F401  (registers the envs)
+from audit import RANDOMIZED
 from connenv.core import StepperError
 from connenv.core.validation import DT_MIN
 from connenv.envs.spec import registry, spec
@@ -580,3 +582,174 @@ def test_a_complex_array_in_a_builders_reset_state_is_refused_not_made_real(env_
         warnings.simplefilter("error")
         with pytest.raises(ValueError, match=rf"(?s)state {key}=.* is complex; expected .*real numbers"):
             env.reset(options={"state": state})
+
+
+# -- issue 44 §1: seeds, resets and parameters ---------------------------------------------------------------------
+
+PARAMETRIZED = [env_id for env_id in IDS if RANDOMIZED[env_id]]  # the ids with physical parameters that may vary
+
+
+def seeded_run(env, seed=0, steps=5):
+    """Observations and rewards of a run whose actions are sampled from the env's seeded action space, over two
+    seeded resets (a randomized reset draws the parameters)."""
+    env.action_space.seed(seed)
+    out = []
+    for episode in range(2):
+        obs, info = env.reset(seed=seed + episode)
+        out.append((obs, info.get("params")))
+        for _ in range(steps):
+            obs, reward, *_ = env.step(env.action_space.sample())
+            out.append((obs, reward))
+    return out
+
+
+def same(x, y) -> bool:
+    """Whether two observations, rewards or parameter dicts are equal to the bit (a goal env's dicts key by key)."""
+    if isinstance(x, dict):
+        return x.keys() == y.keys() and all(same(x[k], y[k]) for k in x)
+    return x is None and y is None or np.array_equal(np.asarray(x, float), np.asarray(y, float), equal_nan=True)
+
+
+def same_runs(a, b):
+    return len(a) == len(b) and all(same(x, y) for p, q in zip(a, b) for x, y in zip(p, q))
+
+
+@pytest.mark.parametrize("observe_params", [False, True])
+@pytest.mark.parametrize("env_id", PARAMETRIZED)
+def test_a_randomized_env_keeps_its_seeded_spaces_and_its_seeded_runs_repeat(env_id, observe_params):
+    """A reset that draws or sets parameters keeps the spaces make fixed, and a space the user seeded with them."""
+    env = make(env_id, randomize=RANDOMIZED[env_id], observe_params=observe_params)
+    spaces = env.action_space, env.observation_space
+    env.action_space.seed(0)
+    env.reset(seed=0)
+    name = next(iter(RANDOMIZED[env_id]))
+    env.reset(options={"params": {name: RANDOMIZED[env_id][name][1]}})
+    assert env.action_space is spaces[0] and env.observation_space is spaces[1]
+    again = make(env_id, randomize=RANDOMIZED[env_id], observe_params=observe_params)
+    assert same_runs(seeded_run(env), seeded_run(again))
+
+
+BAD_RESETS = [  # (seed, options) a reset refuses: a bad state key after good params, a bad parameter, a bad type
+    (123, {"params": "first", "state": {"no such key": 0.0}}),
+    (123, {"params": {"no such parameter": 1.0}}),
+    (None, {"params": "first", "state": {"no such key": 0.0}}),
+    (None, {"params": {"first": True}}),
+    (7, {"params": "first", "no such option": 1}),
+]
+
+
+@pytest.mark.parametrize("randomized", [False, True])
+@pytest.mark.parametrize("env_id", PARAMETRIZED)
+def test_a_reset_that_raises_leaves_the_env_and_its_generator_as_they_were(env_id, randomized):
+    """Everything a reset is given is checked before anything changes: after the ValueError the env steps, draws
+    and resets as its copy made before it."""
+    env = make(env_id, **({"randomize": RANDOMIZED[env_id]} if randomized else {})).unwrapped
+    env.reset(seed=0, options={"params": {name: high for name, (low, high) in RANDOMIZED[env_id].items()}})
+    name, (low, high) = next(iter(RANDOMIZED[env_id].items()))
+    for seed, options in BAD_RESETS:
+        before = copy.deepcopy(env)
+        params = {name: low} if options["params"] == "first" else {
+            (name if k == "first" else k): v for k, v in options["params"].items()}
+        with pytest.raises(ValueError):
+            env.reset(seed=seed, options={**options, "params": params})
+        assert env.context.current == before.context.current
+        assert env.np_random.bit_generator.state == before.np_random.bit_generator.state
+        action = env.action_space.sample()
+        assert same_runs([env.step(action)[:2]], [before.step(action)[:2]])
+        assert same_runs([env.reset()[:1]], [before.reset()[:1]])
+
+
+def test_the_issues_swing_reset_keeps_g_and_the_state_and_a_seed_is_taken_only_with_a_good_reset():
+    env = make("connenv/Swing-v0").unwrapped
+    env.reset(seed=0)
+    state, generator = env.state, env.np_random
+    with pytest.raises(ValueError, match="state theta=99"):
+        env.reset(options={"params": {"g": 3.0}, "state": {"theta": 99}})
+    with pytest.raises(ValueError, match="'bogus'"):
+        env.reset(seed=123, options={"params": {"bogus": 1}})
+    assert env.system.g == 9.81 and env.state is state and env.np_random is generator
+
+
+@pytest.mark.parametrize("env_id", PARAMETRIZED)
+def test_a_vector_env_goes_back_to_its_make_values_as_the_single_env(env_id):
+    """After a reset with "params", a reset without them runs as a new vector env, to the bit."""
+    name, (low, high) = next(iter(RANDOMIZED[env_id].items()))
+    made = [gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", **spec(env_id).make_kwargs())
+            for _ in range(2)]
+    made[0].reset(seed=0, options={"params": {name: high}})
+    runs = []
+    for envs in made:
+        obs, info = envs.reset(seed=0)
+        assert "params" not in info
+        envs.action_space.seed(0)
+        runs.append([obs, *(envs.step(0.8 * envs.action_space.sample())[0] for _ in range(5))])
+    assert all(same(a, b) for a, b in zip(*runs))
+
+
+def test_a_vector_reset_that_a_row_refuses_leaves_every_row_as_it_was():
+    """Row 0 takes b = 0.28, row 1 draws a = 0.25 and refuses it (b < a): neither row changes."""
+    envs = gym.make_vec("connenv/SnakeSwimmer-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                        randomize={"a": (0.25, 0.6)})  # fmt: skip
+    obs, _ = envs.reset(seed=0)
+    rows = copy.deepcopy(envs.unwrapped.row_params)
+    for seed in range(40):
+        draws = [np.random.default_rng(seed + i) for i in range(2)]
+        if 0.28 < math.exp(draws[0].uniform(math.log(0.25), math.log(0.6))) and 0.28 >= math.exp(
+                draws[1].uniform(math.log(0.25), math.log(0.6))):
+            break
+    with pytest.raises(ValueError, match="b=0.28"):
+        envs.reset(seed=seed, options={"params": {"b": 0.28}})
+    assert envs.unwrapped.row_params == rows
+    assert same(envs.step(np.zeros((2, 2)))[0], envs_after_reset(seed=0).step(np.zeros((2, 2)))[0])
+
+
+def envs_after_reset(seed):
+    envs = gym.make_vec("connenv/SnakeSwimmer-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                        randomize={"a": (0.25, 0.6)})  # fmt: skip
+    envs.reset(seed=seed)
+    return envs
+
+
+@pytest.mark.parametrize("env_id", PARAMETRIZED)
+def test_the_model_steps_rows_of_their_own_params_as_the_randomized_vector_env_to_the_bit(env_id):
+    """model.step(X, A, params=rows) is the randomized vector env's step, whose rows step by their own values."""
+    envs = gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point", **spec(env_id).make_kwargs(),
+                        randomize=RANDOMIZED[env_id])  # fmt: skip
+    envs.reset(seed=4)
+    envs.action_space.seed(4)
+    model = make(env_id).unwrapped.model
+    for _ in range(5):
+        actions = 0.8 * envs.action_space.sample()
+        x, params = model.pack(envs.unwrapped.state), [dict(p) for p in envs.unwrapped.row_params]
+        x_next = model.step(x, actions, params=params)
+        envs.step(actions)
+        assert np.array_equal(x_next, model.pack(envs.unwrapped.state), equal_nan=True)
+
+
+def test_the_goal_env_observes_its_parameters_as_a_key_of_their_own():
+    """RollingBallGoal-v0's Dict observation gains "params", in the single env and the vector env."""
+    kwargs = {"randomize": {"radius": (0.05, 0.2)}, "observe_params": True}
+    env = make("connenv/RollingBallGoal-v0", **kwargs)
+    obs, info = env.reset(seed=0)
+    assert set(env.observation_space.spaces) == {"observation", "achieved_goal", "desired_goal", "params"}
+    assert obs in env.observation_space and obs["params"].shape == (1,)
+    obs, *_ = env.step(env.action_space.sample())
+    assert obs in env.observation_space
+    envs = gym.make_vec("connenv/RollingBallGoal-v0", num_envs=2, vectorization_mode="vector_entry_point", **kwargs)
+    obs, info = envs.reset(seed=0)
+    assert obs in envs.observation_space and obs["params"].shape == (2, 1)
+    assert obs["params"][0] == env.reset(seed=0)[0]["params"]
+
+
+@pytest.mark.parametrize("value", [True, np.bool_(True), 1 + 0j, np.complex128(1.0), "1.0", [1.0]])
+def test_a_parameter_that_is_no_real_number_is_refused_even_where_it_equals_the_current_value(value):
+    """mass = 1 is the make value, and True == 1 + 0j == 1.0: the check does not rest on the comparison."""
+    env = make("connenv/Swing-v0").unwrapped
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"mass=.* must be a real number in \[1e-6, 1e6\] kg"):
+        env.reset(options={"params": {"mass": value}})
+    model, x = env.model, env.model.pack(env.state)
+    with pytest.raises(ValueError, match=r"mass=.* must be a real number"):
+        model.step(x, np.zeros(1), params={"mass": value})
+    with pytest.raises(ValueError, match=r"mass=.* must be a real number"):
+        model.step(np.stack([x, x]), np.zeros((2, 1)), params=[{"mass": 1.0}, {"mass": value}])

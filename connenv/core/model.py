@@ -36,9 +36,9 @@ from gymnasium.vector.utils import batch_space
 
 from connenv.core.backend import BATCH, SCALAR
 from connenv.core.batched import batched
-from connenv.core.context import physical_params
+from connenv.core.context import is_real, physical_params
 from connenv.core.steppers import StepperError
-from connenv.core.validation import dtype_kind, real_array
+from connenv.core.validation import check_mapping, dtype_kind, real_array
 
 STEP = 1e-150  # far below any entry a state holds (a step's series converges within |entry|), far above 1e-308
 CACHED_MODELS = 64  # models of other parameter values kept by with_params
@@ -220,14 +220,18 @@ class Model:
     def step(self, x, a, params=None) -> np.ndarray:
         """x_next: the env's step from x under action a (the policy's units, clipped as the env clips it); x (n,)
         with a of the action space's shape, or rows (N, n) with a (N, *shape). ``params``: a dict (or Params) of
-        parameter values for all rows, or a sequence of them, one per row.
+        parameter values for all rows (the model ``with_params(params)``), or a sequence of them, one per row: such
+        rows step as the vector env steps rows whose parameters are their own (``randomize``, or a reset's
+        "params"), each on the single env's path with its own values, to the bit.
 
         Bad input is refused before the step (ValueError or TypeError naming it): x, a or params that are not real
         numbers (complex ones too) or not finite (NaN only in a task's "not measured" entry, ``State.unmeasured``),
         of another shape, an empty batch (N = 0), a flag or counter that is not a whole number. A step that the
         stepper cannot take (it diverges, or overflows) raises `StepperError`, one state or rows."""
+        if params is not None and not (isinstance(params, Mapping) or dataclasses.is_dataclass(params)):
+            return self._step_rows_of_their_own(params, x, a)
         if params is not None:
-            return self._per_params(params, x, a, lambda model, x, a: model.step(x, a))
+            return self.with_params(params).step(x, a)
         x = self._check_state(x)
         if x.ndim == 1:
             command = self.env.command(self.env.check_action(self._check_action(a, None)))
@@ -295,7 +299,8 @@ class Model:
 
     def with_params(self, params) -> Model:
         """The model of the same env with other parameter values (a dict or Params; unnamed ones kept), each a real
-        number (None where the parameter is optional) in the range the env's make takes."""
+        number (None where the parameter is optional) in the range the env's make takes (ValueError naming one that
+        is not)."""
         known = {f.name: f for f in dataclasses.fields(self.params)}
         if dataclasses.is_dataclass(params) and not isinstance(params, type):
             given = dataclasses.asdict(params)
@@ -304,18 +309,17 @@ class Model:
         else:
             raise TypeError(f"params={params!r} must be a dict of parameter values (or a Params) of {self.env.name}; "
                             f"its parameters: {list(known)}")
+        check_mapping("params", given)
         unknown = [name for name in given if name not in known]
         if unknown:
             raise ValueError(f"params {unknown} are not physical parameters of {self.env.name}; known: {list(known)}")
+        declared = physical_params(self.env)
         for name, value in given.items():
-            optional = known[name].type != float and "None" in str(known[name].type)
-            if value is None and optional:
+            if value is None and declared[name].optional:
                 continue
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or not (
-                    math.isfinite(value)):
-                none = " (or None)" if optional else ""
-                raise ValueError(f"params {name}={value!r} must be a finite real number{none}, in the range that "
-                                 f"{self.env.name}'s make takes for {name}")
+            if not (is_real(value) and math.isfinite(value)):
+                none = " (or None)" if declared[name].optional else ""
+                raise ValueError(f"params: {name}={value!r} must be a real number in {declared[name].span()}{none}")
         values = {**dataclasses.asdict(self.params), **given}
         key = self.key(values)
         if key not in self._models:
@@ -337,15 +341,7 @@ class Model:
         """function(model, x, a) with the model of params: one set for all, or grouped by row where they differ."""
         if isinstance(params, Mapping) or dataclasses.is_dataclass(params):
             return function(self.with_params(params), x, a)
-        if isinstance(params, (str, bytes)) or not isinstance(params, Sequence):
-            raise TypeError(f"params={params!r} must be a dict of parameter values (or a Params) for all rows, or a "
-                            "sequence of them, one per row")
-        x = self._check_state(x)
-        if x.ndim != 2 or len(params) != len(x):
-            raise ValueError(f"per-row params ({len(params)} of them) need rows x of shape (N, {self.n}) with N "
-                             f"equal to it; x has shape {x.shape}")
-        a = self._check_action(a, len(x))
-        models = [self.with_params(p) for p in params]
+        x, a, models = self._rows_of(params, x, a)
         groups = {}
         for i, model in enumerate(models):
             groups.setdefault(id(model), (model, []))[1].append(i)
@@ -358,6 +354,29 @@ class Model:
             for o, p in zip(out, parts):
                 o[rows] = p
         return out if pair else out[0]
+
+    def _rows_of(self, params, x, a) -> tuple[np.ndarray, np.ndarray, list[Model]]:
+        """(x, a, the model of each row's params) of per-row params, checked."""
+        if isinstance(params, (str, bytes)) or not isinstance(params, Sequence):
+            raise TypeError(f"params={params!r} must be a dict of parameter values (or a Params) for all rows, or a "
+                            "sequence of them, one per row")
+        x = self._check_state(x)
+        if x.ndim != 2 or len(params) != len(x):
+            raise ValueError(f"per-row params ({len(params)} of them) need rows x of shape (N, {self.n}) with N "
+                             f"equal to it; x has shape {x.shape}")
+        a = self._check_action(a, len(x))
+        return x, a, [self.with_params(p) for p in params]
+
+    def _step_rows_of_their_own(self, params, x, a) -> np.ndarray:
+        """Rows with their own params stepped as the vector env steps them (`connenv.envs.vector`): the actions
+        checked over the batch, then each row on the single env's path by the model of its params."""
+        x, a, models = self._rows_of(params, x, a)
+        actions = self._check_actions(a, len(x))
+        rows = []
+        for model, row, action in zip(models, x, actions):
+            command = model.env.command(action)
+            rows.append(model.pack(model._advance(model._state(row), command, model.env.stepper, SCALAR, row)))
+        return np.stack(rows)
 
     # -- checks ----------------------------------------------------------------
 

@@ -24,6 +24,7 @@ from typing import ClassVar
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.utils import seeding
 
 from connenv.core.backend import SCALAR
 from connenv.core.context import Context
@@ -154,16 +155,42 @@ class TaskEnv(gym.Env):
         return StepperError(f"{error} [{where}, {values}]")
 
     def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
+        """Gymnasium's reset. Everything is checked before anything of the env changes: the options, the
+        parameters (drawn and given) and the state are checked on a copy of the generator (and, where the parameters
+        change, on the env made with them), and taken only when all are good. A reset that raises leaves the env as
+        it was, its generator included (a seed is taken with the reset; draws from the generator are put back)."""
         check_mapping("reset options", options or {})
         options = dict(options or {})
         given, context = options.pop("params", None), self.context
-        if given is not None and context is None:
-            raise ValueError(f'reset option "params": {self.name} declares no physical parameters')
-        if context is not None and (given is not None or context.varies or context.moved):
-            self.set_params(context.draw(self.np_random, given))
+        if given is not None:
+            if context is None:
+                raise ValueError(f'reset option "params": {self.name} declares no physical parameters')
+            given = context.check_given(given)
+        own = self._np_random
+        if seed is not None or own is None:
+            rng, rng_seed, drawn = *seeding.np_random(seed), None
+        else:  # drawn from in place, its state put back if the reset raises: a vector env's row keeps its own
+            rng, rng_seed, drawn = own, None, own.bit_generator.state
+        env, values = self, None
+        try:
+            if context is not None and (given is not None or context.varies or context.moved):
+                values = context.checked(self, context.draw(rng, given))
+                if values != context.current:
+                    env = self.made_with(values)
+            env._np_random = rng
+            state = env.start(options)
+        except BaseException:
+            if drawn is not None:
+                rng.bit_generator.state = drawn
+            raise
+        finally:
+            self._np_random = own
+        if env is not self:
+            self.take(env, values)
+        if rng is not own:
+            self._np_random, self._np_random_seed = rng, rng_seed
         self.reports_params = given is not None or (context is not None and context.varies)
-        self.state = self.start(options)
+        self.state = state
         if self.render_mode is not None:
             self.trace = []
             self.rendered()
@@ -185,11 +212,18 @@ class TaskEnv(gym.Env):
             return self.observation(self.state), reward, terminated, False, self.report(info)
         return self.observe(self.state), reward, terminated, False, info
 
+    _observed_space = None  # the observation space with the observed parameters', made on first use
+
     @property
     def observation_space(self):
-        """The task's observation space, with the observed parameters' appended (``observe_params``)."""
+        """The task's observation space, with the observed parameters' appended (``observe_params``): one object
+        for the env's life, so that a user's seed of it holds."""
         space = self._observation_space  # not self.__dict__: an instance whose dict is read loses its fast attributes
-        return self.context.observation_space(space) if self.context is not None and self.context.observe else space
+        if self.context is None or not self.context.observe:
+            return space
+        if self._observed_space is None:
+            self._observed_space = self.context.observation_space(space)
+        return self._observed_space
 
     @observation_space.setter
     def observation_space(self, space):
@@ -201,6 +235,9 @@ class TaskEnv(gym.Env):
         if self.context is None or not self.context.observe:
             return obs
         params = self.context.observed
+        if isinstance(obs, dict):  # a goal env's: the parameters as a key of their own
+            rows = next(iter(obs.values())).shape[:-1]
+            return {**obs, "params": np.broadcast_to(params, (*rows, params.size)).copy()}
         return np.concatenate([obs, np.broadcast_to(params, (*obs.shape[:-1], params.size))], axis=-1)
 
     def report(self, info: dict) -> dict:
@@ -211,16 +248,31 @@ class TaskEnv(gym.Env):
 
     def set_params(self, values: dict):
         """Take these physical parameter values: the env's make kwargs with them, checked (ValueError naming one
-        out of range) and built anew before anything of this env changes; its generator, context and spec kept."""
-        if values == self.context.current:
-            return
+        out of range) and built anew before anything of this env changes; its generator, spaces, context and spec
+        kept."""
+        values = self.context.checked(self, values)
+        if values != self.context.current:
+            self.take(self.made_with(values), values)
+
+    KEPT = ("_np_random", "_np_random_seed", "context", "spec", "render_mode", "_renderer", "action_space",
+            "_observation_space", "_observed_space")
+    """What a parameter change keeps of the env: its generator, its spaces (a user may have seeded them; make fixed
+    them), its context, its spec and its renderer's settings."""
+
+    def made_with(self, values: dict) -> TaskEnv:
+        """The env made with these (checked) parameter values, its spaces those of this env, else ValueError."""
         fresh = type(self)(**{**self.context.kwargs, **values})
-        if fresh._observation_space != self._observation_space:
-            raise ValueError(f"params {values} change {self.name}'s observation space, which must stay fixed")
+        for space in ("_observation_space", "action_space"):
+            if getattr(fresh, space) != getattr(self, space):
+                raise ValueError(f"params {values} change {self.name}'s {space.strip('_').replace('_', ' ')}, "
+                                 "which must stay fixed")
+        return fresh
+
+    def take(self, fresh: TaskEnv, values: dict):
+        """fresh's parameters and what follows from them (its system, its constants), the rest kept (``KEPT``)."""
         self.close()
-        keep = ("_np_random", "_np_random_seed", "context", "spec", "render_mode", "_renderer")
         for key, value in vars(fresh).items():
-            if key not in keep:
+            if key not in self.KEPT:
                 setattr(self, key, value)
         self._model = None
         self.context.take(values)

@@ -97,8 +97,13 @@ class TaskVectorEnv(VectorEnv):
         mask = np.asarray(options.pop("reset_mask", self.all_rows))
         if mask.shape != (self.num_envs,) or mask.dtype != bool or not mask.any():
             raise ValueError(f"reset_mask={mask!r} must be a bool array of shape ({self.num_envs},) with a True entry")
-        for i in np.flatnonzero(mask):
-            self._reset_row(i, seeds[i], options or None)
+        saved = self._saved()
+        try:
+            for i in np.flatnonzero(mask):
+                self._reset_row(i, seeds[i], options or None)
+        except Exception:
+            self._restore(saved)
+            raise
         self.steps[mask] = 0
         self.prev_done[mask] = False
         return self._observe(self.state), self._with_masks(self._describe(self.state), mask)
@@ -166,7 +171,8 @@ class TaskVectorEnv(VectorEnv):
         if self.row_envs[i] is None:
             self.row_envs[i] = copy.deepcopy(self.env)
         env = self.row_envs[i]
-        env.set_params(self.row_params[i])
+        if env.context.current != self.row_params[i]:  # values a reset has checked: taken without a second check
+            env.take(env.made_with(self.row_params[i]), self.row_params[i])
         env.reports_params = True
         return env
 
@@ -208,6 +214,30 @@ class TaskVectorEnv(VectorEnv):
             if self.row_params is None:
                 self.row_params = [dict(self.env.context.base) for _ in range(self.num_envs)]
             self.row_params[i] = dict(self.env.context.current)
+        elif self.row_params is not None:  # back to the make values, as the single env goes back to them
+            self.row_params[i] = dict(self.env.context.current)
+            if all(params == self.env.context.base for params in self.row_params):
+                self.row_params = None  # every row at the make values: the batch path again, as a new vector env
+
+    def _saved(self):
+        """What a reset changes (the rows' generators and states, their parameters, the prototype's own), so that a
+        reset whose options a row refuses leaves the vector env as it was."""
+        generators = [(g, None if g is None else g.bit_generator.state) for g in self.generators]
+        rows = None if self.row_params is None else [dict(p) for p in self.row_params]
+        context = None if self.env.context is None else dict(vars(self.env.context))
+        return generators, copy.deepcopy(self.state), rows, dict(vars(self.env)), context
+
+    def _restore(self, saved):
+        generators, self.state, self.row_params, env, context = saved
+        for g, state in generators:
+            if g is not None:
+                g.bit_generator.state = state
+        self.generators = [g for g, _ in generators]
+        vars(self.env).clear()
+        vars(self.env).update(env)
+        if context is not None:
+            vars(self.env.context).clear()
+            vars(self.env.context).update(context)
 
     def _with_masks(self, info, mask=None):
         """Gymnasium's vector info: each key k with the mask "_k" of the rows it is about (default: all)."""
