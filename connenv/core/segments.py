@@ -168,7 +168,8 @@ def _per_coordinate(bound, n: int) -> list:
 def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):
     """bounded_segments over a batch (..., m): a list of m + 1 segments (u at the start (..., m), u̇ (..., m),
     durations (...)), a duration 0 where a row has fewer, and (u, u̇) at the end of the step. A segment ends where a
-    coordinate reaches its bound or at dt; row i's segments of nonzero length are bounded_segments' for row i."""
+    coordinate reaches its bound or at dt; row i's segments of nonzero length are bounded_segments' for row i. Written
+branch-free in the rows' namespace, so that JAX traces it (connenv.jax)."""
     ops = namespace(u_dot_cmd)
     u, u_dot = (u, u_dot_cmd) if traced(ops) else (np.array(floats(u)), np.array(floats(u_dot_cmd)))  # JAX's: immutable
     real = ops.real_part

@@ -5,8 +5,11 @@ written once for Python floats (FLOATS, SCALAR) and numpy rows (ARRAYS, BATCH) t
 the rows' seams that numpy code reached outside ``ops`` before: ``stack``, ``real_part`` (the real part a decision
 reads; JAX differentiates by its own forward mode, so there are no complex rows and it is the value itself),
 ``any`` (whether a branch that only some rows take must be computed: always, as a trace cannot look at values; the
-rows that do not take it are left by ``where``), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below)
-and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
+rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenate``, ``full`` and ``ceil`` (the
+bounded segments' and the Kapitza pendulum's), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
+ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
+only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``ellipj``/``ellipk``
+(traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
 
 **Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
 non-finite state, an invariant past its bound), the JAX physics calls ``fail(condition, message)``, which records
