@@ -68,9 +68,10 @@ def test_the_traced_step_is_the_numpy_step_to_rounding(case):
     np.testing.assert_array_equal(np.asarray(terminated), T)
     np.testing.assert_allclose(np.asarray(reward), R, rtol=STEP_RTOL, atol=STEP_RTOL)
     np.testing.assert_allclose(np.asarray(obs), O, rtol=2 * np.finfo(np.float32).eps, atol=1e-7)  # float32's rounding
-    # one state, not vmapped, gives what the rows give
+    # one state, not vmapped, gives what the rows give, to the ulp or two by which XLA's code for one row and for a
+    # batch may round apart (its fusions differ: KapitzaSwingUp-v0's θ and p, measured 3e-16)
     one = jax.jit(jenv.transition)(jnp.asarray(X[7]), jnp.asarray(A[7]))[0]
-    np.testing.assert_array_equal(np.asarray(one), x1[7])
+    assert np.max(np.abs(np.asarray(one) - x1[7]) / np.maximum(1.0, np.abs(x1[7]))) <= 1e-15
 
 
 def test_forward_mode_jacobians_are_the_models_complex_step_ones(case):

@@ -128,6 +128,13 @@ vars(ARRAYS).update(
     stack=np.stack,
     zeros_like=np.zeros_like,
     real_part=np.real,
+    all=np.all,
+    sort=np.sort,
+    maximum_one_sided=selected(np.maximum),
+    minimum_one_sided=selected(np.minimum),
+    concatenate=np.concatenate,
+    full=np.full,
+    ceil=np.ceil,
     traced=False,
 )
 """numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module)."""
@@ -224,6 +231,13 @@ BATCH = operations(
     stack=np.stack,
     zeros_like=np.zeros_like,
     real_part=np.real,
+    all=np.all,
+    sort=np.sort,
+    maximum_one_sided=selected(np.maximum),
+    minimum_one_sided=selected(np.minimum),
+    concatenate=np.concatenate,
+    full=np.full,
+    ceil=np.ceil,
     traced=False,
 )
 """The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names (``ARRAYS``,

@@ -168,21 +168,28 @@ def _per_coordinate(bound, n: int) -> list:
 def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):
     """bounded_segments over a batch (..., m): a list of m + 1 segments (u at the start (..., m), u̇ (..., m),
     durations (...)), a duration 0 where a row has fewer, and (u, u̇) at the end of the step. A segment ends where a
-    coordinate reaches its bound or at dt; row i's segments of nonzero length are bounded_segments' for row i."""
-    u, u_dot = np.array(floats(u)), np.array(floats(u_dot_cmd))
+    coordinate reaches its bound or at dt; row i's segments of nonzero length are bounded_segments' for row i. Written
+branch-free in the rows' namespace, so that JAX traces it (connenv.jax)."""
+    ops = namespace(u_dot_cmd)
+    u, u_dot = (u, u_dot_cmd) if traced(ops) else (np.array(floats(u)), np.array(floats(u_dot_cmd)))  # JAX's: immutable
+    real = ops.real_part
     u_end = u + u_dot * dt
-    free = np.all((np.real(low) <= u_end.real) & (u_end.real <= np.real(high)), axis=-1, keepdims=True)  # no stop
-    stops = np.where(u_dot.real > 0.0, high, low)
+    free = ops.all((real(low) <= real(u_end)) & (real(u_end) <= real(high)), axis=-1, keepdims=True)  # no stop
+    stops = ops.where(real(u_dot) > 0.0, high, low)
+    moving = (real(u_dot) != 0.0) & ~free
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a subnormal u̇ never reaches: inf
-        reach = np.where((u_dot.real != 0.0) & ~free, ARRAYS.maximum((stops - u) / u_dot, 0.0), math.inf)
-    ends = np.concatenate([np.sort(ARRAYS.minimum(reach, dt), axis=-1), np.full(free.shape, dt)], axis=-1)
+        # u̇ = 1 where it is 0 or free: the rows where leaves it out are finite, for a trace's derivatives
+        reach = (stops - u) / ops.where(moving, u_dot, 1.0)
+        reach = ops.where(moving, ops.maximum_one_sided(reach, 0.0), math.inf)
+    ends = ops.concatenate([ops.sort(ops.minimum_one_sided(reach, dt), axis=-1), ops.full(free.shape, dt)], axis=-1)
     segments, start = [], 0.0
-    for end in np.moveaxis(ends, -1, 0):
+    for k in range(ends.shape[-1]):
+        end = ends[..., k]
         duration = end - start
         segments.append((u, u_dot, duration))
-        u = np.where(duration.real[..., None] > 0.0, u + u_dot * duration[..., None], u)
-        stopped = reach.real <= end.real[..., None]
-        u, u_dot = np.where(stopped, stops, u), np.where(stopped, 0.0, u_dot)
+        u = ops.where(real(duration)[..., None] > 0.0, u + u_dot * duration[..., None], u)
+        stopped = real(reach) <= real(end)[..., None]
+        u, u_dot = ops.where(stopped, stops, u), ops.where(stopped, 0.0, u_dot)
         start = end
     return segments, u, u_dot
 

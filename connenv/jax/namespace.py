@@ -5,8 +5,11 @@ written once for Python floats (FLOATS, SCALAR) and numpy rows (ARRAYS, BATCH) t
 the rows' seams that numpy code reached outside ``ops`` before: ``stack``, ``real_part`` (the real part a decision
 reads; JAX differentiates by its own forward mode, so there are no complex rows and it is the value itself),
 ``any`` (whether a branch that only some rows take must be computed: always, as a trace cannot look at values; the
-rows that do not take it are left by ``where``), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below)
-and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
+rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenate``, ``full`` and ``ceil`` (the
+bounded segments' and the Kapitza pendulum's), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
+ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
+only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``ellipj``/``ellipk``
+(traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
 
 **Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
 non-finite state, an invariant past its bound), the JAX physics calls ``fail(condition, message)``, which records
@@ -107,6 +110,53 @@ def fail(condition, message: str):
     _collectors[-1].append((jnp.asarray(condition), message))
 
 
+def repeat(counts, body, carry):
+    """body(i, carry) for i = 0, 1, … up to the largest of counts (an array over rows; traced): JAX's fori_loop, a
+    while_loop where the count is traced (differentiable in forward mode). body holds a row past its own count by
+    ``where``; a loop whose trip count the numpy code takes from the rows' values (``max``) runs so."""
+    return jax.lax.fori_loop(0, jnp.max(counts).astype(int), body, carry)
+
+
+def one_sided(choose):
+    """maximum or minimum (choose) whose forward-mode derivative at a tie is the one-sided one along the tangent,
+    choose(ṫa, ṫb): ARRAYS' convention on a Jacobian's complex rows (`connenv.core.backend.selected`), where a row sits
+    on the kink (the pivot at its end stop). Its tangent is not linear there: forward mode only (jvp, jacfwd)."""
+
+    @jax.custom_jvp
+    def function(a, b):
+        return choose(a, b)
+
+    @function.defjvp
+    def derivative(primals, tangents):
+        (a, b), (ta, tb) = primals, tangents
+        out = choose(a, b)
+        first = jnp.where(a == b, choose(ta, tb) == ta, choose(a, b) == a) | jnp.isnan(a)
+        return out, jnp.broadcast_to(jnp.where(first, ta, tb), jnp.shape(out)).astype(out.dtype)
+
+    function.__name__ = f"one_sided_{choose.__name__}"
+    return function
+
+
+def sort(a, axis=-1):
+    """jnp.sort on the last axis, its forward-mode tangents ordered as numpy's sort orders a Jacobian's complex rows:
+    ties of the values by their tangents (the one-sided derivative; forward mode only)."""
+    if axis != -1:
+        raise ValueError("connenv.jax's sort sorts the last axis")
+    return _sort_last(a)
+
+
+@jax.custom_jvp
+def _sort_last(a):
+    return jnp.sort(a, axis=-1)
+
+
+@_sort_last.defjvp
+def _sort_jvp(primals, tangents):
+    (a,), (ta,) = primals, tangents
+    order = jnp.lexsort((ta, a), axis=-1)
+    return jnp.sort(a, axis=-1), jnp.take_along_axis(ta, order, axis=-1)  # the values: ties are equal
+
+
 def _where(condition, a, b):
     return jnp.where(condition, a, b)
 
@@ -132,6 +182,14 @@ JAX = operations(
     zeros_like=jnp.zeros_like,
     concat=jnp.concatenate,
     real_part=lambda x: x,
+    all=jnp.all,
+    sort=sort,
+    maximum_one_sided=one_sided(jnp.maximum),
+    minimum_one_sided=one_sided(jnp.minimum),
+    concatenate=jnp.concatenate,
+    full=jnp.full,
+    ceil=jnp.ceil,
+    repeat=repeat,
     ellipj=ellipj,
     ellipk=ellipk,
     fail=fail,

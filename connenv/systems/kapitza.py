@@ -33,7 +33,7 @@ from functools import cached_property
 
 import numpy as np
 
-from connenv.core.backend import ARRAYS, FLOATS, floats
+from connenv.core.backend import ARRAYS, FLOATS, floats, namespace, traced
 from connenv.systems.swing import Swing
 
 FLOAT = np.dtype(float)  # the dtype of the states numpy makes, one object: `_frame` tells it by identity
@@ -68,8 +68,11 @@ class KapitzaPendulum:
     def _frame(self, y, u_dot):
         """(θ, m l² θ̇, u̇₁, u̇₂, ops), m l² θ̇ = p − m l u̇·n the momentum in the frame of the pivot's velocity:
         Python floats and FLOATS for one state (a float array is taken as it is), arrays and ARRAYS for rows (complex
-        on a Jacobian's)."""
+        on a Jacobian's), or JAX's namespace where y is traced (rows, or a reset's one state)."""
         if not (type(y) is np.ndarray and y.dtype is FLOAT and type(u_dot) is np.ndarray and u_dot.dtype is FLOAT):
+            if traced(ops := namespace(y)):
+                theta, p, v1, v2 = y[..., 0], y[..., 1], u_dot[..., 0], u_dot[..., 1]
+                return theta, p - self.mass * self.length * (v1 * ops.cos(theta) + v2 * ops.sin(theta)), v1, v2, ops
             y, u_dot = floats(y), floats(u_dot)
         if y.ndim == 1 and u_dot.ndim == 1:
             (theta, p), (v1, v2), ops = y.tolist(), u_dot.tolist(), FLOATS
@@ -78,18 +81,19 @@ class KapitzaPendulum:
         return theta, p - self.mass * self.length * (v1 * ops.cos(theta) + v2 * ops.sin(theta)), v1, v2, ops
 
     def momentum(self, theta, theta_dot, u_dot):
-        """p = m l² θ̇ + m l u̇·n."""
-        along = u_dot[..., 0] * np.cos(theta) + u_dot[..., 1] * np.sin(theta)
+        """p = m l² θ̇ + m l u̇·n: numpy's on one state's float too, JAX's on a traced θ (a reset's)."""
+        ops = namespace(theta) if traced(namespace(theta)) else np
+        along = u_dot[..., 0] * ops.cos(theta) + u_dot[..., 1] * ops.sin(theta)
         return self.mass * self.length * (self.length * theta_dot + along)
 
     def vector_field(self, y, u, u_dot):
         """Hand-derived (θ̇, ṗ); u enters only through u̇ (the potential's slope in θ does not depend on u)."""
-        theta = y[..., 0]
+        theta, ops = y[..., 0], namespace(y)
         theta_dot = self.theta_dot(y, u_dot)
-        across = -u_dot[..., 0] * np.sin(theta) + u_dot[..., 1] * np.cos(theta)  # u̇·n′
+        across = -u_dot[..., 0] * ops.sin(theta) + u_dot[..., 1] * ops.cos(theta)  # u̇·n′
         ml = self.mass * self.length
-        p_dot = ml * theta_dot * across - ml * self.g * np.sin(theta) - self.damping * theta_dot
-        return np.stack([theta_dot, p_dot], axis=-1)
+        p_dot = ml * theta_dot * across - ml * self.g * ops.sin(theta) - self.damping * theta_dot
+        return ops.stack([theta_dot, p_dot], axis=-1)
 
     def energy(self, y, u_dot):
         """E = ½ m l² θ̇² − m g l cos θ, the pendulum's energy in the frame moving with the pivot's velocity u̇
@@ -117,7 +121,10 @@ class KapitzaPendulum:
             theta, spin, v1, v2 = np.broadcast_arrays(theta, spin, v1, v2)
         flowed, flowed_spin = self._pendulum.pendulum_flow(theta, spin, self.length, tau, ops)
         near = ops.isnan(flowed)
-        if ops.any(near):  # the state (or those rows) by RK4
+        if traced(ops):  # every row by RK4 as well, the near ones taken by where
+            stepped, stepped_spin = self._near_separatrix(theta, spin, tau, ops)
+            flowed, flowed_spin = ops.where(near, stepped, flowed), ops.where(near, stepped_spin, flowed_spin)
+        elif ops.any(near):  # the state (or those rows) by RK4
             if ops is ARRAYS:
                 flowed, flowed_spin = flowed.copy(), flowed_spin.copy()
                 rows = (theta[near], spin[near], np.broadcast_to(tau, near.shape)[near])
@@ -125,22 +132,40 @@ class KapitzaPendulum:
             else:
                 flowed, flowed_spin = self._near_separatrix(theta, spin, tau, ops)
         p = flowed_spin + self.mass * self.length * (v1 * ops.cos(flowed) + v2 * ops.sin(flowed))
-        return np.array([flowed, p]) if ops is FLOATS else np.stack([flowed, p], axis=-1)
+        return np.array([flowed, p]) if ops is FLOATS else ops.stack([flowed, p], axis=-1)
 
     def _near_separatrix(self, theta, spin, tau, ops):
         """The plain pendulum (θ, m l² θ̇) after tau by RK4 with steps h, ω₀h ≤ SEPARATRIX_STEP, ω₀ = √(g/l): a
         local error of (ω₀h)⁵/120 ≈ 1e-12 of the state (tests/test_kapitza_physics.py)."""
-        inertia, weight, sin = self.mass * self.length**2, self.mass * self.g * self.length, ops.sin
+        if traced(ops):
+            return self._near_separatrix_traced(theta, spin, tau, ops)
         substeps = max(1, math.ceil(math.sqrt(self.g / self.length) * float(np.max(np.real(tau))) / SEPARATRIX_STEP))
         h = tau / substeps
         for _ in range(substeps):
-            k1, l1 = spin / inertia, -weight * sin(theta)
-            k2, l2 = (spin + 0.5 * h * l1) / inertia, -weight * sin(theta + 0.5 * h * k1)
-            k3, l3 = (spin + 0.5 * h * l2) / inertia, -weight * sin(theta + 0.5 * h * k2)
-            k4, l4 = (spin + h * l3) / inertia, -weight * sin(theta + h * k3)
-            theta = theta + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-            spin = spin + h / 6.0 * (l1 + 2.0 * l2 + 2.0 * l3 + l4)
+            theta, spin = self._rk4_step(theta, spin, h, ops.sin)
         return theta, spin
+
+    def _rk4_step(self, theta, spin, h, sin):
+        """One RK4 step of length h of the plain pendulum (θ, m l² θ̇)."""
+        inertia, weight = self.mass * self.length**2, self.mass * self.g * self.length
+        k1, l1 = spin / inertia, -weight * sin(theta)
+        k2, l2 = (spin + 0.5 * h * l1) / inertia, -weight * sin(theta + 0.5 * h * k1)
+        k3, l3 = (spin + 0.5 * h * l2) / inertia, -weight * sin(theta + 0.5 * h * k2)
+        k4, l4 = (spin + h * l3) / inertia, -weight * sin(theta + h * k3)
+        return theta + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4), spin + h / 6.0 * (l1 + 2.0 * l2 + 2.0 * l3 + l4)
+
+    def _near_separatrix_traced(self, theta, spin, tau, ops):
+        """_near_separatrix on traced rows: each row's substeps from its own τ (the numpy code's count for one
+        state), run up to the rows' largest count with the rows past theirs held by ``where``."""
+        tau = tau + 0.0 * theta  # a length per row
+        substeps = ops.maximum(1.0, ops.ceil(math.sqrt(self.g / self.length) * ops.real_part(tau) / SEPARATRIX_STEP))
+        h = tau / substeps
+
+        def substep(i, state):
+            stepped, taken = self._rk4_step(*state, h, ops.sin), i < substeps
+            return tuple(ops.where(taken, new, old) for new, old in zip(stepped, state))
+
+        return ops.repeat(substeps, substep, (theta, spin))
 
     @cached_property
     def _pendulum(self) -> Swing:
