@@ -222,6 +222,15 @@ def model_section(env_id: str) -> list[str]:
     lines += [f"`env.unwrapped.model` steps a state vector of {model.n} entries: {names}. `model.jacobians` "
               "differentiates the step by complex step, exact to rounding, with any of the env's steppers but "
               "\"lsoda\" and \"radau\" (which step rows one by one and take no complex numbers).", ""]
+    traced = spec(env_id).jax
+    if traced:
+        kwargs = ", ".join(f"`{k}`" if k else "the default make kwargs" for k in traced)
+        lines += [f"**JAX:** `connenv.jax.make(\"{env_id}\")` gives this step as a pure JAX function (jit, vmap, "
+                  f"grad), the same code traced; tests/test_jax.py checks it against the numpy step with {kwargs}. "
+                  "How it may differ: [the JAX guide](../guides/jax.md).", ""]
+    else:
+        lines += ["**JAX:** no JAX version yet (`connenv.jax.make` refuses this id; [the JAX guide](../guides/jax.md)).",
+                  ""]
     env.close()
     return lines
 
