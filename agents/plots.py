@@ -287,10 +287,21 @@ def active_figure(env, local, traces):
     for panel, (label, trace) in zip(portraits, traces.items()):
         image = portrait(panel, column(env, trace, q), column(env, trace, p), u[label], norm)
         panel.set_title(label, color=colour[label])
-        panel.set(xlabel=q, ylabel=p if panel is portraits[0] else None)
-    figure.colorbar(image, ax=portraits, label=f"u = {u_name}", shrink=0.9)
+        panel.set(xlabel=with_unit(env, q), ylabel=with_unit(env, p) if panel is portraits[0] else None)
+    figure.colorbar(image, ax=portraits, label=f"u = {with_unit(env, u_name)}", shrink=0.9)
     measure_panel(energy, env, traces, u, colour)
     return figure
+
+
+UNITS = {"t": "s", "energy": "J", "energy E": "J"}  # names not in an env's reset state: the time, the energy
+
+
+def with_unit(env, name: str) -> str:
+    """name with its unit, "theta (rad)": the unit the env's reset state declares for it (its STATE), else the
+    time's or the energy's; the name alone where none is known (a dimensionless quantity)."""
+    field = env.STATE.fields.get(name)
+    unit = field.unit if field is not None and field.unit else UNITS.get(name, "")
+    return f"{name} ({unit})" if unit else name
 
 
 def roles(env) -> tuple[str, str, tuple[str, ...]]:
@@ -373,4 +384,4 @@ def measure_panel(panel, env, traces, u, colour):
     panel.figure.legend(
         handles=handles, fontsize=8, loc="outside lower center", ncols=min(len(handles), 3), frameon=False
     )  # below the figure: a legend beside the axes would narrow the portraits too
-    panel.set(xlabel="t (s)", ylabel=name, title=f"{name} against time")
+    panel.set(xlabel="t (s)", ylabel=with_unit(env, name), title=f"{name} against time")

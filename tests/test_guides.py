@@ -1,4 +1,4 @@
-"""The guides' code as a reader runs it: every Python block of docs/guides/model.md on its own, in a fresh
+"""The guides' code as a reader runs it: every Python block of docs/guides/model.md and jax.md on its own, in a fresh
 interpreter, as written (no block leans on another's imports); every command is one its command line accepts, and
 runs where it is short."""
 
@@ -16,6 +16,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 GUIDE = ROOT / "docs" / "guides" / "model.md"
 BLOCKS = re.findall(r"^```(python|bash)\n(.*?)^```", GUIDE.read_text(), flags=re.S | re.M)
+JAX_GUIDE = ROOT / "docs" / "guides" / "jax.md"  # its blocks need the jax extra
+JAX_BLOCKS = re.findall(r"^```python\n(.*?)^```", JAX_GUIDE.read_text(), flags=re.S | re.M)
 PYTHON = [code for language, code in BLOCKS if language == "python"]
 COMMANDS = [line for language, code in BLOCKS if language == "bash" for line in code.splitlines() if line.strip()]
 HERE = {**os.environ, "PYTHONPATH": str(ROOT)}  # this checkout's packages, wherever the working directory is
@@ -30,6 +32,12 @@ def test_each_python_block_runs_on_its_own(code, tmp_path):
     done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300,
                           env=HERE)  # fmt: skip
     assert done.returncode == 0, done.stderr[-3000:]
+
+
+@pytest.mark.parametrize("code", JAX_BLOCKS, ids=[f"jax-python-{i}" for i in range(len(JAX_BLOCKS))])
+def test_each_python_block_of_the_jax_guide_runs_on_its_own(code, tmp_path):
+    pytest.importorskip("jax")
+    test_each_python_block_runs_on_its_own(code, tmp_path)
 
 
 @pytest.mark.parametrize("command", COMMANDS, ids=[f"bash-{i}" for i in range(len(COMMANDS))])

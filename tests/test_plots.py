@@ -71,3 +71,18 @@ def test_cli_plot_keeps_the_default_report_and_says_what_it_draws(tmp_path, monk
         for handle in legend.legend_handles:
             marker = handle.get_marker() if hasattr(handle, "get_marker") else "None"
             assert marker in ("None", "", None) or marker in drawn, handle.get_label()
+
+
+def test_the_swings_axes_carry_their_units(tmp_path, monkeypatch):
+    """The phase portrait's axes and the energy's are labelled with SI units (θ in rad, p in kg m²/s, the radius
+    r in m, the energy in J), as the env's reset state declares them."""
+    from matplotlib.figure import Figure
+
+    figures = []
+    monkeypatch.setattr(Figure, "savefig", lambda self, *args, **kwargs: figures.append(self))
+    monkeypatch.chdir(tmp_path)
+    main(["--env", "connenv/Swing-v0", "--policy", "random", "--episodes", "1", "--plot", "swing.png",
+          "--env-kwargs", '{"max_episode_steps": 5}'])  # fmt: skip
+    (figure,) = figures
+    labels = {label for axes in figure.axes for label in (axes.get_xlabel(), axes.get_ylabel()) if label}
+    assert {"theta (rad)", "p (kg m²/s)", "t (s)", "energy (J)", "u = r (m)"} <= labels, labels
