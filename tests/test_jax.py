@@ -5,11 +5,16 @@ reported as data, and the functional interface keeps gymnax's conventions."""
 from __future__ import annotations
 
 import math
+import os
 
 import gymnasium as gym
 import numpy as np
 import pytest
 
+# XLA's CPU backend without LLVM's optimization passes: the traced steps compile several times faster, and these
+# tests run each compiled program on a few thousand states at most, so its speed does not matter here; the results
+# are IEEE arithmetic either way (the tolerances below hold at both levels)
+os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_backend_optimization_level=0".strip()
 jax = pytest.importorskip("jax")
 jax.config.update("jax_enable_x64", True)  # noqa: E402  (connenv.jax asks for float64; tests run in their own process)
 import jax.numpy as jnp  # noqa: E402

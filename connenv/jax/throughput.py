@@ -179,3 +179,7 @@ def table(report, env_ids, sizes, misses: list, numpy_rate):
     for env_id in env_ids:
         if env_id == "connenv/Swing-v0":
             report.note(bound_note(env_id, 4096))
+    report.note(f"JAX backend: {jax.default_backend()} ({jax.devices()[0].device_kind}). " + (
+        "Not measured on a GPU yet: on one, `python -m connenv.throughput --backend jax --sizes 64 4096 65536 "
+        "1048576 --write docs/throughput-jax-gpu.md` runs the same benchmark up to N = 2²⁰."
+        if jax.default_backend() == "cpu" else ""))
