@@ -566,6 +566,56 @@ def geometry_cases(ids, quick=False):
                            lambda e=env_id, g=grid: geometry.minimum_perturbation(e, g).beta)
 
 
+CONTEXT_VALUES = ["79", {"low": 1.0}, (True, 2.0), (1 + 0j, 2.0), (math.nan, 1.0), (1.0, math.inf), (2.0, 1.0),
+                  (1e-300, 1e300), (1.0, 2.0, 3.0), None, 5]
+"""randomize ranges that are no pair of real numbers, are reversed, or leave the parameter's range."""
+PARAM_VALUES = [True, 1 + 0j, "1", math.nan, math.inf, -1.0, 1e300, None, [1.0, 2.0], {"a": 1.0}]
+"""A reset's parameter values that are no real number or lie outside every parameter's range."""
+
+
+def context_cases(ids, quick=False):
+    """Parameters as context: ``randomize`` of each physical parameter (and of an unknown name) given a bad range,
+    at make and make_vec; ``reset(options={"params": ...})`` given a bad value, a bad mapping, an unknown name, on
+    the single env (afterwards it must step as a copy taken before: the failed reset changed nothing) and the vector
+    env; ``observe_params`` given a non-bool."""
+    for env_id in ids:
+        env = make(env_id).unwrapped
+        declared = [f.name for f in dataclasses.fields(env.model.params)]
+        for name in (declared[:1] if quick else declared) + ["bogus"]:
+            for value in CONTEXT_VALUES:
+                for how, maker in (("make", make), ("make_vec", make_vector)):
+                    yield Case(env_id, f"{how} randomize={{{name!r}: {value!r}}}", ("randomize", name),
+                               lambda m=maker, n=name, v=value: m(env_id, randomize={n: v}).reset(seed=0))
+            for value in PARAM_VALUES:
+                yield Case(env_id, f"reset params {name}={value!r}", ("params", name),
+                           lambda n=name, v=value: unchanged_after_failed_reset(env_id, {n: v}))
+                yield Case(env_id, f"vector reset params {name}={value!r}", ("params", name),
+                           lambda n=name, v=value: make_vector(env_id).reset(seed=0, options={"params": {n: v}}))
+        for value in (5, "g", [("g", 1.0)]):
+            yield Case(env_id, f"reset params={value!r}", ("params", "options['params']"),
+                       lambda v=value: unchanged_after_failed_reset(env_id, v))
+        for value in ("yes", 2, None):
+            yield Case(env_id, f"make observe_params={value!r}", ("observe_params",),
+                       lambda v=value: make(env_id, observe_params=v).reset(seed=0))
+
+
+def unchanged_after_failed_reset(env_id, params):
+    """A reset with these params, after a first one; if it raises, the env must step as a copy taken before it
+    (else an AssertionError, which the audit reports as open)."""
+    env = make(env_id)
+    env.reset(seed=0)
+    before = copy.deepcopy(env)
+    try:
+        return env.reset(seed=1, options={"params": params})
+    except (ValueError, TypeError):
+        action = np.zeros(env.action_space.shape, env.action_space.dtype)
+        env.step(action), before.step(action)
+        mine, theirs = env.unwrapped, before.unwrapped
+        assert np.array_equal(mine.model.pack(mine.state), theirs.model.pack(theirs.state), equal_nan=True), (
+            "a failed reset changed the env")
+        raise
+
+
 GENERATORS: list[Callable[[Iterable[str], bool], Iterable[Case]]] = [
     make_kwarg_cases,
     stepper_cases,
@@ -573,6 +623,7 @@ GENERATORS: list[Callable[[Iterable[str], bool], Iterable[Case]]] = [
     action_cases,
     model_cases,
     geometry_cases,
+    context_cases,
 ]
 """The case generators the audit runs, in order: append one to add cases."""
 

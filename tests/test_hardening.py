@@ -753,3 +753,16 @@ def test_a_parameter_that_is_no_real_number_is_refused_even_where_it_equals_the_
         model.step(x, np.zeros(1), params={"mass": value})
     with pytest.raises(ValueError, match=r"mass=.* must be a real number"):
         model.step(np.stack([x, x]), np.zeros((2, 1)), params=[{"mass": 1.0}, {"mass": value}])
+
+
+def test_the_context_sweep_finds_every_bad_range_and_value_refused_by_name():
+    """tests/audit.py's context cases (randomize ranges that are no pair of reals, reversed or out of range; reset
+    params that are no real number or out of range, on the single env, which must be unchanged after a refused
+    reset, and the vector env; observe_params), on every id's first parameter: each is a ValueError or TypeError
+    naming what was bad, or runs finite. randomize of an optional parameter that is off at make (Swing-v0's
+    max_radial_speed) raised numpy's "must be real number, not NoneType" before."""
+    import audit
+
+    verdicts = [(case, audit.judge(case)) for case in audit.context_cases(audit.IDS, quick=True)]
+    open_cases = [f"{case.where}: {case.what}: {verdict.detail}" for case, verdict in verdicts if verdict.kind == "open"]
+    assert len(verdicts) > 1000 and not open_cases, open_cases[:5]

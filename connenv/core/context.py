@@ -43,7 +43,10 @@ class Range:
         return min(max(float(value), self.low), self.high)
 
     def normalized(self, value: float) -> float:
-        """value on [-1, 1] over the range (of the logarithms for a scale), clipped."""
+        """value on [-1, 1] over the range (of the logarithms for a scale), clipped; 0 for an optional parameter that
+        is off (None), as at make before the first reset draws it."""
+        if value is None:
+            return 0.0
         low, high, v = (math.log(x) for x in (self.low, self.high, value)) if self.log else (self.low, self.high, value)
         return min(max(2.0 * (v - low) / (high - low) - 1.0, -1.0), 1.0) if high > low else 0.0
 
