@@ -220,7 +220,7 @@ and the task's. Several times faster than numpy on one state."""
 
 BATCH = operations(
     "BATCH",
-    **{name: getattr(ARRAYS, name) for name in NAMES},
+    **{name: value for name, value in vars(ARRAYS).items() if not name.startswith("__")},  # physics' and rows' names
     clip=lambda x, low, high: ARRAYS.minimum(ARRAYS.maximum(x, low), high),
     column=lambda x: x[..., None],
     pack=lambda parts: np.stack(np.broadcast_arrays(*parts), axis=-1).astype(np.float32),
@@ -228,17 +228,6 @@ BATCH = operations(
     flag=lambda x: np.asarray(np.real(x), bool),
     vector=lambda a: BATCH.real(np.array(a)),
     components=lambda a: [a[..., i] for i in range(a.shape[-1])],
-    stack=np.stack,
-    zeros_like=np.zeros_like,
-    real_part=np.real,
-    all=np.all,
-    sort=np.sort,
-    maximum_one_sided=selected(np.maximum),
-    minimum_one_sided=selected(np.minimum),
-    concatenate=np.concatenate,
-    full=np.full,
-    ceil=np.ceil,
-    traced=False,
 )
 """The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names (``ARRAYS``,
 safe on the complex rows of the model's Jacobians), and the task's. ``components`` splits the last axis: Python floats of one state, arrays over the rows of a batch."""
