@@ -135,6 +135,8 @@ vars(ARRAYS).update(
     concatenate=np.concatenate,
     full=np.full,
     ceil=np.ceil,
+    broadcast_arrays=np.broadcast_arrays,
+    broadcast_to=np.broadcast_to,
     traced=False,
 )
 """numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module)."""

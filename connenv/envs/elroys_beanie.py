@@ -10,7 +10,8 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import SCALAR
+from connenv.core.backend import SCALAR, traced
+from connenv.core.backend import vector as entries_vector
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.state import Fields, Options, angle, number
 from connenv.core.validation import MAGNITUDE_BOUND
@@ -137,12 +138,14 @@ class ElroysBeanieEnv(ConnectionEnv):
         """The largest |μ| a reset takes: 0.9 I₂ · max_beanie_speed, so that the beanie can still hold the body."""
         return 0.9 * self.beanie_inertia * self.max_beanie_speed
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):
+        """At rest at θ = ψ = 0, μ and θ* drawn from np_random; traced (``connenv.jax``, ops its namespace), the same
+        draws from its key."""
         rng = self.np_random
         momentum = rng.uniform(*MOMENTUM_RANGE) * rng.choice((-1.0, 1.0))
         values = self.reset_values(options, {"momentum": momentum, "target": rng.uniform(-math.pi, math.pi)})
         theta, psi, momentum, target = (values[key] for key in ("theta", "psi", "momentum", "target"))
-        return BeanieState(np.array([theta]), np.array([psi]), 0.0, float(momentum), float(target), 0.0)
+        return BeanieState(entries_vector(theta), entries_vector(psi), 0.0, ops.real(momentum), ops.real(target), 0.0)
 
     def advance(self, state, s_dot, stepper, ops=SCALAR):
         return self.drifted(state, super().advance(state, s_dot, stepper, ops), ops)
@@ -150,7 +153,7 @@ class ElroysBeanieEnv(ConnectionEnv):
     def drifted(self, before, moved, ops=SCALAR):
         """The connection's step `moved` plus the dynamic phase μ dt/(I₁ + I₂) on θ, and the hold counted."""
         phase = elroys_beanie.dynamic_phase(before.momentum, self.dt, self.body_inertia, self.beanie_inertia)
-        state = moved.replace(g=moved.g + np.asarray(phase)[..., None])
+        state = moved.replace(g=moved.g + (phase[..., None] if traced(ops) else np.asarray(phase)[..., None]))
         inside = abs(self.error(state, ops)) <= self.tolerance
         return state.replace(held=ops.where(inside, before.held + self.dt, 0.0))
 
@@ -188,6 +191,7 @@ SPECS = (
         "connenv/ElroysBeanie-v0", ElroysBeanieEnv, max_episode_steps=200, dt_max=DT_MAX,
         physics="ElroysBeanie.md", measure=Measure("time to hold", "s", "time_to_success"), controllers=("dead_beat",),
         golden=(("beanie", {"max_episode_steps": 60, "tolerance": 0.5, "hold_time": 0.1}, None),),
+        jax=({},),
         bench="beanie",
     ),
 )

@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.backend import SCALAR
+from connenv.core.backend import vector as entries_vector
 from connenv.core.params import Args, Bound, integrator, options, scale, step
 from connenv.core.state import Fields, Options, angle, number, vector
 from connenv.core.validation import ANGLE_BOUND, MAGNITUDE_BOUND
@@ -120,14 +121,16 @@ class RollingCoinEnv(ConnectionEnv):
         high = np.array([OFFSET_BOUND, OFFSET_BOUND, 1.0, 1.0], np.float32)
         return spaces.Box(-high, high, dtype=np.float32)
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):
+        """The coin at the origin, the target drawn from np_random; traced (``connenv.jax``, ops its namespace), the
+        same draws from its key."""
         rng = self.np_random
         distance, direction = rng.uniform(*TARGET_DISTANCE), rng.uniform(-math.pi, math.pi)
         heading = rng.uniform(-math.pi, math.pi)
-        target = np.array([distance * math.sin(direction), distance * math.cos(direction), heading])
+        target = entries_vector(distance * ops.sin(direction), distance * ops.cos(direction), heading)
         values = self.reset_values(options, {"target": target})
-        g = np.array([values["x"], values["y"]])
-        return CoinState(g, np.array([values["theta"], values["phi"]]), 0.0, values["target"])
+        g = entries_vector(values["x"], values["y"])
+        return CoinState(g, entries_vector(values["theta"], values["phi"]), 0.0, values["target"])
 
     def command(self, a):
         """(θ̇, φ̇) of action a (one (2,) or a batch (N, 2))."""
@@ -181,5 +184,6 @@ SPECS = (
         controllers=("turn_roll_turn",), variants=({}, {"integrator": "magnus"}),
         golden=(("coin", {"max_episode_steps": 60, "position_tolerance": 0.5}, None),),
         bench="coin",
+        jax=({},),
     ),
 )

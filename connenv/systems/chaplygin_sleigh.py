@@ -65,7 +65,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.core.backend import FLOATS
+from connenv.core.backend import FLOATS, namespace
 from connenv.core.mechanics import JumpClass
 
 
@@ -114,10 +114,11 @@ class ChaplyginSleigh:
 
     def vector_field(self, y, u, u_dot):
         """ẏ = (v cos φ, v sin φ, ω, ω P_w, −v P_w), P_w = M a ω + m ((a + u₁) ω + u̇₂), under the control (u, u̇)."""
-        if y.ndim == 1 and u.ndim == 1 and u_dot.ndim == 1:  # one state: Python floats, no array calls but the result
-            return np.array(self.vector_field_one(y.tolist(), u, u_dot))
-        rates = self._rates(y[..., 2], y[..., 3], y[..., 4], u[..., 0], u[..., 1], u_dot[..., 0], u_dot[..., 1], np)
-        return np.stack(rates, -1)
+        if y.ndim == 1 and u.ndim == 1 and u_dot.ndim == 1 and type(y) is np.ndarray:  # one state: Python floats,
+            return np.array(self.vector_field_one(y.tolist(), u, u_dot))  # no array calls but the result
+        ops = namespace(y)  # numpy's rows (ARRAYS: numpy's cos, sin and stack), or JAX's (connenv.jax)
+        rates = self._rates(y[..., 2], y[..., 3], y[..., 4], u[..., 0], u[..., 1], u_dot[..., 0], u_dot[..., 1], ops)
+        return ops.stack(rates, -1)
 
     def vector_field_one(self, y, u, u_dot):
         """vector_field of one state y = [x, y, φ, p₁, p₂] of Python floats (u and u̇ arrays (2,)), as a list."""
@@ -126,7 +127,7 @@ class ChaplyginSleigh:
 
     def _rates(self, phi, p1, p2, u1, u2, d1, d2, ops):
         """ẏ's components at (φ, p₁, p₂) under (u, u̇) given as components: Python floats with ops=FLOATS, or rows
-        with numpy."""
+        with their namespace (numpy's, JAX's)."""
         M, a, m = self.sled_mass, self.offset, self.mass
         v, omega = self._velocities(p1, p2, u1, u2, d1, d2)
         lateral = M * a * omega + m * ((a + u1) * omega + d2)

@@ -37,12 +37,15 @@ import math
 
 import numpy as np
 
-from connenv.core.backend import floats
+from connenv.core.backend import floats, namespace, traced
 
 
 def connection(s, radius: float):
     """A(θ, φ) of shape (..., 2, 2) for shapes s of shape (..., 2)."""
     theta = floats(s)[..., 0]
+    if type(theta) is not np.ndarray and traced(ops := namespace(theta)):  # JAX's rows: A built whole (connenv.jax)
+        zero = ops.zeros_like(theta)
+        return ops.stack([zero, -radius * ops.sin(theta), zero, -radius * ops.cos(theta)], -1).reshape(*theta.shape, 2, 2)
     A = np.zeros((*theta.shape, 2, 2), theta.dtype)
     A[..., 0, 1] = -radius * np.sin(theta)
     A[..., 1, 1] = -radius * np.cos(theta)
@@ -52,21 +55,22 @@ def connection(s, radius: float):
 def exact_segment(g, s, s_dot, tau, radius: float):
     """(x, y) after a segment of length tau at constant (θ̇, φ̇) from the shape s = (θ, φ): one state (arrays (2,),
     a float tau) or a batch of rows (arrays (N, 2), tau a float or one per row; complex on a Jacobian's, the sinc's
-    branch at 0 taken by the real parts)."""
+    branch at 0 taken by the real parts; JAX's rows too, ``connenv.jax``: the same arithmetic in their namespace)."""
     g = floats(g)
-    if g.ndim == 1:
+    if g.ndim == 1 and type(g) is np.ndarray:
         theta, (omega, nu), tau = float(s[0]), map(float, s_dot), float(tau)
         half = 0.5 * omega * tau
         chord = radius * nu * tau * (math.sin(half) / half if half != 0.0 else 1.0)
         mid = theta + half
         return np.array([g[0] + chord * math.sin(mid), g[1] + chord * math.cos(mid)])
     s, s_dot = floats(s), floats(s_dot)
+    ops = namespace(g)  # numpy's rows (ARRAYS: numpy's own functions), or JAX's
     half = 0.5 * s_dot[..., 0] * tau
-    zero = np.real(half) == 0.0
-    safe = np.where(zero, 1.0, half)
-    chord = radius * s_dot[..., 1] * tau * np.where(zero, 1.0, np.sin(safe) / safe)
+    zero = ops.real_part(half) == 0.0
+    safe = ops.where(zero, 1.0, half)
+    chord = radius * s_dot[..., 1] * tau * ops.where(zero, 1.0, ops.sin(safe) / safe)
     mid = s[..., 0] + half
-    return np.stack([g[..., 0] + chord * np.sin(mid), g[..., 1] + chord * np.cos(mid)], axis=-1)
+    return ops.stack([g[..., 0] + chord * ops.sin(mid), g[..., 1] + chord * ops.cos(mid)], axis=-1)
 
 
 def rectangle_displacement(theta0: float, delta_theta: float, delta_phi: float, radius: float):

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from connenv.core.backend import floats
+from connenv.core.backend import ARRAYS, floats, namespace, traced
 from connenv.core.lie.groups import GROUPS
 from connenv.core.validation import check_returned, probe, real_array
 
@@ -34,6 +34,11 @@ class Connection:
     def group_velocity(self, s, s_dot):
         """ξ = −A(s) ṡ, as components (floats for one shape, arrays over the rows of a batch)."""
         s = floats(s)
+        if type(s) is not np.ndarray and traced(ops := namespace(s)):  # JAX's rows (connenv.jax)
+            A = self.connection(s) if self.vectorized else ops.stack(
+                [self.connection(r) for r in s.reshape(-1, s.shape[-1])]).reshape(*s.shape[:-1], -1, s.shape[-1])
+            xi = -(floats(A) * s_dot[..., None, :]).sum(axis=-1)
+            return tuple(xi[..., i] for i in range(xi.shape[-1]))
         if s.ndim == 1 or self.vectorized:
             A = self.connection(s)
         else:
@@ -46,19 +51,26 @@ class Connection:
         """ẏ of the coordinates of g (for the generic steppers: RK4, scipy's): θ̇ = ω on SO2; on SE2 (ẋ, ẏ) = R(θ) v
         (body) or v + ω (−y, x) (space), θ̇ = ω; Ṙ = R ω̂ (body) or ω̂ R (space) on SO3; ẋ = v on R2."""
         y = floats(y)
-        xi = np.stack(np.broadcast_arrays(*self.group_velocity(s, s_dot)), -1)
+        ops = ARRAYS if type(y) is np.ndarray else namespace(y)  # numpy's functions on numpy's arrays; JAX's rows'
+        xi = ops.stack(ops.broadcast_arrays(*self.group_velocity(s, s_dot)), -1)
         if self.group in ("SO2", "R2"):
-            return np.broadcast_to(xi, y.shape).copy()
+            return ops.broadcast_to(xi, y.shape).copy()
         if self.group == "SE2":
             x, y_, theta = y[..., 0], y[..., 1], y[..., 2]
             v1, v2, w = xi[..., 0], xi[..., 1], xi[..., 2]
             if self.frame == "body":
-                c, s_ = np.cos(theta), np.sin(theta)
-                return np.stack([c * v1 - s_ * v2, s_ * v1 + c * v2, w + 0 * theta], -1)
-            return np.stack([v1 - w * y_, v2 + w * x, w + 0 * theta], -1)
-        R, W = y.reshape(*y.shape[:-1], 3, 3), np.zeros((*xi.shape[:-1], 3, 3), xi.dtype)
-        W[..., 0, 1], W[..., 0, 2], W[..., 1, 2] = -xi[..., 2], xi[..., 1], -xi[..., 0]
-        W = W - np.swapaxes(W, -1, -2)
+                c, s_ = ops.cos(theta), ops.sin(theta)
+                return ops.stack([c * v1 - s_ * v2, s_ * v1 + c * v2, w + 0 * theta], -1)
+            return ops.stack([v1 - w * y_, v2 + w * x, w + 0 * theta], -1)
+        R = y.reshape(*y.shape[:-1], 3, 3)
+        if traced(ops):  # JAX's rows: W built whole (its arrays take no assignment)
+            zero = ops.zeros_like(xi[..., 0])
+            W = ops.stack([zero, -xi[..., 2], xi[..., 1], xi[..., 2], zero, -xi[..., 0], -xi[..., 1], xi[..., 0], zero],
+                          -1).reshape(*xi.shape[:-1], 3, 3)
+        else:
+            W = np.zeros((*xi.shape[:-1], 3, 3), xi.dtype)
+            W[..., 0, 1], W[..., 0, 2], W[..., 1, 2] = -xi[..., 2], xi[..., 1], -xi[..., 0]
+            W = W - np.swapaxes(W, -1, -2)
         return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
 
 
