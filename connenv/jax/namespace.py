@@ -8,8 +8,8 @@ reads; JAX differentiates by its own forward mode, so there are no complex rows 
 rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenate``, ``full`` and ``ceil`` (the
 bounded segments' and the Kapitza pendulum's), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
 ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
-only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``ellipj``/``ellipk``
-(traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
+only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
+``nan_to_num`` (numpy's, which the falling cat's rows call), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
 
 **Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
 non-finite state, an invariant past its bound), the JAX physics calls ``fail(condition, message)``, which records
@@ -193,6 +193,8 @@ JAX = operations(
     ellipj=ellipj,
     ellipk=ellipk,
     fail=fail,
+    sinc=jnp.sinc,
+    nan_to_num=jnp.nan_to_num,
     traced=True,
 )
 """The physics' operations on JAX arrays (see the module)."""

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from connenv.core.backend import floats
+from connenv.core.backend import floats, namespace, traced
 from connenv.core.lie.groups import GROUPS
 from connenv.core.validation import check_returned, probe, real_array
 
@@ -39,14 +39,17 @@ class Connection:
         else:
             rows = s.reshape(-1, s.shape[-1])
             A = np.stack([self.connection(r) for r in rows]).reshape(*s.shape[:-1], -1, s.shape[-1])
-        xi = -np.sum(floats(A) * np.asarray(s_dot)[..., None, :], axis=-1)
-        return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
+        xi = -np.sum(floats(A) * _rows(s_dot)[..., None, :], axis=-1)
+        return tuple(xi.tolist()) if xi.ndim == 1 and not _traced(xi) else tuple(np.moveaxis(xi, -1, 0))
 
     def vector_field(self, y, s, s_dot):
         """ẏ of the coordinates of g (for the generic steppers: RK4, scipy's): θ̇ = ω on SO2; on SE2 (ẋ, ẏ) = R(θ) v
         (body) or v + ω (−y, x) (space), θ̇ = ω; Ṙ = R ω̂ (body) or ω̂ R (space) on SO3; ẋ = v on R2."""
         y = floats(y)
-        xi = np.stack(np.broadcast_arrays(*self.group_velocity(s, s_dot)), -1)
+        velocity = self.group_velocity(s, s_dot)
+        if type(y) is not np.ndarray:  # traced rows (connenv.jax): their namespace, no assignment
+            return self._traced_field(y, velocity)
+        xi = np.stack(np.broadcast_arrays(*velocity), -1)
         if self.group in ("SO2", "R2"):
             return np.broadcast_to(xi, y.shape).copy()
         if self.group == "SE2":
@@ -60,6 +63,35 @@ class Connection:
         W[..., 0, 1], W[..., 0, 2], W[..., 1, 2] = -xi[..., 2], xi[..., 1], -xi[..., 0]
         W = W - np.swapaxes(W, -1, -2)
         return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
+
+    def _traced_field(self, y, velocity):
+        """vector_field on traced rows: the same arithmetic in their namespace (ω̂ stacked, not assigned)."""
+        ops = namespace(y)
+        xi = ops.stack([v + ops.zeros_like(y[..., 0]) for v in velocity], -1)  # broadcast to the rows
+        if self.group in ("SO2", "R2"):
+            return xi
+        if self.group == "SE2":
+            x, y_, theta = y[..., 0], y[..., 1], y[..., 2]
+            v1, v2, w = xi[..., 0], xi[..., 1], xi[..., 2]
+            if self.frame == "body":
+                c, s_ = ops.cos(theta), ops.sin(theta)
+                return ops.stack([c * v1 - s_ * v2, s_ * v1 + c * v2, w + 0 * theta], -1)
+            return ops.stack([v1 - w * y_, v2 + w * x, w + 0 * theta], -1)
+        w1, w2, w3 = xi[..., 0], xi[..., 1], xi[..., 2]
+        zero = ops.zeros_like(w1)
+        W = ops.stack([zero, -w3, w2, w3, zero, -w1, -w2, w1, zero], -1).reshape(*xi.shape[:-1], 3, 3)
+        R = y.reshape(*y.shape[:-1], 3, 3)
+        return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
+
+
+def _traced(x) -> bool:
+    """Whether x is a traced array (connenv.jax's), not a float nor a numpy array."""
+    return not isinstance(x, (float, np.ndarray, np.generic)) and traced(namespace(x))
+
+
+def _rows(x):
+    """x as numpy's array, a traced array as itself."""
+    return x if _traced(x) else np.asarray(x)
 
 
 @dataclass(frozen=True)
