@@ -136,7 +136,11 @@ class ConstantConnection(Connection):
             g, tau = tuple(np.moveaxis(floats(y), -1, 0)), floats(tau)
         step = group.exp([tau * c for c in xi])
         g = group.product(g, step) if self.frame == "body" else group.product(step, g)
-        return np.array(g) if single else np.stack(np.broadcast_arrays(*g), -1)
+        if single:
+            return np.array(g)
+        if _traced(g[0]):  # traced rows (connenv.jax): every coordinate a row already
+            return namespace(g[0]).stack(g, -1)
+        return np.stack(np.broadcast_arrays(*g), -1)
 
 
 def connection_system(group, frame, connection, vectorized, exact_segment, shapes, dt, speed) -> Connection:
