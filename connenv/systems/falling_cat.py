@@ -86,7 +86,7 @@ def _np(x):
 def matvec(M, v, transposed=False):
     """M v (Mᵀ v: transposed) over the rows (…, 3, k) (…, k): numpy's einsum, a matmul on traced rows (einsum takes
     no JAX array)."""
-    if _np(M) is np and _np(v) is np:
+    if (type(M) is np.ndarray and type(v) is np.ndarray) or (_np(M) is np and _np(v) is np):
         return np.einsum("...ji,...j->...i" if transposed else "...ij,...j->...i", M, v)
     return ((np.swapaxes(M, -1, -2) if transposed else M) @ v[..., None])[..., 0]
 
@@ -102,7 +102,11 @@ def roll_density(beta_squared, transverse_inertia: float, axial_inertia: float):
     """f(β)/β² as a function of β² ≥ 0, without cancellation at β = 0: sin(β/2)/β and (1 − c)/β² = 2 sin²(β/4)/β²
     through np.sinc."""
     xp = _np(beta_squared)
-    beta = xp.sqrt(floats(beta_squared))
+    if xp is np:
+        beta = np.sqrt(floats(beta_squared))
+    else:  # traced rows: β's tangent 0 at β² = 0 (√'s is infinite there; β² is stationary at s = 0, as is f/β²'s)
+        positive = beta_squared > 0.0
+        beta = xp.where(positive, xp.sqrt(xp.where(positive, beta_squared, 1.0)), 0.0)
     c = xp.cos(0.5 * beta)
     half_sinc = 0.5 * xp.sinc(beta / (2 * math.pi))  # sin(β/2)/β
     quarter_sinc = 0.25 * xp.sinc(beta / (4 * math.pi))  # sin(β/4)/β
