@@ -179,3 +179,39 @@ def test_an_id_without_a_jax_version_is_refused_by_name():
     missing = next(i for i, spec in registry.items() if not spec.jax)
     with pytest.raises(NotImplementedError, match=missing):
         cj.make(missing)
+
+
+@pytest.mark.parametrize("env_id", ["connenv/FallingCat-v0", "connenv/TubeTwist-v0"])
+def test_the_jacobians_at_rest_at_the_start_are_the_models(env_id):
+    """From the start at rest with a zero action: the falling cat's β = 0 (√β² has no derivative there; β² is
+    stationary) and the tube's T = T₀ (hypot's apex), where JAX's own derivatives are NaN or not the complex step's."""
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=0)
+    x, a = env.model.pack(env.state), np.zeros(env.action_space.shape)
+    jenv, params = cj.make(env_id)
+    JA, JB = jax.jit(jax.jacfwd(lambda x, a: jenv.transition(x, a)[0], argnums=(0, 1)))(jnp.asarray(x),
+                                                                                        jnp.asarray(a))
+    MA, MB = env.model.jacobians(x[None], a[None])
+    for mine, theirs in ((JA, MA[0]), (JB, MB[0])):
+        assert np.max(np.abs(np.asarray(mine) - theirs) / np.maximum(1.0, np.abs(theirs))) <= JACOBIAN_RTOL
+
+
+def test_the_cat_and_tube_resets_draw_their_distributions():
+    """FallingCat-v0 starts straight at rest, upside down: g = Rz(ψ) Rx(π + δ), |δ| ≤ 0.2, its heading frame's first
+    column the (horizontal) spine; TubeTwist-v0 at R = R₀ = I with ψ* uniform on [0.3, 3]; both from a key."""
+    keys = jax.random.split(jax.random.key(0), 4000)
+    jenv, params = cj.make("connenv/FallingCat-v0")
+    obs, states = jax.vmap(jenv.reset, (0, None))(keys, params)
+    cat = jenv.state_of(np.asarray(states.x))
+    g, H = np.asarray(cat.g).reshape(-1, 3, 3), np.asarray(cat.heading).reshape(-1, 3, 3)
+    np.testing.assert_allclose(g @ np.swapaxes(g, 1, 2), np.broadcast_to(np.eye(3), g.shape), atol=1e-14)
+    roll = np.arctan2(g[:, 2, 1], g[:, 2, 2])
+    assert np.all(np.pi - np.abs(roll) <= 0.2 + 1e-12) and np.all(g[:, 2, 0] == 0.0)
+    np.testing.assert_array_equal(H[:, :, 0], g[:, :, 0])
+    assert np.all(np.asarray(cat.s) == 0.0) and np.all(np.asarray(cat.s_dot) == 0.0) and np.all(np.asarray(cat.t) == 0)
+    jenv, params = cj.make("connenv/TubeTwist-v0")
+    obs, states = jax.vmap(jenv.reset, (0, None))(keys, params)
+    tube = jenv.state_of(np.asarray(states.x))
+    target = np.asarray(tube.target)
+    assert np.all((target >= 0.3) & (target <= 3.0)) and abs(target.mean() - 1.65) < 0.05
+    assert np.all(np.asarray(tube.g) == np.eye(3).ravel()) and np.all(np.asarray(tube.R0) == np.eye(3).ravel())

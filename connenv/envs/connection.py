@@ -8,7 +8,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv import examples
-from connenv.core.backend import SCALAR
+from connenv.core.backend import SCALAR, namespace, traced
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, ExactConnection, connection_system
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
@@ -206,6 +206,13 @@ class ConnectionEnv(BuilderTask, TaskEnv):
     def check_group(self, g):
         """StepperError if g (any row) left its group by more than GROUP_BOUND (SO3's matrices; the others cannot)."""
         if self.group.name != "SO3":
+            return
+        ops = namespace(g)
+        if traced(ops):  # traced rows (connenv.jax): ‖RᵀR − I‖ as a failure reported as data
+            R = self.group.matrix(g)
+            gram = np.swapaxes(R, -1, -2) @ R - np.eye(3)
+            off = ops.sqrt((gram * gram).sum(axis=(-2, -1)))
+            ops.fail(~(off <= GROUP_BOUND), f"{self.stepper} left SO(3): ‖RᵀR − I‖ > {GROUP_BOUND}")
             return
         off = np.max(self.group.off_group(self.group.matrix(g)))
         if not off <= GROUP_BOUND:

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import BATCH, SCALAR
+from connenv.core import backend
+from connenv.core.backend import SCALAR, concat, traced
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.state import Fields, rotation, vector
@@ -135,7 +136,9 @@ class FallingCatEnv(ConnectionEnv):
     def _observation_space(self):
         return spaces.Box(-1.0, 1.0, (12,), np.float32)
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):
+        """Straight, at rest, upside down at a random heading and roll offset (see Starting State); traced
+        (``connenv.jax``, ops its namespace), the same draws from its key, the arrays built by ``backend.vector``."""
         state, given = self.reset_values(options), options.get("state", {})
         s = state["bend"]
         if math.hypot(*s) > self.max_bend:
@@ -145,22 +148,26 @@ class FallingCatEnv(ConnectionEnv):
         if "R" in given:
             g = state["R"] @ falling_cat.halves(s)[0].T
         else:
-            c, n, cr, sr = math.cos(heading), math.sin(heading), math.cos(roll), math.sin(roll)
-            turn = np.array([[c, -n, 0.0], [n, c, 0.0], [0.0, 0.0, 1.0]])  # Rz(ψ)
-            g = turn @ np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])  # Rz(ψ) Rx(π + δ)
+            c, n, cr, sr = ops.cos(heading), ops.sin(heading), ops.cos(roll), ops.sin(roll)
+            turn = backend.vector(c, -n, 0.0, n, c, 0.0, 0.0, 0.0, 1.0).reshape(3, 3)  # Rz(ψ)
+            g = turn @ backend.vector(1.0, 0.0, 0.0, 0.0, cr, -sr, 0.0, sr, cr).reshape(3, 3)  # Rz(ψ) Rx(π + δ)
         spine = g[:, 0]
-        if not 1.0 - abs(spine[2]) > VERTICAL:
+        if not traced(ops) and not 1.0 - abs(spine[2]) > VERTICAL:  # traced: a drawn start's spine is horizontal
             raise ValueError(f"state R={given['R']!r} puts the spine vertical, {spine.tolist()}: no roll about it")
-        up = np.array([0.0, 0.0, 1.0]) - spine[2] * spine
-        up /= np.linalg.norm(up)
-        H = np.stack([spine, np.cross(up, spine), up], -1)
+        up = backend.vector(0.0, 0.0, 1.0) - spine[2] * spine
+        if traced(ops):
+            up = up / ops.sqrt(np.sum(up * up))
+            H = ops.stack([spine, falling_cat.cross(up, spine), up], -1)
+        else:
+            up /= np.linalg.norm(up)
+            H = np.stack([spine, np.cross(up, spine), up], -1)
         return CatState(g.ravel(), s, 0.0, np.zeros(2), H.ravel())
 
     def advance(self, state, s_dot, stepper, ops=SCALAR):
         """The state after bending at ṡ for dt, stopped at max_bend (one state, or rows with ops=BATCH)."""
         tau, s, v = falling_cat.disc_segment(state.s, s_dot, self.max_bend, self.dt)
         g = state.g
-        if ops is BATCH or tau > 0.0:
+        if ops is not SCALAR or tau > 0.0:
             g = run_segments(stepper, self.system, g, [(state.s, s_dot, tau)])[0]
             self.check_group(g)
         return state.replace(g=g, s=s, s_dot=v, t=state.t + self.dt)
@@ -179,9 +186,10 @@ class FallingCatEnv(ConnectionEnv):
             spine_error = math.atan2(across, a1 * b1 + a2 * b2 + a3 * b3)
             return math.atan2(state.g[7], state.g[8]), spine_error, math.hypot(*state.s.tolist())
         spine, start = g[..., :, 0], H[..., :, 0]
-        across = np.cross(spine, start)
-        spine_error = np.arctan2(np.linalg.norm(across, axis=-1), np.sum(spine * start, -1))
-        return np.arctan2(g[..., 2, 1], g[..., 2, 2]), spine_error, np.hypot(state.s[..., 0], state.s[..., 1])
+        across = falling_cat.cross(spine, start)  # np.cross's products and differences
+        norm = ops.sqrt(np.sum(across * across, -1))  # np.linalg.norm's arithmetic on real rows
+        spine_error = ops.atan2(norm, np.sum(spine * start, -1))
+        return ops.atan2(g[..., 2, 1], g[..., 2, 2]), spine_error, ops.hypot(state.s[..., 0], state.s[..., 1])
 
     def landing_error(self, state, ops=SCALAR):
         roll, spine_error, beta = self.errors(state, ops)
@@ -190,20 +198,21 @@ class FallingCatEnv(ConnectionEnv):
     def observe(self, state, ops=SCALAR):
         g, H = self.frames(state)
         E = (np.swapaxes(H, -1, -2) @ g).reshape(*np.shape(state.s)[:-1], 9)
-        left = ops.clip((self.fall_time - np.asarray(state.t)) / self.fall_time, 0.0, 1.0)
-        parts = [E, state.s / self.max_bend, np.asarray(left)[..., None]]
-        return np.concatenate(parts, -1).astype(np.float32)
+        t = state.t if traced(ops) else np.asarray(state.t)
+        left = ops.clip((self.fall_time - t) / self.fall_time, 0.0, 1.0)
+        parts = [E, state.s / self.max_bend, (left if traced(ops) else np.asarray(left))[..., None]]
+        return concat(parts, -1).astype(np.float32)
 
     def describe(self, state, ops=SCALAR):
         g, _ = self.frames(state)
         roll, spine_error, beta = self.errors(state, ops)
-        omega = -np.einsum("...ij,...j->...i", falling_cat.connection(state.s, **self.inertias), state.s_dot)
+        omega = -falling_cat.matvec(falling_cat.connection(state.s, **self.inertias), state.s_dot)
         front = falling_cat.front_half(state.s)
         momentum = falling_cat.angular_momentum(g, state.s, state.s_dot, omega, **self.inertias, mass=self.mass,
                                                 cm_distance=self.cm_distance, front=front)  # fmt: skip
         success = (abs(roll) <= self.tolerance) & (spine_error <= self.tolerance) & (beta <= self.tolerance)
         return {
-            "state": {"R": g @ front[0], "bend": np.array(state.s), "t": state.t}, "angular_momentum": momentum,
+            "state": {"R": g @ front[0], "bend": state.s * 1.0 if traced(ops) else np.array(state.s), "t": state.t}, "angular_momentum": momentum,
             "roll": roll, "roll_error": abs(roll), "spine_error": spine_error, "bend_angle": beta,
             "is_success": ops.flag(success),
         }
@@ -213,7 +222,7 @@ class FallingCatEnv(ConnectionEnv):
         return self.landing_error(before, ops) - error + SUCCESS_BONUS * ops.real(info["is_success"])
 
     def terminated(self, state, info, ops=SCALAR):
-        landed = np.asarray(state.t) >= self.fall_time - LANDING_SLACK
+        landed = (state.t if traced(ops) else np.asarray(state.t)) >= self.fall_time - LANDING_SLACK
         return ops.flag(info["is_success"] | landed)
 
 
@@ -223,6 +232,6 @@ SPECS = (
         physics="FallingCat.md", measure=Measure("roll error at landing", "rad", "roll_error"),
         controllers=("kane_scher",),
         golden=(("cat", {"max_episode_steps": 60, "fall_time": 0.4, "max_bend": 0.5}, None),),
-        bench="cat",
+        bench="cat", jax=({},),
     ),
 )

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import SCALAR
+from connenv.core.backend import SCALAR, concat, traced
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import run_segments
 from connenv.core.state import Fields, Options, number, rotation
@@ -123,15 +123,18 @@ class TubeTwistEnv(ConnectionEnv):
         lead = np.shape(g)[:-1]
         Q = np.swapaxes(R0.reshape(*lead, 3, 3), -1, -2) @ g.reshape(*lead, 3, 3)
         psi, theta = twist(Q, ops.atan2), tangent_angle(Q, ops.atan2, ops.hypot)
-        c, n = ops.column(np.cos(target)), ops.column(np.sin(target))
+        xp = ops if traced(ops) else np  # numpy's cos and sin on the numpy paths (one state's too), as ever
+        c, n = ops.column(xp.cos(target)), ops.column(xp.sin(target))
         rows = [c * Q[..., 0, :] + n * Q[..., 1, :], c * Q[..., 1, :] - n * Q[..., 0, :], Q[..., 2, :]]
-        error = np.concatenate(rows, -1)
+        error = concat(rows, -1)
         return TubeState(g, s, t, R0, target, error, ops.real(psi), ops.real(theta), path_length)
 
-    def start(self, options):
-        values = self.reset_values(options, {"target": float(self.np_random.uniform(*TARGET_RANGE))})
+    def start(self, options, ops=SCALAR):
+        """R = R₀ = I, ψ* uniform in TARGET_RANGE; traced (``connenv.jax``, ops its namespace), ψ* from its key."""
+        target = self.np_random.uniform(*TARGET_RANGE)
+        values = self.reset_values(options, {"target": target if traced(ops) else float(target)})
         g = values["R"].ravel().copy()
-        return self.at(g, np.zeros(2), 0.0, g.copy(), values["target"], 0.0)
+        return self.at(g, np.zeros(2), 0.0, g.copy(), values["target"], 0.0, ops)
 
     def advance(self, state, kappa, stepper, ops=SCALAR):
         """The state after bending at the rates κ for dt (one state, or rows with ops=BATCH)."""
@@ -146,7 +149,8 @@ class TubeTwistEnv(ConnectionEnv):
 
     def observe(self, s, ops=SCALAR):
         e = self.twist_error(s, ops)
-        return np.concatenate([s.error, np.stack([np.cos(e), np.sin(e)], -1)], -1).astype(np.float32)
+        xp = ops if traced(ops) else np
+        return concat([s.error, xp.stack([xp.cos(e), xp.sin(e)], -1)], -1).astype(np.float32)
 
     def cost(self, s, ops=SCALAR):
         return s.tangent_error + abs(self.twist_error(s, ops))
@@ -179,6 +183,6 @@ SPECS = (
         measure=Measure("bend / shortest loop", "", "path_ratio"), controllers=("cap", "square"),
         play="mouse", variants=({}, {"integrator": "magnus"}),
         golden=(("tube", {"max_episode_steps": 40, "tolerance": 0.6}, None),),
-        bench="tube",
+        bench="tube", jax=({},),
     ),
 )

@@ -8,8 +8,9 @@ reads; JAX differentiates by its own forward mode, so there are no complex rows 
 rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenate``, ``full`` and ``ceil`` (the
 bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the connections'), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
 ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
-only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``ellipj``/``ellipk``
-(traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
+only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
+``nan_to_num`` (numpy's, which the falling cat's rows call), ``atan2`` and ``hypot`` with ARRAYS' derivative (0 at
+the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
 
 **Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
 non-finite state, an invariant past its bound), the JAX physics calls ``fail(condition, message)``, which records
@@ -157,6 +158,35 @@ def _sort_jvp(primals, tangents):
     return jnp.sort(a, axis=-1), jnp.take_along_axis(ta, order, axis=-1)  # the values: ties are equal
 
 
+@jax.custom_jvp
+def hypot(x, y):
+    """jnp.hypot, its derivative ARRAYS' (the complex step's): (x ẋ + y ẏ)/hypot, 0 at the origin (a cone's apex,
+    where it has none; jnp's is not 0 there). Linear in the tangents: forward and reverse mode."""
+    return jnp.hypot(x, y)
+
+
+@hypot.defjvp
+def _hypot_jvp(primals, tangents):
+    (x, y), (tx, ty) = primals, tangents
+    h = jnp.hypot(x, y)
+    apex = h == 0.0
+    return h, jnp.where(apex, 0.0, (x * tx + y * ty) / jnp.where(apex, 1.0, h))
+
+
+@jax.custom_jvp
+def atan2(y, x):
+    """jnp.arctan2, its derivative ARRAYS' (the complex step's): (x ẏ − y ẋ)/(x² + y²), 0 at the origin."""
+    return jnp.arctan2(y, x)
+
+
+@atan2.defjvp
+def _atan2_jvp(primals, tangents):
+    (y, x), (ty, tx) = primals, tangents
+    square = y**2 + x**2
+    apex = square == 0.0
+    return jnp.arctan2(y, x), jnp.where(apex, 0.0, (x * ty - y * tx) / jnp.where(apex, 1.0, square))
+
+
 def _where(condition, a, b):
     return jnp.where(condition, a, b)
 
@@ -165,11 +195,11 @@ JAX = operations(
     "JAX",
     sin=jnp.sin,
     cos=jnp.cos,
-    atan2=jnp.arctan2,
+    atan2=atan2,
     sqrt=jnp.sqrt,
     log=jnp.log,
     acos=jnp.arccos,
-    hypot=jnp.hypot,
+    hypot=hypot,
     abs=jnp.abs,
     copysign=jnp.copysign,
     isnan=jnp.isnan,
@@ -195,6 +225,8 @@ JAX = operations(
     ellipj=ellipj,
     ellipk=ellipk,
     fail=fail,
+    sinc=jnp.sinc,
+    nan_to_num=jnp.nan_to_num,
     traced=True,
 )
 """The physics' operations on JAX arrays (see the module)."""

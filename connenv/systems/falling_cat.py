@@ -67,11 +67,28 @@ import math
 
 import numpy as np
 
-from connenv.core.backend import ARRAYS, floats
+from connenv.core.backend import ARRAYS, floats, is_complex, namespace, traced
 
 GAUSS_NODES = 8  # Gauss–Legendre nodes per piece of a segment
 PIECE_FRACTION = 0.25  # a piece's length at most this fraction of the distance to the integrand's singularity
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(GAUSS_NODES)
+
+
+def _np(x):
+    """numpy, or for traced rows (``connenv.jax``) their namespace, which answers the numpy names used here (sqrt,
+    sin, cos, sinc, hypot, where, stack, zeros_like, minimum): one source for numpy's rows and JAX's."""
+    if type(x) is np.ndarray or isinstance(x, (float, np.generic)):
+        return np
+    ops = namespace(x)
+    return ops if traced(ops) else np
+
+
+def matvec(M, v, transposed=False):
+    """M v (Mᵀ v: transposed) over the rows (…, 3, k) (…, k): numpy's einsum, a matmul on traced rows (einsum takes
+    no JAX array)."""
+    if (type(M) is np.ndarray and type(v) is np.ndarray) or (_np(M) is np and _np(v) is np):
+        return np.einsum("...ji,...j->...i" if transposed else "...ij,...j->...i", M, v)
+    return ((np.swapaxes(M, -1, -2) if transposed else M) @ v[..., None])[..., 0]
 
 
 def roll_fraction(beta, transverse_inertia: float, axial_inertia: float):
@@ -84,10 +101,15 @@ def roll_fraction(beta, transverse_inertia: float, axial_inertia: float):
 def roll_density(beta_squared, transverse_inertia: float, axial_inertia: float):
     """f(β)/β² as a function of β² ≥ 0, without cancellation at β = 0: sin(β/2)/β and (1 − c)/β² = 2 sin²(β/4)/β²
     through np.sinc."""
-    beta = np.sqrt(floats(beta_squared))
-    c = np.cos(0.5 * beta)
-    half_sinc = 0.5 * np.sinc(beta / (2 * math.pi))  # sin(β/2)/β
-    quarter_sinc = 0.25 * np.sinc(beta / (4 * math.pi))  # sin(β/4)/β
+    xp = _np(beta_squared)
+    if xp is np:
+        beta = np.sqrt(floats(beta_squared))
+    else:  # traced rows: β's tangent 0 at β² = 0 (√'s is infinite there; β² is stationary at s = 0, as is f/β²'s)
+        positive = beta_squared > 0.0
+        beta = xp.where(positive, xp.sqrt(xp.where(positive, beta_squared, 1.0)), 0.0)
+    c = xp.cos(0.5 * beta)
+    half_sinc = 0.5 * xp.sinc(beta / (2 * math.pi))  # sin(β/2)/β
+    quarter_sinc = 0.25 * xp.sinc(beta / (4 * math.pi))  # sin(β/4)/β
     numerator = transverse_inertia * half_sinc**2 - 2 * axial_inertia * c * quarter_sinc**2
     return numerator / (transverse_inertia * (beta * half_sinc) ** 2 + axial_inertia * c * c)
 
@@ -96,6 +118,11 @@ def connection(s, transverse_inertia: float, axial_inertia: float):
     """A(s) (…, 3, 2) at bend vectors s (…, 2): f(β)/β² · (−y, x) in the spine's row, zero in the others."""
     s = floats(s)
     density = roll_density(np.sum(s * s, axis=-1), transverse_inertia, axial_inertia)
+    xp = _np(s)
+    if xp is not np:  # traced rows (connenv.jax): stacked, as their arrays take no assignment
+        zero = xp.zeros_like(density)
+        first = xp.stack([-density * s[..., 1], density * s[..., 0]], -1)
+        return xp.stack([first, xp.stack([zero, zero], -1), xp.stack([zero, zero], -1)], -2)
     A = np.zeros((*s.shape[:-1], 3, 2), density.dtype)
     A[..., 0, 0], A[..., 0, 1] = -density * s[..., 1], density * s[..., 0]
     return A
@@ -152,10 +179,11 @@ def segment_roll(s, s_dot, tau, transverse_inertia: float, axial_inertia: float,
 def exact_segment(g, s, s_dot, tau, transverse_inertia: float, axial_inertia: float, pieces: int = 1):
     """The cat frame's 9 coordinates (row by row, …, 9) after a segment at constant ṡ: g Rx(Δφ)."""
     phi = segment_roll(s, s_dot, tau, transverse_inertia, axial_inertia, pieces)
-    c, n = np.cos(phi)[..., None], np.sin(phi)[..., None]
+    xp = _np(phi)
+    c, n = xp.cos(phi)[..., None], xp.sin(phi)[..., None]
     g = floats(g).reshape(*np.shape(phi), 3, 3)
     columns = [g[..., 0], c * g[..., 1] + n * g[..., 2], c * g[..., 2] - n * g[..., 1]]
-    return np.stack(columns, -1).reshape(*np.shape(phi), 9)
+    return xp.stack(columns, -1).reshape(*np.shape(phi), 9)
 
 
 def roll(g):
@@ -166,10 +194,10 @@ def roll(g):
 # -- the two bodies ------------------------------------------------------------
 
 
-def _cross(a, b):
+def cross(a, b):
     """a × b over the last axis (…, 3): numpy's np.cross costs more than the arithmetic on 3-vectors; two single
     vectors on Python floats (the same products and differences)."""
-    if a.ndim == 1 and b.ndim == 1:
+    if a.ndim == 1 and b.ndim == 1 and type(a) is np.ndarray and type(b) is np.ndarray:
         (a0, a1, a2), (b0, b1, b2) = a.tolist(), b.tolist()
         return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
     return a[..., [1, 2, 0]] * b[..., [2, 0, 1]] - a[..., [2, 0, 1]] * b[..., [1, 2, 0]]
@@ -183,14 +211,16 @@ def front_half(s):
     if s.ndim == 1:
         return _front_half_one(*(0.5 * s).tolist())
     x, y = 0.5 * s[..., 0], 0.5 * s[..., 1]
-    theta = ARRAYS.hypot(x, y)[..., None, None]
-    small = np.real(theta) < 1e-3
-    safe = np.where(small, 1.0, theta)
-    sin_part = np.where(small, 1 - theta**2 / 6, np.sin(safe) / safe)
-    cos_part = np.where(small, 0.5 - theta**2 / 24, (1 - np.cos(safe)) / safe**2)
-    tail = np.where(small, 1 / 6 - theta**2 / 120, (safe - np.sin(safe)) / safe**3)
-    zero = np.zeros_like(x)
-    V = np.stack([np.stack([zero, -x, -y], -1), np.stack([x, zero, zero], -1), np.stack([y, zero, zero], -1)], -2)
+    xp = _np(s)
+    ops = ARRAYS if xp is np else xp
+    theta = ops.hypot(x, y)[..., None, None]
+    small = ops.real_part(theta) < 1e-3
+    safe = xp.where(small, 1.0, theta)
+    sin_part = xp.where(small, 1 - theta**2 / 6, xp.sin(safe) / safe)
+    cos_part = xp.where(small, 0.5 - theta**2 / 24, (1 - xp.cos(safe)) / safe**2)
+    tail = xp.where(small, 1 / 6 - theta**2 / 120, (safe - xp.sin(safe)) / safe**3)
+    zero = xp.zeros_like(x)
+    V = xp.stack([xp.stack([zero, -x, -y], -1), xp.stack([x, zero, zero], -1), xp.stack([y, zero, zero], -1)], -2)
     V2 = V @ V
     eye = np.eye(3)
     return eye + sin_part * V + cos_part * V2, eye + cos_part * V + tail * V2
@@ -225,24 +255,25 @@ def angular_momentum(g, s, s_dot, omega, transverse_inertia: float, axial_inerti
     cat frame), the shape s and ṡ (front: `front_half(s)` if at hand)."""
     s_dot, omega = floats(s_dot), floats(omega)
     Q, jacobian = front_half(s) if front is None else front
-    if s_dot.ndim == 1:  # one shape velocity: np.stack of 0-d arrays costs more than the rest of the line
+    xp = _np(s_dot)
+    if s_dot.ndim == 1 and xp is np:  # one shape velocity: np.stack of 0-d arrays costs more than the rest of the line
         v_dot = 0.5 * np.array([0.0, -s_dot[1], s_dot[0]])
     else:
-        v_dot = 0.5 * np.stack([np.zeros_like(s_dot[..., 0]), -s_dot[..., 1], s_dot[..., 0]], -1)
+        v_dot = 0.5 * xp.stack([xp.zeros_like(s_dot[..., 0]), -s_dot[..., 1], s_dot[..., 0]], -1)
     inertia = np.array([axial_inertia, transverse_inertia, transverse_inertia])
     total, centres = 0.0, []
     for Q_i, w_i, sign in ((Q, jacobian @ v_dot[..., None], 1.0), (np.swapaxes(Q, -1, -2),
                            -np.swapaxes(jacobian, -1, -2) @ v_dot[..., None], -1.0)):  # fmt: skip
         w_i = w_i[..., 0]  # Q̇_i Q_iᵀ = ŵ_i
-        body = np.einsum("...ji,...j->...i", Q_i, omega + w_i)  # ω_i in the half's own axes
-        total = total + np.einsum("...ij,...j->...i", Q_i, inertia * body)
+        body = matvec(Q_i, omega + w_i, transposed=True)  # ω_i in the half's own axes
+        total = total + matvec(Q_i, inertia * body)
         axis = Q_i[..., 0]
-        centres.append((sign * cm_distance * axis, sign * cm_distance * _cross(w_i, axis)))  # joint → centre
+        centres.append((sign * cm_distance * axis, sign * cm_distance * cross(w_i, axis)))  # joint → centre
     (a, a_dot), (b, b_dot) = centres
     shift, shift_dot = 0.5 * (a + b), 0.5 * (a_dot + b_dot)  # the joint → the system's centre of mass
     for r, r_dot in ((a - shift, a_dot - shift_dot), (b - shift, b_dot - shift_dot)):
-        total = total + mass * _cross(r, _cross(omega, r) + r_dot)
-    return np.einsum("...ij,...j->...i", g, total)
+        total = total + mass * cross(r, cross(omega, r) + r_dot)
+    return matvec(g, total)
 
 
 def disc_segment(s, s_dot, max_bend: float, dt: float):
@@ -252,20 +283,28 @@ def disc_segment(s, s_dot, max_bend: float, dt: float):
     s, v = floats(s), floats(s_dot)
     if s.ndim == 1:
         return _disc_segment_one(s, v, max_bend, dt)
-    ops = ARRAYS if np.iscomplexobj(s) or np.iscomplexobj(v) else np  # numpy's own on real rows: no dispatch per call
+    # numpy's own on real rows (no dispatch per call); ARRAYS' on a Jacobian's complex rows; the namespace of traced
+    # rows (connenv.jax), whose maximum and minimum take ARRAYS' one-sided derivative at a tie (s on the disc's edge)
+    xp = _np(v) if _np(s) is np else _np(s)
+    if xp is not np:
+        ops, minimum, maximum = xp, xp.minimum_one_sided, xp.maximum_one_sided
+    else:
+        ops = ARRAYS if is_complex(s) or is_complex(v) else np
+        minimum, maximum = ops.minimum, ops.maximum
+    real = ARRAYS.real_part if xp is np else xp.real_part
     a, b = np.sum(v * v, -1), 2 * np.sum(s * v, -1)
-    c = ops.minimum(np.sum(s * s, -1) - max_bend**2, 0.0)  # ≤ 0: s is in the disc
+    c = minimum(np.sum(s * s, -1) - max_bend**2, 0.0)  # ≤ 0: s is in the disc
     end = s + v * dt
-    inside = np.real(np.sum(end * end, -1)) <= max_bend**2
-    root = np.sqrt(b * b - 4 * a * np.where(inside, 0.0, c))
+    inside = real(np.sum(end * end, -1)) <= max_bend**2
+    root = xp.sqrt(b * b - 4 * a * xp.where(inside, 0.0, c))
     with np.errstate(divide="ignore", invalid="ignore"):
-        reach = np.where(np.real(b) >= 0, -2 * c / (b + root), (root - b) / (2 * a))
-    reach = np.nan_to_num(reach)
-    tau = np.where(inside, dt, np.clip(reach, 0.0, dt) if ops is np else ops.minimum(ops.maximum(reach, 0.0), dt))
+        reach = xp.where(real(b) >= 0, -2 * c / (b + root), (root - b) / (2 * a))
+    reach = xp.nan_to_num(reach)
+    tau = xp.where(inside, dt, np.clip(reach, 0.0, dt) if ops is np else minimum(maximum(reach, 0.0), dt))
     edge = s + v * tau[..., None]
-    edge = edge * ops.minimum(1.0, max_bend / ops.maximum(ops.hypot(edge[..., 0], edge[..., 1]), 1e-300))[..., None]
-    s_end = np.where(inside[..., None], end, edge)
-    v_end = np.where(inside[..., None], v, 0.0)
+    edge = edge * minimum(1.0, max_bend / maximum(ops.hypot(edge[..., 0], edge[..., 1]), 1e-300))[..., None]
+    s_end = xp.where(inside[..., None], end, edge)
+    v_end = xp.where(inside[..., None], v, 0.0)
     return (float(tau) if np.ndim(tau) == 0 else tau), s_end, v_end
 
 

@@ -44,8 +44,8 @@ class Connection:
         else:
             rows = s.reshape(-1, s.shape[-1])
             A = np.stack([self.connection(r) for r in rows]).reshape(*s.shape[:-1], -1, s.shape[-1])
-        xi = -np.sum(floats(A) * np.asarray(s_dot)[..., None, :], axis=-1)
-        return tuple(xi.tolist()) if xi.ndim == 1 else tuple(np.moveaxis(xi, -1, 0))
+        xi = -np.sum(floats(A) * _rows(s_dot)[..., None, :], axis=-1)
+        return tuple(xi.tolist()) if xi.ndim == 1 and not _traced(xi) else tuple(np.moveaxis(xi, -1, 0))
 
     def vector_field(self, y, s, s_dot):
         """ẏ of the coordinates of g (for the generic steppers: RK4, scipy's): θ̇ = ω on SO2; on SE2 (ẋ, ẏ) = R(θ) v
@@ -72,6 +72,16 @@ class Connection:
             W[..., 0, 1], W[..., 0, 2], W[..., 1, 2] = -xi[..., 2], xi[..., 1], -xi[..., 0]
             W = W - np.swapaxes(W, -1, -2)
         return (R @ W if self.frame == "body" else W @ R).reshape(y.shape)
+
+
+def _traced(x) -> bool:
+    """Whether x is a traced array (connenv.jax's), not a float nor a numpy array."""
+    return not isinstance(x, (float, np.ndarray, np.generic)) and traced(namespace(x))
+
+
+def _rows(x):
+    """x as numpy's array, a traced array as itself."""
+    return x if _traced(x) else np.asarray(x)
 
 
 @dataclass(frozen=True)
@@ -116,7 +126,11 @@ class ConstantConnection(Connection):
             g, tau = tuple(np.moveaxis(floats(y), -1, 0)), floats(tau)
         step = group.exp([tau * c for c in xi])
         g = group.product(g, step) if self.frame == "body" else group.product(step, g)
-        return np.array(g) if single else np.stack(np.broadcast_arrays(*g), -1)
+        if single:
+            return np.array(g)
+        if _traced(g[0]):  # traced rows (connenv.jax): every coordinate a row already
+            return namespace(g[0]).stack(g, -1)
+        return np.stack(np.broadcast_arrays(*g), -1)
 
 
 def connection_system(group, frame, connection, vectorized, exact_segment, shapes, dt, speed) -> Connection:
