@@ -113,23 +113,32 @@ class FunctionalEnv:
         return env._transition(x, action)
 
     def _transition(self, x, action):
-        X = jnp.asarray(x, float)[None]
-        a = jnp.asarray(action, float).reshape(1, *self._action_space.shape)
+        X_next, obs, reward, terminated, info, stalled = self._advance_rows(jnp.asarray(x, float)[None],
+                                                                            jnp.asarray(action, float)[None])
+        return jax.tree_util.tree_map(lambda v: v[0], (X_next, obs, reward, terminated, info, stalled))
+
+    def _advance_rows(self, X, A):
+        """(X_next, obs, reward, terminated, info, failed) of rows X (N, n) under actions A (N, *shape): the numpy
+        vector env's path, each a row's; a row whose step failed is marked in ``failed``."""
+        N = X.shape[0]
+        a = jnp.asarray(A, float).reshape(N, *self._action_space.shape)
         a = jnp.minimum(jnp.maximum(a, self._low), self._high)
         before = self.state_of(X)
         with failures() as failed:
             after = self.env.advance(before, self.env.command(a), self.stepper, JAX_TASK)
             X_next = self.flatten(after)
-        stalled = jnp.zeros((), bool)
+        stalled = jnp.zeros(N, bool)
         for condition, _ in failed:
-            stalled = stalled | jnp.any(condition)
+            condition = jnp.asarray(condition)
+            per_row = condition.shape[:1] == (N,)
+            stalled = stalled | (jnp.any(condition.reshape(N, -1), axis=-1) if per_row else jnp.any(condition))
         info = self.env.describe(after, JAX_TASK)
         reward = self.env.reward(before, after, info, JAX_TASK)
         terminated = self.env.terminated(after, info, JAX_TASK)
         obs = self.env.observe(after, JAX_TASK)
-        first = lambda v: jnp.asarray(v)[0] if jnp.ndim(v) > 0 else jnp.asarray(v)  # noqa: E731
-        info = jax.tree_util.tree_map(first, info)
-        return X_next[0], first(obs), first(reward), first(terminated) & ~stalled, info, stalled
+        rows = lambda v: jnp.broadcast_to(v, (N, *jnp.shape(v)[1:])) if jnp.ndim(v) > 0 else jnp.broadcast_to(v, (N,))  # noqa: E731
+        info = jax.tree_util.tree_map(rows, info)
+        return X_next, rows(obs), rows(reward), rows(terminated) & ~stalled, info, stalled
 
     def step_env(self, key, state: EnvState, action, params: EnvParams | None = None):
         """One step without autoreset: (obs, state, reward, terminated, truncated, info)."""
@@ -168,3 +177,28 @@ class FunctionalEnv:
         info = {**info, "final_observation": obs, "final_x": after.x}
         state = jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), fresh, after)
         return jnp.where(done, obs_reset, obs), state, reward, terminated, truncated, info
+
+    # -- rows: the vector env's step, without vmap ------------------------------
+
+    def reset_rows(self, key, n: int, params: EnvParams | None = None):
+        """n starting states (obs (n, …), EnvState with x (n, n_x) and time (n,)) from one key."""
+        return jax.vmap(self.reset_env, (0, None))(jax.random.split(key, n), params)
+
+    def step_rows(self, key, state: EnvState, action, params: EnvParams | None = None):
+        """``step`` of rows (state.x (N, n), action (N, …)) in one call, as the numpy vector env steps its rows: the
+        same numbers as ``jax.vmap(env.step)``, but a branch that no row takes (the exact step's numerical fallback)
+        is skipped, which under vmap is computed for every row."""
+        params = self.default_params if params is None else params
+        X_next, obs, reward, terminated, info, failed = self._for(params)._advance_rows(state.x, action)
+        X_next = jnp.where(failed[:, None], state.x, X_next)
+        time = state.time + 1
+        truncated = ((time >= params.max_steps_in_episode) | failed) & ~terminated
+        info = {**info, "stepper_failed": failed, "final_observation": obs, "final_x": X_next}
+        obs_reset, fresh = self.reset_rows(key, state.x.shape[0], params)
+        done = terminated | truncated
+
+        def pick(a, b):
+            return jnp.where(done.reshape(-1, *([1] * (jnp.ndim(a) - 1))), a, b)
+
+        state = jax.tree_util.tree_map(pick, fresh, EnvState(X_next, time))
+        return pick(obs_reset, obs), state, reward.astype(float), terminated, truncated, info

@@ -3,8 +3,9 @@
 
     python -m connenv.throughput --backend jax [--envs ID ...] [--sizes 1 64 1024 4096 65536] [--write PATH]
 
-A rollout is ``jax.jit`` of ``lax.scan`` over ROLLOUT steps of ``jax.vmap(env.step)`` (autoresets included) with
-random actions drawn from the key inside the program, as a PureJaxRL-style trainer runs an env. Its compile time is
+A rollout is ``jax.jit`` of ``lax.scan`` over ROLLOUT steps of ``env.step_rows`` (the N envs' step in one call:
+the numbers of ``jax.vmap(env.step)``, with a branch no row takes skipped) and autoresets, with random actions
+drawn from the key inside the program, as a PureJaxRL-style trainer runs an env. Its compile time is
 the first call's; the rate is N × ROLLOUT / the median time of the following calls. The numpy figure is
 connenv.throughput's native vector env at the same N (timed in blocks as there), and the ratio JAX / numpy is the
 target's (issue 45: ≥ 2× at N = 4096, ≥ 5× at N = 64, compile < 30 s). Pendulum's rollout is the same program on
@@ -28,13 +29,12 @@ COMPILE_MAX = 30.0  # s
 def rollout_program(env, params, n: int):
     """A jitted rollout of ROLLOUT steps of n envs with random actions: (key, states) -> (key, states, Σ reward)."""
     space = env.action_space(params)
-    step = jax.vmap(env.step, (0, 0, 0, None))
 
     def body(carry, _):
         key, states = carry
         key, act, run = jax.random.split(key, 3)
         actions = jax.vmap(space.sample)(jax.random.split(act, n))
-        obs, states, reward, terminated, truncated, info = step(jax.random.split(run, n), states, actions, params)
+        obs, states, reward, terminated, truncated, info = env.step_rows(run, states, actions, params)
         return (key, states), reward.sum()
 
     @jax.jit
