@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.core.backend import FLOATS
+from connenv.core.backend import FLOATS, namespace
 from connenv.systems.surfaces import Surface
 
 SERIES_BELOW = 0.3  # |Ωτ| under which (Ωτ − sin Ωτ)/(Ωτ)² is summed as its series (no cancellation)
@@ -70,9 +70,10 @@ class RollingCoinSurface:
 
     def vector_field(self, y, u, u_dot):
         """ẏ = (R sin θ φ̇, R cos θ φ̇, φ̇, −(2 g/(3 R)) (z_x sin θ + z_y cos θ)); u_dot drops out."""
-        if y.ndim == 1:  # one state: Python floats, no array calls but the result
+        if y.ndim == 1 and type(y) is np.ndarray:  # one state: Python floats, no array calls but the result
             return np.array(self.vector_field_one(y.tolist(), u, u_dot))
-        return np.stack(np.broadcast_arrays(*self._rates(y[..., 0], y[..., 1], y[..., 3], u[..., 0], np)), axis=-1)
+        ops = namespace(y)  # numpy's rows (ARRAYS: numpy's own functions), or JAX's (connenv.jax)
+        return ops.stack(ops.broadcast_arrays(*self._rates(y[..., 0], y[..., 1], y[..., 3], u[..., 0], ops)), axis=-1)
 
     def vector_field_one(self, y, u, u_dot):
         """vector_field of one state y = [x, y, φ, φ̇] of Python floats, as a list."""
@@ -80,7 +81,8 @@ class RollingCoinSurface:
         return self._rates(x, yy, phi_dot, float(u[0]), FLOATS)
 
     def _rates(self, x, y, phi_dot, theta, ops):
-        """ẏ's components at (x, y), φ̇ and heading θ: Python floats with ops=FLOATS, or rows with numpy."""
+        """ẏ's components at (x, y), φ̇ and heading θ: Python floats with ops=FLOATS, or rows with their namespace
+        (ARRAYS, or JAX's)."""
         _, z_x, z_y = self.surface.height(x, y)
         s, c = ops.sin(theta), ops.cos(theta)
         v = self.radius * phi_dot

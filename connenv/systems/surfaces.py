@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from connenv.core.backend import namespace, traced
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number, check_vector
 
 GRID = 201  # samples per side of the arena for the checks and the bounds
@@ -74,7 +75,10 @@ class Hill(Surface):
         sx, sy = self.slope
         cx, cy = self.center
         dx, dy = x - cx, y - cy
-        exp = math.exp if isinstance(x, float) and isinstance(y, float) else np.exp
+        if isinstance(x, float) and isinstance(y, float):
+            exp = math.exp
+        else:  # numpy's, or JAX's on its rows (connenv.jax)
+            exp = ops.exp if traced(ops := namespace(dx)) else np.exp
         bump = self.H * exp(-(dx * dx + dy * dy) / (2.0 * self.width**2))
         scale = bump / self.width**2
         return sx * x + sy * y + bump, sx - scale * dx, sy - scale * dy
