@@ -243,3 +243,19 @@ def test_the_cat_and_tube_resets_draw_their_distributions():
     target = np.asarray(tube.target)
     assert np.all((target >= 0.3) & (target <= 3.0)) and abs(target.mean() - 1.65) < 0.05
     assert np.all(np.asarray(tube.g) == np.eye(3).ravel()) and np.all(np.asarray(tube.R0) == np.eye(3).ravel())
+
+
+def test_the_coin_on_a_surface_resets_to_its_distribution():
+    """RollingCoinSurface-v0 starts at rest at the origin, θ uniform on [−π, π), the target target_distance from it
+    within ±target_angle of the steepest descent, from a key; E = E₀ there, the numpy env's start energy."""
+    jenv, params = cj.make("connenv/RollingCoinSurface-v0")
+    obs, states = jax.vmap(jenv.reset, (0, None))(jax.random.split(jax.random.key(0), 4000), params)
+    coin = jenv.state_of(np.asarray(states.x))
+    env = gym.make("connenv/RollingCoinSurface-v0").unwrapped
+    env.reset(seed=0)
+    theta, target = np.asarray(coin.theta), np.asarray(coin.target).reshape(-1, 2)
+    assert np.all(np.asarray(coin.y).reshape(-1, 4) == 0.0) and np.all(np.asarray(coin.energy) == env.state.energy0)
+    assert np.all(np.abs(theta) <= math.pi) and abs(np.mean(theta)) < 0.1 and abs(np.std(theta) - math.pi / 3**0.5) < 0.05
+    np.testing.assert_allclose(np.hypot(*target.T), env.target_distance, rtol=1e-14)
+    bearing = np.arctan2(target[:, 0], target[:, 1]) - env.downhill
+    assert np.all(np.abs(bearing) <= env.target_angle + 1e-12) and np.std(bearing) > 0.9 * env.target_angle / 3**0.5

@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.backend import SCALAR
+from connenv.core.backend import vector as entries_vector
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, interval, options, step
 from connenv.core.segments import check_drift, run_segments
@@ -209,14 +210,16 @@ class RollingCoinSurfaceEnv(TaskEnv):
         state = CoinSurfaceState(y, theta, target, t, energy, energy if energy0 is None else energy0, previous, 0.0)
         return state.replace(miss=self.closest_approach(state, ops))
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):
+        """At rest at the start point, θ and the target's direction drawn from np_random; traced (``connenv.jax``, ops
+        its namespace), the same draws from its key."""
         theta = self.np_random.uniform(-math.pi, math.pi)
         angle = self.downhill + self.np_random.uniform(-self.target_angle, self.target_angle)
         x0, y0 = self.start_point
-        target = np.array([x0 + self.target_distance * math.sin(angle), y0 + self.target_distance * math.cos(angle)])
+        target = entries_vector(x0 + self.target_distance * ops.sin(angle), y0 + self.target_distance * ops.cos(angle))
         values = self.reset_values(options, {"x": x0, "y": y0, "theta": theta, "target": target})
-        y = np.array([values["x"], values["y"], values["phi"], values["phi_dot"]])
-        return self.at(y, values["theta"], values["target"], 0.0, None, None)
+        y = entries_vector(values["x"], values["y"], values["phi"], values["phi_dot"])
+        return self.at(y, values["theta"], values["target"], 0.0, None, None, ops=ops)
 
     def advance(self, s, rate, stepper, ops=SCALAR):
         """The state after a step at θ̇ = rate (one, or one per row with ops=BATCH and a batched stepper)."""
@@ -289,5 +292,6 @@ SPECS = (
             ("coin_plane", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"}, None),
         ),
         bench="coin_surface",
+        jax=({}, {"surface": "x**2/20 - y/4 + cos(x)*exp(-(y - 2)**2)/2"}),
     ),
 )

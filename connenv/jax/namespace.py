@@ -219,6 +219,7 @@ JAX = operations(
     concatenate=jnp.concatenate,
     full=jnp.full,
     ceil=jnp.ceil,
+    exp=jnp.exp,
     broadcast_arrays=jnp.broadcast_arrays,
     broadcast_to=jnp.broadcast_to,
     repeat=repeat,

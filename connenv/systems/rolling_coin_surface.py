@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.core.backend import FLOATS
+from connenv.core.backend import FLOATS, namespace, traced
 from connenv.systems.surfaces import Surface
 
 SERIES_BELOW = 0.3  # |Ωτ| under which (Ωτ − sin Ωτ)/(Ωτ)² is summed as its series (no cancellation)
@@ -70,9 +70,10 @@ class RollingCoinSurface:
 
     def vector_field(self, y, u, u_dot):
         """ẏ = (R sin θ φ̇, R cos θ φ̇, φ̇, −(2 g/(3 R)) (z_x sin θ + z_y cos θ)); u_dot drops out."""
-        if y.ndim == 1:  # one state: Python floats, no array calls but the result
+        if y.ndim == 1 and type(y) is np.ndarray:  # one state: Python floats, no array calls but the result
             return np.array(self.vector_field_one(y.tolist(), u, u_dot))
-        return np.stack(np.broadcast_arrays(*self._rates(y[..., 0], y[..., 1], y[..., 3], u[..., 0], np)), axis=-1)
+        ops = namespace(y)  # numpy's rows (ARRAYS: numpy's own functions), or JAX's (connenv.jax)
+        return ops.stack(ops.broadcast_arrays(*self._rates(y[..., 0], y[..., 1], y[..., 3], u[..., 0], ops)), axis=-1)
 
     def vector_field_one(self, y, u, u_dot):
         """vector_field of one state y = [x, y, φ, φ̇] of Python floats, as a list."""
@@ -80,7 +81,8 @@ class RollingCoinSurface:
         return self._rates(x, yy, phi_dot, float(u[0]), FLOATS)
 
     def _rates(self, x, y, phi_dot, theta, ops):
-        """ẏ's components at (x, y), φ̇ and heading θ: Python floats with ops=FLOATS, or rows with numpy."""
+        """ẏ's components at (x, y), φ̇ and heading θ: Python floats with ops=FLOATS, or rows with their namespace
+        (ARRAYS, or JAX's)."""
         _, z_x, z_y = self.surface.height(x, y)
         s, c = ops.sin(theta), ops.cos(theta)
         v = self.radius * phi_dot
@@ -97,21 +99,26 @@ class RollingCoinPlane(RollingCoinSurface):
     """The coin on a plane (surface a connenv.systems.surfaces.Plane), with its closed-form step."""
 
     def exact_segment(self, y, u, u_dot, tau):
-        """The state after τ at θ = θ₀ + Ω t (the module's closed form), over leading axes."""
-        if np.ndim(y) == 1 and np.ndim(tau) == 0:
+        """The state after τ at θ = θ₀ + Ω t (the module's closed form), over leading axes (numpy's rows, or JAX's:
+        ``connenv.jax``, the same arithmetic in their namespace)."""
+        if np.ndim(y) == 1 and np.ndim(tau) == 0 and type(y) is np.ndarray:
             return self._exact_one(y, float(u[0]), float(u_dot[0]), float(tau))
-        y = np.asarray(y, float)
-        theta0, omega = np.asarray(u, float)[..., 0], np.asarray(u_dot, float)[..., 0]
+        if traced(ops := namespace(y)):
+            theta0, omega = u[..., 0], u_dot[..., 0]
+        else:
+            ops, y = np, np.asarray(y, float)
+            theta0, omega = np.asarray(u, float)[..., 0], np.asarray(u_dot, float)[..., 0]
         sx, sy = self.surface.slope
         k, R = 2.0 * self.g / 3.0, self.radius
         v0 = R * y[..., 3]
-        phi1, phi2 = phi_functions(omega * tau)
-        turn = np.exp(1j * theta0)
+        phi1, phi2 = phi_functions(omega * tau, ops)
+        turn = ops.exp(1j * theta0)
         a = (sy - 1j * sx) * turn
         v = v0 - k * tau * (a * phi1).real
-        zeta = turn * tau * (v0 * phi1 - 0.5 * k * tau * (0.5 * a * phi1 * phi1 + np.conj(a) * phi2))
+        zeta = turn * tau * (v0 * phi1 - 0.5 * k * tau * (0.5 * a * phi1 * phi1 + a.conj() * phi2))
         roll = (v0 * tau - k * tau * tau * (a * phi2).real) / R
-        return np.stack(np.broadcast_arrays(y[..., 0] + zeta.imag, y[..., 1] + zeta.real, y[..., 2] + roll, v / R), -1)
+        rows = (y[..., 0] + zeta.imag, y[..., 1] + zeta.real, y[..., 2] + roll, v / R)
+        return ops.stack(ops.broadcast_arrays(*rows), -1)
 
 
     def _exact_one(self, y, theta0, omega, tau):
@@ -148,16 +155,17 @@ def odd_series(alpha):
     return alpha * (1 / 6 - a2 * (1 / 120 - a2 * (1 / 5040 - a2 * (1 / 362880 - a2 * (1 / 39916800 - a2 / 6227020800)))))
 
 
-def phi_functions(angle):
+def phi_functions(angle, xp=np):
     """(φ₁(i α), φ₂(i α)) for real α = Ωτ, without cancellation: φ₁ = sin α/α + i (1 − cos α)/α,
     φ₂ = (1 − cos α)/α² + i (α − sin α)/α², the half-angle forms and, for |α| < SERIES_BELOW, the series of
-    (α − sin α)/α²."""
-    alpha = np.asarray(angle, float)
-    half = np.sinc(alpha / (2.0 * math.pi))  # sin(α/2)/(α/2)
+    (α − sin α)/α². xp: numpy, or JAX's namespace on its rows (``connenv.jax``)."""
+    alpha = angle if traced(xp) else np.asarray(angle, float)
+    half = xp.sinc(alpha / (2.0 * math.pi))  # sin(α/2)/(α/2)
     versine = 0.5 * half * half  # (1 − cos α)/α²
     a2 = alpha * alpha
     series = odd_series(alpha)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        direct = (alpha - np.sin(alpha)) / a2
-    odd = np.where(np.abs(alpha) < SERIES_BELOW, series, direct)
-    return np.sinc(alpha / math.pi) + 1j * alpha * versine, versine + 1j * odd
+    small = xp.abs(alpha) < SERIES_BELOW
+    with np.errstate(divide="ignore", invalid="ignore"):  # a2 = 0 only where the series is taken: 1 there, so
+        direct = (alpha - xp.sin(alpha)) / xp.where(small, 1.0, a2)  # that no 0/0 reaches reverse mode's product
+    odd = xp.where(small, series, direct)
+    return xp.sinc(alpha / math.pi) + 1j * alpha * versine, versine + 1j * odd

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from connenv.core.backend import floats, namespace, traced
 from connenv.core.validation import MAGNITUDE_BOUND, check_keys, check_number, check_vector
 
 GRID = 201  # samples per side of the arena for the checks and the bounds
@@ -74,7 +75,10 @@ class Hill(Surface):
         sx, sy = self.slope
         cx, cy = self.center
         dx, dy = x - cx, y - cy
-        exp = math.exp if isinstance(x, float) and isinstance(y, float) else np.exp
+        if isinstance(x, float) and isinstance(y, float):
+            exp = math.exp
+        else:  # numpy's, or JAX's on its rows (connenv.jax)
+            exp = ops.exp if traced(ops := namespace(dx)) else np.exp
         bump = self.H * exp(-(dx * dx + dy * dy) / (2.0 * self.width**2))
         scale = bump / self.width**2
         return sx * x + sy * y + bump, sx - scale * dx, sy - scale * dy
@@ -106,14 +110,28 @@ class Symbolic(Surface):
         if expr.has(sympy.I):
             raise ValueError(f"surface={expression!r} is complex (it has I): the height must be real")
         derivatives = (expr, expr.diff(x), expr.diff(y))
+        self._symbols, self._derivatives, self._traced = (x, y), derivatives, None
         self._functions = [sympy.lambdify((x, y), e, "numpy") for e in derivatives]
         self._scalar = [sympy.lambdify((x, y), e, "math") for e in derivatives]  # one point: no array calls
 
     def height(self, x, y):
         if isinstance(x, float) and isinstance(y, float):
             return tuple(float(f(x, y)) for f in self._scalar)
-        x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
-        return tuple(np.broadcast_to(np.asarray(f(x, y), float), x.shape) for f in self._functions)
+        if traced(ops := namespace(x)) or traced(ops := namespace(y)):  # JAX's rows (connenv.jax)
+            x, y = ops.broadcast_arrays(x * 1.0, y * 1.0)
+            return tuple(ops.broadcast_to(f(x, y) * 1.0, x.shape) for f in self._jax_functions())
+        # floats: complex on a Jacobian's rows, whose imaginary parts carry the derivatives
+        x, y = np.broadcast_arrays(floats(x), floats(y))
+        return tuple(np.broadcast_to(floats(f(x, y)), x.shape) for f in self._functions)
+
+    def _jax_functions(self):
+        """The height and its gradient lambdified for jax.numpy, made on the first traced call (``import connenv``
+        imports no jax)."""
+        if self._traced is None:
+            import sympy
+
+            self._traced = [sympy.lambdify(self._symbols, e, "jax") for e in self._derivatives]
+        return self._traced
 
     def __getstate__(self):
         return {"expression": self.expression, "params": self.params}
