@@ -137,6 +137,8 @@ vars(ARRAYS).update(
     ceil=np.ceil,
     broadcast_arrays=np.broadcast_arrays,
     broadcast_to=np.broadcast_to,
+    sinh=np.sinh,
+    cosh=np.cosh,
     traced=False,
 )
 """numpy under the Array API names of FLOATS, safe on the complex rows of a complex-step Jacobian (see the module)."""

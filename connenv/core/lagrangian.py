@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from connenv.core.backend import floats
+from connenv.core.backend import floats, namespace, traced
 from connenv.core.mechanics import JumpClass
 
 
@@ -163,7 +163,16 @@ def _lambdify(groups, outputs):
     sizes = [len(output) for output in flat]
     bounds = list(zip(np.cumsum([0, *sizes[:-1]]), np.cumsum(sizes)))
 
+    traceable = []  # JAX's rows' function (sympy's "jax" printer), lambdified at the first traced call (connenv.jax)
+
     def call(*arrays):
+        if type(arrays[0]) is not np.ndarray and traced(ops := namespace(arrays[0])):  # JAX's rows: the same outputs
+            if not traceable:
+                traceable.append(sp.lambdify(arguments, values, "jax", cse=True))
+            shape = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
+            out = [ops.broadcast_to(v, shape) for v in traceable[0](*(a[..., j] for a in arrays
+                                                                        for j in range(a.shape[-1])))]
+            return [ops.stack(out[start:end], axis=-1) for start, end in bounds]
         if scalar[0] is not None and all(np.ndim(a) == 1 for a in arrays):
             try:
                 out = np.array(scalar[0](*(x for a in arrays for x in np.asarray(a, float).tolist())), float)

@@ -9,7 +9,8 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import SCALAR
+from connenv.core.backend import SCALAR, namespace, traced
+from connenv.core.backend import vector as entries_vector
 from connenv.core.params import Args, integrator, options, scale, step
 from connenv.core.segments import check_drift
 from connenv.core.state import Fields, Options, angle, number
@@ -152,21 +153,24 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         self.observation_space = spaces.Box(low.astype(np.float32), OBSERVATION_HIGH.astype(np.float32))
         self.state = self.track(self.state, 0.0, None)
 
-    def start(self, options):
-        r, target = self.draw_start()
+    def start(self, options, ops=SCALAR):
+        """At rest, the bead and target drawn from np_random; traced (``connenv.jax``, ops its namespace), the same
+        draws from its key."""
+        r, target = self.draw_start(ops)
         values = self.reset_values(options, {"r": r, "target": target})
-        s = self.at(np.array([values["r"], self.mass * values["r_dot"]]), np.array([values["theta"]]), 0.0, 0.0)
-        return self.track(s, float(values["target"]), None)
+        y = entries_vector(values["r"], self.mass * values["r_dot"])
+        s = self.at(y, entries_vector(values["theta"]), 0.0, 0.0)
+        return self.track(s, ops.real(values["target"]), None)
 
-    def draw_start(self):
+    def draw_start(self, ops=SCALAR):
         """(r₀, r*) drawn from np_random as the docstring's Starting State says."""
         L, rng = self.half_length, self.np_random
         if self.g > 0.0:
             r = rng.uniform(-START_REACH, START_REACH)
-            below = max(r - MIN_DISTANCE + START_REACH, 0.0)  # the length of [−0.8, r₀ − 0.2]
-            above = max(START_REACH - r - MIN_DISTANCE, 0.0)  # of [r₀ + 0.2, 0.8]
+            below = ops.maximum(r - MIN_DISTANCE + START_REACH, 0.0)  # the length of [−0.8, r₀ − 0.2]
+            above = ops.maximum(START_REACH - r - MIN_DISTANCE, 0.0)  # of [r₀ + 0.2, 0.8]
             z = rng.uniform(0.0, below + above)
-            target = -START_REACH + z if z < below else r + MIN_DISTANCE + (z - below)
+            target = ops.where(z < below, -START_REACH + z, r + MIN_DISTANCE + (z - below))
             return L * r, L * target
         side = rng.choice([-1.0, 1.0])
         r = rng.uniform(*OUTWARD_START)
@@ -191,6 +195,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     def held_energy(self, y, u, u_dot):
         """E = p²/(2m) + m g r sin θ where θ is held, 0 where it turns (the builder's, in closed form)."""
+        if type(u_dot) is not np.ndarray and traced(ops := namespace(u_dot)):  # JAX's rows (connenv.jax)
+            return ops.where(u_dot[..., 0] == 0.0, self.system.energy(y, u[..., 0]), 0.0)
         if np.ndim(y) == 1:  # one state: Python floats
             return 0.0 if u_dot[0] != 0.0 else float(self.system.energy(y, u[0]))
         return np.where(u_dot[..., 0].real == 0.0, self.system.energy(y, u[..., 0]), 0.0)
@@ -199,7 +205,8 @@ class BeadOnBarEnv(ActiveConstraintEnv):
         if isinstance(energy_error, float) and energy_error == 0.0:  # one state, nothing to bound (the bar turned)
             return
         energy_error, energy = energy_error.real, self.system.energy(y, u[..., 0]).real
-        check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
+        absolute = np.abs if type(energy_error) is np.ndarray or isinstance(energy_error, float) else abs  # JAX's: abs
+        check_drift(self.stepper, "energy error", absolute(energy_error) / (1.0 + absolute(energy)), ENERGY_ERROR_BOUND)
 
     def observe(self, s, ops=SCALAR):
         r, p = s.y.T
@@ -244,6 +251,6 @@ BEAD = {"dt_max": DT_MAX, "physics": "BeadOnBar.md", "max_episode_steps": 500,
         "fast_start": {"state": {"r_dot": 1000.0}}}
 SPECS = (
     Spec("connenv/BeadOnBar-v0", BeadOnBarEnv, **BEAD,
-         golden=(("bead", {"max_episode_steps": 60}, None),), bench="bead"),
-    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, kwargs={"omega_max": 1.0}, **BEAD),  # see Version History
+         golden=(("bead", {"max_episode_steps": 60}, None),), bench="bead", jax=({},)),
+    Spec("connenv/BeadOnBar-v1", BeadOnBarEnv, kwargs={"omega_max": 1.0}, **BEAD, jax=({},)),  # see Version History
 )

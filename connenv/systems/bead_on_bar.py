@@ -40,7 +40,7 @@ import math
 
 import numpy as np
 
-from connenv.core.backend import floats
+from connenv.core.backend import floats, namespace
 from connenv.core.lagrangian import LagrangianSystem
 
 SERIES_RADIUS = 1.0
@@ -73,11 +73,12 @@ class BeadOnBar(LagrangianSystem):
 
     def energy(self, y, theta):
         """E = p²/(2m) + m g r sin θ, conserved where θ is held."""
-        return y[..., 1] ** 2 / (2.0 * self.mass) + self.mass * self.g * y[..., 0] * np.sin(theta)
+        sin = np.sin if type(y) is np.ndarray else namespace(y).sin  # numpy's, or JAX's on traced rows
+        return y[..., 1] ** 2 / (2.0 * self.mass) + self.mass * self.g * y[..., 0] * sin(theta)
 
     def exact_segment(self, y, u, u_dot, tau):
         """(r, p) after time tau at θ̇ = u_dot from θ = u, in closed form (the module's grouped formula)."""
-        if np.ndim(y) == 1 and np.ndim(tau) == 0:
+        if type(y) is np.ndarray and np.ndim(y) == 1 and np.ndim(tau) == 0:
             return np.array(
                 segment_scalar(float(y[0]), float(y[1]), float(u[0]), float(u_dot[0]), float(tau), self.mass, self.g)
             )
@@ -124,22 +125,24 @@ def _segment_scalar(r, p, theta, omega, tau, mass, g):
 
 
 def segment(y, u, u_dot, tau, mass, g):
-    """exact_segment over a batch: y (..., 2), u and u_dot (..., 1), tau a number or one per row."""
+    """exact_segment over a batch: y (..., 2), u and u_dot (..., 1), tau a number or one per row; numpy's rows or
+    JAX's (their namespace's functions, branch-free as written)."""
     y = floats(y)  # complex on a Jacobian's rows, whose branches follow the real parts
+    ops = namespace(y)  # ARRAYS (numpy's functions) or JAX's (connenv.jax)
     r, v = y[..., 0], y[..., 1] / mass
     theta, omega = floats(u)[..., 0], floats(u_dot)[..., 0]
     tau = floats(tau)
     x = omega * tau
     zero = x.real == 0.0  # s, shc, snc and c are even in x: their derivative there is 0
-    safe = np.where(zero, 1.0, x)
+    safe = ops.where(zero, 1.0, x)
     half = 0.5 * safe
-    shc = np.where(zero, 1.0, np.sinh(safe) / safe)
-    snc = np.where(zero, 1.0, np.sin(safe) / safe)
-    c = np.where(zero, 1.0, 0.5 * ((np.sinh(half) / half) ** 2 + (np.sin(half) / half) ** 2))
-    near = np.abs(x.real) < SERIES_RADIUS
-    far = np.where(near, 1.0, x)
-    s = np.where(near, _s_series(x**4), (np.sinh(far) - np.sin(far)) / far**3)
-    cosh, sin0, cos0 = np.cosh(x), np.sin(theta), np.cos(theta)
+    shc = ops.where(zero, 1.0, ops.sinh(safe) / safe)
+    snc = ops.where(zero, 1.0, ops.sin(safe) / safe)
+    c = ops.where(zero, 1.0, 0.5 * ((ops.sinh(half) / half) ** 2 + (ops.sin(half) / half) ** 2))
+    near = abs(x.real) < SERIES_RADIUS
+    far = ops.where(near, 1.0, x)
+    s = ops.where(near, _s_series(x**4), (ops.sinh(far) - ops.sin(far)) / far**3)
+    cosh, sin0, cos0 = ops.cosh(x), ops.sin(theta), ops.cos(theta)
     r_end = r * cosh + v * tau * shc - 0.5 * g * tau * tau * (sin0 * c + cos0 * x * s)
     v_end = r * omega * x * shc + v * cosh - 0.5 * g * tau * (sin0 * (shc + snc) + cos0 * x * c)
-    return np.stack(np.broadcast_arrays(r_end, mass * v_end), axis=-1)
+    return ops.stack(ops.broadcast_arrays(r_end, mass * v_end), axis=-1)
