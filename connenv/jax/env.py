@@ -26,7 +26,7 @@ import numpy as np
 
 from connenv.jax.namespace import JAX_TASK, failures
 from connenv.jax.random import KeyGenerator
-from connenv.jax.spaces import Box, space_of
+from connenv.jax.spaces import Box, Dict, space_of
 from connenv.jax.steppers import traced_stepper
 
 
@@ -77,7 +77,7 @@ class FunctionalEnv:
     def action_space(self, params: EnvParams | None = None) -> Box:
         return self._action_space
 
-    def observation_space(self, params: EnvParams | None = None) -> Box:
+    def observation_space(self, params: EnvParams | None = None) -> Box | Dict:
         return self._observation_space
 
     # -- the state vector ------------------------------------------------------
@@ -128,8 +128,8 @@ class FunctionalEnv:
         terminated = self.env.terminated(after, info, JAX_TASK)
         obs = self.env.observe(after, JAX_TASK)
         first = lambda v: jnp.asarray(v)[0] if jnp.ndim(v) > 0 else jnp.asarray(v)  # noqa: E731
-        info = jax.tree_util.tree_map(first, info)
-        return X_next[0], first(obs), first(reward), first(terminated) & ~stalled, info, stalled
+        info, obs = jax.tree_util.tree_map(first, (info, obs))  # an observation: an array, or a dict (a goal env's)
+        return X_next[0], obs, first(reward), first(terminated) & ~stalled, info, stalled
 
     def step_env(self, key, state: EnvState, action, params: EnvParams | None = None):
         """One step without autoreset: (obs, state, reward, terminated, truncated, info)."""
@@ -148,7 +148,7 @@ class FunctionalEnv:
         task._np_random = KeyGenerator(key)
         start = task.start({}, JAX_TASK)
         X = self.flatten(self._rows(start))
-        obs = env.observe(self.state_of(X), JAX_TASK)[0]
+        obs = jax.tree_util.tree_map(lambda v: v[0], env.observe(self.state_of(X), JAX_TASK))
         return obs, EnvState(X[0], jnp.zeros((), jnp.int32))
 
     def _rows(self, state):
@@ -167,4 +167,5 @@ class FunctionalEnv:
         done = terminated | truncated
         info = {**info, "final_observation": obs, "final_x": after.x}
         state = jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), fresh, after)
-        return jnp.where(done, obs_reset, obs), state, reward, terminated, truncated, info
+        obs = jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), obs_reset, obs)
+        return obs, state, reward, terminated, truncated, info

@@ -187,6 +187,15 @@ def _atan2_jvp(primals, tangents):
     return jnp.arctan2(y, x), jnp.where(apex, 0.0, (x * ty - y * tx) / jnp.where(apex, 1.0, square))
 
 
+def single_precision(x):
+    """x rounded to float32's values, held in float64 with derivative 1: the complex step's convention on the goals'
+    rounding (its real part rounded, its imaginary part kept; `connenv.envs.rolling_ball.single_precision`), where
+    JAX's own astype(float32) would round the tangent to float32 too. x + (round(x) − x) is round(x) exactly (the
+    difference is exact, by Sterbenz's lemma)."""
+    x = jnp.asarray(x, float)
+    return x + jax.lax.stop_gradient(x.astype(jnp.float32).astype(float) - x)
+
+
 def _where(condition, a, b):
     return jnp.where(condition, a, b)
 
@@ -227,6 +236,7 @@ JAX = operations(
     fail=fail,
     sinc=jnp.sinc,
     nan_to_num=jnp.nan_to_num,
+    single_precision=single_precision,
     traced=True,
 )
 """The physics' operations on JAX arrays (see the module)."""
