@@ -4,6 +4,7 @@
 terminated, truncated, info)`` are pure functions of arrays: jit them, vmap them over keys, states and actions, and
 differentiate them. The state is `EnvState`: the model's flat task state ``x`` (``model.state_names``; float64)
 and the steps taken in the episode; ``model.pack``/``unpack`` carry a state between the numpy env and this one.
+The observation is an array, or a dict of them (a goal env's, its space a `connenv.jax.spaces.Dict`).
 ``step`` resets an episode that has ended (terminated or truncated) from its key, as gymnax's does, and gives the
 ended episode's last observation and state in ``info["final_observation"]`` and ``info["final_x"]``; ``step_env``
 and ``reset_env`` are the step and the reset alone.

@@ -10,7 +10,8 @@ bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadc
 ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
 only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
 ``nan_to_num`` (numpy's, which the falling cat's rows call), ``atan2`` and ``hypot`` with ARRAYS' derivative (0 at
-the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
+the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below), ``single_precision`` (float32's values
+with derivative 1, the goals' rounding) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
 
 **Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
 non-finite state, an invariant past its bound), the JAX physics calls ``fail(condition, message)``, which records
