@@ -79,7 +79,13 @@ def test_the_traced_step_is_the_numpy_step_to_rounding(case, one_step):
     assert not np.any(failed)
     np.testing.assert_array_equal(np.asarray(terminated), T)
     np.testing.assert_allclose(np.asarray(reward), R, rtol=STEP_RTOL, atol=STEP_RTOL)
-    np.testing.assert_allclose(np.asarray(obs), O, rtol=2 * np.finfo(np.float32).eps, atol=1e-7)  # float32's rounding
+    if isinstance(obs, dict):  # a goal env's: each key's rows
+        observed, expected = obs, {key: np.array([o[key] for o in O]) for key in obs}
+    else:
+        observed, expected = {"": obs}, {"": O}
+    for key, value in observed.items():  # float32's rounding
+        np.testing.assert_allclose(np.asarray(value), expected[key], rtol=2 * np.finfo(np.float32).eps, atol=1e-7,
+                                   err_msg=key)
     # one state, not vmapped, gives what the rows give, to the ulp or two by which XLA's code for one row and for a
     # batch may round apart (its fusions differ: KapitzaSwingUp-v0's θ and p, measured 3e-16)
     one = one_step(jnp.asarray(X[7]), jnp.asarray(A[7]))[0]
@@ -181,6 +187,28 @@ def test_the_ball_reset_draws_a_uniform_target():
     assert np.all(np.isnan(np.asarray(fields.distance)))
     P = np.swapaxes(target, 1, 2)  # R R*ᵀ at R = I
     np.testing.assert_array_equal(np.asarray(obs), np.concatenate([P[..., 0], P[..., 1]], -1).astype(np.float32))
+
+
+def test_the_goal_env_observes_a_dict_and_resets_with_its_last_one():
+    """RollingBallGoal-v0: the Dict observation space of Boxes (gymnax's spaces.Dict), a dict observation from the
+    reset and the step, and the autoreset's last observation a dict, the numpy env's from the same state."""
+    env = gym.make("connenv/RollingBallGoal-v0", tolerance=1.5).unwrapped
+    env.reset(seed=0, options={"target": np.eye(3)})
+    jenv, params = cj.make("connenv/RollingBallGoal-v0", tolerance=1.5)
+    space = jenv.observation_space(params)
+    assert set(space.spaces) == {"observation", "achieved_goal", "desired_goal"}
+    sample = space.sample(jax.random.key(0))
+    assert bool(space.contains(sample)) and all(v.dtype == np.float32 and v.shape == (6,) for v in sample.values())
+    obs, state = jenv.reset(jax.random.key(1), params)
+    assert bool(space.contains(obs))
+    x = env.model.pack(env.state)
+    obs_numpy, reward, terminated, *_ = env.step(np.array([0.1, 0.0], np.float32))  # at the target: success
+    obs, after, reward_jax, terminated_jax, truncated, info = jax.jit(jenv.step)(
+        jax.random.key(3), cj.EnvState(jnp.asarray(x), jnp.int32(0)), jnp.asarray([0.1, 0.0]), params)
+    assert terminated and bool(terminated_jax) and float(reward_jax) == reward == 0.0
+    for key, value in obs_numpy.items():
+        np.testing.assert_array_equal(np.asarray(info["final_observation"][key]), value)
+    assert int(after.time) == 0 and bool(space.contains(obs))
 
 
 def test_the_traced_jacobi_elliptic_functions_are_scipys():

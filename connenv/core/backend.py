@@ -146,9 +146,10 @@ vars(ARRAYS).update(
 
 def floats(a) -> np.ndarray:
     """a as an array of floats, or of complex numbers on the complex rows of a Jacobian (which a cast to float would
-    strip of their derivatives). A JAX array stays one (float64), as the traced rows need it."""
+    strip of their derivatives). A JAX array stays one (float64, as numpy's: a float32 one is cast), as the traced
+    rows need it."""
     if type(a) is not np.ndarray and traced(namespace(a)):
-        return a.astype(float) if a.dtype.kind != "f" else a
+        return a if a.dtype.char == "d" else a.astype(float)
     a = np.asarray(a)
     if a.dtype.char in "dD":  # float64 or complex128 already: no conversion (the common case, kept cheap)
         return a

@@ -337,8 +337,10 @@ class RollingBallGoalEnv(RollingBallEnv):
         return GoalBallState(**vars(state), achieved_goal=achieved, desired_goal=desired, goal_error=error)
 
     def observe(self, s, ops=SCALAR):
-        achieved = s.achieved_goal
-        return {"observation": achieved.copy(), "achieved_goal": achieved.copy(), "desired_goal": s.desired_goal.copy()}
+        """The goals as float32 copies (numpy's are float32 already; JAX's hold float32's values in float64)."""
+        achieved, desired = s.achieved_goal, s.desired_goal
+        return {"observation": achieved.astype(np.float32), "achieved_goal": achieved.astype(np.float32),
+                "desired_goal": desired.astype(np.float32)}
 
     def reward(self, before, after, info, ops=SCALAR):
         """compute_reward(achieved, desired) of the state after, from its goal angle."""
@@ -350,7 +352,8 @@ class RollingBallGoalEnv(RollingBallEnv):
 
     def goal_angle(self, achieved_goal, desired_goal):
         """Geodesic angle between attitudes in 6-D form, over leading batch axes."""
-        if ndim(achieved_goal) == 1 and ndim(desired_goal) == 1:  # one pair: Python floats
+        one = ndim(achieved_goal) == 1 and ndim(desired_goal) == 1
+        if one and not (traced(namespace(achieved_goal)) or traced(namespace(desired_goal))):  # one pair: Python floats (JAX's reset: its rows' code)
             return six_d_angle(achieved_goal, desired_goal)
         return rotation_angle(attitude_error(from_six_d(achieved_goal), from_six_d(desired_goal)))
 
@@ -367,9 +370,12 @@ class RollingBallGoalEnv(RollingBallEnv):
 def single_precision(x):
     """x in float32, as the goals are observed. On the complex rows of a Jacobian the real part is rounded and the
     imaginary part kept in float64: the rounding's derivative is 1, and complex64 would flush the complex step's
-    i·1e-150 to 0."""
+    i·1e-150 to 0. On JAX's rows (``connenv.jax``) the same convention: float32's values held in float64, the
+    rounding's derivative 1 (JAX's astype(float32) would round the forward-mode tangent to float32 too)."""
     if np.iscomplexobj(x):
         return x.real.astype(np.float32) + 1j * x.imag
+    if type(x) is not np.ndarray and traced(namespace(x)):
+        return namespace(x).single_precision(x)
     return x.astype(np.float32)
 
 
@@ -405,6 +411,6 @@ SPECS = (
         max_episode_steps=200, **BALL,
         measure=Measure("path / optimal arc", "", "path_ratio"), controllers=("arc", "holonomy"),
         golden=(("ball_goal", {"max_episode_steps": 50, "tolerance": 1.5}, None),),
-        single_target=3.0,
+        single_target=3.0, jax=({},),
     ),
 )

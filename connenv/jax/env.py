@@ -4,6 +4,7 @@
 terminated, truncated, info)`` are pure functions of arrays: jit them, vmap them over keys, states and actions, and
 differentiate them. The state is `EnvState`: the model's flat task state ``x`` (``model.state_names``; float64)
 and the steps taken in the episode; ``model.pack``/``unpack`` carry a state between the numpy env and this one.
+The observation is an array, or a dict of them (a goal env's, its space a `connenv.jax.spaces.Dict`).
 ``step`` resets an episode that has ended (terminated or truncated) from its key, as gymnax's does, and gives the
 ended episode's last observation and state in ``info["final_observation"]`` and ``info["final_x"]``; ``step_env``
 and ``reset_env`` are the step and the reset alone.
@@ -26,7 +27,7 @@ import numpy as np
 
 from connenv.jax.namespace import JAX_TASK, failures
 from connenv.jax.random import KeyGenerator
-from connenv.jax.spaces import Box, space_of
+from connenv.jax.spaces import Box, Dict, space_of
 from connenv.jax.steppers import traced_stepper
 
 
@@ -77,7 +78,7 @@ class FunctionalEnv:
     def action_space(self, params: EnvParams | None = None) -> Box:
         return self._action_space
 
-    def observation_space(self, params: EnvParams | None = None) -> Box:
+    def observation_space(self, params: EnvParams | None = None) -> Box | Dict:
         return self._observation_space
 
     # -- the state vector ------------------------------------------------------
@@ -137,8 +138,8 @@ class FunctionalEnv:
         terminated = self.env.terminated(after, info, JAX_TASK)
         obs = self.env.observe(after, JAX_TASK)
         rows = lambda v: jnp.broadcast_to(v, (N, *jnp.shape(v)[1:])) if jnp.ndim(v) > 0 else jnp.broadcast_to(v, (N,))  # noqa: E731
-        info = jax.tree_util.tree_map(rows, info)
-        return X_next, rows(obs), rows(reward), rows(terminated) & ~stalled, info, stalled
+        info, obs = jax.tree_util.tree_map(rows, (info, obs))  # an observation: an array, or a dict (a goal env's)
+        return X_next, obs, rows(reward), rows(terminated) & ~stalled, info, stalled
 
     def step_env(self, key, state: EnvState, action, params: EnvParams | None = None):
         """One step without autoreset: (obs, state, reward, terminated, truncated, info)."""
@@ -157,7 +158,7 @@ class FunctionalEnv:
         task._np_random = KeyGenerator(key)
         start = task.start({}, JAX_TASK)
         X = self.flatten(self._rows(start))
-        obs = env.observe(self.state_of(X), JAX_TASK)[0]
+        obs = jax.tree_util.tree_map(lambda v: v[0], env.observe(self.state_of(X), JAX_TASK))
         return obs, EnvState(X[0], jnp.zeros((), jnp.int32))
 
     def _rows(self, state):
@@ -176,7 +177,8 @@ class FunctionalEnv:
         done = terminated | truncated
         info = {**info, "final_observation": obs, "final_x": after.x}
         state = jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), fresh, after)
-        return jnp.where(done, obs_reset, obs), state, reward, terminated, truncated, info
+        obs = jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), obs_reset, obs)
+        return obs, state, reward, terminated, truncated, info
 
     # -- rows: the vector env's step, without vmap ------------------------------
 
@@ -201,4 +203,4 @@ class FunctionalEnv:
             return jnp.where(done.reshape(-1, *([1] * (jnp.ndim(a) - 1))), a, b)
 
         state = jax.tree_util.tree_map(pick, fresh, EnvState(X_next, time))
-        return pick(obs_reset, obs), state, reward.astype(float), terminated, truncated, info
+        return jax.tree_util.tree_map(pick, obs_reset, obs), state, reward.astype(float), terminated, truncated, info

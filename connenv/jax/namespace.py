@@ -10,8 +10,9 @@ bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadc
 ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
 only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
 ``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),
-``atan2`` and ``hypot`` with ARRAYS' derivative (0 at
-the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
+``atan2`` and ``hypot`` with ARRAYS' derivative (0 at the origin, where they have none), ``ellipj``/``ellipk``
+(traceable Jacobi elliptic functions, below), ``single_precision`` (float32's values with derivative 1, the goals'
+rounding) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
 
 **Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
 non-finite state, an invariant past its bound), the JAX physics calls ``fail(condition, message)``, which records
@@ -188,6 +189,15 @@ def _atan2_jvp(primals, tangents):
     return jnp.arctan2(y, x), jnp.where(apex, 0.0, (x * ty - y * tx) / jnp.where(apex, 1.0, square))
 
 
+def single_precision(x):
+    """x rounded to float32's values, held in float64 with derivative 1: the complex step's convention on the goals'
+    rounding (its real part rounded, its imaginary part kept; `connenv.envs.rolling_ball.single_precision`), where
+    JAX's own astype(float32) would round the tangent to float32 too. x + (round(x) − x) is round(x) exactly (the
+    difference is exact, by Sterbenz's lemma)."""
+    x = jnp.asarray(x, float)
+    return x + jax.lax.stop_gradient(x.astype(jnp.float32).astype(float) - x)
+
+
 def _where(condition, a, b):
     return jnp.where(condition, a, b)
 
@@ -231,6 +241,7 @@ JAX = operations(
     nan_to_num=jnp.nan_to_num,
     sinh=jnp.sinh,
     cosh=jnp.cosh,
+    single_precision=single_precision,
     traced=True,
 )
 """The physics' operations on JAX arrays (see the module)."""

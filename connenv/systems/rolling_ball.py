@@ -396,9 +396,17 @@ def from_six_d(x):
     x = floats(x)
     a, b = x[..., :3], x[..., 3:]
     c1 = a / norm(a, keepdims=True)
-    b = b - np.sum(c1 * b, axis=-1, keepdims=True) * c1
+    b = b - (c1 * b).sum(axis=-1, keepdims=True) * c1  # np.sum's reduction, in x's namespace
     c2 = b / norm(b, keepdims=True)
-    return np.stack([c1, c2, np.cross(c1, c2)], axis=-1)
+    return namespace(x).stack([c1, c2, cross(c1, c2)], axis=-1)
+
+
+def cross(u, v):
+    """u × v over the last axis (3), np.cross's arithmetic (each component a product minus a product), in u's
+    namespace."""
+    u0, u1, u2 = (u[..., i] for i in range(3))
+    v0, v1, v2 = (v[..., i] for i in range(3))
+    return namespace(u).stack([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0], -1)
 
 
 def check_so3(stepper, R):
