@@ -9,7 +9,8 @@ rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenat
 bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the connections'), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
 ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
 only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
-``nan_to_num`` (numpy's, which the falling cat's rows call), ``atan2`` and ``hypot`` with ARRAYS' derivative (0 at
+``nan_to_num`` (numpy's, which the falling cat's rows call), ``solve`` (numpy's linalg.solve, which the builders'
+Hamiltonian calls), ``atan2`` and ``hypot`` with ARRAYS' derivative (0 at
 the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions, below) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
 
 **Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
@@ -227,6 +228,7 @@ JAX = operations(
     fail=fail,
     sinc=jnp.sinc,
     nan_to_num=jnp.nan_to_num,
+    solve=jnp.linalg.solve,
     traced=True,
 )
 """The physics' operations on JAX arrays (see the module)."""
