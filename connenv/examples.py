@@ -8,7 +8,10 @@ contract tests check the generic ids with.
   (the bar's angle θ is steered by its rate);
 - ``beanie()``: ConnectionEnv on Elroy's beanie, SO(2) with A = I₂/(I₁+I₂), flat;
 - ``rolling_ball()``: ConnectionEnv on the ball rolled without turning, SO(3) in the space frame, shape the contact
-  point, A = −(1/ρ) [[0, −1], [1, 0], [0, 0]] so that ω = e_z × v/ρ.
+  point, A = −(1/ρ) [[0, −1], [1, 0], [0, 0]] so that ω = e_z × v/ρ;
+- ``swing_rk4()``, ``rotor_ramp_rk4()``, ``beanie_rk4()``: the swing, the rotor (turned at a bounded speed, not
+  jumped) and the beanie stepped by RK4, the builders' examples that ``connenv.jax`` traces (their default steppers,
+  DOP853 and Magnus, and a fit system's jumps do not trace).
 
 Every value is picklable (module-level functions, partials, sympy systems), as vector envs and copies need.
 """
@@ -79,3 +82,19 @@ def rolling_ball(radius: float = 1.0, reach: float = 10.0) -> dict:
     connection = functools.partial(rolling_ball_connection, radius=radius)
     return {"group": "SO3", "frame": "space", "connection": connection, "shape_low": [-reach, -reach],
             "shape_high": [reach, reach], "vectorized": True}
+
+
+def swing_rk4() -> dict:
+    """swing() stepped by RK4: its vector field lambdified to JAX as well, the step traced by connenv.jax."""
+    return {**swing(), "integrator": "rk4"}
+
+
+def rotor_ramp_rk4() -> dict:
+    """rotor() with u heading to its command at 2 rad/s (no jump), stepped by RK4: the body turns from rest."""
+    return {**rotor(), "max_control_speed": 2.0, "integrator": "rk4"}
+
+
+def beanie_rk4() -> dict:
+    """beanie() stepped by RK4: its connection (numpy on constants only) traced by connenv.jax."""
+    return {**beanie(), "integrator": "rk4"}
+

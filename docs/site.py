@@ -223,7 +223,13 @@ def model_section(env_id: str) -> list[str]:
               "differentiates the step by complex step, exact to rounding, with any of the env's steppers but "
               "\"lsoda\" and \"radau\" (which step rows one by one and take no complex numbers).", ""]
     traced = spec(env_id).jax
-    if traced:
+    if traced and spec(env_id).example:  # a builder: the user's functions trace, or make says what they need
+        kwargs = ", ".join(f"`{k.__module__}.{k.__name__}()`" if callable(k) else f"`{k}`" for k in traced)
+        lines += [f"**JAX:** `connenv.jax.make(\"{env_id}\", **make_kwargs)` gives this step as a pure JAX function "
+                  "(jit, vmap, grad), the same code traced, where the user's functions take JAX arrays (else a "
+                  "TypeError saying what they need); tests/test_jax.py checks it against the numpy step with "
+                  f"{kwargs}. How it may differ: [the JAX guide](../guides/jax.md).", ""]
+    elif traced:
         kwargs = ", ".join(f"`{k}`" if k else "the default make kwargs" for k in traced)
         lines += [f"**JAX:** `connenv.jax.make(\"{env_id}\")` gives this step as a pure JAX function (jit, vmap, "
                   f"grad), the same code traced; tests/test_jax.py checks it against the numpy step with {kwargs}. "

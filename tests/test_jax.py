@@ -26,7 +26,8 @@ from connenv.core.steppers import StepperError  # noqa: E402
 from connenv.jax.namespace import ellipj  # noqa: E402
 
 CASES = [(spec.id, kwargs) for spec in registry.values() for kwargs in spec.jax]
-IDS = [f"{i.removeprefix('connenv/')}{''.join(f'-{k}={v}' for k, v in kw.items())}" for i, kw in CASES]
+IDS = [i.removeprefix("connenv/") + (f"-{kw.__name__}" if callable(kw) else "".join(f"-{k}={v}" for k, v in kw.items()))
+       for i, kw in CASES]  # a builder's kwargs by its example's name
 SEEDS, STEPS = 20, 1000
 STEP_RTOL = 1e-12
 """|x_jax − x_numpy| ≤ STEP_RTOL · max(1, |x_numpy|) entry by entry after one step: XLA's sin, cos, atan2 and its
@@ -58,6 +59,7 @@ def trajectories(env_id, kwargs):
 @pytest.fixture(scope="module", params=CASES, ids=IDS)
 def case(request):
     env_id, kwargs = request.param
+    kwargs = kwargs() if callable(kwargs) else kwargs  # a builder's example (Spec.jax)
     jenv, params = cj.make(env_id, **kwargs)
     return jenv, params, trajectories(env_id, kwargs)
 
@@ -287,3 +289,28 @@ def test_the_coin_on_a_surface_resets_to_its_distribution():
     np.testing.assert_allclose(np.hypot(*target.T), env.target_distance, rtol=1e-14)
     bearing = np.arctan2(target[:, 0], target[:, 1]) - env.downhill
     assert np.all(np.abs(bearing) <= env.target_angle + 1e-12) and np.std(bearing) > 0.9 * env.target_angle / 3**0.5
+
+
+def _numpy_connection(s):
+    """A(s) = [[cos s₁]] by numpy's cos, which converts its argument: no JAX version."""
+    return np.array([[np.cos(s[0])]])
+
+
+def test_a_connection_or_system_that_does_not_trace_is_a_type_error_saying_what_is_needed():
+    """Connection-v0 of a connection written with numpy's functions, ActiveConstraint-v0 of a fit system's jumps
+    (scipy's DOP853): a TypeError at make naming what the user's functions need; the builders' systems that trace
+    (a bead's general one by velocity, the ball's constant connection) are made, and their reset traces."""
+    from connenv import examples
+
+    kwargs = dict(group="SO2", connection=_numpy_connection, shape_low=[-1.0], shape_high=[1.0], integrator="rk4")
+    with pytest.raises(TypeError, match="namespace of its argument"):
+        cj.make("connenv/Connection-v0", **kwargs)
+    with pytest.raises(TypeError, match="fit system's jumps"):
+        cj.make("connenv/ActiveConstraint-v0", **{**examples.rotor(), "integrator": "rk4"})
+    for env_id, made in (("connenv/ActiveConstraint-v0", examples.bead()),
+                         ("connenv/Connection-v0", examples.rolling_ball())):
+        jenv, params = cj.make(env_id, **made, integrator="rk4")
+        env = gym.make(env_id, **made, integrator="rk4").unwrapped
+        env.reset(seed=0)
+        obs, state = jenv.reset(jax.random.key(0), params)
+        np.testing.assert_array_equal(np.asarray(state.x), env.model.pack(env.state))

@@ -12,8 +12,10 @@ symbolically:
 - the jump flow of a fit system: along a straight path u(s) = u + s Δu, s ∈ [0, 1],
   dq/ds = −K(q, u(s)) Δu,  dp/ds = ∂/∂q [pᵀ K(q, u(s))] Δu (``jump_field``).
 
-All of them are lambdified to numpy and broadcast over leading batch axes (coordinates on the last axis). A
-system pickles as its expressions and is derived again when unpickled.
+All of them are lambdified to numpy and broadcast over leading batch axes (coordinates on the last axis); on JAX
+arrays (``connenv.jax``), to JAX (sympy's ``modules="jax"``, built on the first traced call), from the same
+expressions, so that a system built here traces. A system pickles as its expressions and is derived again when
+unpickled.
 """
 
 from __future__ import annotations
@@ -163,16 +165,11 @@ def _lambdify(groups, outputs):
     sizes = [len(output) for output in flat]
     bounds = list(zip(np.cumsum([0, *sizes[:-1]]), np.cumsum(sizes)))
 
-    traceable = []  # JAX's rows' function (sympy's "jax" printer), lambdified at the first traced call (connenv.jax)
+    jax = []  # the JAX function, lambdified on the first traced call (connenv.jax): import connenv imports no jax
 
     def call(*arrays):
-        if type(arrays[0]) is not np.ndarray and traced(ops := namespace(arrays[0])):  # JAX's rows: the same outputs
-            if not traceable:
-                traceable.append(sp.lambdify(arguments, values, "jax", cse=True))
-            shape = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
-            out = [ops.broadcast_to(v, shape) for v in traceable[0](*(a[..., j] for a in arrays
-                                                                        for j in range(a.shape[-1])))]
-            return [ops.stack(out[start:end], axis=-1) for start, end in bounds]
+        if any(type(a) is not np.ndarray and not isinstance(a, float) and traced(namespace(a)) for a in arrays):
+            return _traced_call(jax, arguments, values, bounds, arrays)
         if scalar[0] is not None and all(np.ndim(a) == 1 for a in arrays):
             try:
                 out = np.array(scalar[0](*(x for a in arrays for x in np.asarray(a, float).tolist())), float)
@@ -186,3 +183,15 @@ def _lambdify(groups, outputs):
         return [np.stack(out[start:end], axis=-1) for start, end in bounds]
 
     return call
+
+
+def _traced_call(jax, arguments, values, bounds, arrays):
+    """call on JAX arrays: the expressions lambdified to JAX (once), broadcast and stacked as numpy's are."""
+    if not jax:
+        jax.append(sp.lambdify(arguments, values, "jax", cse=True))
+    ops = next(namespace(a) for a in arrays if type(a) is not np.ndarray and traced(namespace(a)))
+    arrays = [floats(a) if type(a) is not np.ndarray and traced(namespace(a)) else np.asarray(a, float) for a in arrays]
+    shape = np.broadcast_shapes(*(np.shape(a)[:-1] for a in arrays))
+    columns = [a[..., j] for a in arrays for j in range(np.shape(a)[-1])]
+    out = [ops.broadcast_to(ops.real_part(v) * 1.0, shape) for v in jax[0](*columns)]
+    return [ops.stack(out[start:end], -1) for start, end in bounds]

@@ -32,7 +32,7 @@ from typing import Protocol
 import numpy as np
 from scipy.differentiate import derivative
 
-from connenv.core.backend import floats
+from connenv.core.backend import floats, namespace, traced
 from connenv.core.batched import batched
 from connenv.core.steppers import MAX_EVALUATIONS, Scipy
 from connenv.core.validation import check_returned, probe
@@ -72,7 +72,9 @@ def hamiltonian(system: ActiveConstraintSystem, q, p, u, u_dot):
     """H_u = ½ (p − G12 u̇)ᵀ A (p − G12 u̇) − ½ u̇ᵀ G22 u̇ + V."""
     G11, G12, G22 = system.metric(q, u)
     w = p - _matvec(G12, u_dot)
-    kinetic = 0.5 * np.sum(w * np.linalg.solve(G11, w[..., None])[..., 0], axis=-1)
+    ops = namespace(w)
+    solve = ops.solve if traced(ops) else np.linalg.solve  # JAX's rows (connenv.jax): its solve
+    kinetic = 0.5 * np.sum(w * solve(G11, w[..., None])[..., 0], axis=-1)
     return kinetic - 0.5 * np.sum(u_dot * _matvec(G22, u_dot), axis=-1) + system.potential(q, u)
 
 

@@ -33,7 +33,7 @@ from typing import ClassVar, Protocol, runtime_checkable
 import numpy as np
 from scipy.integrate import DOP853, solve_ivp
 
-from connenv.core.backend import floats
+from connenv.core.backend import floats, namespace, traced
 
 
 @runtime_checkable
@@ -508,7 +508,12 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)  # observations are float32: a sta
 
 def check_observable(name: str, value):
     """StepperError if an entry of value (a state's array, one state or a batch) lies beyond ±FLOAT32_MAX, where the
-    float32 observation of a finite state would be ±inf. A few numbers are compared as Python floats."""
+    float32 observation of a finite state would be ±inf. A few numbers are compared as Python floats. Traced rows
+    (JAX's, connenv.jax) report it as a failure (``ops.fail``)."""
+    if type(value) is not np.ndarray and traced(ops := namespace(value)):
+        ops.fail(~ops.all(ops.abs(value) <= FLOAT32_MAX, axis=-1),
+                 f"{name} has left float32's range ±{FLOAT32_MAX:.4g}")
+        return
     value = np.real(value)
     worst = max(map(abs, value.ravel().tolist()), default=0.0) if value.size <= SMALL else np.max(np.abs(value))
     if not worst <= FLOAT32_MAX:

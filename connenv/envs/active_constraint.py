@@ -8,7 +8,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv import examples
-from connenv.core.backend import ARRAYS, SCALAR
+from connenv.core.backend import ARRAYS, SCALAR, concat, namespace, traced
 from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import (
     JUMP_ROWS,
@@ -140,6 +140,15 @@ class ActiveConstraintEnv(BuilderTask, TaskEnv):
 
     renderer = CoordinatePlot
 
+    JAX_NEEDS = (
+        "the system's metric, potential and vector_field must take JAX arrays: a system from from_lagrangian "
+        "(LagrangianSystem, lambdified to JAX as well) does; a system of your own writes them with the namespace of "
+        "their arguments (connenv.core.backend.namespace) and gives vector_field (H's numerical gradient does not "
+        "trace); a fit system's jumps (control='position' without max_control_speed) run scipy's DOP853 and do not "
+        "trace; a task's methods take Python numbers and do not trace (task=None)"
+    )
+    """What ``connenv.jax.make`` needs of the user's system to trace this builder (its TypeError otherwise)."""
+
     STATE = Fields(
         vector("q", "n", about="the free coordinates", bound=MAGNITUDE_BOUND, scalar=True),
         vector("p", "n", about="their conjugate momenta", bound=MAGNITUDE_BOUND, scalar=True),
@@ -236,7 +245,7 @@ class ActiveConstraintEnv(BuilderTask, TaskEnv):
     def at(self, y, u, t, energy_error):
         return ActiveConstraintState(y, u, t, energy_error)
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):  # the default start is no draw: the same on JAX's reset (connenv.jax)
         values = self.start_values(options, {"u": self.u_start.copy()})
         return self.at(np.concatenate([values["q"], values["p"]]), values["u"], 0.0, 0.0)
 
@@ -250,10 +259,12 @@ class ActiveConstraintEnv(BuilderTask, TaskEnv):
         """(y's jump or None, control segments, u at the end) of a step from u under the command: one state, or rows,
         each with its own segments where its u stops at a bound."""
         if self.control == "position" and self.max_control_speed is None:
-            return command - u, [(command, np.zeros_like(command), self.dt)], command
+            at_rest = ops.zeros_like(command) if traced(ops) else np.zeros_like(command)  # JAX's rows: no numpy
+            return command - u, [(command, at_rest, self.dt)], command
         if self.control == "position":
-            u_dot = ARRAYS.copysign(self.max_control_speed, command - u)
-            low, high = ARRAYS.minimum(u, command), ARRAYS.maximum(u, command)
+            xp = ops if traced(ops) else ARRAYS  # JAX's rows (connenv.jax): its one-sided stops, as ARRAYS' at a tie
+            u_dot = xp.copysign(self.max_control_speed, command - u)
+            low, high = xp.minimum_one_sided(u, command), xp.maximum_one_sided(u, command)
         else:
             u_dot, low, high = command, self.u_low, self.u_high
         cut = bounded_segments if ops is SCALAR else bounded_segments_batch
@@ -275,6 +286,9 @@ class ActiveConstraintEnv(BuilderTask, TaskEnv):
     def held_energy(self, y, u, u_dot):
         """E = ½ pᵀ A p + V(q, u) where u is held (u̇ = 0, by the real parts on a Jacobian's rows), 0 where u moves."""
         held = np.all(u_dot.real == 0.0, axis=-1)
+        if traced(ops := namespace(held)):  # JAX's rows (connenv.jax): every row's E, kept where u is held
+            n = self.n
+            return ops.where(held, hamiltonian(self.system, y[..., :n], y[..., n:], u, ops.zeros_like(u)), 0.0)
         if not np.any(held):
             return 0.0 if np.ndim(held) == 0 else np.zeros(held.shape)
         n = self.n
@@ -282,9 +296,14 @@ class ActiveConstraintEnv(BuilderTask, TaskEnv):
         return np.where(held, energy, 0.0) if np.ndim(held) else float(energy)
 
     def check_energy_error(self, energy_error, y, u):
-        n = self.n
-        energy = hamiltonian(self.system, y[..., :n], y[..., n:], u, np.zeros_like(u))
+        n, ops = self.n, namespace(u)
+        at_rest = ops.zeros_like(u) if traced(ops) else np.zeros_like(u)  # JAX's rows (connenv.jax): no numpy
+        energy = hamiltonian(self.system, y[..., :n], y[..., n:], u, at_rest)
         energy_error, energy = energy_error.real, energy.real
+        if traced(ops):  # JAX's rows: the drift traced, a failure as data
+            check_drift(self.stepper, "energy error", ops.abs(energy_error) / (1.0 + ops.abs(energy)),
+                        ENERGY_ERROR_BOUND)
+            return
         check_drift(self.stepper, "energy error", np.abs(energy_error) / (1.0 + np.abs(energy)), ENERGY_ERROR_BOUND)
 
     @staticmethod
@@ -296,11 +315,12 @@ class ActiveConstraintEnv(BuilderTask, TaskEnv):
     def state_dict(self, s, ops=SCALAR):
         n = self.n
         q, p = s.y[..., :n].copy(), s.y[..., n:].copy()
-        return {"q": q, "p": p, "u": np.array(s.u, float), "t": ops.real(s.t)}
+        u = ops.real(s.u) if traced(ops) else np.array(s.u, float)  # JAX's rows (connenv.jax): no numpy
+        return {"q": q, "p": p, "u": u, "t": ops.real(s.t)}
 
     def raw_observation(self, s):
         """(q, p, u) as float32."""
-        return np.concatenate([s.y, s.u], axis=-1).astype(np.float32)
+        return concat([s.y, s.u], axis=-1).astype(np.float32)
 
 
 SPECS = (
@@ -312,6 +332,6 @@ SPECS = (
         play="space", space_action=-1.0,
         variants=(examples.swing, examples.rotor, examples.bead),  # one of each jump class
         fast_start={"state": {"p": [1000.0]}},
-        bench="generic",
+        bench="generic", jax=(examples.swing_rk4, examples.rotor_ramp_rk4),
     ),
 )

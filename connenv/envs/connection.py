@@ -8,7 +8,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv import examples
-from connenv.core.backend import SCALAR, namespace, traced
+from connenv.core.backend import SCALAR, concat, namespace, traced
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import FRAMES, GROUPS, ConstantConnection, ExactConnection, connection_system
 from connenv.core.segments import bounded_segments, bounded_segments_batch, run_segments
@@ -124,6 +124,13 @@ class ConnectionEnv(BuilderTask, TaskEnv):
 
     renderer = ConnectionRenderer
 
+    JAX_NEEDS = (
+        "the connection must be written with the namespace of its argument (connenv.core.backend.namespace(s), "
+        "JAX's on a JAX array; numpy's functions only on constants, as connenv.examples' connections), and so must an "
+        "exact_segment; a task's methods take Python numbers and do not trace (task=None)"
+    )
+    """What ``connenv.jax.make`` needs of the user's functions to trace this builder (its TypeError otherwise)."""
+
     STATE = Fields(
         given("g", "g_shape", "check_g", "on its group to 1e-9, every entry within ±1e3", "a vector for R2"),
         vector("s", "k", about="the shape",
@@ -177,7 +184,7 @@ class ConnectionEnv(BuilderTask, TaskEnv):
         own = {"group": self.group.name, "frame": self.system.frame, "max_shape_speed": self.max_shape_speed}
         return {**own, **super().parameters()}
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):  # the default start is no draw: the same on JAX's reset (connenv.jax)
         values = self.start_values(options, {"g": np.array(self.group.identity()), "s": self.start_shape()})
         return ConnectionState(values["g"], values["s"], 0.0)
 
@@ -244,12 +251,13 @@ class ConnectionEnv(BuilderTask, TaskEnv):
 
     def state_dict(self, state, ops=SCALAR):
         """The state as `info["state"]`: g as a matrix (a vector for R2), s, t."""
-        return {"g": self.group.matrix(state.g), "s": np.array(state.s), "t": state.t}
+        s = state.s if traced(ops) else np.array(state.s)  # JAX's rows (connenv.jax): no numpy
+        return {"g": self.group.matrix(state.g), "s": s, "t": state.t}
 
     def raw_observation(self, state):
         """g's matrix entries (R2: the vector) and s, as float32."""
         g = self.group.matrix(state.g)
-        return np.concatenate([g.reshape(*np.shape(state.s)[:-1], -1), state.s], axis=-1).astype(np.float32)
+        return concat([g.reshape(*np.shape(state.s)[:-1], -1), state.s], axis=-1).astype(np.float32)
 
 
 SPECS = (
@@ -258,6 +266,6 @@ SPECS = (
         physics="connections.md", example=examples.beanie,
         variants=(examples.beanie, examples.rolling_ball),  # a flat and a curved connection
         fast_start={"state": {"s": [1000.0]}},
-        bench="connection",
+        bench="connection", jax=(examples.beanie_rk4,),
     ),
 )

@@ -114,7 +114,8 @@ class Spec:
     and the smallest fraction of CartPole-v1's native vector env-steps/s at N = 4096; None: no target).
 
     JAX: ``jax`` (the make kwargs whose step ``connenv.jax`` traces, each checked against the numpy env in the
-    tests; empty: no JAX version yet, and ``connenv.jax.make`` refuses the id).
+    tests, or a function making them, as ``variants``' (a builder's example); empty: no JAX version yet, and
+    ``connenv.jax.make`` refuses the id).
     """
 
     id: str
@@ -136,7 +137,7 @@ class Spec:
     bench: str | None = None
     single_target: float | None = None
     vector_target: float | None = None
-    jax: tuple[dict, ...] = ()
+    jax: tuple[KwargsOrMaker, ...] = ()
     vector_base: type = TaskVectorEnv
     vector_env: type = field(init=False)
 

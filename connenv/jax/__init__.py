@@ -35,4 +35,23 @@ def make(env_id: str, **kwargs) -> tuple[FunctionalEnv, EnvParams]:
     steps = kwargs.get("max_episode_steps", max_steps)
     env = FunctionalEnv(numpy_env, steps)
     numpy_env.close()
+    needs = getattr(numpy_env, "JAX_NEEDS", None)  # a builder: its user's functions may not trace
+    if needs is not None:
+        _check_traces(env, env_id, needs)
     return env, env.default_params
+
+
+def _check_traces(env: FunctionalEnv, env_id: str, needs: str):
+    """A builder's step and reset traced once (jax.eval_shape: no compile), else a TypeError saying what its user's
+    functions need (``needs``, the env's ``JAX_NEEDS``) and what failed."""
+    import jax
+    import jax.numpy as jnp
+
+    x, action = jnp.zeros(len(env.state_names)), jnp.zeros(env.action_space().shape)
+    try:
+        jax.eval_shape(env.transition, x, action)
+        jax.eval_shape(env.reset, jax.random.key(0))
+    except TypeError as error:  # JAX's tracer errors (a numpy function or float() on a traced array) are TypeErrors
+        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise TypeError(f"{env_id} with these make kwargs does not trace: {needs} (tracing it raised "
+                        f"{type(error).__name__}: {first})") from error

@@ -10,9 +10,10 @@ bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadc
 ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
 only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
 ``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),
-``atan2`` and ``hypot`` with ARRAYS' derivative (0 at the origin, where they have none), ``ellipj``/``ellipk``
-(traceable Jacobi elliptic functions, below), ``single_precision`` (float32's values with derivative 1, the goals'
-rounding) and ``fail`` (a failure reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
+``solve`` (numpy's linalg.solve, which the builders' Hamiltonian calls), ``atan2`` and ``hypot`` with ARRAYS'
+derivative (0 at the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions,
+below), ``single_precision`` (float32's values with derivative 1, the goals' rounding) and ``fail`` (a failure
+reported as data, below). ``JAX_TASK`` adds the task's names (``connenv.envs.base``).
 
 **Failures as data.** Traced code cannot raise on a value. Where the numpy env raises StepperError (a stepper's
 non-finite state, an invariant past its bound), the JAX physics calls ``fail(condition, message)``, which records
@@ -242,6 +243,7 @@ JAX = operations(
     sinh=jnp.sinh,
     cosh=jnp.cosh,
     single_precision=single_precision,
+    solve=jnp.linalg.solve,
     traced=True,
 )
 """The physics' operations on JAX arrays (see the module)."""

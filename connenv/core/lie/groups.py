@@ -134,12 +134,14 @@ class Group:
             return g.copy()
         if self.name == "SO3":
             return g.reshape(*g.shape[:-1], 3, 3)
-        c, s = np.cos(g[..., -1]), np.sin(g[..., -1])
+        xp = np if type(g) is np.ndarray or not traced(namespace(g)) else namespace(g)  # JAX's rows (connenv.jax)
+        c, s = xp.cos(g[..., -1]), xp.sin(g[..., -1])
         if self.name == "SO2":
-            return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-        one, zero = np.ones_like(c), np.zeros_like(c)
+            return xp.stack([xp.stack([c, -s], -1), xp.stack([s, c], -1)], -2)
+        zero = xp.zeros_like(c)
+        one = np.ones_like(c) if xp is np else zero + 1.0
         rows = [[c, -s, g[..., 0]], [s, c, g[..., 1]], [zero, zero, one]]
-        return np.stack([np.stack(row, -1) for row in rows], -2)
+        return xp.stack([xp.stack(row, -1) for row in rows], -2)
 
     def coordinates(self, matrix):
         """The coordinates of g given as a matrix (a vector for R2); the inverse of ``matrix`` on the group."""
