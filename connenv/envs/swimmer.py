@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connenv.core.backend import SCALAR, components, traced
+from connenv.core.backend import vector as entries_vector
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus
 from connenv.core.params import Bound
@@ -77,12 +78,14 @@ class PlanarSwimmer:
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = self.state_class(*(np.zeros(n) for n in (3, 3, 2, 2)), 0.0, False, np.zeros(3))
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):
         """At rest at the origin, or options['state']; the target drawn by np_random, or options['target']. The model
-        follows the momentum: reduced at zero, full otherwise."""
+        follows the momentum: reduced at zero, full otherwise. Traced (``connenv.jax``, ops its namespace): the same
+        draws from its key."""
         distance = self.np_random.uniform(*self.TARGET_DISTANCES) * self.target_unit
         angle = self.np_random.uniform(-math.pi, math.pi)
-        values = self.reset_values(options, {"target": distance * np.array([math.cos(angle), math.sin(angle)])})
+        values = self.reset_values(options, {"target": entries_vector(distance * ops.cos(angle),
+                                                                      distance * ops.sin(angle))})
         pose, momentum = np.array([values["x"], values["y"], values["theta"]]), values["momentum"]
         full = bool(momentum.any())
         momentum, shape = momentum if full else np.zeros(3), self.start_shape(values)
