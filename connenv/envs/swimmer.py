@@ -165,7 +165,8 @@ class PlanarSwimmer:
                  "t": s.t}  # fmt: skip
         return {
             "state": state, "spatial_momentum": self.spatial_momentum(s, ops), "target": ops.vector(s.target),
-            "distance": distance, "model": ops.flag(s.full) if traced(ops) else ops.where(s.full, "full", "reduced"),  # JAX's: whether full
+            "distance": distance,
+            "model": ops.flag(s.full) if traced(ops) else ops.where(s.full, "full", "reduced"),  # JAX's: whether full
             "is_success": ops.flag(distance <= self.success_radius),
         }
 
