@@ -314,3 +314,19 @@ def test_a_connection_or_system_that_does_not_trace_is_a_type_error_saying_what_
         env.reset(seed=0)
         obs, state = jenv.reset(jax.random.key(0), params)
         np.testing.assert_array_equal(np.asarray(state.x), env.model.pack(env.state))
+
+
+@pytest.mark.parametrize("env_id, unit", [("connenv/SnakeSwimmer-v0", 3.0), ("connenv/KozlovShell-v0", 1.0)])
+def test_the_swimmer_resets_draw_their_targets(env_id, unit):
+    """The swimmers start at rest at the origin in the reduced model, the target uniform in distance (TARGET_DISTANCES
+    body lengths: the snake's 6a = 3 m; the shell's in metres) and in direction, from a key."""
+    jenv, params = cj.make(env_id)
+    obs, states = jax.vmap(jenv.reset, (0, None))(jax.random.split(jax.random.key(0), 4000), params)
+    fields = jenv.state_of(np.asarray(states.x))
+    target = np.asarray(fields.target)
+    low, high = jenv.env.TARGET_DISTANCES
+    distance = np.hypot(target[:, 0], target[:, 1]) / unit
+    assert np.all((distance >= low) & (distance <= high)) and abs(distance.mean() - (low + high) / 2) < 0.02 * high
+    assert abs(np.mean(target[:, 1] > 0) - 0.5) < 0.05
+    assert np.all(np.asarray(fields.pose) == 0.0) and np.all(np.asarray(fields.momentum) == 0.0)
+    assert not np.any(np.asarray(fields.full)) and np.all(np.asarray(fields.momentum0) == 0.0)

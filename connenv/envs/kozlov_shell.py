@@ -200,5 +200,6 @@ SPECS = (
             ("shell_full", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),
         ),
         bench="shell",
+        jax=({},),
     ),
 )

@@ -196,5 +196,6 @@ SPECS = (
             ("snake_full", {"max_episode_steps": 60}, {"state": {"momentum": (0.3, -0.2, 0.1)}}),
         ),
         bench="snake",
+        jax=({},),
     ),
 )

@@ -9,7 +9,8 @@ import math
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import SCALAR, components
+from connenv.core.backend import SCALAR, components, traced
+from connenv.core.backend import vector as entries_vector
 from connenv.core.integrators import make_stepper
 from connenv.core.lie import Magnus
 from connenv.core.params import Bound
@@ -77,12 +78,14 @@ class PlanarSwimmer:
         self.observation_space = spaces.Box(-high, high, dtype=np.float32)
         self.state = self.state_class(*(np.zeros(n) for n in (3, 3, 2, 2)), 0.0, False, np.zeros(3))
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):
         """At rest at the origin, or options['state']; the target drawn by np_random, or options['target']. The model
-        follows the momentum: reduced at zero, full otherwise."""
+        follows the momentum: reduced at zero, full otherwise. Traced (``connenv.jax``, ops its namespace): the same
+        draws from its key."""
         distance = self.np_random.uniform(*self.TARGET_DISTANCES) * self.target_unit
         angle = self.np_random.uniform(-math.pi, math.pi)
-        values = self.reset_values(options, {"target": distance * np.array([math.cos(angle), math.sin(angle)])})
+        values = self.reset_values(options, {"target": entries_vector(distance * ops.cos(angle),
+                                                                      distance * ops.sin(angle))})
         pose, momentum = np.array([values["x"], values["y"], values["theta"]]), values["momentum"]
         full = bool(momentum.any())
         momentum, shape = momentum if full else np.zeros(3), self.start_shape(values)
@@ -100,6 +103,8 @@ class PlanarSwimmer:
                 return y[:3], y[3:]
             pose = run_segments(stepper, self.reduced_system, s.pose, [c for c in reduced_segments if c[2] > 0.0])[0]
             return pose, s.momentum
+        if traced(ops):
+            return self._swim_traced(s, full_segments, reduced_segments, stepper, ops)
         full, rest = s.full, ~s.full
         if not full.any():
             return run_segments(stepper, self.reduced_system, s.pose, reduced_segments)[0], s.momentum
@@ -110,10 +115,23 @@ class PlanarSwimmer:
             y[rest, :3] = run_segments(stepper, self.reduced_system, s.pose[rest], _rows(reduced_segments, rest))[0]
         return y[:, :3], y[:, 3:]
 
+    def _swim_traced(self, s, full_segments, reduced_segments, stepper, ops):
+        """swim on traced rows (connenv.jax): both models on every row, each row keeping its own model's by ``where``;
+        the spatial momentum checked on the full rows (a failure as data)."""
+        full = ops.flag(s.full)
+        y = run_segments(stepper, self.full_system, ops.concat([s.pose, s.momentum], axis=-1), full_segments)[0]
+        drift = self.full_system.spatial_momentum(y) - s.momentum0
+        drift = ops.sqrt((drift * drift).sum(axis=-1))
+        norm = ops.sqrt((s.momentum0 * s.momentum0).sum(axis=-1))
+        check_drift(self.stepper, "the spatial momentum", ops.where(full, drift, 0.0), MOMENTUM_ERROR_BOUND,
+                    norm=norm)
+        pose = run_segments(stepper, self.reduced_system, s.pose, reduced_segments)[0]
+        return ops.where(full[..., None], y[..., :3], pose), ops.where(full[..., None], y[..., 3:], s.momentum)
+
     def spatial_momentum(self, s, ops=SCALAR):
         """(R(θ) P, Π + x P_y − y P_x): a tuple of floats for one state, an array (N, 3) for a batch."""
         momentum = ideal_fluid.spatial_momentum(*components(s.pose), *components(s.momentum), ops)
-        return momentum if ops is SCALAR else np.stack(momentum, axis=-1)
+        return momentum if ops is SCALAR else ops.stack(momentum, axis=-1)
 
     def check_momentum(self, y, momentum0):
         """StepperError where the spatial momentum moved over MOMENTUM_ERROR_BOUND of its norm (any row; real parts)."""
@@ -147,7 +165,8 @@ class PlanarSwimmer:
                  "t": s.t}  # fmt: skip
         return {
             "state": state, "spatial_momentum": self.spatial_momentum(s, ops), "target": ops.vector(s.target),
-            "distance": distance, "model": ops.where(s.full, "full", "reduced"),
+            "distance": distance,
+            "model": ops.flag(s.full) if traced(ops) else ops.where(s.full, "full", "reduced"),  # JAX's: whether full
             "is_success": ops.flag(distance <= self.success_radius),
         }
 

@@ -58,7 +58,8 @@ class FunctionalEnv:
         self.model = self.env.model
         self.name = self.env.name
         self.max_episode_steps = max_episode_steps
-        self.stepper = traced_stepper(self.env.stepper, self.env.system, self.name)
+        # an env of several systems (the swimmers' full and reduced models) has none: its stepper takes each as it comes
+        self.stepper = traced_stepper(self.env.stepper, getattr(self.env, "system", None), self.name)
         self.entries = self.model.entries
         self.state_names = self.model.state_names
         self.num_actions = self.model.m

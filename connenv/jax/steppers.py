@@ -27,6 +27,8 @@ from connenv.core.steppers import (
     compiled_substeps,
     conforms,
 )
+from connenv.core.lie.magnus import Magnus, along, se2_body_flow
+from connenv.core.steppers import ConnectionSystem
 from connenv.jax.namespace import fail
 
 FALLBACK_SUBSTEPS = 8  # RK8 substeps standing in for scipy's DOP853 (the exact step's fallback) on a segment: under vmap
@@ -94,10 +96,40 @@ class TracedExact:
         return repr(self.stepper)
 
 
+@dataclasses.dataclass(frozen=True)
+class TracedMagnus:
+    """The Lie-group step with its fixed rule (``Magnus.pieces``, chosen at the env's construction: the swimmers')
+    on SE(2) in the body frame: the numpy rows' quadrature, its pieces and Gauss points fixed, so the same count on
+    every row. A system without a connection (a swimmer's full model) goes to the numpy stepper's fallback, scipy's
+    DOP853, which does not trace: RK8 at FALLBACK_SUBSTEPS fixed substeps stands in for it (the adaptive method's
+    tolerance apart, not rounding)."""
+
+    stepper: Magnus
+    fallback: TracedRungeKutta = TracedRungeKutta(RK8(FALLBACK_SUBSTEPS))
+
+    def __call__(self, system, y, u, u_dot, tau):
+        if not conforms(system, ConnectionSystem):
+            return _finite(self.fallback.unchecked(system, y, u, u_dot, tau), self.stepper)
+        if self.stepper.pieces is None or (system.group, system.frame) != ("SE2", "body"):
+            raise TypeError(f"{self.stepper!r} on {system.group} ({system.frame} frame) has no JAX version yet: "
+                            "connenv.jax runs the Lie-group step with a fixed rule on SE(2) in the body frame")
+        g = tuple(y[..., i] for i in range(y.shape[-1]))
+        tau = tau if jnp.ndim(tau) == 0 else jnp.reshape(tau, -1)
+        g = se2_body_flow(along(system), g, u, u_dot, tau, self.stepper.pieces, self.stepper.points)
+        return _finite(jnp.stack(g, -1), self.stepper)
+
+    def __repr__(self):
+        return repr(self.stepper)
+
+
 def traced_stepper(stepper, system, name: str):
-    """The traced stepper of a numpy env's stepper, or a TypeError naming what is missing."""
+    """The traced stepper of a numpy env's stepper, or a TypeError naming what is missing. system: the env's one
+    system, or None for an env that steps several (the swimmers' full and reduced models): the stepper then takes
+    each as it comes."""
     if isinstance(stepper, ExplicitRungeKutta):
         return TracedRungeKutta(stepper)
+    if isinstance(stepper, Magnus) and stepper.pieces is not None:
+        return TracedMagnus(stepper)
     if isinstance(stepper, Exact) and (conforms(system, ExactFlow) or conforms(system, ExactSegment)):
         return TracedExact(stepper)
     raise TypeError(

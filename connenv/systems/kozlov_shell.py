@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.core.backend import components
+from connenv.core.backend import ARRAYS, components, namespace
 from connenv.systems.ideal_fluid import added_masses, kirchhoff, reconstruct, space_frame, spatial_momentum
 
 
@@ -96,11 +96,13 @@ class KozlovShell:
         """Full model: ẏ for y = (x, y, θ, P₁, P₂, Π), Kirchhoff's equations and the reconstruction."""
         _, _, theta, p1, p2, pi = components(y)
         v1, v2, omega = self._body_velocity((p1, p2, pi), components(u), components(u_dot))
-        return np.stack([*reconstruct(theta, v1, v2, omega, np), *kirchhoff(p1, p2, pi, v1, v2, omega)], axis=-1)
+        ops = ARRAYS if isinstance(theta, float) else namespace(theta)  # numpy's, on one state too; JAX's on its rows
+        return ops.stack([*reconstruct(theta, v1, v2, omega, ops), *kirchhoff(p1, p2, pi, v1, v2, omega)], axis=-1)
 
     def spatial_momentum(self, y):
         """(R(θ) P, Π + x P_y − y P_x): the total momentum in the space frame, conserved by the full model."""
-        return np.stack(spatial_momentum(*(y[..., i] for i in range(6)), np), axis=-1)
+        ops = namespace(y)
+        return ops.stack(spatial_momentum(*(y[..., i] for i in range(6)), ops), axis=-1)
 
     def energy(self, mu, u, u_dot):
         """T = ½ ξᵀ I ξ + ξᵀ C u̇ + ½ m |u̇|² = ½ ξᵀ (μ + C u̇) + ½ m |u̇|²; conserved while u is held."""
@@ -157,7 +159,8 @@ class ReducedKozlovShell(KozlovShell):
 
         whose coefficients are per row, so that few operations run over the nodes."""
         m_alpha, m_beta, a_, b_, c = self._connection_constants
-        (u1, u2), (d1, d2) = np.ascontiguousarray(u.T), np.ascontiguousarray(u_dot.T)
+        rows = type(u) is np.ndarray  # else JAX's traced rows (connenv.jax): the same arithmetic, not in place
+        (u1, u2), (d1, d2) = (np.ascontiguousarray(u.T), np.ascontiguousarray(u_dot.T)) if rows else (u.T, u_dot.T)
         denominator = (a_ * d1 * d1 + b_ * d2 * d2) * t  # in place over the nodes: see se2_body_flow
         denominator += 2.0 * (a_ * u1 * d1 + b_ * u2 * d2)
         denominator *= t
@@ -169,7 +172,7 @@ class ReducedKozlovShell(KozlovShell):
         v1 += m_alpha * u2
         v1 *= omega
         v1 -= m_alpha * d1
-        v2 = np.multiply(-m_beta * d1, t, out=denominator)
+        v2 = np.multiply(-m_beta * d1, t, out=denominator) if rows else -m_beta * d1 * t
         v2 -= m_beta * u1
         v2 *= omega
         v2 -= m_beta * d2
@@ -185,4 +188,5 @@ class ReducedKozlovShell(KozlovShell):
     def vector_field(self, y, u, u_dot):
         """Reduced model: ẏ for y = (x, y, θ), the connection ξ = −I⁻¹ C u̇ reconstructed on SE(2)."""
         xi = self._body_velocity((0.0, 0.0, 0.0), components(u), components(u_dot))
-        return np.stack(np.broadcast_arrays(*reconstruct(components(y)[2], *xi, np)), axis=-1)
+        ops = ARRAYS if isinstance(components(y)[2], float) else namespace(components(y)[2])  # as vector_field's
+        return ops.stack(ops.broadcast_arrays(*reconstruct(components(y)[2], *xi, ops)), axis=-1)

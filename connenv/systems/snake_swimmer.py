@@ -170,12 +170,14 @@ class SnakeSwimmer:
         y, s, s_dot = (np.asarray(a, float).tolist() if single else components(a) for a in (y, s, s_dot))
         _, _, theta, p1, p2, pi = y
         v1, v2, omega = self._body_velocity((p1, p2, pi), s, s_dot)
-        y_dot = (*reconstruct(theta, v1, v2, omega, namespace(theta)), *kirchhoff(p1, p2, pi, v1, v2, omega))
-        return np.array(y_dot) if single else np.stack(np.broadcast_arrays(*y_dot), -1)
+        ops = namespace(theta)
+        y_dot = (*reconstruct(theta, v1, v2, omega, ops), *kirchhoff(p1, p2, pi, v1, v2, omega))
+        return np.array(y_dot) if single else ops.stack(ops.broadcast_arrays(*y_dot), -1)
 
     def spatial_momentum(self, y):
         """(R(θ) P, Π + x P_y − y P_x): the total momentum of chain and fluid in the space frame, conserved."""
-        return np.stack(spatial_momentum(*(y[..., i] for i in range(6)), np), axis=-1)
+        ops = namespace(y)
+        return ops.stack(spatial_momentum(*(y[..., i] for i in range(6)), ops), axis=-1)
 
     def energy(self, mu, s, s_dot):
         """T = ½ ξᵀ 𝕀_loc ξ + ξᵀ 𝕀_c ṡ + ½ ṡᵀ 𝕀_s ṡ = ½ ξᵀ (μ + 𝕀_c ṡ) + ½ ṡᵀ 𝕀_s ṡ; conserved while s is held."""
@@ -225,7 +227,7 @@ class ReducedSnakeSwimmer(SnakeSwimmer):
     def group_velocity(self, s, s_dot):
         """ξ = −A(s) ṡ as components (v₁, v₂, ω): floats for one shape (a tuple of floats or a 1-D array), arrays
         over rows for a batch (..., 2)."""
-        if isinstance(s, np.ndarray):
+        if isinstance(s, np.ndarray) or (type(s) is not tuple and hasattr(s, "shape")):  # numpy's or JAX's rows
             s, s_dot = components(s), components(s_dot)
         return self._body_velocity((0.0, 0.0, 0.0), s, s_dot)
 
@@ -233,5 +235,6 @@ class ReducedSnakeSwimmer(SnakeSwimmer):
         """Reduced model: ẏ for y = (x, y, θ), the connection reconstructed on SE(2)."""
         single = np.ndim(y) == 1 and np.ndim(s) == 1
         y, s, s_dot = (np.asarray(a, float).tolist() if single else components(a) for a in (y, s, s_dot))
-        y_dot = reconstruct(y[2], *self._body_velocity((0.0, 0.0, 0.0), s, s_dot), namespace(y[2]))
-        return np.array(y_dot) if single else np.stack(np.broadcast_arrays(*y_dot), axis=-1)
+        ops = namespace(y[2])
+        y_dot = reconstruct(y[2], *self._body_velocity((0.0, 0.0, 0.0), s, s_dot), ops)
+        return np.array(y_dot) if single else ops.stack(ops.broadcast_arrays(*y_dot), axis=-1)

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from connenv.core.backend import floats
+from connenv.core.backend import floats, namespace, traced
 from connenv.core.lie.connections import group_velocity
 from connenv.core.lie.groups import GROUPS, Group, ops_of
 from connenv.core.steppers import ConnectionSystem, Scipy, StepperError, check_finite, conforms
@@ -191,6 +191,8 @@ def se2_body_flow(velocity, g, s, s_dot, tau, pieces: int, points: int = QUADRAT
 
 def _se2_body_increment(velocity, s, s_dot, tau, pieces, points):
     """The body-frame increment (dx, dy, turn) of se2_body_flow over a batch of rows."""
+    if type(s) is not np.ndarray and traced(ops := namespace(s)):
+        return _se2_body_increment_traced(velocity, s, s_dot, tau, pieces, points, ops)
     nodes, weights, Q = gauss_rule(points)[:3]
     h = floats(tau / pieces)
     t = (np.arange(pieces)[:, None] + nodes).reshape(-1, 1) * h  # (pieces · points, N) or (pieces · points, 1)
@@ -208,6 +210,31 @@ def _se2_body_increment(velocity, s, s_dot, tau, pieces, points):
     s_ *= v2
     ax -= s_  # cos W v₁ − sin W v₂
     ay += c  # sin W v₁ + cos W v₂
+    dx = h * (weights @ ax.reshape(omega.shape)).sum(axis=0)
+    dy = h * (weights @ ay.reshape(omega.shape)).sum(axis=0)
+    return dx, dy, turns.sum(axis=0)
+
+
+def _se2_body_increment_traced(velocity, s, s_dot, tau, pieces, points, ops):
+    """_se2_body_increment on traced rows (connenv.jax): the same quadrature without numpy's in-place arithmetic,
+    cos and sin taken directly (the numpy rows' half-angle tangent agrees to a few ulps)."""
+    nodes, weights, Q = gauss_rule(points)[:3]
+    h = tau / pieces
+    t = (np.arange(pieces)[:, None] + nodes).reshape(-1, 1) * h
+    shape = (len(t), len(s))
+    v1, v2, omega = (ops.broadcast_to(c, shape) for c in velocity(s, s_dot, t))
+    omega = omega.reshape(pieces, points, -1)
+    turns = h * (weights @ omega)  # (pieces, N)
+    W = (Q @ omega) * h
+    if pieces > 1:  # each piece's θ offset by the turns of the pieces before it (numpy's cumsum, in its order)
+        parts, offset = [W[0]], turns[0]
+        for j in range(1, pieces):
+            parts.append(W[j] + offset)
+            offset = offset + turns[j]
+        W = ops.stack(parts)
+    W = W.reshape(v1.shape)
+    c, s_ = ops.cos(W), ops.sin(W)
+    ax, ay = c * v1 - s_ * v2, s_ * v1 + c * v2
     dx = h * (weights @ ax.reshape(omega.shape)).sum(axis=0)
     dy = h * (weights @ ay.reshape(omega.shape)).sum(axis=0)
     return dx, dy, turns.sum(axis=0)
@@ -399,7 +426,7 @@ class Magnus:
             return group_velocity(system, s, s_dot)
 
         if group.name == "SE2" and frame == "body":
-            g = se2_body_flow(_along(system), g, u, u_dot, tau, self.pieces, self.points)
+            g = se2_body_flow(along(system), g, u, u_dot, tau, self.pieces, self.points)
         elif group.name == "SO3":
             u, u_dot = np.asarray(u), np.asarray(u_dot)
             g = magnus_flow(group, frame, velocity, g, u, u_dot, tau, self.pieces, self.order)[0]
@@ -444,7 +471,7 @@ def fixed_rule(system, segments, atol: float = 1e-10, stepper=None, max_points: 
     raise StepperError(f"the Lie-group step needs > {MAX_SUBSTEPS} pieces for atol {atol} on the segments given")
 
 
-def _along(system):
+def along(system):
     """velocity(s, ṡ, t) of se2_body_flow: ξ at s + t ṡ, the system's own ``segment_velocity`` for a batch if it has
     one (a closed form along the straight path), else group_velocity at the shapes."""
     if hasattr(system, "segment_velocity"):
@@ -460,6 +487,8 @@ def _along(system):
     def velocity(s, s_dot, t):
         if isinstance(t, float):
             return group_velocity(system, tuple(a + t * d for a, d in zip(s, s_dot)), s_dot)
+        if type(s) is not np.ndarray and traced(namespace(s)):  # JAX's rows (connenv.jax): no in-place copies
+            return group_velocity(system, (s.T[:, None, :] + t * s_dot.T[:, None, :]).transpose(1, 2, 0), s_dot)
         shapes = np.ascontiguousarray(s.T)[:, None, :] + t * np.ascontiguousarray(s_dot.T)[:, None, :]
         return group_velocity(system, np.moveaxis(shapes, 0, -1), s_dot)  # components contiguous along the rows
 
