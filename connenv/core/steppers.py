@@ -339,11 +339,19 @@ class EnergyProjected:
             y_new, excess = y_new.copy(), excess.copy()
             y_new[redo] = self._held(system, y[redo], rows(u), rows(u_dot), rows(tau), 2 * substeps)
             excess[redo] = 0.0  # those rows are projected already
-        f = system.vector_field(y_new, u, u_dot)
-        gradient = np.concatenate([-f[..., system.n :], f[..., : system.n]], axis=-1)
-        norm = np.sum(gradient * gradient, axis=-1)
-        shift = np.divide(excess, norm, out=np.zeros_like(norm), where=np.real(norm) > 0.0)
-        return check_finite(y_new - shift[..., None] * gradient, self)
+        return check_finite(project_onto_level(system, y_new, u, u_dot, excess), self)
+
+
+def project_onto_level(system, y_new, u, u_dot, excess):
+    """EnergyProjected's Newton step on rows: y − (H(y) − H₀) ∇H / |∇H|², ∇H = (−ṗ, q̇), no shift where ∇H = 0;
+    in the rows' namespace (numpy's, or JAX's for connenv.jax's traced stepper)."""
+    ops = namespace(y_new)
+    f = system.vector_field(y_new, u, u_dot)
+    gradient = ops.concatenate([-f[..., system.n :], f[..., : system.n]], axis=-1)
+    norm = (gradient * gradient).sum(axis=-1)
+    positive = ops.real_part(norm) > 0.0
+    shift = ops.where(positive, excess / ops.where(positive, norm, 1.0), 0.0)
+    return y_new - shift[..., None] * gradient
 
 
 MAX_DOUBLINGS = 6  # of EnergyProjected's substeps on one segment

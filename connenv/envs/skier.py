@@ -10,7 +10,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import SCALAR
+from connenv.core.backend import SCALAR, vector
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, options, scale, step
 from connenv.core.segments import check_drift, control_path, held_energy, run_segments
@@ -234,9 +234,11 @@ class SkierEnv(TaskEnv):
         energy, x_dot, f1, sigma, kappa = (ops.real(v) for v in self.system.kinematics(y, h))
         return SkierState(y, h, t, side, energy, energy_error, x_dot, f1, sigma, kappa)
 
-    def start(self, options):
+    def start(self, options, ops=SCALAR):
+        """At rest crouched, x₀ from np_random (see the class); traced (``connenv.jax``, ops its namespace), the same
+        draws from its key."""
         offset = self.np_random.uniform(*START_OFFSETS) * self.np_random.choice([-1.0, 1.0])
-        x0 = min(max(self.x_bottom + offset, self.trail.lo), self.trail.hi)
+        x0 = ops.clip(self.x_bottom + offset, self.trail.lo, self.trail.hi)
         state = self.reset_values(options, {"x": x0, "h": self.h_min})
         x, h = state["x"], state["h"]
         if "p" in state:
@@ -244,9 +246,9 @@ class SkierEnv(TaskEnv):
         else:
             w = self.system.geometry(x, h)[5]
             p = self.system.mass * w * w * state["x_dot"]
-        y = np.array([x, p])
-        side = math.copysign(1.0, y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
-        return self.at(y, h, 0.0, side, 0.0)
+        y = vector(x, p)
+        side = ops.copysign(1.0, y[0] - self.goals[0]) if len(self.goals) == 1 else 0.0
+        return self.at(y, h, 0.0, side, 0.0, ops)
 
     def advance(self, s, h_cmd, stepper, ops=SCALAR):
         """The state after a step toward the commanded height; rows with the vector env's stepper and ops=BATCH."""
@@ -319,5 +321,6 @@ SPECS = (
             ("skier_ramp", {"max_episode_steps": 40, "max_height_speed": 3.0, "target_x": 0.3}, None),
         ),
         bench="skier", single_target=5.0, vector_target=0.15,
+        jax=({},),
     ),
 )

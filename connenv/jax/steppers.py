@@ -21,11 +21,14 @@ from connenv.core.steppers import (
     ExactFlow,
     ExactSegment,
     Exact,
+    EnergyProjected,
     ExplicitRungeKutta,
+    MAX_DOUBLINGS,
     RK8,
     compiled_substep,
     compiled_substeps,
     conforms,
+    project_onto_level,
 )
 from connenv.core.lie.magnus import Magnus, along, se2_body_flow
 from connenv.core.steppers import ConnectionSystem
@@ -118,6 +121,42 @@ class TracedMagnus:
         g = se2_body_flow(along(system), g, u, u_dot, tau, self.stepper.pieces, self.stepper.points)
         return _finite(jnp.stack(g, -1), self.stepper)
 
+
+@dataclasses.dataclass(frozen=True)
+class TracedEnergyProjected:
+    """EnergyProjected's step on traced rows: RK8 at its substeps, then its Newton step onto the energy level
+    (``project_onto_level``, the numpy rows' own code) where u is held. The numpy stepper retakes a row whose energy
+    error passes atol at twice the substeps, up to MAX_DOUBLINGS times; here each doubling is a level of a fixed
+    depth (MAX_DOUBLINGS + 1 levels, a static recursion): a level runs under lax.cond only where some row asks for it
+    (on rows under jit a real branch; under vmap JAX computes every level, 2^7 − 1 times the substeps of the first),
+    and a row takes the deeper level's projected state by ``where`` exactly where numpy's would recurse. So the
+    decisions and the arithmetic are numpy's: a row differs from it by XLA's rounding, and by a doubling more or
+    less only where its energy error sits within rounding of atol. Where u moves the step is RK8's alone, per row.
+    Reverse mode differentiates it (lax.cond), as forward mode does."""
+
+    stepper: EnergyProjected
+
+    def __call__(self, system, y, u, u_dot, tau):
+        substeps = self.stepper.substeps
+        y_new = TracedRungeKutta(RK8(substeps)).unchecked(system, y, u, u_dot, tau)
+        moving = jnp.any(u_dot != 0.0, axis=-1)
+        projected = self._held(system, y, u, u_dot, tau, substeps, y_new, ~moving)
+        return _finite(jnp.where(moving[..., None], y_new, projected), self.stepper)
+
+    def _held(self, system, y, u, u_dot, tau, substeps, y_new, active):
+        """EnergyProjected._held's rows: y_new the RK8 step at substeps; active the rows that may ask to redo."""
+        excess = system.hamiltonian(y_new, u) - system.hamiltonian(y, u)
+        if substeps < self.stepper.substeps << MAX_DOUBLINGS:
+            redo = active & ~(jnp.abs(excess) <= self.stepper.atol)
+
+            def deeper(y_new):
+                finer = TracedRungeKutta(RK8(2 * substeps)).unchecked(system, y, u, u_dot, tau)
+                return self._held(system, y, u, u_dot, tau, 2 * substeps, finer, redo)
+
+            y_new = jnp.where(redo[..., None], jax.lax.cond(jnp.any(redo), deeper, lambda y_new: y_new, y_new), y_new)
+            excess = jnp.where(redo, 0.0, excess)  # those rows are projected already
+        return project_onto_level(system, y_new, u, u_dot, excess)
+
     def __repr__(self):
         return repr(self.stepper)
 
@@ -130,6 +169,8 @@ def traced_stepper(stepper, system, name: str):
         return TracedRungeKutta(stepper)
     if isinstance(stepper, Magnus) and stepper.pieces is not None:
         return TracedMagnus(stepper)
+    if isinstance(stepper, EnergyProjected):
+        return TracedEnergyProjected(stepper)
     if isinstance(stepper, Exact) and (conforms(system, ExactFlow) or conforms(system, ExactSegment)):
         return TracedExact(stepper)
     raise TypeError(

@@ -25,6 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from connenv.core.backend import namespace
 from connenv.core.validation import ndim
 from connenv.systems.trails import Trail
 
@@ -61,9 +62,10 @@ class Skier:
 
     def vector_field(self, y, u, u_dot):
         """Hand-derived (ẋ, ṗ); u_dot is accepted for the common interface and drops out."""
-        if y.ndim == 1:  # one state: Python floats, which the trail evaluates without array calls
-            return np.array(self.vector_field_one(y.tolist(), u, u_dot))
-        return np.stack(self._rates(y[..., 0], y[..., 1], u[..., 0]), axis=-1)
+        if y.ndim == 1 and type(y) is np.ndarray:  # one state: Python floats, which the trail evaluates without
+            return np.array(self.vector_field_one(y.tolist(), u, u_dot))  # array calls
+        # numpy's rows, or JAX's (connenv.jax)
+        return namespace(y).stack(self._rates(y[..., 0], y[..., 1], u[..., 0]), axis=-1)
 
     def vector_field_one(self, y, u, u_dot):
         """vector_field of one state y = [x, p] of Python floats, as a list."""
@@ -89,7 +91,8 @@ class Skier:
 
     def kinematics(self, y, h):
         """(E, ẋ, f′, σ, κ) at (y, h), from one evaluation of the trail's geometry."""
-        if ndim(y) == 1:  # one state: Python floats (a 0-d array would take the trail's array path)
+        if ndim(y) == 1 and type(y) is np.ndarray:  # one state: Python floats (a 0-d array would take the trail's
+            # array path); one traced state (connenv.jax's start) its entries
             (x, p), h = y.tolist(), float(h)
         else:
             x, p = y[..., 0], y[..., 1]

@@ -22,7 +22,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicSpline
 from scipy.special import ellipeinc
 
-from connenv.core.backend import namespace
+from connenv.core.backend import namespace, traced
 from connenv.core.validation import check_keys, check_number
 
 GRID = 4001  # samples of the domain for the checks and the tabulated arc length
@@ -47,10 +47,15 @@ class Trail:
             f, f1, f2, _ = self.profile(b)
             d = x - b
             return f + d * (f1 + 0.5 * d * f2), f1 + d * f2, f2, 0.0
-        b = np.clip(x, self.lo, self.hi)
+        ops = namespace(x)  # numpy's rows, or JAX's (connenv.jax)
+        b = self._clip(x, ops)
         f, f1, f2, f3 = self.profile(b)
         d = x - b
-        return f + d * (f1 + 0.5 * d * f2), f1 + d * f2, f2 + 0.0 * d, np.where(d == 0.0, f3, 0.0)
+        return f + d * (f1 + 0.5 * d * f2), f1 + d * f2, f2 + 0.0 * d, ops.where(d == 0.0, f3, 0.0)
+
+    def _clip(self, x, ops):
+        """x clipped to the domain: numpy's clip on numpy's rows, the namespace's maximum and minimum on traced ones."""
+        return ops.minimum(ops.maximum(x, self.lo), self.hi) if traced(ops) else np.clip(x, self.lo, self.hi)
 
     def grid(self):
         return np.linspace(self.lo, self.hi, GRID)
@@ -63,7 +68,7 @@ class Trail:
         """s(x) = ∫ σ dx from the origin; continued in closed form along the parabola beyond the domain."""
         if isinstance(x, float) and self.lo <= x <= self.hi:  # a single state on the domain: no array calls
             return float(self.arc_length_on_domain(x) - self._origin_arc) + 0.0  # + the parabola's 0, as below
-        b = np.clip(x, self.lo, self.hi)
+        b = self._clip(x, namespace(x))
         _, f1, f2, _ = self.profile(b)
         return self.arc_length_on_domain(b) - self._origin_arc + _parabola_arc(f1, f2, x - b)
 
@@ -84,12 +89,20 @@ class Trail:
         return {k: v for k, v in self.__dict__.items() if not k.startswith("_")}
 
 
+def _ufuncs(x):
+    """numpy itself (its ufuncs on numpy's rows and scalars alike, under the Array API names sqrt, asin, asinh, where),
+    or the namespace of traced rows (connenv.jax)."""
+    ops = namespace(x)
+    return ops if traced(ops) else np
+
+
 def _parabola_arc(c, k, d):
     """∫₀ᵈ √(1 + (c + k t)²) dt, the arc length along y′ = c + k t."""
-    primitive = lambda v: 0.5 * (v * np.sqrt(1.0 + v * v) + np.arcsinh(v))  # noqa: E731
+    ops = _ufuncs(d)
+    primitive = lambda v: 0.5 * (v * ops.sqrt(1.0 + v * v) + ops.asinh(v))  # noqa: E731
     with np.errstate(divide="ignore", invalid="ignore"):
         curved = (primitive(c + k * d) - primitive(c)) / k
-    return np.where(k * d == 0.0, np.sqrt(1.0 + c * c) * d, curved)
+    return ops.where(k * d == 0.0, ops.sqrt(1.0 + c * c) * d, curved)
 
 
 class Valley(Trail):
@@ -111,7 +124,8 @@ class Valley(Trail):
     def arc_length_on_domain(self, x):
         """∫₀ˣ √(1 + (ak)² sin² kx) dx = E(kx | −(ak)²)/k, Legendre's incomplete integral of the second kind."""
         k = 2.0 * math.pi / self.L
-        return ellipeinc(k * x, -((0.5 * self.H * k) ** 2)) / k
+        ops = namespace(x)
+        return (ops.ellipeinc if traced(ops) else ellipeinc)(k * x, -((0.5 * self.H * k) ** 2)) / k
 
 
 class Halfpipe(Trail):
@@ -131,7 +145,7 @@ class Halfpipe(Trail):
         return self.radius - root, x / root, R2 / root**3, 3.0 * R2 * x / root**5
 
     def arc_length_on_domain(self, x):
-        return self.radius * np.arcsin(x / self.radius)
+        return self.radius * _ufuncs(x).asin(x / self.radius)
 
 
 class Callables(Trail):
