@@ -18,6 +18,7 @@ import jax
 import jax.numpy as jnp
 
 from connenv.core.steppers import (
+    ConnectionSystem,
     ExactFlow,
     ExactSegment,
     Exact,
@@ -31,7 +32,6 @@ from connenv.core.steppers import (
     project_onto_level,
 )
 from connenv.core.lie.magnus import Magnus, along, se2_body_flow
-from connenv.core.steppers import ConnectionSystem
 from connenv.jax.namespace import fail
 
 FALLBACK_SUBSTEPS = 8  # RK8 substeps standing in for scipy's DOP853 (the exact step's fallback) on a segment: under vmap
@@ -174,6 +174,7 @@ def traced_stepper(stepper, system, name: str):
     if isinstance(stepper, Exact) and (conforms(system, ExactFlow) or conforms(system, ExactSegment)):
         return TracedExact(stepper)
     raise TypeError(
-        f"{name}'s stepper {stepper!r} has no JAX version yet (connenv.jax runs the exact step and the fixed-step "
-        "Runge–Kutta methods: make it with integrator='exact', 'euler', 'rk4' or 'rk8')"
+        f"{name}'s stepper {stepper!r} has no JAX version (scipy's adaptive step-size control does not trace; "
+        "connenv.jax runs the exact step, the Lie-group step with a fixed rule, the energy-projected RK8 and the "
+        "fixed-step Runge–Kutta methods: make it with integrator='exact', 'euler', 'rk4' or 'rk8')"
     )
