@@ -563,11 +563,13 @@ def main(argv=None):
     )
     misses = []
     if args.backend == "jax":
+        from connenv.jax import checked_kwargs
         from connenv.jax.throughput import table
 
         sizes = args.sizes if args.sizes != list(SIZES) else [1, 64, 1024, 4096, 65536]
         table(report, args.envs, sizes, misses,
-              lambda env_id, n: vector_rates(env_id, n, args.seconds, sync=False, reference=None)[0])
+              lambda env_id, n: vector_rates(env_id, n, args.seconds, sync=False, reference=None,
+                                             **checked_kwargs(env_id))[0])
         args.skip_single = args.skip_vector = True
         report.note("Targets missed: " + ("; ".join(misses) if misses else "none") + ".")
     if not args.skip_single:

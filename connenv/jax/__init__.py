@@ -8,7 +8,16 @@ import gymnasium as gym
 
 from connenv.jax.env import EnvParams, EnvState, FunctionalEnv
 
-__all__ = ["make", "FunctionalEnv", "EnvState", "EnvParams"]
+__all__ = ["make", "checked_kwargs", "FunctionalEnv", "EnvState", "EnvParams"]
+
+
+def checked_kwargs(env_id: str) -> dict:
+    """The first make kwargs whose JAX step the tests check against numpy (the id's ``Spec.jax``; a builder's is a
+    maker of its example, called here)."""
+    from connenv.envs.spec import spec
+
+    first = spec(env_id).jax[0]
+    return first() if callable(first) else dict(first)
 
 
 def make(env_id: str, **kwargs) -> tuple[FunctionalEnv, EnvParams]:

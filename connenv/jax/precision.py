@@ -29,8 +29,9 @@ def measure(env_id: str) -> dict:
     """The float32 errors of env_id's step (see the module)."""
     import connenv.jax as cj
 
-    jenv, params = cj.make(env_id)
-    env = gym.make(env_id).unwrapped
+    kwargs = cj.checked_kwargs(env_id)
+    jenv, params = cj.make(env_id, **kwargs)
+    env = gym.make(env_id, **kwargs).unwrapped
     rng = np.random.default_rng(0)
     X, A, X1, first = [], [], [], []
     for seed in range(SEEDS):

@@ -92,10 +92,8 @@ def timed(rollout, key, states):
 def rates(env_id: str, n: int):
     """(compile s, JAX env-steps/s) of env_id's rollout at N = n."""
     import connenv.jax as cj
-    from connenv.envs.spec import spec
 
-    first = spec(env_id).jax[0]  # a builder's: its example's maker (Spec.jax)
-    env, params = cj.make(env_id, **(first() if callable(first) else {}))
+    env, params = cj.make(env_id, **cj.checked_kwargs(env_id))
     obs, states = jax.vmap(env.reset, (0, None))(jax.random.split(jax.random.key(0), n), params)
     compile_time, seconds = timed(rollout_program(env, params, n), jax.random.key(1), states)
     return compile_time, n * ROLLOUT / seconds
