@@ -157,7 +157,15 @@ def table(report, env_ids, sizes, misses: list, numpy_rate):
             rows.append([env_id.removeprefix("connenv/"), "–", "no JAX version yet", "", "", "", ""])
             continue
         for n in sizes:
-            compile_time, ours = rates(env_id, n)
+            try:
+                compile_time, ours = rates(env_id, n)
+            except Exception as error:  # noqa: BLE001  (a rollout that does not trace at this N is a row that says so)
+                first = str(error).splitlines()[0][:120]
+                rows.append([env_id.removeprefix("connenv/"), str(n), "–", f"failed: {type(error).__name__}: {first}",
+                             "", "", ""])
+                misses.append(f"{env_id} at N = {n}: the rollout failed ({type(error).__name__})")
+                print(" | ".join(rows[-1]), flush=True)
+                continue
             numpy = numpy_rate(env_id, n)
             pendulum = pendulum_rate(n)
             ratio = ours / numpy
