@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None):
     parser.add_argument("--write", type=cli.writable_file, metavar="FILE.png",
                         help="where the curvature map goes (default: <Env>-curvature.png here)")  # fmt: skip
     args = parser.parse_args(argv)
-    path = args.write or f"{args.env_id.rpartition('/')[2].rpartition('-')[0]}-curvature.png"
+    path = args.write or geometry.map_path(args.env_id)
     draw(args.env_id, path)
     print(path)
     return path

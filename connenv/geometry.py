@@ -618,6 +618,11 @@ def draw(env_id: str, path: str, points: int = 41, gait=None, gait_label: str = 
 # -- command line --------------------------------------------------------------------------------------------------
 
 
+def map_path(env_id: str) -> str:
+    """Where an env's curvature map goes by default: <Env>-curvature.png in the working directory."""
+    return f"{env_id.rpartition('/')[2].rpartition('-')[0]}-curvature.png"
+
+
 def main(argv: list[str] | None = None):
     parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("env_id", metavar="ID", help="a connenv id whose env has a mechanical connection")
@@ -631,7 +636,7 @@ def main(argv: list[str] | None = None):
     if args.prediction_error:
         print_gait_errors(args.env_id)
         return None
-    path = args.write or f"{args.env_id.rpartition('/')[2].rpartition('-')[0]}-curvature.png"
+    path = args.write or map_path(args.env_id)
     draw(args.env_id, path)
     print(path)
     return path
