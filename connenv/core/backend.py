@@ -16,7 +16,8 @@ complex-analytic (atan2, hypot, maximum, …): on complex rows, those of the mod
 (`connenv.core.model`), each returns its value at the real parts, exactly as on real rows, with the imaginary part
 carried by its derivative there (the one-sided one at a kink), so that Im f(x + ih)/h is f′(x). The task
 namespaces SCALAR and BATCH (below; ``connenv.envs.base`` writes tasks on them) are these with the task's operations
-added, and serve the systems' functions as well. Special functions outside the standard (scipy.special's Jacobi elliptic functions) are chosen by the system beside ``ops``.
+added, and serve the systems' functions as well. Special functions outside the standard (scipy.special's Jacobi
+elliptic functions) are chosen by the system beside ``ops``, or taken from the namespace where it has them (JAX's).
 """
 
 from __future__ import annotations
@@ -235,4 +236,5 @@ BATCH = operations(
     components=lambda a: [a[..., i] for i in range(a.shape[-1])],
 )
 """The same operations on arrays over a batch (the vector env's): numpy's under FLOATS' Array API names (``ARRAYS``,
-safe on the complex rows of the model's Jacobians), and the task's. ``components`` splits the last axis: Python floats of one state, arrays over the rows of a batch."""
+safe on the complex rows of the model's Jacobians), and the task's. ``components`` splits the last axis: Python floats
+of one state, arrays over the rows of a batch."""

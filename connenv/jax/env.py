@@ -23,7 +23,6 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from connenv.jax.namespace import JAX_TASK, failures
 from connenv.jax.random import KeyGenerator

@@ -34,8 +34,8 @@ from connenv.core.steppers import (
 from connenv.core.lie.magnus import Magnus, along, se2_body_flow
 from connenv.jax.namespace import fail
 
-FALLBACK_SUBSTEPS = 8  # RK8 substeps standing in for scipy's DOP853 (the exact step's fallback) on a segment: under vmap
-# both sides of the fallback's branch are computed for every row, so its cost is paid on every step
+FALLBACK_SUBSTEPS = 8  # RK8 substeps standing in for scipy's DOP853 (the exact step's fallback) on a segment; vmap
+# computes both sides of the fallback's branch for every row, so its cost is paid on every step there
 
 
 def _column(tau):

@@ -137,7 +137,8 @@ def bound_note(env_id: str, n: int) -> str:
     whole = median(lambda: step(X, A).block_until_ready())
     special = median(lambda: traced(u, m)[0].block_until_ready())
     numpy_special = median(lambda: scipy.special.ellipj(u, m))
-    return (f"Bound of {env_id.removeprefix('connenv/')} at N = {n}: the vmapped transition takes {whole * 1e3:.2f} ms, "
+    return (f"Bound of {env_id.removeprefix('connenv/')} at N = {n}: the vmapped transition takes "
+            f"{whole * 1e3:.2f} ms, "
             f"of which the traced Jacobi elliptic functions alone take {special * 1e3:.2f} ms, against "
             f"{numpy_special * 1e3:.2f} ms for scipy's ellipj on the same rows (cephes' AGM stops at its level; "
             "the traced one computes every level and both series, and XLA's float64 transcendental functions on the "
