@@ -338,3 +338,18 @@ def test_the_swimmer_resets_draw_their_targets(env_id, unit):
     assert abs(np.mean(target[:, 1] > 0) - 0.5) < 0.05
     assert np.all(np.asarray(fields.pose) == 0.0) and np.all(np.asarray(fields.momentum) == 0.0)
     assert not np.any(np.asarray(fields.full)) and np.all(np.asarray(fields.momentum0) == 0.0)
+
+
+@pytest.mark.parametrize("env_id, n", [("connenv/Swing-v0", 64), ("connenv/KozlovShell-v0", 2048)])
+def test_step_rows_is_the_vmapped_step(env_id, n):
+    """step_rows (N envs in one call, a branch no row takes skipped) gives vmap(step_env)'s numbers to the bit; at
+    N = 2048 the shell's Lie-group quadrature, which numpy's rows run in blocks of bounded memory, takes JAX's rows
+    whole (it raised TracerArrayConversionError there before)."""
+    jenv, params = cj.make(env_id)
+    obs, states = jenv.reset_rows(jax.random.key(0), n, params)
+    actions = jax.random.uniform(jax.random.key(1), (n, *jenv.action_space(params).shape), minval=-1.0, maxval=1.0)
+    rows = jax.jit(jenv.step_rows)(jax.random.key(2), states, actions, params)
+    each = jax.jit(jax.vmap(jenv.step_env, (0, 0, 0, None)))(jax.random.split(jax.random.key(2), n), states, actions,
+                                                              params)
+    np.testing.assert_array_equal(np.asarray(rows[1].x), np.asarray(each[1].x))
+    np.testing.assert_array_equal(np.asarray(rows[2]), np.asarray(each[2]))

@@ -179,7 +179,7 @@ def se2_body_flow(velocity, g, s, s_dot, tau, pieces: int, points: int = QUADRAT
     if isinstance(g[0], float):
         return _se2_body_floats(velocity, g, s, s_dot, tau, pieces, points)
     block = max(1, BLOCK_BYTES // (8 * pieces * points))
-    if len(s) > block:
+    if len(s) > block and type(s) is np.ndarray:  # numpy's rows in blocks of bounded memory; JAX's rows whole
         increments = np.empty((3, len(s)), np.result_type(s, s_dot, tau))
         for i in range(0, len(s), block):
             rows = slice(i, i + block)
