@@ -89,7 +89,7 @@ def test_the_traced_step_is_the_numpy_step_to_rounding(case, one_step):
         np.testing.assert_allclose(np.asarray(value), expected[key], rtol=2 * np.finfo(np.float32).eps, atol=1e-7,
                                    err_msg=key)
     # one state, not vmapped, gives what the rows give, to the ulp or two by which XLA's code for one row and for a
-    # batch may round apart (its fusions differ: KapitzaSwingUp-v0's θ and p, measured 3e-16)
+    # batch may round apart (its fusions differ: KapitzaSwingUp-v0's θ and p, by an ulp or two)
     one = one_step(jnp.asarray(X[7]), jnp.asarray(A[7]))[0]
     assert np.max(np.abs(np.asarray(one) - x1[7]) / np.maximum(1.0, np.abs(x1[7]))) <= 1e-15
 
@@ -97,15 +97,14 @@ def test_the_traced_step_is_the_numpy_step_to_rounding(case, one_step):
 TRAJECTORY_RTOL = 1e-11
 """Largest difference of a whole JAX trajectory from numpy's (up to 1000 steps of the same random actions from the
 same state, seeds 0, 2 and 4), as a fraction of max(1, |x|): each step rounds differently by ~1e-16 (above), and the
-flow carries that difference along, growing it where the motion is unstable. Measured per id (docs/guides/jax.md's
-table): 8.9e-13 at most (KapitzaPendulum-v0, whose pivot's fast oscillation stretches the difference), 0 to 3e-14
-elsewhere."""
+flow carries that difference along, growing it where the motion is unstable (the Kapitza pivot's fast oscillation
+stretches it most). The test prints each id's; docs/guides/jax.md tables them."""
 
 
 TRAJECTORY_RTOL_OF = {"Skier-v0": 1e-9}
 """Skier-v0: its state's energy error, the sum of each projected step's change of E (E ≈ 800 J, a difference of
-large numbers), is all roundoff: a few ulp of E a step sum to 1.2e-10 J over 1000 steps (measured), while x and p
-agree to 1e-13."""
+large numbers), is all roundoff: a few ulp of E a step, summed over 1000 steps, pass TRAJECTORY_RTOL in that entry
+alone, while x and p stay within it (the test prints the difference)."""
 
 
 def test_whole_trajectories_follow_numpys(case, one_step):
@@ -221,7 +220,7 @@ def test_the_goal_env_observes_a_dict_and_resets_with_its_last_one():
 
 def test_the_traced_jacobi_elliptic_functions_are_scipys():
     """sn, cn, dn and am by cephes' descending Landen recurrence at a fixed trip count, against scipy's ellipj over
-    the whole parameter range and the series at its ends (largest absolute difference measured: 3.4e-14, in dn)."""
+    the whole parameter range and the series at its ends (dn, near cn = 0, differs most)."""
     rng = np.random.default_rng(1)
     u = rng.uniform(-20.0, 20.0, 20000)
     m = np.concatenate([rng.uniform(0.0, 1.0, 19990), [0.0, 1e-12, 1e-10, 1e-9, 1e-5, 0.5, 1 - 1e-9, 1 - 1e-10,

@@ -185,8 +185,8 @@ def vector(*entries):
     """One state's entries as an array: numpy's float64 array, or JAX's stack where an entry is traced (a reset traced
     by ``connenv.jax``)."""
     for entry in entries:
-        if not isinstance(entry, float) and traced(namespace(entry)):
-            return namespace(entry).stack([namespace(entry).real_part(e) * 1.0 for e in entries])
+        if not isinstance(entry, float) and traced(ops := namespace(entry)):
+            return ops.stack(entries).astype(float)
     return np.array(entries, float)
 
 
