@@ -29,6 +29,10 @@ from connenv.jax.random import KeyGenerator
 from connenv.jax.spaces import Box, Dict, space_of
 from connenv.jax.steppers import traced_stepper
 
+RESET_SHARE = 16
+"""step_rows resets only the rows that are done where they are at most N / RESET_SHARE of the N (see
+`FunctionalEnv._reset_where`)."""
+
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
@@ -196,11 +200,35 @@ class FunctionalEnv:
         time = state.time + 1
         truncated = ((time >= params.max_steps_in_episode) | failed) & ~terminated
         info = {**info, "stepper_failed": failed, "final_observation": obs, "final_x": X_next}
-        obs_reset, fresh = self.reset_rows(key, state.x.shape[0], params)
-        done = terminated | truncated
+        obs, state = self._reset_where(key, terminated | truncated, obs, EnvState(X_next, time), params)
+        return obs, state, reward.astype(float), terminated, truncated, info
 
-        def pick(a, b):
-            return jnp.where(done.reshape(-1, *([1] * (jnp.ndim(a) - 1))), a, b)
+    def _reset_where(self, key, done, obs, state, params):
+        """(obs, state) with the rows where done replaced by reset_rows(key, N, params)'s: where at most
+        N / RESET_SHARE rows are done (the usual step: episodes end a few at a time), only those rows are reset
+        (gathered, reset, written back; the same numbers), else every row, as vmap(step) resets."""
+        n = done.shape[0]
 
-        state = jax.tree_util.tree_map(pick, fresh, EnvState(X_next, time))
-        return jax.tree_util.tree_map(pick, obs_reset, obs), state, reward.astype(float), terminated, truncated, info
+        def every(obs, state):
+            obs_reset, fresh = self.reset_rows(key, n, params)
+
+            def pick(a, b):
+                return jnp.where(done.reshape(-1, *([1] * (jnp.ndim(a) - 1))), a, b)
+
+            return jax.tree_util.tree_map(pick, (obs_reset, fresh), (obs, state))
+
+        few = max(1, n // RESET_SHARE)
+        if few >= n:
+            return every(obs, state)
+
+        def some(obs, state):
+            index = jnp.nonzero(done, size=few, fill_value=0)[0]  # the done rows, then row 0 again (unchanged)
+            fresh = jax.vmap(self.reset_env, (0, None))(jax.random.split(key, n)[index], params)
+            taken = done[index]
+
+            def put(a, b):
+                return a.at[index].set(jnp.where(taken.reshape(-1, *([1] * (jnp.ndim(a) - 1))), b, a[index]))
+
+            return jax.tree_util.tree_map(put, (obs, state), fresh)
+
+        return jax.lax.cond(jnp.sum(done) <= few, some, every, obs, state)
