@@ -30,8 +30,7 @@ from connenv.jax.spaces import Box, Dict, space_of
 from connenv.jax.steppers import traced_stepper
 
 RESET_SHARE = 16
-"""step_rows resets only the rows that are done where they are at most N / RESET_SHARE of the N (see
-`FunctionalEnv._reset_where`)."""
+"""step_rows resets the rows that are done N / RESET_SHARE at a time (`FunctionalEnv._reset_where`)."""
 
 
 @jax.tree_util.register_dataclass
@@ -204,31 +203,28 @@ class FunctionalEnv:
         return obs, state, reward.astype(float), terminated, truncated, info
 
     def _reset_where(self, key, done, obs, state, params):
-        """(obs, state) with the rows where done replaced by reset_rows(key, N, params)'s: where at most
-        N / RESET_SHARE rows are done (the usual step: episodes end a few at a time), only those rows are reset
-        (gathered, reset, written back; the same numbers), else every row, as vmap(step) resets."""
+        """(obs, state) with the rows where done replaced by reset_rows(key, N, params)'s, the same numbers: the done
+        rows are gathered N / RESET_SHARE at a time, reset and written back, a chunk run only where some done row is
+        left (``lax.cond`` in a loop of a fixed trip count: the reset traced once, reverse mode kept). Episodes end a
+        few at a time, so a step usually resets one chunk, not N rows."""
         n = done.shape[0]
-
-        def every(obs, state):
-            obs_reset, fresh = self.reset_rows(key, n, params)
-
-            def pick(a, b):
-                return jnp.where(done.reshape(-1, *([1] * (jnp.ndim(a) - 1))), a, b)
-
-            return jax.tree_util.tree_map(pick, (obs_reset, fresh), (obs, state))
-
         few = max(1, n // RESET_SHARE)
-        if few >= n:
-            return every(obs, state)
+        keys = jax.random.split(key, n)
 
-        def some(obs, state):
-            index = jnp.nonzero(done, size=few, fill_value=0)[0]  # the done rows, then row 0 again (unchanged)
-            fresh = jax.vmap(self.reset_env, (0, None))(jax.random.split(key, n)[index], params)
-            taken = done[index]
+        def chunk(i, carry):
+            def reset_some(carry):
+                obs, state, left = carry
+                index = jnp.nonzero(left, size=few, fill_value=0)[0]  # the rows left, then row 0 (kept as it is)
+                taken = left[index]
+                fresh = jax.vmap(self.reset_env, (0, None))(keys[index], params)
 
-            def put(a, b):
-                return a.at[index].set(jnp.where(taken.reshape(-1, *([1] * (jnp.ndim(a) - 1))), b, a[index]))
+                def put(a, b):
+                    return a.at[index].set(jnp.where(taken.reshape(-1, *([1] * (jnp.ndim(a) - 1))), b, a[index]))
 
-            return jax.tree_util.tree_map(put, (obs, state), fresh)
+                obs, state = jax.tree_util.tree_map(put, (obs, state), fresh)
+                return obs, state, left.at[index].set(False)
 
-        return jax.lax.cond(jnp.sum(done) <= few, some, every, obs, state)
+            return jax.lax.cond(jnp.any(carry[2]), reset_some, lambda carry: carry, carry)
+
+        obs, state, _ = jax.lax.fori_loop(0, -(-n // few), chunk, (obs, state, done))
+        return obs, state

@@ -5,9 +5,10 @@ written once for Python floats (FLOATS, SCALAR) and numpy rows (ARRAYS, BATCH) t
 the rows' seams that numpy code reached outside ``ops`` before: ``stack``, ``real_part`` (the real part a decision
 reads; JAX differentiates by its own forward mode, so there are no complex rows and it is the value itself),
 ``any`` (whether a branch that only some rows take must be computed: always, as a trace cannot look at values; the
-rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenate``, ``full`` and ``ceil`` (the
-bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the connections'),
-``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
+rows that do not take it are left by ``where``), ``branch`` (a branch computed only where some row takes it:
+``lax.cond`` on rows stepped in one call, both sides under vmap), ``all``, ``sort``, ``concatenate``, ``full`` and
+``ceil`` (the bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the
+connections'), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
 ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
 only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
 ``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),

@@ -5,21 +5,29 @@
 
 A rollout is ``jax.jit`` of ``lax.scan`` over ROLLOUT steps of ``env.step_rows`` (the N envs' step in one call:
 the numbers of ``jax.vmap(env.step)``, with a branch no row takes skipped) and autoresets, with random actions
-drawn from the key inside the program, as a PureJaxRL-style trainer runs an env. Its compile time is
+drawn from the key inside the program (one uniform draw of the N rows' actions, as Pendulum's), as a PureJaxRL-style
+trainer runs an env. Its compile time is
 the first call's; the rate is N × ROLLOUT / the median time of the following calls. The numpy figure is
 connenv.throughput's native vector env at the same N (timed in blocks as there), and the ratio JAX / numpy is the
 target's (issue 45: ≥ 2× at N = 4096, ≥ 5× at N = 64, compile < 30 s). Pendulum's rollout is the same program on
 its transition, observation and reward, with a reset where an episode reaches 200 steps.
+
+Where an id misses a target, the page names what bounds it, measured in the same run (`bound_note`): step_rows'
+time split into the next state, the observation, reward and info, and the autoreset, and the transcendental
+functions of its transition, counted in its jaxpr and timed on N rows, summed per function of connenv that calls
+them. On a GPU, GPU_COMMAND runs the benchmark up to N = 2²⁰ within 8 minutes.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import statistics
 import time
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 ROLLOUT = 100
 CALLS = 5
@@ -34,7 +42,8 @@ def rollout_program(env, params, n: int):
     def body(carry, _):
         key, states = carry
         key, act, run = jax.random.split(key, 3)
-        actions = jax.vmap(space.sample)(jax.random.split(act, n))
+        actions = jax.random.uniform(act, (n, *space.shape), jnp.float32 if space.dtype == np.float32 else float,
+                                     jnp.asarray(space.low), jnp.asarray(space.high)).astype(space.dtype)
         obs, states, reward, terminated, truncated, info = env.step_rows(run, states, actions, params)
         return (key, states), reward.sum()
 
@@ -129,6 +138,7 @@ def _least(*calls, rounds: int = 15) -> list[float]:
     return least
 
 
+@functools.cache
 def primitive_time(name: str, n: int) -> float:
     """Seconds one call of the lax primitive ``name`` takes on n float64 rows: a jitted chain of CHAIN calls, less the
     same chain without them, over CHAIN."""
