@@ -186,21 +186,34 @@ class FunctionalEnv:
         """n starting states (obs (n, …), EnvState with x (n, n_x) and time (n,)) from one key."""
         return jax.vmap(self.reset_env, (0, None))(jax.random.split(key, n), params)
 
-    def step_rows(self, key, state: EnvState, action, params: EnvParams | None = None):
-        """``step`` of rows (state.x (N, n), action (N, …)) in one call, as the numpy vector env steps its rows: the
-        same numbers as ``jax.vmap(env.step)``, but a branch that no row takes (the exact step's numerical fallback)
-        is skipped, which under vmap is computed for every row."""
+    def step_env_rows(self, key, state: EnvState, action, params: EnvParams | None = None):
+        """``step_env`` of rows (state.x (N, n), action (N, …)) in one call, without autoreset: (obs, state, reward,
+        terminated, truncated, info), a failed row's state held and its episode truncated. The key is unused (the
+        step draws nothing), kept for gymnax's signature."""
         params = self.default_params if params is None else params
         X_next, obs, reward, terminated, info, failed = self._for(params)._advance_rows(state.x, action)
         X_next = jnp.where(failed[:, None], state.x, X_next)
         time = state.time + 1
         truncated = ((time >= params.max_steps_in_episode) | failed) & ~terminated
-        info = {**info, "stepper_failed": failed, "final_observation": obs, "final_x": X_next}
+        info = {**info, "stepper_failed": failed}
+        return obs, EnvState(X_next, time), reward.astype(float), terminated, truncated, info
+
+    def step_rows(self, key, state: EnvState, action, params: EnvParams | None = None):
+        """``step`` of rows (state.x (N, n), action (N, …)) in one call, as the numpy vector env steps its rows: the
+        same numbers as ``jax.vmap(env.step)``, but a branch that no row takes (the exact step's numerical fallback)
+        is skipped, which under vmap is computed for every row. (Under an outer vmap, over seeds say, that skip is
+        lost too: step ``step_env_rows`` on all rows at once and reset each group with ``autoreset_rows``.)"""
+        obs, after, reward, terminated, truncated, info = self.step_env_rows(key, state, action, params)
+        obs, state, info = self.autoreset_rows(key, obs, after, terminated | truncated, info, params)
+        return obs, state, reward, terminated, truncated, info
+
+    def autoreset_rows(self, key, obs, state: EnvState, done, info: dict, params: EnvParams | None = None):
+        """gymnax's autoreset of rows: where done, the state and observation of a reset from the key;
+        info["final_observation"] and info["final_x"] the ended step's. (obs, state, info)."""
+        info = {**info, "final_observation": obs, "final_x": state.x}
         obs_reset, fresh = self.reset_rows(key, state.x.shape[0], params)
-        done = terminated | truncated
 
         def pick(a, b):
             return jnp.where(done.reshape(-1, *([1] * (jnp.ndim(a) - 1))), a, b)
 
-        state = jax.tree_util.tree_map(pick, fresh, EnvState(X_next, time))
-        return jax.tree_util.tree_map(pick, obs_reset, obs), state, reward.astype(float), terminated, truncated, info
+        return jax.tree_util.tree_map(pick, obs_reset, obs), jax.tree_util.tree_map(pick, fresh, state), info
