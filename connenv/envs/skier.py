@@ -139,6 +139,8 @@ class SkierEnv(TaskEnv):
 
     renderer = SkierRenderer
 
+    JAX_STATIC = ("h_max",)  # they set the observation space
+
     ARGS = Args(
         scale("h_min", 0.5, "m", "below h_max"),
         scale("h_max", 1.0, "m", "with 1 − κ h_max > 0 on the whole trail", low="h_min"),
