@@ -15,11 +15,11 @@ import pytest
 
 os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_backend_optimization_level=0".strip()  # as test_jax
 jax = pytest.importorskip("jax")
-jax.config.update("jax_enable_x64", True)  # noqa: E402
-import jax.numpy as jnp  # noqa: E402
+jax.config.update("jax_enable_x64", True)
+import jax.numpy as jnp
 
-import connenv.jax as cj  # noqa: E402
-from connenv.envs.spec import registry  # noqa: E402
+import connenv.jax as cj
+from connenv.envs.spec import registry
 
 STEP_RTOL = 1e-12  # as tests/test_jax.py's, entry by entry of max(1, |x|)
 ROWS = 3

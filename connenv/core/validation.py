@@ -9,7 +9,6 @@ from collections.abc import Mapping
 import numpy as np
 
 from connenv.core.backend import is_traced
-
 from connenv.core.steppers import SMALL, STEPPER_OPTIONS
 
 

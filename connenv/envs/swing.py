@@ -10,7 +10,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import BATCH, SCALAR, vector, namespace
+from connenv.core.backend import BATCH, SCALAR, namespace, vector
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import check_drift, control_path, held_energy, run_segments
