@@ -147,6 +147,24 @@ def stats_update(stats: dict, batch) -> dict:
     return {"mean": stats["mean"] + delta * count / total, "var": m2 / total, "count": total}
 
 
+def gae(reward, value, last_value, final_value, terminated, truncated, gamma: float, lam: float):
+    """Generalized advantage estimates (Schulman et al. 2016) of a rollout (time first: reward, value, flags (T, N);
+    last_value (N,) the value of the state after it). After a terminal step the value is 0; after a step the clock
+    cut (truncated), the value of its final observation (final_value), as SB3 bootstraps a time limit, not 0; the
+    recursion does not run across either. float32, the learning side's precision."""
+    next_value = jnp.concatenate([value[1:], last_value[None]], 0)
+    bootstrap = jnp.where(truncated, final_value, next_value) * (1.0 - terminated)
+    delta = (reward + gamma * bootstrap - value).astype(jnp.float32)
+    done = (terminated | truncated).astype(jnp.float32)
+
+    def step(carry, x):
+        delta, done = x
+        carry = delta + gamma * lam * (1.0 - done) * carry
+        return carry, carry
+
+    return jax.lax.scan(step, jnp.zeros_like(delta[0]), (delta, done), reverse=True)[1]
+
+
 # -- training -------------------------------------------------------------------------------------------------------
 
 
@@ -265,24 +283,15 @@ class Trainer:
         after it and its metrics."""
         c = self.config
         reward = t["reward"]
+        # the rollout's values were computed with the statistics before this update's: so is the last one
+        last_value = forward(runner["params"]["vf"], self.normalized(runner, runner["obs"]), jnp)[..., 0]
         if c.normalize:
             scale = jnp.sqrt(runner["ret_stats"]["var"] + OBS_EPSILON)
             reward = jnp.clip(reward / scale, -c.clip_reward, c.clip_reward)
             runner = {**runner, "ret_stats": stats_update(runner["ret_stats"], t["discounted"].reshape(-1)),
                       "obs_stats": stats_update(runner["obs_stats"], t["raw_obs"].reshape(-1, self.obs_dim))}  # fmt: skip
-        last_value = forward(runner["params"]["vf"], self.normalized(runner, runner["obs"]), jnp)[..., 0]
-        next_value = jnp.concatenate([t["value"][1:], last_value[None]], 0)
-        # the value after each step: 0 past a terminal state, the final observation's where the clock cut the episode
-        bootstrap = jnp.where(t["truncated"], t["final_value"], next_value) * (1.0 - t["terminated"])
-        delta = (reward + c.gamma * bootstrap - t["value"]).astype(jnp.float32)  # the learning side's float32
-        done = (t["terminated"] | t["truncated"]).astype(jnp.float32)
-
-        def gae(carry, x):
-            delta, done = x
-            carry = delta + c.gamma * c.gae_lambda * (1.0 - done) * carry
-            return carry, carry
-
-        _, advantages = jax.lax.scan(gae, jnp.zeros_like(last_value), (delta, done), reverse=True)
+        advantages = gae(reward, t["value"], last_value, t["final_value"], t["terminated"], t["truncated"],
+                         c.gamma, c.gae_lambda)  # fmt: skip
         returns = advantages + t["value"]
         batch = {"nobs": t["nobs"], "action": t["action"], "logp": t["logp"], "advantage": advantages,
                  "return": returns}  # fmt: skip

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import math
 import os
 import sys
@@ -140,6 +139,11 @@ def run(args: argparse.Namespace) -> dict:
     import jax
 
     jax.config.update("jax_enable_x64", True)  # connenv.jax computes the physics in float64 (an application may set it)
+    # XLA's compiled programs kept between runs (JAX's persistent cache): a second run of the same env and
+    # hyperparameters starts at once; JAX_COMPILATION_CACHE_DIR moves it, an empty one turns it off
+    cache = os.environ.get("JAX_COMPILATION_CACHE_DIR", str(Path.home() / ".cache" / "connenv" / "jax"))
+    if cache:
+        jax.config.update("jax_compilation_cache_dir", cache)
     import connenv.jax
     from agents.jax_ppo import Config, Trainer
 
@@ -262,21 +266,16 @@ def run(args: argparse.Namespace) -> dict:
     specs += [*(["analytic"] if args.env in CONTROLLERS else []), "random"]
     report = evaluate.compare(args.env, specs, args.eval_episodes, args.eval_seed, env_kwargs=env_kwargs)
     print(evaluate.format_table(report))
-    rows = report["policies"] if "policies" in report else None
     for seed, folder, spec in zip(seeds, folders, specs):
         own = _own_report(report, spec)
         results = {"status": "finished", "seed": seed, **common, "model": str(folder / "best_policy.npz"),
                    "evaluation": own}  # fmt: skip
         evaluate.write_json(results, folder / "results.json")
-    del rows
     return report
 
 
 def _own_report(report: dict, spec: str) -> dict:
     """The compare report with only this seed's policy among the learned ones (the references kept)."""
     label = evaluate.jax_label(spec.removeprefix("jax:"))
-    own = json.loads(json.dumps(report))
-    for key, value in report.items():
-        if isinstance(value, dict):
-            own[key] = {k: v for k, v in value.items() if not (k.startswith(f"{ALGO}:") and k != label)}
-    return own
+    rows = [row for row in report["policies"] if not row["policy"].startswith(f"{ALGO}:") or row["policy"] == label]
+    return {**report, "policies": rows}
