@@ -24,6 +24,7 @@ a policy file (agents.jax_policy), which numpy alone runs.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from typing import Any
 
@@ -111,7 +112,7 @@ def init_layers(key, sizes: list[int], last_gain: float):
     """SB3's initialization: orthogonal weights of gain √2 (the last layer's `last_gain`), zero biases; float32."""
     layers = []
     keys = jax.random.split(key, len(sizes) - 1)
-    for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
+    for i, (n_in, n_out) in enumerate(itertools.pairwise(sizes)):
         gain = last_gain if i == len(sizes) - 2 else math.sqrt(2)
         W = jax.nn.initializers.orthogonal(gain)(keys[i], (n_in, n_out), jnp.float32)
         layers.append((W, jnp.zeros(n_out, jnp.float32)))
@@ -183,7 +184,7 @@ class Trainer:
         self.low, self.high = np.asarray(action_space.low, float), np.asarray(action_space.high, float)
         steps_per_update = config.n_epochs * config.n_minibatches
         if config.linear_lr:  # SB3's: constant within an update, 1 − (updates done) / n_updates of the rate
-            learning_rate = lambda count: config.learning_rate * (1.0 - (count // steps_per_update) / config.n_updates)  # noqa: E731
+            learning_rate = lambda count: config.learning_rate * (1.0 - (count // steps_per_update) / config.n_updates)
         else:
             learning_rate = config.learning_rate
         self.optimizer = optax.chain(
@@ -235,8 +236,8 @@ class Trainer:
         """The env step of every seed's rows at once (one batch of S·N rows, so that a branch no row takes is
         skipped, which a vmap over the seeds would compute), then each seed's autoreset from its own key."""
         S, N = action.shape[:2]
-        flat = lambda v: v.reshape(S * N, *v.shape[2:])  # noqa: E731
-        rows = lambda v: v.reshape(S, N, *v.shape[1:])  # noqa: E731
+        flat = lambda v: v.reshape(S * N, *v.shape[2:])
+        rows = lambda v: v.reshape(S, N, *v.shape[1:])
         step = self.env.step_env_rows(None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params)
         obs, after, reward, terminated, truncated, info = jax.tree_util.tree_map(rows, step)
         reset = jax.vmap(self.env.autoreset_rows, (0, 0, 0, 0, 0, None))
@@ -288,8 +289,9 @@ class Trainer:
         if c.normalize:
             scale = jnp.sqrt(runner["ret_stats"]["var"] + OBS_EPSILON)
             reward = jnp.clip(reward / scale, -c.clip_reward, c.clip_reward)
-            runner = {**runner, "ret_stats": stats_update(runner["ret_stats"], t["discounted"].reshape(-1)),
-                      "obs_stats": stats_update(runner["obs_stats"], t["raw_obs"].reshape(-1, self.obs_dim))}  # fmt: skip
+            ret_stats = stats_update(runner["ret_stats"], t["discounted"].reshape(-1))
+            obs_stats = stats_update(runner["obs_stats"], t["raw_obs"].reshape(-1, self.obs_dim))
+            runner = {**runner, "ret_stats": ret_stats, "obs_stats": obs_stats}
         advantages = gae(reward, t["value"], last_value, t["final_value"], t["terminated"], t["truncated"],
                          c.gamma, c.gae_lambda)  # fmt: skip
         returns = advantages + t["value"]
@@ -383,7 +385,7 @@ class Trainer:
     def policy_arrays(self, runner: dict, seed_index: int) -> tuple[dict, np.ndarray, np.ndarray]:
         """(params, obs_mean, obs_var) of one seed of vmapped runners, as numpy (float64 weights: numpy's
         evaluation computes in float64 what training computed in float32)."""
-        pick = lambda v: np.asarray(v[seed_index], float)  # noqa: E731
+        pick = lambda v: np.asarray(v[seed_index], float)
         params = jax.tree_util.tree_map(pick, runner["params"])
         stats = runner["obs_stats"]
         if not self.config.normalize:

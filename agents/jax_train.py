@@ -42,10 +42,9 @@ ALGO = "ppo_jax"
 
 def hyperparams_entry(path: Path, env_id: str) -> dict:
     loaded = yaml.safe_load(Path(path).read_text())
-    entry = loaded.get(env_id, loaded.get("default"))
-    if not isinstance(entry, dict):
+    if env_id not in loaded and "default" not in loaded:  # train.py's hyperparams_fault has checked the rest
         raise ValueError(f"--hyperparams {path}: no entry for {env_id} (nor default)")
-    return dict(entry)
+    return dict(loaded.get(env_id, loaded.get("default")))
 
 
 def run_folder(runs: Path, env_id: str, seed: int) -> Path:
@@ -132,6 +131,18 @@ def read_progress(folder: Path) -> list[dict]:
         return []
     with open(path) as file:
         return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(file)]
+
+
+def write_records(seeds: list[int], folders: list[Path], evaluations: dict, progress: dict):
+    """Each seed's evaluations.npz (SB3's EvalCallback's keys) and progress.csv, as far as the run has come."""
+    for seed, folder in zip(seeds, folders):
+        record = evaluations[seed]
+        if record["timesteps"]:
+            np.savez(folder / "evaluations.npz", timesteps=np.array(record["timesteps"]),
+                     results=np.array(record["results"]), successes=np.array(record["successes"]),
+                     ep_lengths=np.zeros_like(np.array(record["results"])))  # fmt: skip
+        if progress[seed]:
+            write_progress(folder, progress[seed])
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -225,6 +236,7 @@ def run(args: argparse.Namespace) -> dict:
                   f"success {mean_success:.0%} (mean of {len(seeds)} seeds)", flush=True)  # fmt: skip
             due = args.checkpoint_freq > 0 and timesteps // args.checkpoint_freq > saved_steps // args.checkpoint_freq
             if due or (args.checkpoint_freq > 0 and updates >= config.n_updates):
+                write_records(seeds, folders, evaluations, progress)  # the curves so far, with their checkpoint
                 save_checkpoint(folders[0], runner, timesteps)
                 for folder in folders[1:]:  # every seed's folder names the common checkpoint
                     (folder / "checkpoints").mkdir(parents=True, exist_ok=True)
@@ -236,17 +248,11 @@ def run(args: argparse.Namespace) -> dict:
         updates -= 0  # the interrupted chunk's updates are lost: the state before it is kept
     train_seconds = time.perf_counter() - train_start
     timesteps = int(np.asarray(runner["update"])[0]) * config.rollout
+    write_records(seeds, folders, evaluations, progress)
     for i, (seed, folder) in enumerate(zip(seeds, folders)):
         jax_policy.save(folder / "policy.npz", *trainer.policy_arrays(runner, i), meta)
         if not (folder / "best_policy.npz").is_file():
             jax_policy.save(folder / "best_policy.npz", *trainer.policy_arrays(runner, i), meta)
-        record = evaluations[seed]
-        if record["timesteps"]:
-            np.savez(folder / "evaluations.npz", timesteps=np.array(record["timesteps"]),
-                     results=np.array(record["results"]), successes=np.array(record["successes"]),
-                     ep_lengths=np.zeros_like(np.array(record["results"])))  # fmt: skip
-        if progress[seed]:
-            write_progress(folder, progress[seed])
     common = {"algo": ALGO, "backend": "jax", "timesteps": timesteps, "train_seconds": train_seconds,
               "compile_seconds": compile_seconds, "seeds_trained_together": seeds,
               "hyperparams": str(hyperparams_file), "jax_devices": [str(d) for d in jax.devices()]}  # fmt: skip

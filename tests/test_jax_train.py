@@ -14,12 +14,12 @@ import pytest
 os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_backend_optimization_level=0".strip()
 jax = pytest.importorskip("jax")
 pytest.importorskip("optax")
-jax.config.update("jax_enable_x64", True)  # noqa: E402
-import jax.numpy as jnp  # noqa: E402
+jax.config.update("jax_enable_x64", True)
+import jax.numpy as jnp
 
-from agents import jax_ppo, jax_train, train  # noqa: E402
-from agents.evaluate import make_policy  # noqa: E402
-from agents.jax_policy import JaxPolicy  # noqa: E402
+from agents import jax_ppo, jax_train, train
+from agents.evaluate import make_policy
+from agents.jax_policy import JaxPolicy
 
 
 def test_a_time_limit_is_bootstrapped_and_a_terminal_state_is_not():
@@ -29,7 +29,7 @@ def test_a_time_limit_is_bootstrapped_and_a_terminal_state_is_not():
     gamma, lam, r, T = 0.99, 0.95, 1.0, 6
     V = r / (1 - gamma)
     value, reward = jnp.full((T, 1), V, jnp.float32), jnp.full((T, 1), r)
-    flags = lambda t: jnp.zeros((T, 1), bool).at[t].set(True)  # noqa: E731
+    flags = lambda t: jnp.zeros((T, 1), bool).at[t].set(True)
     cut = jax_ppo.gae(reward, value, jnp.full(1, V), jnp.full((T, 1), V), flags(T + 1), flags(2), gamma, lam)
     np.testing.assert_allclose(cut, 0.0, atol=1e-4)
     ended = jax_ppo.gae(reward, value, jnp.full(1, V), jnp.full((T, 1), V), flags(2), flags(T + 1), gamma, lam)
@@ -88,7 +88,7 @@ def test_a_run_trains_seeds_together_and_leaves_policies_numpy_runs(tmp_path):
         folder = jax_train.run_folder(tmp_path, "connenv/Swing-v0", seed)
         results = json.loads((folder / "results.json").read_text())
         assert results["status"] == "finished" and results["timesteps"] == 512 and results["seed"] == seed
-        assert [row["policy"] for row in results["evaluation"]["policies"]][0] == f"ppo_jax:{folder.name}"
+        assert next(row["policy"] for row in results["evaluation"]["policies"]) == f"ppo_jax:{folder.name}"
         assert np.load(folder / "evaluations.npz")["timesteps"].tolist() == [256, 512]
         assert (folder / "connenv-Swing-v0" / "config.yml").is_file() and (folder / "progress.csv").is_file()
     assert make_policy(f"jax:{folder}", "connenv/Swing-v0", 0)[0] == f"ppo_jax:{folder.name}"
