@@ -159,7 +159,7 @@ class KapitzaPendulum:
         """_near_separatrix on traced rows: each row's substeps from its own τ (the numpy code's count for one
         state), run up to the rows' largest count with the rows past theirs held by ``where``."""
         tau = tau + 0.0 * theta  # a length per row
-        substeps = ops.maximum(1.0, ops.ceil(math.sqrt(self.g / self.length) * ops.real_part(tau) / SEPARATRIX_STEP))
+        substeps = ops.maximum(1.0, ops.ceil(ops.sqrt(self.g / self.length) * ops.real_part(tau) / SEPARATRIX_STEP))
         h = tau / substeps
 
         def substep(i, state):
