@@ -302,7 +302,9 @@ class FunctionalEnv:
         """(obs, state) with the rows where done replaced by reset_env(their key, params)'s: the done rows are
         gathered N / RESET_SHARE at a time, reset and written back, a chunk run only where some done row is left
         (``lax.cond`` in a loop of a fixed trip count: the reset traced once, reverse mode kept). Episodes end a few
-        at a time, so a step usually resets one chunk, not N rows."""
+        at a time, so a step usually resets one chunk, not N rows. A row's reset is the one reset_rows draws from
+        its key, to an ulp: XLA's code for a batch of another size may round a product apart (measured: 4e-19 in an
+        energy of 20 J)."""
         n = done.shape[0]
         few = max(1, n // RESET_SHARE)
 
