@@ -240,7 +240,8 @@ class Trainer:
         flat = lambda v: v.reshape(S * N, *v.shape[2:])
         rows = lambda v: v.reshape(S, N, *v.shape[1:])
         obs, after, reward, terminated, truncated, info = self.env.step_env_rows(
-            None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params)
+            None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params
+        )
         obs, state, info = self.env.autoreset_rows(keys, obs, after, terminated | truncated, info, self.env_params)
         return jax.tree_util.tree_map(rows, (obs, state, reward, terminated, truncated, info))
 
