@@ -279,6 +279,7 @@ def table(report, env_ids, sizes, misses: list, numpy_rate, numpy_max: int | Non
             if deadline is not None and time.perf_counter() > deadline:
                 rows.append([env_id.removeprefix("connenv/"), str(n), "–", f"not run: past the {budget:g} s budget",
                              "", "", ""])
+                misses.append(f"{env_id} at N = {n}: not run (past the budget)")
                 continue
             try:
                 compile_time, ours = rates(env_id, n)
