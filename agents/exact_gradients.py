@@ -455,6 +455,7 @@ def main(argv=None):
     out.parent.mkdir(parents=True, exist_ok=True)
     chart(envs, data, out.parent / (out.stem + ".png"))
     command = "python -m agents.exact_gradients" + (" --quick" if args.quick else "")
+    command += f" --envs {' '.join(envs)}" if args.envs else ""
     text = page(envs, data, seeds, args.quick, command).replace(f"]({CHART})", f"]({out.stem}.png)")
     out.write_text(text)
     print(f"wrote {out} and {out.stem}.png")
