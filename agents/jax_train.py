@@ -133,6 +133,16 @@ def read_progress(folder: Path) -> list[dict]:
         return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(file)]
 
 
+def wait(tree, poll: float = 0.05):
+    """Until every array of the tree is computed, in short sleeps rather than one blocking call, so that Ctrl-C
+    interrupts at once (Python handles a signal between its own steps, not inside XLA's wait)."""
+    import jax
+
+    leaves = [leaf for leaf in jax.tree_util.tree_leaves(tree) if hasattr(leaf, "is_ready")]
+    while not all(leaf.is_ready() for leaf in leaves):
+        time.sleep(poll)
+
+
 def write_records(seeds: list[int], folders: list[Path], evaluations: dict, progress: dict):
     """Each seed's evaluations.npz (SB3's EvalCallback's keys) and progress.csv, as far as the run has come."""
     for seed, folder in zip(seeds, folders):
@@ -200,13 +210,14 @@ def run(args: argparse.Namespace) -> dict:
     best = {seed: max((np.mean(r) for r in evaluations[seed]["results"]), default=-math.inf) for seed in seeds}
     meta = trainer.meta(args.env)
     saved_steps = steps or 0
-    interrupted = False
+    interrupted, pending = False, False
     train_start = time.perf_counter()
     try:
         while updates < config.n_updates:
-            previous = runner
+            previous, pending = runner, True
             runner, metrics, evaluation = compiled(runner)
-            jax.block_until_ready(runner)
+            wait(runner)
+            pending = False
             updates += config.updates_per_eval
             timesteps = updates * config.rollout
             wall = time.perf_counter() - train_start
@@ -243,9 +254,8 @@ def run(args: argparse.Namespace) -> dict:
                     (folder / "checkpoints" / "latest").write_text(str(timesteps))
                     (folder / "checkpoints" / "in").write_text(str(folders[0].resolve()))
                 saved_steps = timesteps
-    except KeyboardInterrupt:
-        interrupted, runner = True, previous
-        updates -= 0  # the interrupted chunk's updates are lost: the state before it is kept
+    except KeyboardInterrupt:  # a chunk of updates under way is dropped: the state before it is kept
+        interrupted, runner = True, previous if pending else runner
     train_seconds = time.perf_counter() - train_start
     timesteps = int(np.asarray(runner["update"])[0]) * config.rollout
     write_records(seeds, folders, evaluations, progress)
