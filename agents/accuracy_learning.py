@@ -13,9 +13,9 @@ checkpoint). Then, for every seed's best policy:
   episodes (reset seeds agents.baselines.UNSEEN_SEED + i, which no training saw), all episodes at once in the
   native vector env; the mean over a seed's episodes, then the mean over seeds with a 95% bootstrap interval
   (scipy.stats.bootstrap, percentile) over the seeds;
-- **exploitation**: the same policy on connenv.jax, on its own training stepper, on the default and on Euler, from
-  the same JAX keys: return, success, the episodes a stepper failure cut short (``info["stepper_failed"]``, where
-  numpy raises StepperError), and where the env keeps the stepper's energy error (the swing, the Kapitza pendulum:
+- **exploitation**: the same policy on connenv.jax, on Euler and on the default step, from the same JAX keys:
+  return, success, the episodes a stepper failure cut short (``info["stepper_failed"]``, where numpy raises
+  StepperError), and where the env keeps the stepper's energy error (the swing, the Kapitza pendulum:
   the change of E on segments where the control is held, summed since reset, so 0 for the exact flow) the energy a
   stepper gave from nothing per episode;
 - **one-step error** of each stepper on the env: from STATES states (rows of the default env under uniform random
@@ -25,7 +25,8 @@ checkpoint). Then, for every seed's best policy:
 
 It writes ``--docs``/precision/accuracy_learning.csv (a row per env and stepper), accuracy_learning_jax.csv (the
 exploitation table), accuracy_learning.png (the chart) and guides/speed-accuracy-learning.md (the page, its
-numbers and its summary generated from the run). --quick writes them under --runs/docs unless --docs is given.
+numbers and its summary generated from the run; --page rewrites the chart and the page from the CSVs alone).
+--quick writes them under --runs/docs unless --docs is given.
 """
 
 from __future__ import annotations
@@ -54,6 +55,9 @@ LADDER = (
 BUDGETS = {"connenv/SnakeSwimmer-v0": 500_000}
 """Steps per seed where they differ from agents/hyperparams/ppo_jax.yml's n_timesteps: the swimmer's JAX step is the
 slowest of the four (its 2·10⁶ steps × 5 seeds × 5 steppers would take hours on 2 cores)."""
+EXPLOIT_PHYSICS = ("euler", "default")  # the physics every policy also runs on in connenv.jax (RK4's differ from the
+# default by less than 1e-6 a step: see the one-step error)
+STALL_SECONDS, ATTEMPTS = 900, 3  # a training whose log is silent this long is stopped and resumed, this many tries
 QUICK_TIMESTEPS = 4096  # two rollouts of 16 × 128
 SEEDS, QUICK_SEEDS = 5, 2
 EPISODES, QUICK_EPISODES = 100, 8
@@ -115,14 +119,35 @@ def train(env_id: str, stepper: str, kwargs: dict, runs: Path, seeds: int, times
         command += ["--timesteps", str(timesteps)] if timesteps else []
         print(f"{short(env_id)} {stepper}: training {seeds} seeds (log: {directory / 'train.log'})", flush=True)
         start = time.perf_counter()
-        with open(directory / "train.log", "a") as log:
-            done = subprocess.run(command, check=False, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT,
-                                  env={**os.environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
-        if done.returncode != 0 or not all(map(finished, folders)):
+        for attempt in range(ATTEMPTS):
+            returncode = _train_watched(command, directory / "train.log")
+            if returncode is not None:
+                break
+            print(f"{short(env_id)} {stepper}: train.py wrote nothing for {STALL_SECONDS} s: stopped, resumed from its "
+                  "checkpoint", flush=True)  # fmt: skip
+        if returncode != 0 or not all(map(finished, folders)):
             tail = (directory / "train.log").read_text().strip().splitlines()[-3:]
-            raise RuntimeError(f"{short(env_id)} {stepper}: train.py exited {done.returncode}: {' | '.join(tail)}")
+            raise RuntimeError(f"{short(env_id)} {stepper}: train.py exited {returncode}: {' | '.join(tail)}")
         print(f"{short(env_id)} {stepper}: trained in {time.perf_counter() - start:.0f} s", flush=True)
     return json.loads((folders[0] / "results.json").read_text())
+
+
+def _train_watched(command: list[str], log_path: Path) -> int | None:
+    """Run train.py with its output appended to log_path: its exit status, or None if it stalled (its log unchanged
+    for STALL_SECONDS: XLA's CPU runtime has been seen to wait forever, every thread idle), then stopped."""
+    with open(log_path, "a") as log:
+        process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT,
+                                   env={**os.environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+        size, changed = -1, time.monotonic()
+        while process.poll() is None:
+            time.sleep(5)
+            if log_path.stat().st_size != size:
+                size, changed = log_path.stat().st_size, time.monotonic()
+            elif time.monotonic() - changed > STALL_SECONDS:
+                process.kill()
+                process.wait()
+                return None
+    return process.returncode
 
 
 # -- evaluation on the numpy env: the exact physics, the unseen episodes --------------------------------------------
@@ -325,9 +350,9 @@ def study(env_id: str, args) -> tuple[list[dict], list[dict]]:
             flush=True,
         )
     physics = {stepper: kwargs for stepper, kwargs in LADDER}
-    for trained, _ in LADDER:
-        for on in dict.fromkeys([trained, "default", "euler"]):
-            episodes = jax_rollout(env_id, physics[on], _meta(policies[trained][0]))
+    for on in EXPLOIT_PHYSICS:  # compiled once per physics: every policy's weights are arguments
+        episodes = jax_rollout(env_id, physics[on], policies["default"][0].meta)
+        for trained, _ in LADDER:
             outcomes = [episodes(policy, keys) for policy in policies[trained]]
             gained = [o["energy_gained"] for o in outcomes if o["energy_gained"] is not None]
             jax_rows.append({
@@ -338,10 +363,6 @@ def study(env_id: str, args) -> tuple[list[dict], list[dict]]:
                 "energy_gained": float(np.mean([g.mean() for g in gained])) if gained else "",
             })  # fmt: skip
     return rows, jax_rows
-
-
-def _meta(policy) -> dict:
-    return policy.meta
 
 
 def _training_failures(folder: Path) -> float:
@@ -441,23 +462,24 @@ def summary(rows: list[dict], jax_rows: list[dict]) -> list[str]:
         lines.append(text)
     for env in dict.fromkeys(row["env"] for row in jax_rows):
         own = {(r["trained_on"], r["physics"]): r for r in jax_rows if r["env"] == env}
-        if not any(r["energy_gained"] != "" for r in own.values()):
-            continue
         default = next(k for k, _ in own if k.endswith("(default)"))
         e_e, e_d, d_e = own.get(("euler", "euler")), own.get(("euler", default)), own.get((default, "euler"))
-        if e_e and e_d and d_e:
-            lines.append(
-                f"**{env}, exploiting Euler**: the policies trained on Euler gain {e_e['energy_gained']:.3g} J per "
-                f"episode from Euler's error on Euler physics, where the policies trained on {default} gain "
-                f"{d_e['energy_gained']:.3g} J on the same physics; the Euler-trained policies return "
-                f"{e_e['return']:.3g} (success {e_e['success']:.0%}, {e_e['failed']:.0%} of episodes cut by a "
-                f"stepper failure) on Euler and {e_d['return']:.3g} (success {e_d['success']:.0%}) on the exact "
-                f"physics (JAX, the same episodes)."
-            )
+        if not (e_e and e_d and d_e):
+            continue
+        text = (f"**{env}, Euler's error**: the policies trained on Euler return {e_e['return']:.3g} on Euler "
+                f"(success {e_e['success']:.0%}, {e_e['failed']:.0%} of the episodes cut short by a stepper failure) "
+                f"and {e_d['return']:.3g} on the {default} step (success {e_d['success']:.0%}); the policies trained "
+                f"on the {default} step return {d_e['return']:.3g} on Euler (success {d_e['success']:.0%}, "
+                f"{d_e['failed']:.0%} cut short) (connenv.jax, the same episodes).")  # fmt: skip
+        if e_e["energy_gained"] != "" and d_e["energy_gained"] != "":
+            text += (f" Energy from nothing: the Euler-trained policies gain {e_e['energy_gained']:.3g} J per episode "
+                     f"from Euler's error, the {default}-trained ones {d_e['energy_gained']:.3g} J on the same "
+                     "physics.")  # fmt: skip
+        lines.append(text)
     return lines
 
 
-def page(rows: list[dict], jax_rows: list[dict], args, wall: float) -> str:
+def page(rows: list[dict], jax_rows: list[dict], args, wall: float | None) -> str:
     png = f"../precision/{PNG_NAME}"
     budgets = {env: int(next(r["timesteps"] for r in rows if r["env"] == env)) for env in dict.fromkeys(
         r["env"] for r in rows)}  # fmt: skip
@@ -467,7 +489,7 @@ def page(rows: list[dict], jax_rows: list[dict], args, wall: float) -> str:
         "Generated by `python -m agents.accuracy_learning` (its docstring: what each number is); do not edit by hand.",
         f"This run: {args.seeds} seeds a stepper trained together by JAX PPO (agents/hyperparams/ppo_jax.yml), "
         f"{args.episodes} unseen episodes a seed (reset seeds 100000 on), {args.states} states for the one-step "
-        f"error; {wall / 60:.0f} min in all on this machine. Steps per seed: "
+        f"error{'' if wall is None else f'; {wall / 60:.0f} min in all on this machine'}. Steps per seed: "
         + ", ".join(f"{env} {steps:,}" for env, steps in budgets.items())
         + (
             ""
@@ -507,7 +529,7 @@ def page(rows: list[dict], jax_rows: list[dict], args, wall: float) -> str:
         )
     out += [
         "",
-        "## Each policy on its own stepper, the default and Euler",
+        "## Each policy on Euler and on the default step",
         "",
         (
             "On connenv.jax from the same keys (100000 on): a stepper failure (numpy's StepperError: Euler's energy "
@@ -527,7 +549,7 @@ def page(rows: list[dict], jax_rows: list[dict], args, wall: float) -> str:
     return "\n".join(out)
 
 
-def write_outputs(rows: list[dict], jax_rows: list[dict], docs: Path, args, wall: float):
+def write_outputs(rows: list[dict], jax_rows: list[dict], docs: Path, args, wall: float | None):
     write_csv(rows, docs / "precision" / CSV_NAME)
     write_csv(jax_rows, docs / "precision" / JAX_CSV_NAME)
     chart(rows, docs / "precision" / PNG_NAME)
@@ -544,6 +566,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     parser.add_argument(
         "--docs", type=Path, help="where the CSVs, chart and page go (default: docs; --quick: RUNS/docs)"
     )
+    parser.add_argument("--page", action="store_true", help="only rewrite the chart and the page from the CSVs")
     parser.add_argument("--timesteps", type=int, help="steps per seed for every env (default: ppo_jax.yml's, BUDGETS)")
     args = parser.parse_args(argv)
     args.seeds = QUICK_SEEDS if args.quick else SEEDS
@@ -556,6 +579,11 @@ def parse_args(argv=None) -> argparse.Namespace:
 
 def main(argv=None):
     args = parse_args(argv)
+    if args.page:
+        rows, jax_rows = (read_csv(args.docs / "precision" / name) for name in (CSV_NAME, JAX_CSV_NAME))
+        write_outputs(rows, jax_rows, args.docs, args, None)
+        print(f"wrote {args.docs / PAGE} and {args.docs / 'precision' / PNG_NAME} from the CSVs")
+        return rows, jax_rows
     start = time.perf_counter()
     rows, jax_rows = [], []
     for env_id in args.envs:
