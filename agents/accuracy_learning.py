@@ -55,6 +55,9 @@ LADDER = (
 BUDGETS = {"connenv/SnakeSwimmer-v0": 500_000}
 """Steps per seed where they differ from agents/hyperparams/ppo_jax.yml's n_timesteps: the swimmer's JAX step is the
 slowest of the four (its 2·10⁶ steps × 5 seeds × 5 steppers would take hours on 2 cores)."""
+DIVERGES = 0.5  # a stepper failing this share of single steps from the sampled states is not trained: its episodes
+# end at their first steps (the falling cat's Euler leaves SO(3) at once), and XLA's CPU runtime was seen to stall
+# on them
 EXPLOIT_PHYSICS = ("euler", "default")  # the physics every policy also runs on in connenv.jax (RK4's differ from the
 # default by less than 1e-6 a step: see the one-step error)
 STALL_SECONDS, ATTEMPTS = 900, 3  # a training whose log is silent this long is stopped and resumed, this many tries
@@ -328,6 +331,16 @@ def study(env_id: str, args) -> tuple[list[dict], list[dict]]:
     rows, jax_rows, policies = [], [], {}
     timesteps = QUICK_TIMESTEPS if args.quick else args.timesteps or BUDGETS.get(env_id)
     for stepper, kwargs in LADDER:
+        error = one_step_error(env_id, kwargs, X, A, reference)
+        row = {"env": short(env_id), "stepper": label_of(env_id, stepper), "kwargs": json.dumps(kwargs),
+               "seeds": args.seeds}  # fmt: skip
+        if error["failed_share"] >= DIVERGES:
+            nan = math.nan
+            rows.append({**row, "timesteps": 0, "train_seconds": nan, "compile_seconds": nan, "episodes": 0,
+                         "success": nan, "success_low": nan, "success_high": nan, "return": nan, "return_low": nan,
+                         "return_high": nan, "training_failures": nan, **error})  # fmt: skip
+            print(f"{short(env_id)} {stepper}: fails {error['failed_share']:.0%} of single steps: not trained")
+            continue
         results = train(env_id, stepper, kwargs, args.runs, args.seeds, timesteps, args.eval_episodes)
         folders = seed_folders(args.runs, env_id, stepper, args.seeds)
         policies[stepper] = [JaxPolicy(folder / "best_policy.npz", env_id) for folder in folders]
@@ -335,10 +348,8 @@ def study(env_id: str, args) -> tuple[list[dict], list[dict]]:
         success = interval([e["successes"].mean() for e in exact])
         ret = interval([e["returns"].mean() for e in exact])
         failures = [_training_failures(folder) for folder in folders]
-        error = one_step_error(env_id, kwargs, X, A, reference)
         rows.append({
-            "env": short(env_id), "stepper": label_of(env_id, stepper), "kwargs": json.dumps(kwargs),
-            "seeds": args.seeds, "timesteps": results["timesteps"], "train_seconds": round(results["train_seconds"], 1),
+            **row, "timesteps": results["timesteps"], "train_seconds": round(results["train_seconds"], 1),
             "compile_seconds": round(results["compile_seconds"], 1), "episodes": args.episodes,
             "success": success[0], "success_low": success[1], "success_high": success[2],
             "return": ret[0], "return_low": ret[1], "return_high": ret[2],
@@ -352,8 +363,8 @@ def study(env_id: str, args) -> tuple[list[dict], list[dict]]:
     physics = {stepper: kwargs for stepper, kwargs in LADDER}
     for on in EXPLOIT_PHYSICS:  # compiled once per physics: every policy's weights are arguments
         episodes = jax_rollout(env_id, physics[on], policies["default"][0].meta)
-        for trained, _ in LADDER:
-            outcomes = [episodes(policy, keys) for policy in policies[trained]]
+        for trained, trained_policies in policies.items():
+            outcomes = [episodes(policy, keys) for policy in trained_policies]
             gained = [o["energy_gained"] for o in outcomes if o["energy_gained"] is not None]
             jax_rows.append({
                 "env": short(env_id), "trained_on": label_of(env_id, trained), "physics": label_of(env_id, on),
@@ -411,6 +422,8 @@ def chart(rows: list[dict], path: Path):
                               (ax_row[1], "return", "return on exact physics")):  # fmt: skip
             for i, row in enumerate(mine):
                 x, y = row["train_seconds"], row[key]
+                if math.isnan(x):
+                    continue
                 ax.errorbar(x, y, yerr=[[y - row[f"{key}_low"]], [row[f"{key}_high"] - y]], fmt="o", capsize=3)
                 offset = (5, 6 - 9 * (i % 3))  # three heights: points at about the same time and success
                 ax.annotate(row["stepper"], (x, y), textcoords="offset points", xytext=offset, fontsize=8)
@@ -421,7 +434,7 @@ def chart(rows: list[dict], path: Path):
         ax_row[0].set_ylim(-0.05, 1.05)
         ax = ax_row[2]
         steppers = [row["stepper"] for row in mine]
-        errors = [max(row["error_median"], 1e-17) for row in mine]
+        errors = [row["error_median"] if row["error_median"] > 0 else 1e-17 for row in mine]  # log axis: 0 (or none)
         bars = ax.barh(steppers, errors, color=["tab:red" if row["failed_share"] > 0 else "tab:blue" for row in mine])
         ax.set_xscale("log")
         ax.set_xlabel("one-step state error / spread (median)")
@@ -448,15 +461,18 @@ def summary(rows: list[dict], jax_rows: list[dict]) -> list[str]:
     for env in dict.fromkeys(row["env"] for row in rows):
         mine = [row for row in rows if row["env"] == env]
         default = next(row for row in mine if row["stepper"].endswith("(default)"))
-        cheap = [row for row in mine if row is not default]
+        diverged = [row for row in mine if math.isnan(row["train_seconds"])]
+        cheap = [row for row in mine if row is not default and row not in diverged]
         good = [row["stepper"] for row in cheap if good_enough(row, default)]
         bad = [f"{row['stepper']} ({row['success']:.0%})" for row in cheap if not good_enough(row, default)]
-        fastest = min(mine, key=lambda row: row["train_seconds"])
+        fastest = min((row for row in mine if row not in diverged), key=lambda row: row["train_seconds"])
         text = (f"**{env}**: trained on the default step the policies succeed in {default['success']:.0%} "
                 f"[{default['success_low']:.0%}, {default['success_high']:.0%}] of the exact episodes "
                 f"({default['train_seconds']:.0f} s of training). ")  # fmt: skip
         text += f"As good on the exact physics: {', '.join(good)}. " if good else "No cheaper stepper does as well. "
         text += f"Not good enough: {', '.join(bad)}. " if bad else ""
+        names = ", ".join(row["stepper"] for row in diverged)
+        text += f"Not trained, as it fails most single steps (the env's divergence check): {names}. " if names else ""
         failed = [f"{row['stepper']} ({row['failed_share']:.0%} of single steps)" for row in mine
                   if row["failed_share"] > 0]  # fmt: skip
         text += f"Steppers that fail the env's divergence check: {', '.join(failed)}. " if failed else ""
@@ -484,7 +500,7 @@ def summary(rows: list[dict], jax_rows: list[dict]) -> list[str]:
 
 def page(rows: list[dict], jax_rows: list[dict], args, wall: float | None) -> str:
     png = f"../precision/{PNG_NAME}"
-    budgets = {env: int(next(r["timesteps"] for r in rows if r["env"] == env)) for env in dict.fromkeys(
+    budgets = {env: int(max(r["timesteps"] for r in rows if r["env"] == env)) for env in dict.fromkeys(
         r["env"] for r in rows)}  # fmt: skip
     out = [
         "# How much accuracy does learning need?",
@@ -528,6 +544,10 @@ def page(rows: list[dict], jax_rows: list[dict], args, wall: float | None) -> st
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
+        if math.isnan(r["train_seconds"]):
+            out.append(f"| {r['env']} | {r['stepper']} | not trained: it fails {r['failed_share']:.0%} of single "
+                       f"steps | | | | {r['error_median']:.2e} | {r['failed_share']:.0%} | |")  # fmt: skip
+            continue
         out.append(
             f"| {r['env']} | {r['stepper']} | {r['train_seconds']:.0f} | {r['compile_seconds']:.0f} | "
             f"{r['success']:.0%} [{r['success_low']:.0%}, {r['success_high']:.0%}] | {r['return']:.3g} "

@@ -38,6 +38,10 @@ def rows_of_a_run():
             ("exact (default)", 11.0, 0.97, 0.93, 1.0, 0.0)]  # fmt: skip
     rows = [{**base, "stepper": s, "train_seconds": t, "success": m, "success_low": lo, "success_high": hi,
              "return": m, "return_low": lo, "return_high": hi, "error_median": e} for s, t, m, lo, hi, e in made]  # fmt: skip
+    nan = float("nan")  # a stepper failing most single steps is not trained
+    rows.append({**rows[0], "stepper": "euler×2", "timesteps": 0, "train_seconds": nan, "compile_seconds": nan,
+                 "success": nan, "success_low": nan, "success_high": nan, "training_failures": nan,
+                 "failed_share": 0.75})  # fmt: skip
     jax_rows = [{"env": "Swing-v0", "trained_on": t, "physics": p, "return": r, "success": 0.5, "failed": f,
                  "energy_gained": g} for t, p, r, f, g in [("euler", "euler", 1.5, 0.4, 1.2),
                                                           ("euler", "exact (default)", 0.3, 0.0, 0.0),
@@ -57,6 +61,8 @@ def test_outputs_are_written_from_the_rows(tmp_path):
     assert "trained on Euler return 1.5 on Euler (success 50%, 40% of the episodes cut short" in page
     assert "gain 1.2 J per episode from Euler's error, the exact (default)-trained ones 0.4 J" in page
     assert "| Swing-v0 | euler | 10 | 30 | 20% [10%, 30%] |" in page
+    assert "Not trained, as it fails most single steps (the env's divergence check): euler×2." in page
+    assert "| Swing-v0 | euler×2 | not trained: it fails 75% of single steps |" in page
     al.main(["--quick", "--runs", str(tmp_path), "--page"])  # the page again from the CSVs alone
     again = (args.docs / al.PAGE).read_text()
     assert again.replace("; 1 min in all on this machine", "") == page.replace("; 1 min in all on this machine", "")
