@@ -58,6 +58,7 @@ slowest of the four (its 2·10⁶ steps × 5 seeds × 5 steppers would take hour
 DIVERGES = 0.5  # a stepper failing this share of single steps from the sampled states is not trained: its episodes
 # end at their first steps (the falling cat's Euler leaves SO(3) at once), and XLA's CPU runtime was seen to stall
 # on them
+NOT_RUN = "--errors-only"  # the note of a row that this run did not train
 EXPLOIT_PHYSICS = ("euler", "default")  # the physics every policy also runs on in connenv.jax (RK4's differ from the
 # default by less than 1e-6 a step: see the one-step error)
 STALL_SECONDS, ATTEMPTS = 900, 3  # a training whose log is silent this long is stopped and resumed, this many tries
@@ -334,12 +335,14 @@ def study(env_id: str, args) -> tuple[list[dict], list[dict]]:
         error = one_step_error(env_id, kwargs, X, A, reference)
         row = {"env": short(env_id), "stepper": label_of(env_id, stepper), "kwargs": json.dumps(kwargs),
                "seeds": args.seeds}  # fmt: skip
-        if error["failed_share"] >= DIVERGES:
+        diverges = error["failed_share"] >= DIVERGES
+        if diverges or args.errors_only:
             nan = math.nan
+            row["note"] = f"it fails {error['failed_share']:.0%} of single steps" if diverges else args.errors_only
             rows.append({**row, "timesteps": 0, "train_seconds": nan, "compile_seconds": nan, "episodes": 0,
                          "success": nan, "success_low": nan, "success_high": nan, "return": nan, "return_low": nan,
                          "return_high": nan, "training_failures": nan, **error})  # fmt: skip
-            print(f"{short(env_id)} {stepper}: fails {error['failed_share']:.0%} of single steps: not trained")
+            print(f"{short(env_id)} {stepper}: not trained: {row['note']}", flush=True)
             continue
         results = train(env_id, stepper, kwargs, args.runs, args.seeds, timesteps, args.eval_episodes)
         folders = seed_folders(args.runs, env_id, stepper, args.seeds)
@@ -349,7 +352,7 @@ def study(env_id: str, args) -> tuple[list[dict], list[dict]]:
         ret = interval([e["returns"].mean() for e in exact])
         failures = [_training_failures(folder) for folder in folders]
         rows.append({
-            **row, "timesteps": results["timesteps"], "train_seconds": round(results["train_seconds"], 1),
+            **row, "note": "", "timesteps": results["timesteps"], "train_seconds": round(results["train_seconds"], 1),
             "compile_seconds": round(results["compile_seconds"], 1), "episodes": args.episodes,
             "success": success[0], "success_low": success[1], "success_high": success[2],
             "return": ret[0], "return_low": ret[1], "return_high": ret[2],
@@ -361,7 +364,9 @@ def study(env_id: str, args) -> tuple[list[dict], list[dict]]:
             flush=True,
         )
     physics = {stepper: kwargs for stepper, kwargs in LADDER}
-    for on in EXPLOIT_PHYSICS:  # compiled once per physics: every policy's weights are arguments
+    for on in (
+        EXPLOIT_PHYSICS if "default" in policies else ()
+    ):  # compiled once per physics: every policy's weights are arguments
         episodes = jax_rollout(env_id, physics[on], policies["default"][0].meta)
         for trained, trained_policies in policies.items():
             outcomes = [episodes(policy, keys) for policy in trained_policies]
@@ -387,8 +392,9 @@ def _training_failures(folder: Path) -> float:
 
 def write_csv(rows: list[dict], path: Path):
     path.parent.mkdir(parents=True, exist_ok=True)
+    keys = list(dict.fromkeys(key for row in rows for key in row))  # rows of earlier runs may lack a later column
     with open(path, "w", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
+        writer = csv.DictWriter(file, fieldnames=keys, restval="")
         writer.writeheader()
         for row in rows:
             writer.writerow({k: f"{v:.6g}" if isinstance(v, float) else v for k, v in row.items()})
@@ -462,6 +468,14 @@ def summary(rows: list[dict], jax_rows: list[dict]) -> list[str]:
         mine = [row for row in rows if row["env"] == env]
         default = next(row for row in mine if row["stepper"].endswith("(default)"))
         diverged = [row for row in mine if math.isnan(row["train_seconds"])]
+        if default in diverged:  # not trained in this run (--errors-only): the one-step errors alone
+            errors = ", ".join(
+                f"{row['stepper']} {row['error_median']:.1e}"
+                + (f" (fails {row['failed_share']:.0%} of single steps)" if row["failed_share"] else "")
+                for row in mine
+            )
+            lines.append(f"**{env}**: not trained in this run ({default.get('note', '')}). One-step errors: {errors}.")
+            continue
         cheap = [row for row in mine if row is not default and row not in diverged]
         good = [row["stepper"] for row in cheap if good_enough(row, default)]
         bad = [f"{row['stepper']} ({row['success']:.0%})" for row in cheap if not good_enough(row, default)]
@@ -545,8 +559,8 @@ def page(rows: list[dict], jax_rows: list[dict], args, wall: float | None) -> st
     ]
     for r in rows:
         if math.isnan(r["train_seconds"]):
-            out.append(f"| {r['env']} | {r['stepper']} | not trained: it fails {r['failed_share']:.0%} of single "
-                       f"steps | | | | {r['error_median']:.2e} | {r['failed_share']:.0%} | |")  # fmt: skip
+            out.append(f"| {r['env']} | {r['stepper']} | not trained: {r.get('note', '')} | | | | "
+                       f"{r['error_median']:.2e} | {r['failed_share']:.0%} | |")  # fmt: skip
             continue
         out.append(
             f"| {r['env']} | {r['stepper']} | {r['train_seconds']:.0f} | {r['compile_seconds']:.0f} | "
@@ -593,6 +607,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     parser.add_argument(
         "--docs", type=Path, help="where the CSVs, chart and page go (default: docs; --quick: RUNS/docs)"
     )
+    parser.add_argument("--errors-only", nargs="?", const=NOT_RUN, metavar="REASON",
+                        help="no training: the one-step errors alone (REASON: why, for the page)")  # fmt: skip
     parser.add_argument("--page", action="store_true", help="only rewrite the chart and the page from the CSVs")
     parser.add_argument("--timesteps", type=int, help="steps per seed for every env (default: ppo_jax.yml's, BUDGETS)")
     args = parser.parse_args(argv)
