@@ -45,7 +45,8 @@ def rows_of_a_run():
     jax_rows = [{"env": "Swing-v0", "trained_on": t, "physics": p, "return": r, "success": 0.5, "failed": f,
                  "energy_gained": g} for t, p, r, f, g in [("euler", "euler", 1.5, 0.4, 1.2),
                                                           ("euler", "exact (default)", 0.3, 0.0, 0.0),
-                                                          ("exact (default)", "euler", 1.1, 0.1, 0.4)]]  # fmt: skip
+                                                          ("exact (default)", "euler", 1.1, 0.1, 0.4),
+                                                          ("exact (default)", "exact (default)", 1.0, 0.0, 0.0)]]  # fmt: skip
     return rows, jax_rows
 
 
@@ -54,15 +55,18 @@ def test_outputs_are_written_from_the_rows(tmp_path):
     args = al.parse_args(["--quick", "--runs", str(tmp_path)])
     al.write_outputs(rows, jax_rows, args.docs, args, 60.0)
     assert al.read_csv(args.docs / "precision" / al.CSV_NAME)[0]["success"] == pytest.approx(0.2)
-    assert len(al.read_csv(args.docs / "precision" / al.JAX_CSV_NAME)) == 3
+    assert len(al.read_csv(args.docs / "precision" / al.JAX_CSV_NAME)) == 4
     assert (args.docs / "precision" / al.PNG_NAME).read_bytes()[:4] == b"\x89PNG"
     page = (args.docs / al.PAGE).read_text()
     assert "As good on the exact physics: rk4." in page and "Not good enough: euler (20%)." in page
     assert "trained on Euler return 1.5 on Euler (success 50%, 40% of the episodes cut short" in page
-    assert "gain 1.2 J per episode from Euler's error, the exact (default)-trained ones 0.4 J" in page
+    assert "Euler's error is worth +1.2 of return to the Euler-trained policies and +0.1 to the exact" in page
+    assert "1.2 J per episode under the Euler-trained policies, 0.4 J under the exact (default)-trained ones" in page
     assert "| Swing-v0 | euler | 10 | 30 | 20% [10%, 30%] |" in page
     assert "Not trained, as it fails most single steps (the env's divergence check): euler×2." in page
     assert "| Swing-v0 | euler×2 | not trained: it fails 75% of single steps |" in page
     al.main(["--quick", "--runs", str(tmp_path), "--page"])  # the page again from the CSVs alone
     again = (args.docs / al.PAGE).read_text()
     assert again.replace("; 1 min in all on this machine", "") == page.replace("; 1 min in all on this machine", "")
+    assert "In short: Worse than the default's: Swing-v0 (euler). A cheaper model stopped being usable where it " \
+           "fails the env's divergence check: Swing-v0's euler×2 (75% of single steps)." in page  # fmt: skip
