@@ -234,15 +234,16 @@ class Trainer:
 
     def _env_step(self, keys, state, action, runners):
         """The env step of every seed's rows at once (one batch of S·N rows, so that a branch no row takes is
-        skipped, which a vmap over the seeds would compute), then each seed's autoreset from its own key."""
+        skipped, which a vmap over the seeds would compute), then the autoreset of those rows, each seed's from its
+        own key (the done rows alone reset)."""
         S, N = action.shape[:2]
         flat = lambda v: v.reshape(S * N, *v.shape[2:])
         rows = lambda v: v.reshape(S, N, *v.shape[1:])
-        step = self.env.step_env_rows(None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params)
-        obs, after, reward, terminated, truncated, info = jax.tree_util.tree_map(rows, step)
-        reset = jax.vmap(self.env.autoreset_rows, (0, 0, 0, 0, 0, None))
-        obs, state, info = reset(keys, obs, after, terminated | truncated, info, self.env_params)
-        return obs, state, reward, terminated, truncated, info
+        obs, after, reward, terminated, truncated, info = self.env.step_env_rows(
+            None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params
+        )
+        obs, state, info = self.env.autoreset_rows(keys, obs, after, terminated | truncated, info, self.env_params)
+        return jax.tree_util.tree_map(rows, (obs, state, reward, terminated, truncated, info))
 
     def _rollout(self, runners):
         """n_steps of the stochastic policy on every seed's rows: the transitions (n_steps, S, N, …), the runners

@@ -1,9 +1,13 @@
 """agents.jax_shac: the actor's gradient backpropagated through connenv.jax's step is the derivative of the window's
 return (+ γ^h V of the target critic), and a few updates raise that return."""
 
+import os
+
 import numpy as np
 import pytest
 
+# as tests/test_jax.py: XLA without LLVM's optimization passes compiles several times faster; IEEE results either way
+os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_backend_optimization_level=0".strip()
 jax = pytest.importorskip("jax")
 pytest.importorskip("optax")
 jax.config.update("jax_enable_x64", True)
