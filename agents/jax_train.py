@@ -12,7 +12,9 @@ them: connenv-{env}/config.yml (the hyperparameters used), evaluations.npz (SB3'
 results, successes, ep_lengths; the periodic deterministic evaluations on the JAX env), progress.csv (per update:
 the training episodes' mean return and success, the losses), policy.npz (the final policy) and best_policy.npz
 (the best periodic evaluation's; agents.jax_policy: numpy runs them), and results.json: the final evaluation of
-agents.evaluate on the numpy env, the policy beside the analytic controller and random, on the same episodes.
+agents.evaluate on the numpy env, the policy beside the analytic controller and random, on the same episodes
+(where the numpy env diverges under them, a cheap stepper's StepperError, "evaluation" is null and
+"evaluation_error" says why: the trained policies are kept).
 
 Checkpoints (--checkpoint-freq N: the training state of every seed, at the first evaluation past every N steps and
 at the end), --resume, --overwrite, Ctrl-C (the policies so far saved, results.json "interrupted", exit 130) and
@@ -35,6 +37,7 @@ import yaml
 import agents
 from agents import evaluate, jax_policy
 from agents.controllers import CONTROLLERS
+from connenv.core.steppers import StepperError
 
 HYPERPARAMS = Path(agents.__file__).parent / "hyperparams" / "ppo_jax.yml"
 ALGO = "ppo_jax"
@@ -280,7 +283,15 @@ def run(args: argparse.Namespace) -> dict:
           "compiling)", flush=True)  # fmt: skip
     specs = [f"jax:{folder / 'best_policy.npz'}" for folder in folders]
     specs += [*(["analytic"] if args.env in CONTROLLERS else []), "random"]
-    report = evaluate.compare(args.env, specs, args.eval_episodes, args.eval_seed, env_kwargs=env_kwargs)
+    try:
+        report = evaluate.compare(args.env, specs, args.eval_episodes, args.eval_seed, env_kwargs=env_kwargs)
+    except StepperError as error:  # the numpy env diverged under a policy (a cheap stepper): the runs are kept
+        print(f"the final evaluation on the numpy env diverged: {error}", file=sys.stderr)
+        for seed, folder in zip(seeds, folders):
+            results = {"status": "finished", "seed": seed, **common, "model": str(folder / "best_policy.npz"),
+                       "evaluation": None, "evaluation_error": f"StepperError: {error}"}  # fmt: skip
+            evaluate.write_json(results, folder / "results.json")
+        return {"env": args.env, "evaluation_error": str(error)}
     print(evaluate.format_table(report))
     for seed, folder, spec in zip(seeds, folders, specs):
         own = _own_report(report, spec)

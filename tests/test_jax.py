@@ -147,6 +147,30 @@ def test_a_diverging_step_is_a_flag_with_the_state_held():
     np.testing.assert_array_equal(np.asarray(after.x), x)
 
 
+@pytest.mark.parametrize("env_id", ["connenv/Swing-v0", "connenv/KapitzaPendulum-v0"])
+def test_semi_implicit_euler_traces_as_numpy_steps_it(env_id):
+    """Semi-implicit Euler (symplectic on the swing; Gymnasium's, first order, on the Kapitza pendulum, whose q̇
+    depends on q) on rows: the JAX step is numpy's model step to rounding, at 2 substeps, from states along random
+    episodes of the exact step."""
+    kwargs = {"integrator": "semi_implicit_euler", "substeps": 2}
+    env = gym.make(env_id).unwrapped
+    stepped = gym.make(env_id, **kwargs).unwrapped.model
+    rng = np.random.default_rng(0)
+    X = []
+    for seed in range(4):
+        env.reset(seed=seed)
+        for _ in range(30):
+            X.append(env.model.pack(env.state))
+            env.step(env.action_space.sample())
+    X = np.array(X)
+    A = rng.uniform(env.action_space.low, env.action_space.high, (len(X), *env.action_space.shape))
+    jenv, params = cj.make(env_id, **kwargs)
+    mine = np.asarray(jax.jit(jax.vmap(lambda x, a: jenv.transition(x, a, params)[0]))(X, A))
+    theirs = stepped.step(X, A)
+    assert np.max(np.abs(mine - theirs) / np.maximum(1.0, np.abs(theirs))) <= STEP_RTOL
+    assert np.max(np.abs(theirs - env.model.step(X, A))) > 1e-6  # it is not the exact step
+
+
 def test_an_ended_episode_resets_and_hands_over_its_last_observation():
     """Swing-v0 at its target amplitude (held over the step at r_max): terminated, and step gives
     the next episode's first observation, the last one in info."""

@@ -33,7 +33,7 @@ from typing import ClassVar, Protocol, runtime_checkable
 import numpy as np
 from scipy.integrate import DOP853, solve_ivp
 
-from connenv.core.backend import floats, namespace, traced
+from connenv.core.backend import concat, floats, namespace, traced
 
 
 @runtime_checkable
@@ -257,13 +257,17 @@ class SemiImplicitEuler:
     substeps: int = 1
 
     def __call__(self, system, y, u, u_dot, tau):
+        return check_finite(self.unchecked(system, y, u, u_dot, tau), self)
+
+    def unchecked(self, system, y, u, u_dot, tau):
+        """The step without its check of finite values (numpy's arrays, or JAX's: connenv.jax checks them)."""
         h, n = tau / self.substeps, system.n
         for i in range(self.substeps):
             u_i = u + i * h * u_dot
             p = y[..., n:] + h * system.vector_field(y, u_i, u_dot)[..., n:]
-            y = np.concatenate([y[..., :n], p], axis=-1)
-            y = np.concatenate([y[..., :n] + h * system.vector_field(y, u_i, u_dot)[..., :n], p], axis=-1)
-        return check_finite(y, self)
+            y = concat([y[..., :n], p], axis=-1)
+            y = concat([y[..., :n] + h * system.vector_field(y, u_i, u_dot)[..., :n], p], axis=-1)
+        return y
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,8 @@
 and branch-free stand-ins where it has one, each named with how far it may differ from the numpy stepper.
 
 - The explicit Runge–Kutta methods (Euler, RK4, RK8) are the numpy rows' own code (``compiled_substeps``): the
-  control is evaluated at u + c h u̇ on every stage, which where u is held (u̇ = 0) is u itself.
+  control is evaluated at u + c h u̇ on every stage, which where u is held (u̇ = 0) is u itself. Semi-implicit Euler
+  is its numpy code too (``SemiImplicitEuler.unchecked``).
 - The exact step runs the system's closed form on every row; where the closed form declines (NaN: the swing's
   separatrix band) or where u moves under a system that has only a held flow, the numpy stepper calls scipy's
   adaptive DOP853, which does not trace: there the JAX step takes DOP853's eighth-order formula at FALLBACK_SUBSTEPS (8)
@@ -26,6 +27,7 @@ from connenv.core.steppers import (
     ExplicitRungeKutta,
     MAX_DOUBLINGS,
     RK8,
+    SemiImplicitEuler,
     compiled_substep,
     compiled_substeps,
     conforms,
@@ -66,6 +68,20 @@ class TracedRungeKutta:
             return compiled_substeps(tableau, floats=False)(system.vector_field, y, u, u_dot, h, h_b, False, 1)
         substep = compiled_substep(tableau)
         return jax.lax.fori_loop(0, n, lambda i, y: substep(system.vector_field, y, u, u_dot, h, h_b, False, i), y)
+
+    def __repr__(self):
+        return repr(self.stepper)
+
+
+@dataclasses.dataclass(frozen=True)
+class TracedSemiImplicitEuler:
+    """Semi-implicit Euler's numpy code (``SemiImplicitEuler.unchecked``) on traced rows, a segment length per row
+    as a column."""
+
+    stepper: SemiImplicitEuler
+
+    def __call__(self, system, y, u, u_dot, tau):
+        return _finite(self.stepper.unchecked(system, y, u, u_dot, _column(tau)), self.stepper)
 
     def __repr__(self):
         return repr(self.stepper)
@@ -167,6 +183,8 @@ def traced_stepper(stepper, system, name: str):
     each as it comes."""
     if isinstance(stepper, ExplicitRungeKutta):
         return TracedRungeKutta(stepper)
+    if isinstance(stepper, SemiImplicitEuler):
+        return TracedSemiImplicitEuler(stepper)
     if isinstance(stepper, Magnus) and stepper.pieces is not None:
         return TracedMagnus(stepper)
     if isinstance(stepper, EnergyProjected):
@@ -175,6 +193,7 @@ def traced_stepper(stepper, system, name: str):
         return TracedExact(stepper)
     raise TypeError(
         f"{name}'s stepper {stepper!r} has no JAX version (scipy's adaptive step-size control does not trace; "
-        "connenv.jax runs the exact step, the Lie-group step with a fixed rule, the energy-projected RK8 and the "
-        "fixed-step Runge–Kutta methods: make it with integrator='exact', 'euler', 'rk4' or 'rk8')"
+        "connenv.jax runs the exact step, the Lie-group step with a fixed rule, the energy-projected RK8, the "
+        "fixed-step Runge–Kutta methods and semi-implicit Euler: make it with integrator='exact', 'euler', "
+        "'semi_implicit_euler', 'rk4' or 'rk8')"
     )
