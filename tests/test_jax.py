@@ -22,6 +22,7 @@ import scipy.special  # noqa: E402
 
 import connenv.jax as cj  # noqa: E402
 from connenv.envs.spec import registry  # noqa: E402
+from connenv.core.backend import FLOATS  # noqa: E402
 from connenv.core.steppers import StepperError  # noqa: E402
 from connenv.jax.namespace import ellipj  # noqa: E402
 
@@ -352,3 +353,103 @@ def test_step_rows_is_the_vmapped_step(env_id, n):
                                                               params)
     np.testing.assert_array_equal(np.asarray(rows[1].x), np.asarray(each[1].x))
     np.testing.assert_array_equal(np.asarray(rows[2]), np.asarray(each[2]))
+
+
+REVERSE_IDS = ["connenv/RollingBall-v0", "connenv/RollingCoinSurface-v0", "connenv/BeadOnBar-v0"]
+"""Ids whose step reverse mode differentiates, checked here where a rollout compiles in a few seconds: Swing-v0 (below,
+against numpy), TubeTwist-v0, BeadOnBar-v1, RollingBallPose-v0, KozlovShell-v0 and Skier-v0 agree as well (measured;
+Skier-v0's seven lax.cond levels take minutes to compile under grad and jacfwd together). The ids with one-sided
+stops do not: their forward-mode rule at a tie is not linear in the tangent (see docs/guides/jax.md)."""
+GRADIENT_RTOL = 1e-10
+
+
+def rollout_return(jenv, x0, steps):
+    """The return of `steps` steps from x0 under actions (steps, *shape), plus a fixed weighting of the last state
+    (a sparse or flat reward would make a vanishing gradient, which any rule passes)."""
+    weights = jnp.linspace(0.5, 1.5, x0.shape[0])
+
+    def total(actions):
+        def one(x, a):
+            x_next, obs, reward, terminated, info, failed = jenv.transition(x, a)
+            return x_next, reward
+
+        x, rewards = jax.lax.scan(one, x0, actions)
+        return jnp.sum(rewards) + jnp.sum(weights * jnp.where(jnp.isfinite(x), x, 0.0))
+
+    return total
+
+
+@pytest.mark.parametrize("env_id", REVERSE_IDS)
+def test_reverse_mode_gradients_are_forward_modes(env_id):
+    """jax.grad of a 2-step rollout's return with respect to the actions equals jax.jacfwd's, both in one compiled
+    function: reverse mode transposes the step's linearization (every rule it passes through must be linear in the
+    tangents), forward mode pushes each action's direction through it."""
+    jenv, params = cj.make(env_id)
+    obs, state = jenv.reset(jax.random.key(0), params)
+    actions = jax.random.uniform(jax.random.key(1), (2, *jenv.action_space(params).shape), minval=-0.9, maxval=0.9)
+    total = rollout_return(jenv, state.x, 2)
+    reverse, forward = jax.jit(lambda a: (jax.grad(total)(a), jax.jacfwd(total)(a)))(actions)
+    reverse, forward = np.asarray(reverse), np.asarray(forward)
+    scale = np.max(np.abs(forward))
+    print(f"{env_id}: |grad − jacfwd| / max|jacfwd| = {np.max(np.abs(reverse - forward)) / scale:.2g}")
+    assert scale > 0.0 and np.all(np.isfinite(reverse))
+    assert np.max(np.abs(reverse - forward)) <= GRADIENT_RTOL * scale
+
+
+def test_the_swing_gradient_is_the_numpy_models_central_difference():
+    """Swing-v0: jax.grad of a 3-step return equals central differences (h = 1e-5) of the numpy model's rollout,
+    to their roundoff (the return's ~1e-14 over h)."""
+    env_id, steps, h = "connenv/Swing-v0", 3, 1e-5
+    jenv, params = cj.make(env_id)
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=1)
+    x0 = env.model.pack(env.state)
+    actions = np.random.default_rng(2).uniform(-0.9, 0.9, (steps, 1))
+    total = rollout_return(jenv, jnp.asarray(x0), steps)
+    gradient = np.asarray(jax.jit(jax.grad(total))(jnp.asarray(actions)))
+    weights = np.linspace(0.5, 1.5, x0.shape[0])
+
+    def numpy_total(a):
+        x, value = x0, 0.0
+        for k in range(steps):
+            x_next = env.model.step(x, a[k])
+            value += float(env.model.reward(x, a[k], x_next))
+            x = x_next
+        return value + float(np.sum(weights * np.where(np.isfinite(x), x, 0.0)))
+
+    central = np.zeros_like(actions)
+    for index in np.ndindex(actions.shape):
+        up, down = actions.copy(), actions.copy()
+        up[index] += h
+        down[index] -= h
+        central[index] = (numpy_total(up) - numpy_total(down)) / (2 * h)
+    np.testing.assert_allclose(gradient, central, rtol=1e-6, atol=1e-7 * np.max(np.abs(central)))
+
+
+def test_the_kapitza_separatrix_loop_has_a_fixed_trip_count():
+    """The Kapitza pendulum's RK4 near the separatrix (its substeps per row from the segment's length): in a step
+    being traced (``stepping(dt)``) it runs the count of the longest segment, dt's, so that reverse mode
+    differentiates it (jax.grad equals jax.jacfwd), with the numpy code's numbers for one state; a segment longer than
+    dt needs more trips than the bound and is a failure."""
+    from connenv.jax.namespace import JAX, failures, stepping
+    from connenv.systems.kapitza import KapitzaPendulum
+
+    system = KapitzaPendulum(length=0.25)  # ω₀ = 6.26/s: dt = 0.01 s takes up to ⌈6.26⌉ = 7 substeps
+    theta, spin, tau = np.array([3.0, 3.1]), np.array([0.2, -0.1]), np.array([0.01, 0.0037])
+
+    def run(theta, spin, tau, dt):
+        with failures() as failed, stepping(dt):
+            out = system._near_separatrix(theta, spin, tau, JAX)
+            return jnp.stack(out), jnp.any(jnp.stack([jnp.any(c) for c, _ in failed]))
+
+    out, failed = jax.jit(run, static_argnums=3)(theta, spin, tau, 0.01)
+    assert not bool(failed)
+    for k in range(2):
+        expected = system._near_separatrix(float(theta[k]), float(spin[k]), float(tau[k]), FLOATS)
+        np.testing.assert_allclose(np.asarray(out)[:, k], expected, rtol=1e-15, atol=1e-15)
+    value = lambda theta, spin, tau: jnp.sum(run(theta, spin, tau, 0.01)[0] * jnp.array([[1.0], [0.3]]))
+    for argnum in range(3):
+        reverse = jax.grad(value, argnum)(theta, spin, tau)
+        forward = jax.jacfwd(value, argnum)(theta, spin, tau)
+        np.testing.assert_allclose(np.asarray(reverse), np.asarray(forward), rtol=1e-12, atol=1e-14)
+    assert bool(jax.jit(run, static_argnums=3)(theta, spin, tau, 0.005)[1])  # 7 substeps past dt = 0.005's 4

@@ -24,7 +24,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
-from connenv.jax.namespace import JAX_TASK, failures
+from connenv.jax.namespace import JAX_TASK, failures, stepping
 from connenv.jax.random import KeyGenerator
 from connenv.jax.spaces import Box, Dict, space_of
 from connenv.jax.steppers import traced_stepper
@@ -125,7 +125,7 @@ class FunctionalEnv:
         a = jnp.asarray(A, float).reshape(N, *self._action_space.shape)
         a = jnp.minimum(jnp.maximum(a, self._low), self._high)
         before = self.state_of(X)
-        with failures() as failed:
+        with failures() as failed, stepping(self.env.dt):  # the segments' bound: loops of a fixed trip count
             after = self.env.advance(before, self.env.command(a), self.stepper, JAX_TASK)
             X_next = self.flatten(after)
         stalled = jnp.zeros(N, bool)

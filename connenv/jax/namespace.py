@@ -9,7 +9,8 @@ rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenat
 bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the connections'),
 ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
 ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
-only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
+only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values, at a fixed trip count where the
+step's ``longest_segment`` bounds it), ``sinc`` and
 ``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),
 ``solve`` (numpy's linalg.solve, which the builders' Hamiltonian calls), ``atan2`` and ``hypot`` with ARRAYS'
 derivative (0 at the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions,
@@ -164,11 +165,36 @@ def fail(condition, message: str):
     _collectors[-1].append((jnp.asarray(condition), message))
 
 
-def repeat(counts, body, carry):
-    """body(i, carry) for i = 0, 1, … up to the largest of counts (an array over rows; traced): JAX's fori_loop, a
-    while_loop where the count is traced (differentiable in forward mode). body holds a row past its own count by
-    ``where``; a loop whose trip count the numpy code takes from the rows' values (``max``) runs so."""
-    return jax.lax.fori_loop(0, jnp.max(counts).astype(int), body, carry)
+_step_lengths: list[float] = []
+
+
+@contextlib.contextmanager
+def stepping(dt: float):
+    """The step being traced is dt long: every control segment within it lasts at most dt, which bounds the trip
+    count of a loop whose count the numpy code takes from a segment's length (``longest_segment``, ``repeat``)."""
+    _step_lengths.append(float(dt))
+    try:
+        yield
+    finally:
+        _step_lengths.pop()
+
+
+def longest_segment():
+    """The longest a control segment of the step being traced can last (its dt, a Python float), or None outside
+    connenv.jax's step."""
+    return _step_lengths[-1] if _step_lengths else None
+
+
+def repeat(counts, body, carry, most=None):
+    """body(i, carry) for i = 0, 1, … up to the largest of counts (an array over rows; traced); body holds a row past
+    its own count by ``where``, so that every further trip leaves the rows as they are. With most (a static bound on
+    the counts, a Python int) the loop runs most trips, a fixed trip count that JAX's reverse mode differentiates as
+    well as its forward mode, and a row whose count passes it is a failure (``fail``); without it, a while_loop to the
+    largest count (forward mode only)."""
+    if most is None:
+        return jax.lax.fori_loop(0, jnp.max(counts).astype(int), body, carry)
+    fail(counts > most, f"a loop of more than {most} trips (its static bound)")
+    return jax.lax.fori_loop(0, int(most), body, carry)
 
 
 def one_sided(choose):
@@ -285,6 +311,7 @@ JAX = operations(
     broadcast_arrays=jnp.broadcast_arrays,
     broadcast_to=jnp.broadcast_to,
     repeat=repeat,
+    longest_segment=longest_segment,
     ellipj=ellipj,
     ellipk=ellipk,
     ellipeinc=ellipeinc,
