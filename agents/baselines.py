@@ -66,6 +66,7 @@ UNTRAINED = ()
 """Envs with hyperparameters and analytic controllers whose reference runs are still to be trained: ``train`` and
 ``collect`` take them; the table holds ENVS."""
 ALGOS = ("ppo", "sac")  # SAC on a goal env is SAC + HER (its entry of agents/hyperparams/sac.yml)
+JAX_ALGOS = ("ppo_jax",)  # train.py --backend jax's runs: trained by train.py --seeds, evaluated and scored here
 EVALUATIONS = 10  # periodic evaluations per run, of train.PERIODIC_EVAL_EPISODES (10) episodes each
 FINAL_EPISODES = 10  # train.py's own table at the end of a run; the results table is evaluated on EPISODES
 EPISODES = 100
@@ -504,10 +505,14 @@ def run_records(env_id: str, algos: list[str], runs: Path) -> list[dict]:
             folder = run_folder(env_id, algo, seed, runs)
             if finished(folder) and run_config(folder, env_id) == hyperparams(algo, env_id):
                 timesteps = json.loads((folder / "results.json").read_text())["timesteps"]
-                model = folder / "best_model.zip"
-                shipped = hashlib.sha256(model.read_bytes()).hexdigest() == record.get(algo, {}).get("source_sha256")
+                if algo in JAX_ALGOS:
+                    spec, shipped = f"jax:{folder / 'best_policy.npz'}", False
+                else:
+                    model = folder / "best_model.zip"
+                    digest = hashlib.sha256(model.read_bytes()).hexdigest()
+                    spec, shipped = str(model), digest == record.get(algo, {}).get("source_sha256")
                 records.append({"algo": algo, "seed": seed, "timesteps": timesteps, "shipped": shipped,
-                                **episodes_record(env_id, str(model), algo)})  # fmt: skip
+                                **episodes_record(env_id, spec, None if algo in JAX_ALGOS else algo)})  # fmt: skip
     return records
 
 
@@ -564,7 +569,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--jobs", type=positive_int, default=os.cpu_count(), help="CPUs of a local Ray / table's processes"
     )
     parser.add_argument("--env", nargs="+", default=list(ENVS), choices=ENVS + UNTRAINED)
-    parser.add_argument("--algo", nargs="+", default=list(ALGOS), choices=ALGOS)
+    parser.add_argument(
+        "--algo", nargs="+", default=list(ALGOS), choices=ALGOS + JAX_ALGOS, help="ppo_jax: unseen and score only"
+    )
     parser.add_argument(
         "--address", type=cluster.address, help="train: join the Ray cluster at ADDR (default: start a local Ray)"
     )
@@ -581,6 +588,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "envs: those that have one, seeds: 0, runs: runs/long), collected into docs/baselines/long.{csv,png}",
     )
     args = parser.parse_args(argv)
+    if args.command in ("train", "collect", "table") and set(args.algo) & set(JAX_ALGOS):
+        parser.error("argument --algo: ppo_jax runs are trained by python train.py --backend jax --seeds N; "
+                     "unseen and score take them")  # fmt: skip
     if args.long:
         defaults = parser.parse_args([args.command])
         entries = yaml.safe_load(hyperparams_file("ppo").read_text())
@@ -608,7 +618,7 @@ def main(argv: list[str] | None = None):
     elif args.command == "unseen":
         unseen(args.env, args.algo, args.jobs, Path(args.runs), args.pretrained)
     elif args.command == "score":
-        print(score.write(score.load(UNSEEN), DOCS, score.latest(list(ENVS + UNTRAINED)), ALGOS))
+        print(score.write(score.load(UNSEEN), DOCS, score.latest(list(ENVS + UNTRAINED)), ALGOS + JAX_ALGOS))
     else:
         print(table(args.jobs, args.env))
 

@@ -101,8 +101,17 @@ class NormalizedPolicy:
 
 
 def policy_spec(text: str) -> str:
-    """argparse type: a controller name, 'random', a planner, 'pretrained' or an existing model zip that SB3 saved."""
+    """argparse type: a controller name, 'random', a planner, 'pretrained', an existing model zip that SB3 saved or
+    jax:PATH (a policy file of train.py --backend jax, or its run folder)."""
     if text in (*CONTROLLER_NAMES, "random", *PLANNERS, "pretrained"):
+        return text
+    if text.startswith("jax:"):
+        from agents.jax_policy import JaxPolicy
+
+        try:
+            JaxPolicy(text.removeprefix("jax:"))
+        except (OSError, ValueError) as error:
+            raise argparse.ArgumentTypeError(str(error)) from error
         return text
     if not (text.endswith(".zip") and Path(text).is_file()):
         raise argparse.ArgumentTypeError(
@@ -270,12 +279,24 @@ def make_policy(
         return spec, controller(env_id, spec)
     if spec == "random":
         return spec, RandomPolicy(gym.make(env_id, **(env_kwargs or {})).action_space, seed)
+    if spec.startswith("jax:"):
+        from agents.jax_policy import JaxPolicy
+
+        policy = JaxPolicy(spec.removeprefix("jax:"), env_id)
+        return jax_label(policy.path), policy
     if not spec.endswith(".zip"):
         raise ValueError(
-            f"policy {spec!r} is not one of {controller_names(env_id)}, 'random', 'pretrained' or a model PATH.zip"
+            f"policy {spec!r} is not one of {controller_names(env_id)}, 'random', 'pretrained', a model PATH.zip or "
+            "jax:PATH"
         )
     algo = algo or algo_of(Path(spec))
     return f"{algo}:{Path(spec).parent.name}", load_model(spec, env_id, algo, env_kwargs)
+
+
+def jax_label(path: str | Path) -> str:
+    """The label of a policy file of train.py --backend jax: ppo_jax:{its run folder}."""
+    path = Path(path)
+    return f"ppo_jax:{(path.parent if path.suffix == '.npz' else path).name}"
 
 
 def run_episode(env: gym.Env, policy, seed: int, trace: Trace | None = None) -> Episode:
@@ -428,7 +449,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         type=policy_spec,
         default=["analytic", "random"],
         help=f"one of {CONTROLLER_NAMES} (the env's controllers; analytic is its first), random, mpc or ilqr"
-        " (planners on the env's model, agents.mpc), pretrained (agents/pretrained/) or PATH.zip",
+        " (planners on the env's model, agents.mpc), pretrained (agents/pretrained/), PATH.zip (SB3) or jax:PATH (a"
+        " policy of train.py --backend jax: its .npz or its run folder)",
     )
     parser.add_argument("--algo", help="algorithm of the zips (default: read from their run folder)")
     parser.add_argument("--episodes", type=positive_int, default=100)

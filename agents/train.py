@@ -87,6 +87,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default=evaluate.DEFAULT_ENV, choices=evaluate.ENV_IDS, help="default: %(default)s")
     parser.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
+    parser.add_argument(
+        "--backend",
+        default="sb3",
+        choices=("sb3", "jax"),
+        help="sb3: rl-zoo3 and SB3 on the numpy env (default); jax: PPO compiled with the env (agents.jax_train)",
+    )
+    parser.add_argument(
+        "--seeds", type=evaluate.positive_int, default=1, help="--backend jax: seeds --seed … --seed + SEEDS − 1 at once"
+    )
     parser.add_argument("--timesteps", type=evaluate.positive_int, help="default: n_timesteps of the hyperparameters")
     parser.add_argument("--seed", type=evaluate.seed_int, default=0)
     parser.add_argument("--hyperparams", help="rl-zoo3 YAML file (default: agents/hyperparams/{algo}.yml)")
@@ -110,7 +119,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--overwrite", action="store_true", help="move an earlier run in the run folder aside to {run}.{date-time}"
     )
     args = parser.parse_args(argv)
-    args.hyperparams = args.hyperparams or str(HYPERPARAMS / f"{args.algo}.yml")
+    if args.backend == "sb3" and args.seeds != 1:
+        parser.error(f"argument --seeds: {args.seeds} seeds at once train on --backend jax; sb3 trains one --seed")
+    if args.backend == "jax" and args.algo != "ppo":
+        parser.error(f"argument --algo: --backend jax trains ppo, not {args.algo}")
+    name = "ppo_jax" if args.backend == "jax" else args.algo
+    args.hyperparams = args.hyperparams or str(HYPERPARAMS / f"{name}.yml")
     if not Path(args.hyperparams).is_file():
         parser.error(f"--hyperparams {args.hyperparams!r}: no such file; give a YAML file for --algo {args.algo}")
     if fault := hyperparams_fault(Path(args.hyperparams), args.env):
@@ -397,6 +411,10 @@ def main(argv: list[str] | None = None) -> dict:
     interrupted run writes results.json without the evaluation and exits with 130; a run folder holding an earlier
     run exits with an error naming it."""
     args = parse_args(argv)
+    if args.backend == "jax":
+        from agents import jax_train
+
+        return jax_train.run(args)
     env_kwargs = evaluate.make_kwargs(args.env, args.env_kwargs)
     start = time.perf_counter()
     try:

@@ -181,6 +181,12 @@ def traced(ops) -> bool:
     return getattr(ops, "traced", False)
 
 
+def is_traced(x) -> bool:
+    """Whether x is a JAX array or tracer (a physical parameter traced by ``connenv.jax``), told without importing
+    jax: a number, numpy's array or None is not."""
+    return not isinstance(x, (float, int, np.ndarray, type(None))) and "jax" in type(x).__module__
+
+
 def vector(*entries):
     """One state's entries as an array: numpy's float64 array, or JAX's stack where an entry is traced (a reset traced
     by ``connenv.jax``)."""
@@ -209,13 +215,33 @@ def components(a):
     return a.tolist() if one else [a[..., i] for i in range(a.shape[-1])]
 
 
+def _clip(x, low, high):
+    """x clipped to [low, high], on Python floats; a traced number (connenv.jax's traced parameters, in the state
+    an env's constructor builds of them) by its own namespace."""
+    try:
+        return min(max(x, low), high)
+    except TypeError:  # JAX's concretization errors are TypeErrors; a float never raises here
+        ops = namespace(x)
+        return ops.minimum(ops.maximum(x, low), high)
+
+
+def _real(x):
+    """float(x); a traced number (as in `_clip`) as it is."""
+    try:
+        return float(x)
+    except TypeError:
+        if is_traced(x):
+            return x
+        raise
+
+
 SCALAR = operations(
     "SCALAR",
     **{name: getattr(FLOATS, name) for name in NAMES},
-    clip=lambda x, low, high: min(max(x, low), high),
+    clip=_clip,
     column=lambda x: x,
     pack=lambda parts: np.array(parts, np.float32),
-    real=float,
+    real=_real,
     flag=bool,
     vector=lambda a: tuple(np.asarray(a, float).tolist()),
     components=lambda a: a.tolist(),

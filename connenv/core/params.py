@@ -18,6 +18,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+from connenv.core.backend import is_traced
 from connenv.core.validation import DT_MIN, SCALE_SPAN, check_number, check_scale, check_stepper_options
 
 
@@ -58,7 +59,12 @@ class Param:
     typical: End | None = None  # a scale's centre of its span where the default is None
 
     def check(self, value, args: dict):
-        """value checked against its range (args: the arguments checked before it), or ValueError."""
+        """value checked against its range (args: the arguments checked before it), or ValueError. A traced value
+        (a physical parameter that ``connenv.jax`` traces), or one whose range a traced argument sets, passes as it
+        is: it has no number to check until it is drawn (``FunctionalEnv.sample_params`` draws within the ranges
+        checked here at their corners)."""
+        if is_traced(value) or any(map(is_traced, args.values())):
+            return value
         if value is None and self.optional or self.kind in ("given", "options"):
             return value
         if self.kind == "choice":

@@ -8,6 +8,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from connenv.core.backend import is_traced
 from connenv.core.steppers import SMALL, STEPPER_OPTIONS
 
 
@@ -26,6 +27,8 @@ def check_number(
     high_name name the parameters that set a bound, if any."""
     ends = [low if low_name is None else f"{low_name}={low}", high if high_name is None else f"{high_name}={high}"]
     interval = f"{'(' if open_low else '['}{ends[0]}, {ends[1]}{')' if open_high else ']'}"
+    if is_traced(value):  # a physical parameter connenv.jax traces: checked where it is drawn, not here
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name}={value!r} must be a real number in {interval}")
     value = float(value)

@@ -92,6 +92,9 @@ class TaskEnv(gym.Env):
     """The reset state's keys (`connenv.core.state`): their checks in ``start``, the docstring's table of them."""
     OPTIONS: ClassVar[Options] = Options()
     """The reset options beside "state" and "params" (a target), declared as the state is."""
+    JAX_STATIC: ClassVar[tuple[str, ...]] = ()
+    """Physical parameters that ``connenv.jax`` holds static (compiled anew for another value) rather than traced: those
+    that set the spaces (which ``randomize`` refuses to vary too) or the step's structure (a count of pieces)."""
     context: Context | None = None
     """The episodes' physical parameters (`connenv.core.context`); None for an env without declared ones."""
     _model = None  # the model, made on first use

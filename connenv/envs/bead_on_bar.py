@@ -117,6 +117,9 @@ class BeadOnBarEnv(ActiveConstraintEnv):
 
     renderer = BeadRenderer
 
+    JAX_STATIC = ("mass", "g")
+    # the sympy-derived system holds them as constants
+
     ARGS = Args(
         scale("half_length", 1.0, "m", "L"),
         scale("g", 9.81, "m/s²", low=0.0),

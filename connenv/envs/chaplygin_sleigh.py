@@ -9,7 +9,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import ARRAYS, SCALAR, namespace, traced
+from connenv.core.backend import ARRAYS, SCALAR, is_traced, namespace, traced
 from connenv.core.backend import vector as entries_vector
 from connenv.core.integrators import make_stepper
 from connenv.core.mechanics import JUMP_ROWS, JUMP_STEPPER, JumpClass, JumpFlow
@@ -122,6 +122,9 @@ class ChaplyginSleighEnv(TaskEnv):
 
     renderer = SleighRenderer
 
+    JAX_STATIC = ("sled_mass", "sled_inertia", "offset", "mass", "rail", "box")
+    # the jump class, a numerical test of the equations at them, decides the control
+
     ARGS = Args(
         scale("sled_mass", 1.0, "kg"),
         scale("sled_inertia", 0.1, "kg m²", "about C"),
@@ -167,7 +170,7 @@ class ChaplyginSleighEnv(TaskEnv):
                 f"box={self.box}, class {self.jump_class.value!r}: u̇ enters its equations quadratically) does not "
                 "admit; give a speed > 0 (only the rail, box=0, over the knife edge, offset=0, is fit for jumps)"
             )
-        if a.max_mass_speed is not None and a.max_mass_speed * self.dt > TRAVEL_MAX:
+        if a.max_mass_speed is not None and not is_traced(a.max_mass_speed) and a.max_mass_speed * self.dt > TRAVEL_MAX:
             raise ValueError(
                 f"max_mass_speed={a.max_mass_speed!r} is out of range with dt={self.dt!r}: the mass's travel in a "
                 f"step, max_mass_speed · dt = {a.max_mass_speed * self.dt:.6g} m, must be at most {TRAVEL_MAX} m"

@@ -96,6 +96,8 @@ class ElroysBeanieEnv(ConnectionEnv):
     renderer = BeanieRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("error",)}
 
+    JAX_STATIC = ("beanie_inertia", "max_beanie_speed")  # they set the observation space
+
     ARGS = Args(
         scale("body_inertia", 1.0, "kg m²", high=MAGNITUDE_BOUND),
         scale("beanie_inertia", 0.25, "kg m²", high=MAGNITUDE_BOUND),

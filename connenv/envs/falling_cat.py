@@ -95,6 +95,9 @@ class FallingCatEnv(ConnectionEnv):
     renderer = CatRenderer
     metadata = {**ConnectionEnv.metadata, "measures": ("roll_error",)}
 
+    JAX_STATIC = ("transverse_inertia", "axial_inertia", "max_bend", "max_bend_speed")
+    # they set the count of the roll's Gauss–Legendre pieces (pieces_for), the step's structure
+
     ARGS = Args(
         scale("transverse_inertia", 0.01, "kg m²", "I: a half's inertia across its axis about its centre of mass",
               high=MAGNITUDE_BOUND),

@@ -154,6 +154,8 @@ class KapitzaPendulumEnv(TaskEnv):
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("max_deviation",)}
 
+    JAX_STATIC = ("damping",)  # it chooses the step: the closed form without it, the numerical fallback with it
+
     ARGS = Args(
         choice("pivot", "vertical", PIVOTS),
         scale("length", 1.0, "m", "l"),
@@ -189,7 +191,7 @@ class KapitzaPendulumEnv(TaskEnv):
         self.v_max, self.a_max, self.tolerance = a.v_max, a.a_max, a.tolerance
         self.stepper = make_stepper(a.integrator, self.system, **stepper_options)
 
-        self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / a.length)
+        self.theta_dot_scale = 2.0 * namespace(a.length).sqrt(self.system.g / a.length)
         k = len(self.axes)
         self.action_space = spaces.Box(-1.0, 1.0, (k,), np.float32)
         high = np.array([1.0, 1.0, SPEED_BOUND] + [1.0] * 2 * k, np.float32)

@@ -113,6 +113,9 @@ class KozlovShellEnv(PlanarSwimmer, TaskEnv):
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
+    JAX_STATIC = ("a", "b", "shell_mass", "shell_inertia", "rho", "mass", "u1_max", "u2_max")
+    # they set the Lie-group step's fixed rule (shell_rule: its pieces)
+
     ARGS = Args(
         scale("a", 1.0, "m", "semi-axis along body x, a ≥ b"),
         scale("b", 0.5, "m", "at most a"),

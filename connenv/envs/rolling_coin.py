@@ -108,7 +108,7 @@ class RollingCoinEnv(ConnectionEnv):
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         a, stepper_options = self.check_args(kwargs)
-        self.radius, self.rates = a.radius, np.array([a.max_steer_rate, a.max_roll_rate])
+        self.radius, self.rates = a.radius, entries_vector(a.max_steer_rate, a.max_roll_rate)
         self.position_tolerance, self.heading_tolerance = a.position_tolerance, a.heading_tolerance
         super().__init__(
             "R2", functools.partial(rolling_coin.connection, radius=self.radius), shape_low=[-math.inf, -math.inf],

@@ -9,7 +9,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import SCALAR
+from connenv.core.backend import SCALAR, namespace
 from connenv.core.backend import vector as entries_vector
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, given, integrator, interval, options, step
@@ -166,7 +166,7 @@ class RollingCoinSurfaceEnv(TaskEnv):
 
         z_min, z_max, self.slope_bound = check_surface(self.surface, self.arena)
         self.height_range = max(z_max - z_min, 1e-9)
-        self.speed_scale = math.sqrt(4.0 * self.system.g * self.height_range / 3.0)
+        self.speed_scale = namespace(self.system.g).sqrt(4.0 * self.system.g * self.height_range / 3.0)
         self.start_point = self._start_point(surface)
         self.downhill = self._downhill()
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)

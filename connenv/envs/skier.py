@@ -139,6 +139,10 @@ class SkierEnv(TaskEnv):
 
     renderer = SkierRenderer
 
+    JAX_STATIC = ("h_min", "h_max", "g")
+    # h_min and h_max set the trail's reach (its floor, goals and curvature bound, from a grid) and the observation
+    # space; g sets the stepper's count of substeps
+
     ARGS = Args(
         scale("h_min", 0.5, "m", "below h_max"),
         scale("h_max", 1.0, "m", "with 1 − κ h_max > 0 on the whole trail", low="h_min"),

@@ -117,6 +117,9 @@ class SnakeSwimmerEnv(PlanarSwimmer, TaskEnv):
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ("distance",)}
 
+    JAX_STATIC = ("a", "b", "link_density", "rho", "max_joint_speed")
+    # they set the Lie-group step's fixed rule (snake_rule: its pieces)
+
     ARGS = Args(
         interval("a", 0.5, "m", SIZE_MIN, MAGNITUDE_BOUND, "the links' semi-axis along the link"),
         interval("b", 0.05, "m", Bound(thinnest, "a/100"), "a", "across the link", open_high=True),

@@ -10,7 +10,7 @@ from typing import ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from connenv.core.backend import BATCH, SCALAR, vector
+from connenv.core.backend import BATCH, SCALAR, namespace, vector
 from connenv.core.integrators import make_stepper
 from connenv.core.params import Args, Bound, integrator, interval, options, scale, step
 from connenv.core.segments import check_drift, control_path, held_energy, run_segments
@@ -106,6 +106,8 @@ class SwingEnv(TaskEnv):
 
     renderer = SwingRenderer
 
+    JAX_STATIC = ("r_min", "r_max")  # they set the observation space
+
     ARGS = Args(
         scale("r_min", 1.6, "m"),
         scale("r_max", 2.0, "m", low="r_min"),
@@ -136,7 +138,7 @@ class SwingEnv(TaskEnv):
         self.stepper = make_stepper(a.integrator, self.system, **stepper_options)
         self.held_energy = functools.partial(held_energy, self.system.energy)  # E where r is held
 
-        self.theta_dot_scale = 2.0 * math.sqrt(self.system.g / self.r_min)
+        self.theta_dot_scale = 2.0 * namespace(self.system.g).sqrt(self.system.g / self.r_min)
         self.target_lift = 1.0 - math.cos(self.target_amplitude)
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         self.obs_high = np.array([1.0, 1.0, (self.r_max / self.r_min) ** 2, 1.0])

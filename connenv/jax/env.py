@@ -24,6 +24,8 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from connenv.core.backend import is_traced
+from connenv.core.context import Context
 from connenv.jax.namespace import JAX_TASK, failures, stepping
 from connenv.jax.random import KeyGenerator
 from connenv.jax.spaces import Box, Dict, space_of
@@ -42,11 +44,26 @@ class EnvState:
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class EnvParams:
-    """The episode's time limit (gymnax's ``max_steps_in_episode``, a traced leaf) and the physical parameters (the
-    model's Params; static: a change of them compiles the step anew, as ``model.with_params`` builds a model)."""
+    """The episode's time limit (gymnax's ``max_steps_in_episode``) and the physical parameters (the model's Params),
+    both traced leaves: jit compiles the step once for every value, and vmap batches over them (domain
+    randomization). A parameter that sets the spaces or the step's structure (the env's ``JAX_STATIC``), or an
+    optional one that is None, is static: another value of it is compiled anew, as ``model.with_params`` builds a
+    model."""
 
     max_steps_in_episode: Any
-    physical: Any = dataclasses.field(metadata=dict(static=True))
+    physical: Any
+
+
+REGISTERED: set[type] = set()
+
+
+def register_params(cls: type, static: tuple[str, ...]):
+    """A model's Params class as a pytree: its traced parameters as leaves, the env's ``JAX_STATIC`` ones as its
+    static structure (registered once per class: a class is one env's)."""
+    if cls not in REGISTERED:
+        names = [f.name for f in dataclasses.fields(cls)]
+        jax.tree_util.register_dataclass(cls, [n for n in names if n not in static], [n for n in names if n in static])
+        REGISTERED.add(cls)
 
 
 class FunctionalEnv:
@@ -66,7 +83,10 @@ class FunctionalEnv:
         self._observation_space = space_of(self.env.observation_space)
         self._low = jnp.asarray(self.env.action_space.low, float)
         self._high = jnp.asarray(self.env.action_space.high, float)
+        self.static = tuple(getattr(self.env, "JAX_STATIC", ()))
+        register_params(type(self.model.params), self.static)
         self._models = {self.model.params: self}
+        self._contexts = {}
 
     def __repr__(self):
         return f"connenv.jax FunctionalEnv({self.name}, n={self.model.n}, m={self.model.m})"
@@ -99,14 +119,64 @@ class FunctionalEnv:
     # -- the functional face ---------------------------------------------------
 
     def _for(self, params: EnvParams | None) -> FunctionalEnv:
-        """The functional env of these physical parameters (built once per value, as ``model.with_params``)."""
-        if params is None or params.physical == self.model.params:
+        """The functional env of these physical parameters: this one where they are its own; where a static one
+        differs, the env of those values (built once per value, as ``model.with_params``); and where a traced one is
+        given, the numpy env's class made with the traced values (`traced_with`)."""
+        if params is None or params.physical is self.model.params:
             return self
-        if params.physical not in self._models:
-            other = FunctionalEnv(self.model.with_params(params.physical).env, self.max_episode_steps)
-            other._models = self._models
-            self._models[params.physical] = other
-        return self._models[params.physical]
+        physical, base = params.physical, self.model.params
+        values = {f.name: getattr(physical, f.name) for f in dataclasses.fields(base)}
+        env = self
+        static = {name: values[name] for name in self.static}
+        if any(value != getattr(base, name) for name, value in static.items()):
+            key = tuple(static.items())
+            if key not in self._models:
+                other = FunctionalEnv(self.model.with_params(static).env, self.max_episode_steps)
+                other._models = self._models
+                self._models[key] = other
+            env = self._models[key]
+        moved = {name: value for name, value in values.items() if name not in self.static and (
+            is_traced(value) or value != getattr(base, name))}
+        return env.traced_with(moved) if moved else env
+
+    def traced_with(self, values: dict) -> FunctionalEnv:
+        """This env with the physical parameters ``values`` (traced, or numbers): the numpy env's own class made with
+        them, so that what its constructor derives from them (a system's constants, a bound, a scale of the
+        observation) is derived once, by the same code, on traced numbers; its checks pass a traced value
+        (`connenv.core.params.Param.check`). Its spaces are this env's (the static parameters set them)."""
+        env = type(self.env)(**{**self.env.kwargs, **values})
+        other = copy.copy(self)
+        other.env, other.model = env, None
+        other.stepper = traced_stepper(env.stepper, getattr(env, "system", None), self.name)
+        return other
+
+    def sample_params(self, key, ranges: dict, params: EnvParams | None = None) -> EnvParams:
+        """params (default: the make-time ones) with the physical parameters of ``ranges`` ({name: (low, high)},
+        as ``gym.make(id, randomize=ranges)`` takes them) drawn from the key as the numpy env draws them
+        (`connenv.core.context.Range.draw`): uniform on [low, high], log-uniform for a scale with low > 0, the ends
+        exact. The ranges are checked as ``randomize`` is, at make: the env made at every corner of their box
+        (linked parameters: every draw is one the numpy env takes) and its spaces unchanged there; a static
+        parameter (``JAX_STATIC``) cannot be drawn under jit and is refused. vmap over keys draws a batch."""
+        params = self.default_params if params is None else params
+        ranges = dict(ranges)
+        fixed = sorted(set(ranges) & set(self.static))
+        if fixed:
+            raise ValueError(f"sample_params: {fixed} of {self.name} are static in connenv.jax (they set the spaces "
+                             f"or the step's structure); traced: "
+                             f"{[f.name for f in dataclasses.fields(self.model.params) if f.name not in self.static]}")
+        written = tuple((name, tuple(bounds) if isinstance(bounds, (tuple, list)) else bounds)
+                        for name, bounds in ranges.items())
+        if written not in self._contexts:
+            self._contexts[written] = Context(self.env, ranges, False).ranges
+        keys = jax.random.split(key, max(len(ranges), 1))
+        drawn = {}
+        for k, (name, r) in zip(keys, self._contexts[written].items()):
+            if r.log:
+                value = jnp.exp(jax.random.uniform(k, (), float, jnp.log(r.low), jnp.log(r.high)))
+            else:
+                value = jax.random.uniform(k, (), float, r.low, r.high)
+            drawn[name] = jnp.clip(value, r.low, r.high)
+        return EnvParams(params.max_steps_in_episode, dataclasses.replace(params.physical, **drawn))
 
     def transition(self, x, action, params: EnvParams | None = None):
         """(x_next, reward, terminated, info, failed) of one state x (n,) under action: the numpy env's step."""
@@ -186,21 +256,34 @@ class FunctionalEnv:
         """n starting states (obs (n, …), EnvState with x (n, n_x) and time (n,)) from one key."""
         return jax.vmap(self.reset_env, (0, None))(jax.random.split(key, n), params)
 
-    def step_rows(self, key, state: EnvState, action, params: EnvParams | None = None):
-        """``step`` of rows (state.x (N, n), action (N, …)) in one call, as the numpy vector env steps its rows: the
-        same numbers as ``jax.vmap(env.step)``, but a branch that no row takes (the exact step's numerical fallback)
-        is skipped, which under vmap is computed for every row."""
+    def step_env_rows(self, key, state: EnvState, action, params: EnvParams | None = None):
+        """``step_env`` of rows (state.x (N, n), action (N, …)) in one call, without autoreset: (obs, state, reward,
+        terminated, truncated, info), a failed row's state held and its episode truncated. The key is unused (the
+        step draws nothing), kept for gymnax's signature."""
         params = self.default_params if params is None else params
         X_next, obs, reward, terminated, info, failed = self._for(params)._advance_rows(state.x, action)
         X_next = jnp.where(failed[:, None], state.x, X_next)
         time = state.time + 1
         truncated = ((time >= params.max_steps_in_episode) | failed) & ~terminated
-        info = {**info, "stepper_failed": failed, "final_observation": obs, "final_x": X_next}
+        info = {**info, "stepper_failed": failed}
+        return obs, EnvState(X_next, time), reward.astype(float), terminated, truncated, info
+
+    def step_rows(self, key, state: EnvState, action, params: EnvParams | None = None):
+        """``step`` of rows (state.x (N, n), action (N, …)) in one call, as the numpy vector env steps its rows: the
+        same numbers as ``jax.vmap(env.step)``, but a branch that no row takes (the exact step's numerical fallback)
+        is skipped, which under vmap is computed for every row. (Under an outer vmap, over seeds say, that skip is
+        lost too: step ``step_env_rows`` on all rows at once and reset each group with ``autoreset_rows``.)"""
+        obs, after, reward, terminated, truncated, info = self.step_env_rows(key, state, action, params)
+        obs, state, info = self.autoreset_rows(key, obs, after, terminated | truncated, info, params)
+        return obs, state, reward, terminated, truncated, info
+
+    def autoreset_rows(self, key, obs, state: EnvState, done, info: dict, params: EnvParams | None = None):
+        """gymnax's autoreset of rows: where done, the state and observation of a reset from the key;
+        info["final_observation"] and info["final_x"] the ended step's. (obs, state, info)."""
+        info = {**info, "final_observation": obs, "final_x": state.x}
         obs_reset, fresh = self.reset_rows(key, state.x.shape[0], params)
-        done = terminated | truncated
 
         def pick(a, b):
             return jnp.where(done.reshape(-1, *([1] * (jnp.ndim(a) - 1))), a, b)
 
-        state = jax.tree_util.tree_map(pick, fresh, EnvState(X_next, time))
-        return jax.tree_util.tree_map(pick, obs_reset, obs), state, reward.astype(float), terminated, truncated, info
+        return jax.tree_util.tree_map(pick, obs_reset, obs), jax.tree_util.tree_map(pick, fresh, state), info

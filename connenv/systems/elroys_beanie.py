@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from connenv.core.backend import floats
+from connenv.core.backend import floats, is_traced, namespace
 
 
 def coupling(body_inertia: float, beanie_inertia: float) -> float:
@@ -34,7 +34,8 @@ def coupling(body_inertia: float, beanie_inertia: float) -> float:
 
 def connection(s, body_inertia: float, beanie_inertia: float):
     """A (shape (..., 1, 1)) at shapes s of shape (..., 1): the same at every ψ."""
-    return np.full((*np.shape(s)[:-1], 1, 1), coupling(body_inertia, beanie_inertia))
+    A, shape = coupling(body_inertia, beanie_inertia), (*np.shape(s)[:-1], 1, 1)
+    return namespace(A).full(shape, A) if is_traced(A) else np.full(shape, A)  # traced: connenv.jax's parameters
 
 
 def exact_segment(g, s, s_dot, tau, body_inertia: float, beanie_inertia: float):

@@ -160,7 +160,7 @@ class KapitzaPendulum:
         segment the step can have (its dt: the same arithmetic, monotone in τ), so that reverse mode differentiates it;
         a row needing more is a failure (ops.repeat)."""
         tau = tau + 0.0 * theta  # a length per row
-        substeps = ops.maximum(1.0, ops.ceil(math.sqrt(self.g / self.length) * ops.real_part(tau) / SEPARATRIX_STEP))
+        substeps = ops.maximum(1.0, ops.ceil(ops.sqrt(self.g / self.length) * ops.real_part(tau) / SEPARATRIX_STEP))
         h = tau / substeps
         longest = ops.longest_segment()  # the step's dt: a static bound on τ, so on the count (monotone in τ)
         most = None if longest is None else max(1, math.ceil(math.sqrt(self.g / self.length) * longest

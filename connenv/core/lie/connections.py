@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from connenv.core.backend import ARRAYS, floats, namespace, traced
+from connenv.core.backend import ARRAYS, floats, is_traced, namespace, traced
 from connenv.core.lie.groups import GROUPS
 from connenv.core.validation import check_returned, probe, real_array
 
@@ -133,6 +133,12 @@ class ConstantConnection(Connection):
         return np.stack(np.broadcast_arrays(*g), -1)
 
 
+def bound_traced(function) -> bool:
+    """Whether function is a partial with a traced argument bound (an env's connection of physical parameters that
+    connenv.jax traces), which cannot be tried on numbers: the same function was tried at the make-time values."""
+    return isinstance(function, functools.partial) and any(map(is_traced, function.keywords.values()))
+
+
 def connection_system(group, frame, connection, vectorized, exact_segment, shapes, dt, speed) -> Connection:
     """The system of a connection given as a builder's argument, checked: a constant A (ConstantConnection), a
     callable s -> A(s) (Connection), or one with its exact_segment (ExactConnection). The callables are tried at the
@@ -144,6 +150,9 @@ def connection_system(group, frame, connection, vectorized, exact_segment, shape
             raise ValueError(f"exact_segment={exact_segment!r} is for a callable connection; a constant A "
                              "has its own exact step (one exponential)")  # fmt: skip
         return ConstantConnection(group, frame, A=_check_constant(connection, algebra, shapes.shape[-1]))
+    if bound_traced(connection):  # an env's own connection of traced parameters (connenv.jax): checked at make
+        return Connection(group, frame, connection, vectorized) if exact_segment is None else ExactConnection(
+            group, frame, connection, vectorized, exact_segment)
     connection = _check_connection(connection, algebra, shapes, vectorized)
     if exact_segment is None:
         return Connection(group, frame, connection, vectorized)

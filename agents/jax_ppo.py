@@ -1,0 +1,389 @@
+"""PPO on connenv.jax: rollouts, advantages and updates of many seeds in one compiled program.
+
+    python train.py --backend jax --env connenv/Swing-v0 --seeds 16
+
+PPO (Schulman et al. 2017) as SB3 runs it — the same hyperparameters (agents/hyperparams/ppo_jax.yml, rl-zoo3's
+layout), the clipped surrogate, GAE, advantages normalized per minibatch, Adam with ε 1e-5 and the global gradient
+norm clipped, separate tanh MLPs for the policy and the value, a state-independent log σ, observations and rewards
+normalized as VecNormalize does (running mean and variance; the reward by the running standard deviation of the
+discounted return) — written in the style of PureJaxRL (Lu et al. 2022): the env is ``connenv.jax``'s, stepped as
+rows (``env.step_rows``, autoresets included), and a whole update (a rollout of n_steps on n_envs rows, GAE, n_epochs
+of minibatch steps) is one function that ``lax.scan`` repeats and ``vmap`` runs for several seeds at once.
+
+Why not a library: rejax (PPO and SAC on gymnax-style envs) depends on gymnax, whose release 1.0.1 pins gymnasium
+below 1.4, the version connenv is tested on; PureJaxRL is a set of scripts, not a package. What is written here
+beyond them: an episode cut by the time limit (truncated) is bootstrapped with the value of its final observation
+(``info["final_observation"]``), as SB3 does, not counted as terminal (PureJaxRL's scripts treat both as done, which
+biases the value of a task whose episodes end only by the clock); VecNormalize's statistics are kept in the state.
+
+Each update is followed, every ``eval_freq`` steps, by a deterministic evaluation on ``eval_episodes`` episodes of
+the JAX env from a key fixed per seed; the best of these is kept as the seed's best policy. What a seed leaves is
+a policy file (agents.jax_policy), which numpy alone runs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from agents import jax_policy
+from agents.jax_policy import flat_observation, forward, normalize
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """PPO's hyperparameters, with SB3's names (those of agents/hyperparams/ppo_jax.yml)."""
+
+    n_timesteps: int
+    n_envs: int = 8
+    n_steps: int = 256
+    batch_size: int = 256
+    n_epochs: int = 10
+    learning_rate: float = 1e-3
+    linear_lr: bool = False  # rl-zoo3's "lin_<rate>": decayed linearly to 0 over the budget
+    gamma: float = 0.99
+    gae_lambda: float = 0.95
+    clip_range: float = 0.2
+    ent_coef: float = 0.0
+    vf_coef: float = 0.5
+    max_grad_norm: float = 0.5
+    net_arch: tuple[int, ...] = (64, 64)
+    log_std_init: float = 0.0
+    normalize: bool = True
+    clip_obs: float = 10.0
+    clip_reward: float = 10.0
+    eval_freq: int = 0  # steps between evaluations per seed; 0: a tenth of the budget
+    eval_episodes: int = 16
+
+    @property
+    def rollout(self) -> int:
+        return self.n_envs * self.n_steps
+
+    @property
+    def n_updates(self) -> int:
+        return math.ceil(self.n_timesteps / self.rollout)
+
+    @property
+    def n_minibatches(self) -> int:
+        return max(self.rollout // self.batch_size, 1)
+
+    @property
+    def updates_per_eval(self) -> int:
+        frequency = self.eval_freq or self.n_timesteps // 10
+        return min(max(frequency // self.rollout, 1), self.n_updates)
+
+    @classmethod
+    def from_hyperparams(cls, entry: dict, n_timesteps: int | None = None) -> Config:
+        """A Config of a hyperparameter entry (rl-zoo3's layout: ``lin_1e-3`` a linear schedule, ``policy_kwargs``
+        a dict(net_arch=[…]) text); unknown keys are refused by name."""
+        entry = dict(entry)
+        names = {f.name for f in dataclasses.fields(cls)}
+        if isinstance(entry.get("learning_rate"), str) and entry["learning_rate"].startswith("lin_"):
+            entry["learning_rate"], entry["linear_lr"] = float(entry["learning_rate"][4:]), True
+        if "net_arch" in entry:
+            entry["net_arch"] = tuple(int(n) for n in entry["net_arch"])
+        unknown = sorted(set(entry) - names)
+        if unknown:
+            raise ValueError(f"hyperparameters {unknown} are not PPO's on JAX; it takes {sorted(names)}")
+        if n_timesteps is not None:
+            entry["n_timesteps"] = n_timesteps
+        kinds = {f.name: f.type for f in dataclasses.fields(cls)}
+        for key, value in entry.items():
+            if kinds[key] in ("int", "float") and not isinstance(value, bool):
+                entry[key] = int(float(value)) if kinds[key] == "int" else float(value)
+        config = cls(**entry)
+        for key in ("n_timesteps", "n_envs", "n_steps", "batch_size", "n_epochs"):
+            if getattr(config, key) < 1:
+                raise ValueError(f"hyperparameter {key} = {getattr(config, key)} must be ≥ 1")
+        return config
+
+
+# -- the policy -----------------------------------------------------------------------------------------------------
+
+
+def init_layers(key, sizes: list[int], last_gain: float):
+    """SB3's initialization: orthogonal weights of gain √2 (the last layer's `last_gain`), zero biases; float32."""
+    layers = []
+    keys = jax.random.split(key, len(sizes) - 1)
+    for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
+        gain = last_gain if i == len(sizes) - 2 else math.sqrt(2)
+        W = jax.nn.initializers.orthogonal(gain)(keys[i], (n_in, n_out), jnp.float32)
+        layers.append((W, jnp.zeros(n_out, jnp.float32)))
+    return layers
+
+
+def init_params(key, obs_dim: int, act_dim: int, config: Config) -> dict:
+    k_pi, k_vf = jax.random.split(key)
+    sizes = list(config.net_arch)
+    return {
+        "pi": init_layers(k_pi, [obs_dim, *sizes, act_dim], 0.01),
+        "vf": init_layers(k_vf, [obs_dim, *sizes, 1], 1.0),
+        "log_std": jnp.full(act_dim, config.log_std_init, jnp.float32),
+    }
+
+
+def log_prob(mean, log_std, action):
+    return jnp.sum(-0.5 * ((action - mean) / jnp.exp(log_std)) ** 2 - log_std - 0.5 * math.log(2 * math.pi), -1)
+
+
+# -- running statistics (VecNormalize's RunningMeanStd) -------------------------------------------------------------
+
+
+def stats_init(shape) -> dict:
+    return {"mean": jnp.zeros(shape), "var": jnp.ones(shape), "count": jnp.asarray(1e-4)}
+
+
+def stats_update(stats: dict, batch) -> dict:
+    """Chan et al.'s parallel update of mean and variance by a batch (rows along axis 0), as RunningMeanStd."""
+    mean, var, count = jnp.mean(batch, 0), jnp.var(batch, 0), batch.shape[0]
+    delta, total = mean - stats["mean"], stats["count"] + count
+    m2 = stats["var"] * stats["count"] + var * count + delta**2 * stats["count"] * count / total
+    return {"mean": stats["mean"] + delta * count / total, "var": m2 / total, "count": total}
+
+
+# -- training -------------------------------------------------------------------------------------------------------
+
+
+class Trainer:
+    """PPO of one env and Config; ``init(keys)`` the runners of several seeds, ``run(runners)`` updates_per_eval
+    updates of each and an evaluation, compiled once."""
+
+    def __init__(self, env, env_params, config: Config):
+        self.env, self.env_params, self.config = env, env_params, config
+        space = env.observation_space(env_params)
+        self.obs_keys = sorted(space.spaces) if hasattr(space, "spaces") else None
+        sample = env.reset(jax.random.key(0), env_params)[0]
+        self.obs_dim = int(flat_observation(sample, self.obs_keys, jnp).shape[-1])
+        action_space = env.action_space(env_params)
+        self.act_dim = int(np.prod(action_space.shape))
+        self.low, self.high = np.asarray(action_space.low, float), np.asarray(action_space.high, float)
+        steps_per_update = config.n_epochs * config.n_minibatches
+        if config.linear_lr:  # SB3's: constant within an update, 1 − (updates done) / n_updates of the rate
+            learning_rate = lambda count: config.learning_rate * (1.0 - (count // steps_per_update) / config.n_updates)  # noqa: E731
+        else:
+            learning_rate = config.learning_rate
+        self.optimizer = optax.chain(
+            optax.clip_by_global_norm(config.max_grad_norm), optax.adam(learning_rate=learning_rate, eps=1e-5)
+        )
+        self.run = jax.jit(self._run)  # of runners with a leading seed axis (init's)
+        self.init = jax.jit(jax.vmap(self._init))
+
+    def meta(self, env_id: str) -> dict:
+        return {"env": env_id, "obs_keys": self.obs_keys, "clip_obs": self.config.clip_obs,
+                "action_low": self.low.tolist(), "action_high": self.high.tolist()}  # fmt: skip
+
+    def observe(self, obs):
+        return flat_observation(obs, self.obs_keys, jnp).astype(float)
+
+    def normalized(self, runner, obs):
+        if not self.config.normalize:
+            return obs.astype(jnp.float32)
+        s = runner["obs_stats"]
+        return normalize(obs, s["mean"], s["var"], self.config.clip_obs, jnp).astype(jnp.float32)
+
+    def _init(self, key) -> dict:
+        c = self.config
+        k_params, k_reset, key = jax.random.split(key, 3)
+        params = init_params(k_params, self.obs_dim, self.act_dim, c)
+        obs, state = self.env.reset_rows(k_reset, c.n_envs, self.env_params)
+        return {
+            "params": params,
+            "opt_state": self.optimizer.init(params),
+            "obs_stats": stats_init(self.obs_dim),
+            "ret_stats": stats_init(()),
+            "env_state": state,
+            "obs": self.observe(obs),
+            "discounted": jnp.zeros(c.n_envs),  # the discounted return VecNormalize scales rewards by
+            "episode_return": jnp.zeros(c.n_envs),
+            "key": key,
+            "update": jnp.zeros((), jnp.int32),
+            "eval_key": jax.random.fold_in(k_reset, 1),
+        }
+
+    def _policy(self, runners, obs):
+        """(normalized obs, mean action, value) of every seed's rows: obs (S, N, d), the seeds' own weights."""
+        nobs = jax.vmap(self.normalized)(runners, obs)
+        mean = jax.vmap(lambda p, x: forward(p["pi"], x, jnp))(runners["params"], nobs)
+        value = jax.vmap(lambda p, x: forward(p["vf"], x, jnp)[..., 0])(runners["params"], nobs)
+        return nobs, mean, value
+
+    def _env_step(self, keys, state, action, runners):
+        """The env step of every seed's rows at once (one batch of S·N rows, so that a branch no row takes is
+        skipped, which a vmap over the seeds would compute), then each seed's autoreset from its own key."""
+        S, N = action.shape[:2]
+        flat = lambda v: v.reshape(S * N, *v.shape[2:])  # noqa: E731
+        rows = lambda v: v.reshape(S, N, *v.shape[1:])  # noqa: E731
+        step = self.env.step_env_rows(None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params)
+        obs, after, reward, terminated, truncated, info = jax.tree_util.tree_map(rows, step)
+        reset = jax.vmap(self.env.autoreset_rows, (0, 0, 0, 0, 0, None))
+        obs, state, info = reset(keys, obs, after, terminated | truncated, info, self.env_params)
+        return obs, state, reward, terminated, truncated, info
+
+    def _rollout(self, runners):
+        """n_steps of the stochastic policy on every seed's rows: the transitions (n_steps, S, N, …), the runners
+        after them."""
+        c = self.config
+
+        def step(runners, _):
+            keys = jax.vmap(lambda k: jax.random.split(k, 3))(runners["key"])
+            nobs, mean, value = self._policy(runners, runners["obs"])
+            params = runners["params"]
+            log_std = params["log_std"][:, None, :]
+            noise = jax.vmap(lambda k, m: jax.random.normal(k, m.shape, m.dtype))(keys[:, 1], mean)
+            action = mean + jnp.exp(log_std) * noise
+            logp = log_prob(mean, log_std, action)
+            obs, state, reward, terminated, truncated, info = self._env_step(
+                keys[:, 2], runners["env_state"], action.astype(float), runners
+            )
+            final = jax.vmap(self.normalized)(runners, self.observe(info["final_observation"]))
+            final_value = jax.vmap(lambda p, x: forward(p["vf"], x, jnp)[..., 0])(params, final)
+            done = terminated | truncated
+            discounted = runners["discounted"] * c.gamma + reward
+            episode_return = runners["episode_return"] + reward
+            transition = {
+                "nobs": nobs, "action": action, "logp": logp, "value": value, "reward": reward,
+                "terminated": terminated, "truncated": truncated, "final_value": final_value,
+                "raw_obs": runners["obs"], "discounted": discounted, "episode_return": episode_return,
+                "success": info["is_success"].astype(bool), "failed": info["stepper_failed"],
+            }  # fmt: skip
+            runners = {**runners, "key": keys[:, 0], "env_state": state, "obs": self.observe(obs),
+                       "discounted": jnp.where(done, 0.0, discounted),
+                       "episode_return": jnp.where(done, 0.0, episode_return)}  # fmt: skip
+            return runners, transition
+
+        runners, t = jax.lax.scan(step, runners, None, c.n_steps)
+        return runners, jax.tree_util.tree_map(lambda v: jnp.swapaxes(v, 0, 1), t)  # seeds first
+
+    def _learn(self, runner, t):
+        """One seed's PPO update from its rollout t (n_steps, N, …): GAE, n_epochs of minibatch steps; the runner
+        after it and its metrics."""
+        c = self.config
+        reward = t["reward"]
+        if c.normalize:
+            scale = jnp.sqrt(runner["ret_stats"]["var"] + OBS_EPSILON)
+            reward = jnp.clip(reward / scale, -c.clip_reward, c.clip_reward)
+            runner = {**runner, "ret_stats": stats_update(runner["ret_stats"], t["discounted"].reshape(-1)),
+                      "obs_stats": stats_update(runner["obs_stats"], t["raw_obs"].reshape(-1, self.obs_dim))}  # fmt: skip
+        last_value = forward(runner["params"]["vf"], self.normalized(runner, runner["obs"]), jnp)[..., 0]
+        next_value = jnp.concatenate([t["value"][1:], last_value[None]], 0)
+        # the value after each step: 0 past a terminal state, the final observation's where the clock cut the episode
+        bootstrap = jnp.where(t["truncated"], t["final_value"], next_value) * (1.0 - t["terminated"])
+        delta = (reward + c.gamma * bootstrap - t["value"]).astype(jnp.float32)  # the learning side's float32
+        done = (t["terminated"] | t["truncated"]).astype(jnp.float32)
+
+        def gae(carry, x):
+            delta, done = x
+            carry = delta + c.gamma * c.gae_lambda * (1.0 - done) * carry
+            return carry, carry
+
+        _, advantages = jax.lax.scan(gae, jnp.zeros_like(last_value), (delta, done), reverse=True)
+        returns = advantages + t["value"]
+        batch = {"nobs": t["nobs"], "action": t["action"], "logp": t["logp"], "advantage": advantages,
+                 "return": returns}  # fmt: skip
+        batch = jax.tree_util.tree_map(lambda v: v.reshape(c.rollout, *v.shape[2:]), batch)
+        opt_state = runner["opt_state"]
+
+        def epoch(carry, key):
+            params, opt_state = carry
+            order = jax.random.permutation(key, c.rollout)[: c.n_minibatches * c.batch_size]
+            minibatches = jax.tree_util.tree_map(
+                lambda v: v[order].reshape(c.n_minibatches, c.batch_size, *v.shape[1:]), batch
+            )
+
+            def minibatch_step(carry, mb):
+                params, opt_state = carry
+                grads, losses = jax.grad(self._loss, has_aux=True)(params, mb)
+                updates, opt_state = self.optimizer.update(grads, opt_state, params)
+                return (optax.apply_updates(params, updates), opt_state), losses
+
+            return jax.lax.scan(minibatch_step, (params, opt_state), minibatches)
+
+        key, k_epochs = jax.random.split(runner["key"])
+        (params, opt_state), losses = jax.lax.scan(
+            epoch, (runner["params"], opt_state), jax.random.split(k_epochs, c.n_epochs)
+        )
+        ended = (t["terminated"] | t["truncated"]) & ~t["failed"]
+        metrics = {
+            "episodes": jnp.sum(ended),
+            "episode_return": jnp.sum(jnp.where(ended, t["episode_return"], 0.0)),
+            "successes": jnp.sum(ended & t["success"]),
+            "stepper_failures": jnp.sum(t["failed"]),
+            **jax.tree_util.tree_map(jnp.mean, losses),
+        }
+        runner = {**runner, "params": params, "opt_state": opt_state, "key": key, "update": runner["update"] + 1}
+        return runner, metrics
+
+    def _loss(self, params, mb):
+        c = self.config
+        mean = forward(params["pi"], mb["nobs"], jnp)
+        value = forward(params["vf"], mb["nobs"], jnp)[..., 0]
+        logp = log_prob(mean, params["log_std"], mb["action"])
+        advantage = mb["advantage"]
+        advantage = (advantage - advantage.mean()) / (advantage.std() + 1e-8)
+        ratio = jnp.exp(logp - mb["logp"])
+        clipped = jnp.clip(ratio, 1 - c.clip_range, 1 + c.clip_range)
+        policy_loss = -jnp.mean(jnp.minimum(ratio * advantage, clipped * advantage))
+        value_loss = jnp.mean((mb["return"] - value) ** 2)
+        entropy = jnp.sum(params["log_std"] + 0.5 * math.log(2 * math.pi * math.e))
+        loss = policy_loss + c.vf_coef * value_loss - c.ent_coef * entropy
+        return loss, {"policy_loss": policy_loss, "value_loss": value_loss, "entropy": entropy,
+                      "approx_kl": jnp.mean((ratio - 1) - jnp.log(ratio)),
+                      "clip_fraction": jnp.mean(jnp.abs(ratio - 1) > c.clip_range)}  # fmt: skip
+
+    def _evaluate(self, runners):
+        """The deterministic policy on eval_episodes episodes of the JAX env per seed (each its first episode, from
+        the seed's fixed evaluation key): their returns and successes (S, eval_episodes)."""
+        n = self.config.eval_episodes
+        obs, state = jax.vmap(self.env.reset_rows, (0, None, None))(runners["eval_key"], n, self.env_params)
+        low, high = jnp.asarray(self.low), jnp.asarray(self.high)
+
+        def step(carry, keys):
+            obs, state, total, success, running = carry
+            _, action, _ = self._policy(runners, self.observe(obs))
+            action = jnp.clip(action.astype(float), low, high)
+            obs, state, reward, terminated, truncated, info = self._env_step(keys, state, action, runners)
+            done = terminated | truncated
+            total = total + jnp.where(running, reward, 0.0)
+            success = jnp.where(running & done, info["is_success"].astype(bool), success)
+            return (obs, state, total, success, running & ~done), None
+
+        steps = self.env_params.max_steps_in_episode
+        keys = jax.vmap(lambda k: jax.random.split(jax.random.fold_in(k, 1), steps))(runners["eval_key"])
+        S = keys.shape[0]
+        carry = (obs, state, jnp.zeros((S, n)), jnp.zeros((S, n), bool), jnp.ones((S, n), bool))
+        (_, _, total, success, _), _ = jax.lax.scan(step, carry, jnp.swapaxes(keys, 0, 1))
+        return {"return": total, "success": success}
+
+    def _run(self, runners):
+        """updates_per_eval updates of every seed, then an evaluation: (runners, metrics (S, updates), evaluation)."""
+
+        def update(runners, _):
+            runners, t = self._rollout(runners)
+            return jax.vmap(self._learn)(runners, t)
+
+        runners, metrics = jax.lax.scan(update, runners, None, self.config.updates_per_eval)
+        metrics = jax.tree_util.tree_map(lambda v: jnp.swapaxes(v, 0, 1), metrics)
+        return runners, metrics, self._evaluate(runners)
+
+    def policy_arrays(self, runner: dict, seed_index: int) -> tuple[dict, np.ndarray, np.ndarray]:
+        """(params, obs_mean, obs_var) of one seed of vmapped runners, as numpy (float64 weights: numpy's
+        evaluation computes in float64 what training computed in float32)."""
+        pick = lambda v: np.asarray(v[seed_index], float)  # noqa: E731
+        params = jax.tree_util.tree_map(pick, runner["params"])
+        stats = runner["obs_stats"]
+        if not self.config.normalize:
+            return params, np.zeros(self.obs_dim), np.ones(self.obs_dim) - jax_policy.OBS_EPSILON
+        return params, pick(stats["mean"]), pick(stats["var"])
+
+
+OBS_EPSILON = jax_policy.OBS_EPSILON
+
+
+def to_numpy(tree: Any):
+    return jax.tree_util.tree_map(np.asarray, tree)
