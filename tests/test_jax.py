@@ -122,7 +122,12 @@ def test_whole_trajectories_follow_numpys(case, one_step):
 
 
 def test_forward_mode_jacobians_are_the_models_complex_step_ones(case):
+    """jax.jacfwd of the step is model.jacobians' complex step at states of the numpy env's trajectories, ties of max,
+    min and sort included: under ties="one-sided", whose derivative at a tie is the complex step's one-sided one (a
+    pivot at its end stop, which random actions reach); the default rule ("linear") takes the second argument's
+    there, the same derivative everywhere else (test_reverse_mode_is_forward_mode_transposed)."""
     jenv, params, (env, X, A, *_) = case
+    jenv = cj.FunctionalEnv(jenv.env, jenv.max_episode_steps, ties="one-sided")
     pick = np.linspace(0, len(X) - 1, 20).astype(int)
     jac = jax.jit(jax.vmap(jax.jacfwd(lambda x, a: jenv.transition(x, a)[0], argnums=(0, 1))))
     JA, JB = (np.asarray(J) for J in jac(jnp.asarray(X[pick]), jnp.asarray(A[pick], float)))
@@ -250,16 +255,34 @@ def test_every_id_has_a_jax_version_and_a_stepper_without_one_is_refused_by_name
 @pytest.mark.parametrize("env_id", ["connenv/FallingCat-v0", "connenv/TubeTwist-v0"])
 def test_the_jacobians_at_rest_at_the_start_are_the_models(env_id):
     """From the start at rest with a zero action: the falling cat's β = 0 (√β² has no derivative there; β² is
-    stationary) and the tube's T = T₀ (hypot's apex), where JAX's own derivatives are NaN or not the complex step's."""
+    stationary) and the tube's T = T₀ (hypot's apex), where JAX's own derivatives are NaN or not the complex step's.
+    From there under a nonzero action, the reward's derivative in it is the numpy reward's central difference: finite
+    where the cat's spine lies on its start (its error √|spine × start|² at 0, whose derivative leaked ∞ · 0 = NaN)."""
     env = gym.make(env_id).unwrapped
     env.reset(seed=0)
-    x, a = env.model.pack(env.state), np.zeros(env.action_space.shape)
-    jenv, params = cj.make(env_id)
-    JA, JB = jax.jit(jax.jacfwd(lambda x, a: jenv.transition(x, a)[0], argnums=(0, 1)))(jnp.asarray(x),
-                                                                                        jnp.asarray(a))
-    MA, MB = env.model.jacobians(x[None], a[None])
+    model = env.model
+    x, a = model.pack(env.state), np.zeros(env.action_space.shape)
+    jenv, _ = cj.make(env_id)
+
+    def step(x, a):
+        x_next, _, reward, *_ = jenv.transition(x, a)
+        return x_next, reward
+
+    jacobians = jax.jit(jax.jacfwd(step, argnums=(0, 1)))
+    (JA, JB), _ = jacobians(jnp.asarray(x), jnp.asarray(a))
+    MA, MB = model.jacobians(x[None], a[None])
     for mine, theirs in ((JA, MA[0]), (JB, MB[0])):
         assert np.max(np.abs(np.asarray(mine) - theirs) / np.maximum(1.0, np.abs(theirs))) <= JACOBIAN_RTOL
+    # the reward's derivative at a nonzero action (the same compiled function), against numpy's central difference
+    b, h = np.linspace(0.3, -0.2, a.size), 1e-6
+    _, (_, reward_by_action) = jacobians(jnp.asarray(x), jnp.asarray(b))
+
+    def reward(b):
+        return model.reward(x, b, model.step(x, b))
+
+    central = [(reward(b + h * e) - reward(b - h * e)) / (2 * h) for e in np.eye(a.size)]
+    assert np.all(np.isfinite(np.asarray(reward_by_action)))
+    np.testing.assert_allclose(np.asarray(reward_by_action), central, rtol=1e-6, atol=1e-8)
 
 
 def test_the_cat_and_tube_resets_draw_their_distributions():
@@ -355,14 +378,6 @@ def test_step_rows_is_the_vmapped_step(env_id, n):
     np.testing.assert_array_equal(np.asarray(rows[2]), np.asarray(each[2]))
 
 
-REVERSE_IDS = ["connenv/RollingBall-v0", "connenv/RollingCoinSurface-v0", "connenv/BeadOnBar-v0"]
-"""Ids whose step reverse mode differentiates, checked here where a rollout compiles in a few seconds: Swing-v0 (below,
-against numpy), TubeTwist-v0, BeadOnBar-v1, RollingBallPose-v0, KozlovShell-v0 and Skier-v0 agree as well (measured;
-Skier-v0's seven lax.cond levels take minutes to compile under grad and jacfwd together). The ids with one-sided
-stops do not: their forward-mode rule at a tie is not linear in the tangent (see docs/guides/jax.md)."""
-GRADIENT_RTOL = 1e-10
-
-
 def rollout_return(jenv, x0, steps):
     """The return of `steps` steps from x0 under actions (steps, *shape), plus a fixed weighting of the last state
     (a sparse or flat reward would make a vanishing gradient, which any rule passes)."""
@@ -370,7 +385,7 @@ def rollout_return(jenv, x0, steps):
 
     def total(actions):
         def one(x, a):
-            x_next, obs, reward, terminated, info, failed = jenv.transition(x, a)
+            x_next, _, reward, *_ = jenv.transition(x, a)
             return x_next, reward
 
         x, rewards = jax.lax.scan(one, x0, actions)
@@ -379,51 +394,97 @@ def rollout_return(jenv, x0, steps):
     return total
 
 
-@pytest.mark.parametrize("env_id", REVERSE_IDS)
-def test_reverse_mode_gradients_are_forward_modes(env_id):
-    """jax.grad of a 2-step rollout's return with respect to the actions equals jax.jacfwd's, both in one compiled
-    function: reverse mode transposes the step's linearization (every rule it passes through must be linear in the
-    tangents), forward mode pushes each action's direction through it."""
-    jenv, params = cj.make(env_id)
-    obs, state = jenv.reset(jax.random.key(0), params)
-    actions = jax.random.uniform(jax.random.key(1), (2, *jenv.action_space(params).shape), minval=-0.9, maxval=0.9)
+REVERSE_RTOL = 1e-10
+TRACED_ONLY = {}
+"""Ids whose reverse mode is traced here, not compiled: XLA takes long to compile their step's transpose (CPU
+seconds for the 2-step rollout, measured at XLA's optimization level 0); their grad equals jacfwd as well
+(docs/guides/jax.md's table), and what could break it (a rule not linear in the tangents) fails in the trace."""
+
+
+@pytest.mark.parametrize("env_id, kwargs", CASES, ids=IDS)
+def test_reverse_mode_is_forward_mode_transposed(env_id, kwargs):
+    """jax.grad of a 2-step rollout's return (from the reset, random actions) equals jax.jacfwd's, both from one
+    linearization in one compiled function: reverse mode transposes the step's linearization, which needs every rule
+    it passes through linear in the tangents (the default tie rule, ties="linear"), forward mode pushes each action's
+    direction through it. A NaN (a derivative of a branch where leaves out, leaking: the falling cat's) fails it."""
+    jenv, params = cj.make(env_id, **(kwargs() if callable(kwargs) else kwargs))
+    _, state = jenv.reset(jax.random.key(0), params)
+    actions = jax.random.uniform(jax.random.key(1), (2, *jenv.action_space(params).shape), minval=-0.6, maxval=0.6)
     total = rollout_return(jenv, state.x, 2)
-    reverse, forward = jax.jit(lambda a: (jax.grad(total)(a), jax.jacfwd(total)(a)))(actions)
-    reverse, forward = np.asarray(reverse), np.asarray(forward)
+    if jenv.name in TRACED_ONLY:
+        assert jax.eval_shape(jax.grad(total), actions).shape == actions.shape
+        return
+
+    def both(actions):
+        _, linear = jax.linearize(total, actions)
+        (reverse,) = jax.linear_transpose(linear, actions)(1.0)  # jax.grad's transpose
+        basis = jnp.eye(actions.size).reshape(actions.size, *actions.shape)
+        return reverse, jax.vmap(linear)(basis).reshape(actions.shape)  # jax.jacfwd's columns
+
+    reverse, forward = (np.asarray(v) for v in jax.jit(both)(actions))
     scale = np.max(np.abs(forward))
-    print(f"{env_id}: |grad − jacfwd| / max|jacfwd| = {np.max(np.abs(reverse - forward)) / scale:.2g}")
-    assert scale > 0.0 and np.all(np.isfinite(reverse))
-    assert np.max(np.abs(reverse - forward)) <= GRADIENT_RTOL * scale
+    print(f"{jenv.name}: |grad − jacfwd| / max|jacfwd| = {np.max(np.abs(reverse - forward)) / scale:.2g}")
+    assert scale > 0.0 and np.all(np.isfinite(reverse)) and np.all(np.isfinite(forward))
+    assert np.max(np.abs(reverse - forward)) <= REVERSE_RTOL * scale
 
 
-def test_the_swing_gradient_is_the_numpy_models_central_difference():
-    """Swing-v0: jax.grad of a 3-step return equals central differences (h = 1e-5) of the numpy model's rollout,
-    to their roundoff (the return's ~1e-14 over h)."""
-    env_id, steps, h = "connenv/Swing-v0", 3, 1e-5
-    jenv, params = cj.make(env_id)
-    env = gym.make(env_id).unwrapped
-    env.reset(seed=1)
-    x0 = env.model.pack(env.state)
-    actions = np.random.default_rng(2).uniform(-0.9, 0.9, (steps, 1))
-    total = rollout_return(jenv, jnp.asarray(x0), steps)
-    gradient = np.asarray(jax.jit(jax.grad(total))(jnp.asarray(actions)))
-    weights = np.linspace(0.5, 1.5, x0.shape[0])
+def test_the_tie_rules_at_a_kink():
+    """max(a, b) at a tie a = b: under "linear" b's derivative in every direction, a selection by the values, which
+    reverse mode transposes; under "one-sided" the larger tangent's (the complex step's one-sided derivative), not
+    linear, which it cannot (JAX raises: an AssertionError or a TypeError in JAX 0.10); away from a tie both are the
+    derivative of the side the values pick. sort's tangents at a tie of the values: in the values' stable order under
+    "linear", by the tangents under "one-sided"."""
+    from connenv.jax.namespace import JAX, ties
 
-    def numpy_total(a):
-        x, value = x0, 0.0
-        for k in range(steps):
-            x_next = env.model.step(x, a[k])
-            value += float(env.model.reward(x, a[k], x_next))
-            x = x_next
-        return value + float(np.sum(weights * np.where(np.isfinite(x), x, 0.0)))
+    maximum, minimum = JAX.maximum_one_sided, JAX.minimum_one_sided
+    weights = jnp.array([1.0, 2.0, 3.0])
+    values, tangents = jnp.array([1.0, 1.0, 0.0]), jnp.array([5.0, 2.0, 0.0])
+    with ties("linear"):
+        assert [float(jax.jvp(maximum, (1.0, 1.0), (t, 2.0))[1]) for t in (3.0, -3.0)] == [2.0, 2.0]
+        assert [float(jax.jvp(minimum, (1.0, 1.0), (t, 2.0))[1]) for t in (3.0, -3.0)] == [2.0, 2.0]
+        assert [float(g) for g in jax.grad(maximum, (0, 1))(1.0, 1.0)] == [0.0, 1.0]
+        assert [float(g) for g in jax.grad(maximum, (0, 1))(2.0, 1.0)] == [1.0, 0.0]
+        assert [float(g) for g in jax.grad(minimum, (0, 1))(2.0, 1.0)] == [0.0, 1.0]
+        assert np.asarray(jax.jvp(JAX.sort, (values,), (tangents,))[1]).tolist() == [0.0, 5.0, 2.0]
+        assert np.asarray(jax.grad(lambda a: JAX.sort(a) @ weights)(values)).tolist() == [2.0, 3.0, 1.0]
+    with ties("one-sided"):
+        assert [float(jax.jvp(maximum, (1.0, 1.0), (t, 2.0))[1]) for t in (3.0, -3.0)] == [3.0, 2.0]
+        assert [float(jax.jvp(minimum, (1.0, 1.0), (t, 2.0))[1]) for t in (3.0, -3.0)] == [2.0, -3.0]
+        assert np.asarray(jax.jvp(JAX.sort, (values,), (tangents,))[1]).tolist() == [0.0, 2.0, 5.0]
+        with pytest.raises((AssertionError, TypeError)):  # JAX 0.10's transpose of a comparison of tangents
+            jax.grad(maximum)(1.0, 1.0)
+    with pytest.raises(ValueError, match=r"ties='both'.*\['linear', 'one-sided'\]"):
+        cj.make("connenv/Swing-v0", ties="both")
 
-    central = np.zeros_like(actions)
-    for index in np.ndindex(actions.shape):
-        up, down = actions.copy(), actions.copy()
-        up[index] += h
-        down[index] -= h
-        central[index] = (numpy_total(up) - numpy_total(down)) / (2 * h)
-    np.testing.assert_allclose(gradient, central, rtol=1e-6, atol=1e-7 * np.max(np.abs(central)))
+
+def test_at_an_end_stop_the_tie_rules_take_their_sides():
+    """A rotor on a body (ActiveConstraint-v0, velocity control) with the rotor's angle u at its low stop and a command
+    beyond it: the stop's reach (u_low − u)/u̇ = 0 ties max(reach, 0). ∂x_next/∂x under ties="one-sided" is
+    model.jacobians' (the complex step's one-sided derivative: u moved inside the range travels to the stop, turning
+    the body); under "linear" it is the second argument's (the reach held at 0, u at the stop all step), which is
+    model.jacobians' from just beyond the stop (1e-9), where max takes its second argument; and there jax.jacrev is
+    jax.jacfwd, the rule being linear."""
+    from connenv import examples
+
+    kwargs = {**examples.rotor(), "control": "velocity", "max_control_speed": 2.0, "integrator": "rk4"}
+    env = gym.make("connenv/ActiveConstraint-v0", **kwargs).unwrapped
+    env.reset(seed=0, options={"state": {"u": [env.u_low[0]], "p": [0.3]}})
+    x, a = env.model.pack(env.state), np.array([-0.5])
+    beyond = x.copy()
+    beyond[env.model.state_names.index("u1")] -= 1e-9
+    (at_tie, _), (past_it, _) = (env.model.jacobians(v, a) for v in (x, beyond))
+    for ties, expected in (("one-sided", at_tie), ("linear", past_it)):
+        jenv, _ = cj.make("connenv/ActiveConstraint-v0", ties=ties, **kwargs)
+
+        def step(x, jenv=jenv):
+            return jenv.transition(x, jnp.asarray(a))[0]
+
+        forward = np.asarray(jax.jit(jax.jacfwd(step))(jnp.asarray(x)))
+        np.testing.assert_allclose(forward, expected, rtol=0.0, atol=1e-8, err_msg=ties)
+        if ties == "linear":
+            reverse = np.asarray(jax.jit(jax.jacrev(step))(jnp.asarray(x)))
+            np.testing.assert_allclose(reverse, forward, rtol=0.0, atol=1e-15)
+    assert np.max(np.abs(at_tie - past_it)) > 0.1  # the rotor's stop turns the body: the sides differ
 
 
 def test_the_kapitza_separatrix_loop_has_a_fixed_trip_count():
@@ -447,9 +508,11 @@ def test_the_kapitza_separatrix_loop_has_a_fixed_trip_count():
     for k in range(2):
         expected = system._near_separatrix(float(theta[k]), float(spin[k]), float(tau[k]), FLOATS)
         np.testing.assert_allclose(np.asarray(out)[:, k], expected, rtol=1e-15, atol=1e-15)
-    value = lambda theta, spin, tau: jnp.sum(run(theta, spin, tau, 0.01)[0] * jnp.array([[1.0], [0.3]]))
-    for argnum in range(3):
-        reverse = jax.grad(value, argnum)(theta, spin, tau)
-        forward = jax.jacfwd(value, argnum)(theta, spin, tau)
-        np.testing.assert_allclose(np.asarray(reverse), np.asarray(forward), rtol=1e-12, atol=1e-14)
+    def value(theta, spin, tau):
+        return jnp.sum(run(theta, spin, tau, 0.01)[0] * jnp.array([[1.0], [0.3]]))
+
+    both = jax.jit(lambda *args: (jax.grad(value, (0, 1, 2))(*args), jax.jacfwd(value, (0, 1, 2))(*args)))
+    reverse, forward = both(theta, spin, tau)
+    for mine, theirs in zip(reverse, forward):
+        np.testing.assert_allclose(np.asarray(mine), np.asarray(theirs), rtol=1e-12, atol=1e-14)
     assert bool(jax.jit(run, static_argnums=3)(theta, spin, tau, 0.005)[1])  # 7 substeps past dt = 0.005's 4

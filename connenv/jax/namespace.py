@@ -7,11 +7,10 @@ reads; JAX differentiates by its own forward mode, so there are no complex rows 
 ``any`` (whether a branch that only some rows take must be computed: always, as a trace cannot look at values; the
 rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenate``, ``full`` and ``ceil`` (the
 bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the connections'),
-``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
-ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
-only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values, at a fixed trip count where the
-step's ``longest_segment`` bounds it), ``sinc`` and
-``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),
+``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with the derivative at a tie of the trace's tie rule
+(``ties``: "linear", the second argument's, for forward and reverse mode; "one-sided", ARRAYS', as the complex step
+takes it at a pivot's end stop, forward mode only), ``repeat`` (a loop to a trip count the numpy code reads off
+the rows' values, at a fixed trip count where the step's ``longest_segment`` bounds it), ``sinc`` and ``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),
 ``solve`` (numpy's linalg.solve, which the builders' Hamiltonian calls), ``atan2`` and ``hypot`` with ARRAYS'
 derivative (0 at the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions,
 below), ``single_precision`` (float32's values with derivative 1, the goals' rounding) and ``fail`` (a failure
@@ -197,6 +196,40 @@ def repeat(counts, body, carry, most=None):
     return jax.lax.fori_loop(0, int(most), body, carry)
 
 
+TIES = ("linear", "one-sided")
+"""The derivative rules of max, min and sort at a tie of their values (a kink: a pivot at its end stop), chosen per
+functional env (``connenv.jax.make(id, ties=...)``). "linear", the default: the second argument's derivative (the
+command, a ramp's stop: see `connenv.core.backend.selected`), a stable sort's order of the tangents; a rule linear in
+the tangents, so that reverse mode (grad, vjp) transposes it and agrees with forward mode. "one-sided": the one-sided
+derivative along the tangent, ARRAYS' (the complex step's: ``model.jacobians``), which is not linear in the tangent
+at a tie: forward mode only (jvp, jacfwd). Away from ties both are the derivative of the side the values pick."""
+
+_tie_rules: list[str] = []
+
+
+def check_ties(rule: str) -> str:
+    """rule, if it is one of TIES; else a ValueError naming them."""
+    if rule not in TIES:
+        raise ValueError(f"ties={rule!r}: the tie rule of connenv.jax's max, min and sort is one of {list(TIES)}")
+    return rule
+
+
+@contextlib.contextmanager
+def ties(rule: str):
+    """Trace max, min and sort with this tie rule (one of TIES) within: read where they are called, so that the rule
+    of a traced function is the one its trace saw, whenever JAX differentiates it later."""
+    _tie_rules.append(check_ties(rule))
+    try:
+        yield
+    finally:
+        _tie_rules.pop()
+
+
+def tie_rule() -> str:
+    """The tie rule of the code being traced: the innermost ``ties`` context's, "linear" outside any."""
+    return _tie_rules[-1] if _tie_rules else TIES[0]
+
+
 def one_sided(choose):
     """maximum or minimum (choose) whose forward-mode derivative at a tie is the one-sided one along the tangent,
     choose(ṫa, ṫb): ARRAYS' convention on a Jacobian's complex rows (`connenv.core.backend.selected`), where a row sits
@@ -217,12 +250,42 @@ def one_sided(choose):
     return function
 
 
+def second_at_ties(choose):
+    """maximum or minimum (choose) whose derivative is the side's the values pick, at a tie the second argument's (a
+    NaN's where one is): a selection by the values alone, linear in the tangents (forward and reverse mode)."""
+
+    @jax.custom_jvp
+    def function(a, b):
+        return choose(a, b)
+
+    @function.defjvp
+    def derivative(primals, tangents):
+        (a, b), (ta, tb) = primals, tangents
+        out = choose(a, b)
+        first = ((a != b) & (out == a)) | jnp.isnan(a)
+        return out, jnp.broadcast_to(jnp.where(first, ta, tb), jnp.shape(out)).astype(out.dtype)
+
+    function.__name__ = f"second_at_ties_{choose.__name__}"
+    return function
+
+
+def by_tie_rule(rules: dict):
+    """The function of the tie rule being traced (``tie_rule``), picked where it is called."""
+
+    def function(*args, **kwargs):
+        return rules[tie_rule()](*args, **kwargs)
+
+    function.__name__ = rules[TIES[0]].__name__
+    return function
+
+
 def sort(a, axis=-1):
-    """jnp.sort on the last axis, its forward-mode tangents ordered as numpy's sort orders a Jacobian's complex rows:
-    ties of the values by their tangents (the one-sided derivative; forward mode only)."""
+    """jnp.sort on the last axis, its tangents ordered by the tie rule (``ties``): "linear", a stable sort's order of
+    the values (ties in their order); "one-sided", as numpy's sort orders a Jacobian's complex rows: ties of the values
+    by their tangents (the one-sided derivative; forward mode only)."""
     if axis != -1:
         raise ValueError("connenv.jax's sort sorts the last axis")
-    return _sort_last(a)
+    return (_sort_last if tie_rule() == "one-sided" else _stable_sort_last)(a)
 
 
 @jax.custom_jvp
@@ -235,6 +298,18 @@ def _sort_jvp(primals, tangents):
     (a,), (ta,) = primals, tangents
     order = jnp.lexsort((ta, a), axis=-1)
     return jnp.sort(a, axis=-1), jnp.take_along_axis(ta, order, axis=-1)  # the values: ties are equal
+
+
+@jax.custom_jvp
+def _stable_sort_last(a):
+    return jnp.sort(a, axis=-1)
+
+
+@_stable_sort_last.defjvp
+def _stable_sort_jvp(primals, tangents):
+    (a,), (ta,) = primals, tangents
+    order = jnp.argsort(a, axis=-1, stable=True)
+    return jnp.sort(a, axis=-1), jnp.take_along_axis(ta, order, axis=-1)
 
 
 @jax.custom_jvp
@@ -302,8 +377,8 @@ JAX = operations(
     real_part=lambda x: x,
     all=jnp.all,
     sort=sort,
-    maximum_one_sided=one_sided(jnp.maximum),
-    minimum_one_sided=one_sided(jnp.minimum),
+    maximum_one_sided=by_tie_rule({"linear": second_at_ties(jnp.maximum), "one-sided": one_sided(jnp.maximum)}),
+    minimum_one_sided=by_tie_rule({"linear": second_at_ties(jnp.minimum), "one-sided": one_sided(jnp.minimum)}),
     concatenate=jnp.concatenate,
     full=jnp.full,
     ceil=jnp.ceil,
