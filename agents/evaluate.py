@@ -23,6 +23,7 @@ import copy
 import importlib
 import json
 import os
+import re
 import sys
 import zipfile
 from collections.abc import Mapping
@@ -294,9 +295,12 @@ def make_policy(
 
 
 def jax_label(path: str | Path) -> str:
-    """The label of a policy file of train.py --backend jax: ppo_jax:{its run folder}."""
+    """The label of a policy file of connenv.jax's trainers: {algo}:{its run folder}, the algo read from the folder's
+    name {env}_{algo}_s{seed} (ppo_jax of train.py --backend jax, shac_jax and apg_jax of agents.jax_shac)."""
     path = Path(path)
-    return f"ppo_jax:{(path.parent if path.suffix == '.npz' else path).name}"
+    folder = (path.parent if path.suffix == ".npz" else path).name
+    algo = re.search(r"_((?:shac|apg)_jax)_s\d+$", folder)
+    return f"{algo.group(1) if algo else 'ppo_jax'}:{folder}"
 
 
 def run_episode(env: gym.Env, policy, seed: int, trace: Trace | None = None) -> Episode:

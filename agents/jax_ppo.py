@@ -24,6 +24,7 @@ a policy file (agents.jax_policy), which numpy alone runs.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from typing import Any
 
@@ -111,7 +112,7 @@ def init_layers(key, sizes: list[int], last_gain: float):
     """SB3's initialization: orthogonal weights of gain √2 (the last layer's `last_gain`), zero biases; float32."""
     layers = []
     keys = jax.random.split(key, len(sizes) - 1)
-    for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
+    for i, (n_in, n_out) in enumerate(itertools.pairwise(sizes)):
         gain = last_gain if i == len(sizes) - 2 else math.sqrt(2)
         W = jax.nn.initializers.orthogonal(gain)(keys[i], (n_in, n_out), jnp.float32)
         layers.append((W, jnp.zeros(n_out, jnp.float32)))
@@ -147,6 +148,24 @@ def stats_update(stats: dict, batch) -> dict:
     return {"mean": stats["mean"] + delta * count / total, "var": m2 / total, "count": total}
 
 
+def gae(reward, value, last_value, final_value, terminated, truncated, gamma: float, lam: float):
+    """Generalized advantage estimates (Schulman et al. 2016) of a rollout (time first: reward, value, flags (T, N);
+    last_value (N,) the value of the state after it). After a terminal step the value is 0; after a step the clock
+    cut (truncated), the value of its final observation (final_value), as SB3 bootstraps a time limit, not 0; the
+    recursion does not run across either. float32, the learning side's precision."""
+    next_value = jnp.concatenate([value[1:], last_value[None]], 0)
+    bootstrap = jnp.where(truncated, final_value, next_value) * (1.0 - terminated)
+    delta = (reward + gamma * bootstrap - value).astype(jnp.float32)
+    done = (terminated | truncated).astype(jnp.float32)
+
+    def step(carry, x):
+        delta, done = x
+        carry = delta + gamma * lam * (1.0 - done) * carry
+        return carry, carry
+
+    return jax.lax.scan(step, jnp.zeros_like(delta[0]), (delta, done), reverse=True)[1]
+
+
 # -- training -------------------------------------------------------------------------------------------------------
 
 
@@ -165,7 +184,7 @@ class Trainer:
         self.low, self.high = np.asarray(action_space.low, float), np.asarray(action_space.high, float)
         steps_per_update = config.n_epochs * config.n_minibatches
         if config.linear_lr:  # SB3's: constant within an update, 1 − (updates done) / n_updates of the rate
-            learning_rate = lambda count: config.learning_rate * (1.0 - (count // steps_per_update) / config.n_updates)  # noqa: E731
+            learning_rate = lambda count: config.learning_rate * (1.0 - (count // steps_per_update) / config.n_updates)
         else:
             learning_rate = config.learning_rate
         self.optimizer = optax.chain(
@@ -215,15 +234,16 @@ class Trainer:
 
     def _env_step(self, keys, state, action, runners):
         """The env step of every seed's rows at once (one batch of S·N rows, so that a branch no row takes is
-        skipped, which a vmap over the seeds would compute), then each seed's autoreset from its own key."""
+        skipped, which a vmap over the seeds would compute), then the autoreset of those rows, each seed's from its
+        own key (the done rows alone reset)."""
         S, N = action.shape[:2]
-        flat = lambda v: v.reshape(S * N, *v.shape[2:])  # noqa: E731
-        rows = lambda v: v.reshape(S, N, *v.shape[1:])  # noqa: E731
-        step = self.env.step_env_rows(None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params)
-        obs, after, reward, terminated, truncated, info = jax.tree_util.tree_map(rows, step)
-        reset = jax.vmap(self.env.autoreset_rows, (0, 0, 0, 0, 0, None))
-        obs, state, info = reset(keys, obs, after, terminated | truncated, info, self.env_params)
-        return obs, state, reward, terminated, truncated, info
+        flat = lambda v: v.reshape(S * N, *v.shape[2:])
+        rows = lambda v: v.reshape(S, N, *v.shape[1:])
+        obs, after, reward, terminated, truncated, info = self.env.step_env_rows(
+            None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params
+        )
+        obs, state, info = self.env.autoreset_rows(keys, obs, after, terminated | truncated, info, self.env_params)
+        return jax.tree_util.tree_map(rows, (obs, state, reward, terminated, truncated, info))
 
     def _rollout(self, runners):
         """n_steps of the stochastic policy on every seed's rows: the transitions (n_steps, S, N, …), the runners
@@ -265,24 +285,16 @@ class Trainer:
         after it and its metrics."""
         c = self.config
         reward = t["reward"]
+        # the rollout's values were computed with the statistics before this update's: so is the last one
+        last_value = forward(runner["params"]["vf"], self.normalized(runner, runner["obs"]), jnp)[..., 0]
         if c.normalize:
             scale = jnp.sqrt(runner["ret_stats"]["var"] + OBS_EPSILON)
             reward = jnp.clip(reward / scale, -c.clip_reward, c.clip_reward)
-            runner = {**runner, "ret_stats": stats_update(runner["ret_stats"], t["discounted"].reshape(-1)),
-                      "obs_stats": stats_update(runner["obs_stats"], t["raw_obs"].reshape(-1, self.obs_dim))}  # fmt: skip
-        last_value = forward(runner["params"]["vf"], self.normalized(runner, runner["obs"]), jnp)[..., 0]
-        next_value = jnp.concatenate([t["value"][1:], last_value[None]], 0)
-        # the value after each step: 0 past a terminal state, the final observation's where the clock cut the episode
-        bootstrap = jnp.where(t["truncated"], t["final_value"], next_value) * (1.0 - t["terminated"])
-        delta = (reward + c.gamma * bootstrap - t["value"]).astype(jnp.float32)  # the learning side's float32
-        done = (t["terminated"] | t["truncated"]).astype(jnp.float32)
-
-        def gae(carry, x):
-            delta, done = x
-            carry = delta + c.gamma * c.gae_lambda * (1.0 - done) * carry
-            return carry, carry
-
-        _, advantages = jax.lax.scan(gae, jnp.zeros_like(last_value), (delta, done), reverse=True)
+            ret_stats = stats_update(runner["ret_stats"], t["discounted"].reshape(-1))
+            obs_stats = stats_update(runner["obs_stats"], t["raw_obs"].reshape(-1, self.obs_dim))
+            runner = {**runner, "ret_stats": ret_stats, "obs_stats": obs_stats}
+        advantages = gae(reward, t["value"], last_value, t["final_value"], t["terminated"], t["truncated"],
+                         c.gamma, c.gae_lambda)  # fmt: skip
         returns = advantages + t["value"]
         batch = {"nobs": t["nobs"], "action": t["action"], "logp": t["logp"], "advantage": advantages,
                  "return": returns}  # fmt: skip
@@ -374,7 +386,7 @@ class Trainer:
     def policy_arrays(self, runner: dict, seed_index: int) -> tuple[dict, np.ndarray, np.ndarray]:
         """(params, obs_mean, obs_var) of one seed of vmapped runners, as numpy (float64 weights: numpy's
         evaluation computes in float64 what training computed in float32)."""
-        pick = lambda v: np.asarray(v[seed_index], float)  # noqa: E731
+        pick = lambda v: np.asarray(v[seed_index], float)
         params = jax.tree_util.tree_map(pick, runner["params"])
         stats = runner["obs_stats"]
         if not self.config.normalize:

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import math
 import os
 import sys
@@ -43,10 +42,9 @@ ALGO = "ppo_jax"
 
 def hyperparams_entry(path: Path, env_id: str) -> dict:
     loaded = yaml.safe_load(Path(path).read_text())
-    entry = loaded.get(env_id, loaded.get("default"))
-    if not isinstance(entry, dict):
+    if env_id not in loaded and "default" not in loaded:  # train.py's hyperparams_fault has checked the rest
         raise ValueError(f"--hyperparams {path}: no entry for {env_id} (nor default)")
-    return dict(entry)
+    return dict(loaded.get(env_id, loaded.get("default")))
 
 
 def run_folder(runs: Path, env_id: str, seed: int) -> Path:
@@ -135,11 +133,38 @@ def read_progress(folder: Path) -> list[dict]:
         return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(file)]
 
 
+def wait(tree, poll: float = 0.05):
+    """Until every array of the tree is computed, in short sleeps rather than one blocking call, so that Ctrl-C
+    interrupts at once (Python handles a signal between its own steps, not inside XLA's wait)."""
+    import jax
+
+    leaves = [leaf for leaf in jax.tree_util.tree_leaves(tree) if hasattr(leaf, "is_ready")]
+    while not all(leaf.is_ready() for leaf in leaves):
+        time.sleep(poll)
+
+
+def write_records(seeds: list[int], folders: list[Path], evaluations: dict, progress: dict):
+    """Each seed's evaluations.npz (SB3's EvalCallback's keys) and progress.csv, as far as the run has come."""
+    for seed, folder in zip(seeds, folders):
+        record = evaluations[seed]
+        if record["timesteps"]:
+            np.savez(folder / "evaluations.npz", timesteps=np.array(record["timesteps"]),
+                     results=np.array(record["results"]), successes=np.array(record["successes"]),
+                     ep_lengths=np.zeros_like(np.array(record["results"])))  # fmt: skip
+        if progress[seed]:
+            write_progress(folder, progress[seed])
+
+
 def run(args: argparse.Namespace) -> dict:
     """Train args.seeds seeds of PPO on the JAX env, evaluate them on the numpy env, write the run folders."""
     import jax
 
     jax.config.update("jax_enable_x64", True)  # connenv.jax computes the physics in float64 (an application may set it)
+    # XLA's compiled programs kept between runs (JAX's persistent cache): a second run of the same env and
+    # hyperparameters starts at once; JAX_COMPILATION_CACHE_DIR moves it, an empty one turns it off
+    cache = os.environ.get("JAX_COMPILATION_CACHE_DIR", str(Path.home() / ".cache" / "connenv" / "jax"))
+    if cache:
+        jax.config.update("jax_compilation_cache_dir", cache)
     import connenv.jax
     from agents.jax_ppo import Config, Trainer
 
@@ -185,13 +210,14 @@ def run(args: argparse.Namespace) -> dict:
     best = {seed: max((np.mean(r) for r in evaluations[seed]["results"]), default=-math.inf) for seed in seeds}
     meta = trainer.meta(args.env)
     saved_steps = steps or 0
-    interrupted = False
+    interrupted, pending = False, False
     train_start = time.perf_counter()
     try:
         while updates < config.n_updates:
-            previous = runner
+            previous, pending = runner, True
             runner, metrics, evaluation = compiled(runner)
-            jax.block_until_ready(runner)
+            wait(runner)
+            pending = False
             updates += config.updates_per_eval
             timesteps = updates * config.rollout
             wall = time.perf_counter() - train_start
@@ -221,28 +247,22 @@ def run(args: argparse.Namespace) -> dict:
                   f"success {mean_success:.0%} (mean of {len(seeds)} seeds)", flush=True)  # fmt: skip
             due = args.checkpoint_freq > 0 and timesteps // args.checkpoint_freq > saved_steps // args.checkpoint_freq
             if due or (args.checkpoint_freq > 0 and updates >= config.n_updates):
+                write_records(seeds, folders, evaluations, progress)  # the curves so far, with their checkpoint
                 save_checkpoint(folders[0], runner, timesteps)
                 for folder in folders[1:]:  # every seed's folder names the common checkpoint
                     (folder / "checkpoints").mkdir(parents=True, exist_ok=True)
                     (folder / "checkpoints" / "latest").write_text(str(timesteps))
                     (folder / "checkpoints" / "in").write_text(str(folders[0].resolve()))
                 saved_steps = timesteps
-    except KeyboardInterrupt:
-        interrupted, runner = True, previous
-        updates -= 0  # the interrupted chunk's updates are lost: the state before it is kept
+    except KeyboardInterrupt:  # a chunk of updates under way is dropped: the state before it is kept
+        interrupted, runner = True, previous if pending else runner
     train_seconds = time.perf_counter() - train_start
     timesteps = int(np.asarray(runner["update"])[0]) * config.rollout
+    write_records(seeds, folders, evaluations, progress)
     for i, (seed, folder) in enumerate(zip(seeds, folders)):
         jax_policy.save(folder / "policy.npz", *trainer.policy_arrays(runner, i), meta)
         if not (folder / "best_policy.npz").is_file():
             jax_policy.save(folder / "best_policy.npz", *trainer.policy_arrays(runner, i), meta)
-        record = evaluations[seed]
-        if record["timesteps"]:
-            np.savez(folder / "evaluations.npz", timesteps=np.array(record["timesteps"]),
-                     results=np.array(record["results"]), successes=np.array(record["successes"]),
-                     ep_lengths=np.zeros_like(np.array(record["results"])))  # fmt: skip
-        if progress[seed]:
-            write_progress(folder, progress[seed])
     common = {"algo": ALGO, "backend": "jax", "timesteps": timesteps, "train_seconds": train_seconds,
               "compile_seconds": compile_seconds, "seeds_trained_together": seeds,
               "hyperparams": str(hyperparams_file), "jax_devices": [str(d) for d in jax.devices()]}  # fmt: skip
@@ -262,21 +282,16 @@ def run(args: argparse.Namespace) -> dict:
     specs += [*(["analytic"] if args.env in CONTROLLERS else []), "random"]
     report = evaluate.compare(args.env, specs, args.eval_episodes, args.eval_seed, env_kwargs=env_kwargs)
     print(evaluate.format_table(report))
-    rows = report["policies"] if "policies" in report else None
     for seed, folder, spec in zip(seeds, folders, specs):
         own = _own_report(report, spec)
         results = {"status": "finished", "seed": seed, **common, "model": str(folder / "best_policy.npz"),
                    "evaluation": own}  # fmt: skip
         evaluate.write_json(results, folder / "results.json")
-    del rows
     return report
 
 
 def _own_report(report: dict, spec: str) -> dict:
     """The compare report with only this seed's policy among the learned ones (the references kept)."""
     label = evaluate.jax_label(spec.removeprefix("jax:"))
-    own = json.loads(json.dumps(report))
-    for key, value in report.items():
-        if isinstance(value, dict):
-            own[key] = {k: v for k, v in value.items() if not (k.startswith(f"{ALGO}:") and k != label)}
-    return own
+    rows = [row for row in report["policies"] if not row["policy"].startswith(f"{ALGO}:") or row["policy"] == label]
+    return {**report, "policies": rows}

@@ -105,7 +105,7 @@ def aggregates(scores: dict[str, list[float]]) -> dict:
 LABELS = {"ppo_jax": "PPO (JAX)"}  # train.py --backend jax's PPO (agents.jax_ppo); the others: their names in capitals
 
 
-def label(algo: str) -> str:
+def algo_label(algo: str) -> str:
     return LABELS.get(algo, algo.upper())
 
 
@@ -151,7 +151,7 @@ def env_table(data: dict) -> list[str]:
             cells = [mean_interval([run[key] for run in runs]) for key in ("success", "return", "score")]
             shipped = [f"{run['seed']}: {100 * run['success']:.0f}%, {run['score']:.3g}" for run in runs if run.get("shipped")]
             lines.append(
-                f"| | {label(algo)} | {', '.join(str(run['seed']) for run in runs)} | {cell(*cells[0], percent=True)} "
+                f"| | {algo_label(algo)} | {', '.join(str(run['seed']) for run in runs)} | {cell(*cells[0], percent=True)} "
                 f"| {cell(*cells[1])} | {cell(*cells[2])} | {shipped[0] if shipped else 'an earlier round (below)'} |"
             )
     return lines
@@ -173,7 +173,7 @@ def release_table(data: dict) -> list[str]:
         for key in sorted(k for k in entry if k.startswith("pretrained")):
             for algo, (run,) in env_scores(entry, key).items():
                 lines.append(
-                    f"| {env_id.split('/')[-1]} | {key.removeprefix('pretrained ')} | {label(algo)} "
+                    f"| {env_id.split('/')[-1]} | {key.removeprefix('pretrained ')} | {algo_label(algo)} "
                     f"| {run['seed']} ({run['of_seeds']}) | {100 * run['success']:.0f}% | {run['score']:.3g} |"
                 )
     return lines
@@ -220,7 +220,7 @@ def aggregate_table(run_sets: dict[str, dict]) -> tuple[list[str], dict]:
                 iqm_cell, gap_cell = (f"{result[m][0]:.3g} (one run per env: no interval)" for m in result)
             else:
                 iqm_cell, gap_cell = cell(*result["iqm"]), cell(*result["optimality_gap"])
-            lines.append(f"| {set_label(key)} | {label(algo)} | {len(by_env)} | {n_runs} | {iqm_cell} | {gap_cell} |")
+            lines.append(f"| {set_label(key)} | {algo_label(algo)} | {len(by_env)} | {n_runs} | {iqm_cell} | {gap_cell} |")
     ppo, sac = run_sets["runs"].get("ppo", {}), run_sets["runs"].get("sac", {})
     both = sorted(set(ppo) & set(sac))
     if both:
@@ -239,7 +239,7 @@ def plot_profiles(scores: dict[str, dict[str, list[float]]], path):
     fig, ax = plt.subplots(figsize=(6, 3.6))
     for algo, by_env in sorted(scores.items()):
         point, low, high = interval(profile, list(by_env.values()))
-        (line,) = ax.plot(PROFILE_TAUS, point, label=f"{label(algo)} ({len(by_env)} envs)")
+        (line,) = ax.plot(PROFILE_TAUS, point, label=f"{algo_label(algo)} ({len(by_env)} envs)")
         ax.fill_between(PROFILE_TAUS, low, high, color=line.get_color(), alpha=0.25)
     ax.axvline(1.0, ls="--", color="k", lw=1, label="analytic controller")
     ax.set(xlabel="normalized score τ", ylabel="fraction of runs with score > τ", ylim=(0, 1.02))
@@ -263,7 +263,7 @@ def plot_aggregates(numbers: dict, path):
             point, low, high = numbers[pair][metric]
             ax.errorbar(point, i, xerr=[[point - low], [high - point]], fmt="o", capsize=3, color="k")
         ax.set(title=title, xlabel="normalized score")
-    axes[0].set_yticks(range(len(pairs)), [f"{label(algo)}, {set_label(key)}" for key, algo in pairs], fontsize=8)
+    axes[0].set_yticks(range(len(pairs)), [f"{algo_label(algo)}, {set_label(key)}" for key, algo in pairs], fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -272,7 +272,7 @@ def plot_aggregates(numbers: dict, path):
 def missing(data: dict, envs, algos) -> list[str]:
     """The (env, algo) pairs of the benchmark without runs in unseen.json."""
     have = {(env_id, algo) for env_id, entry in data["envs"].items() for algo in env_scores(entry)}
-    return [f"{env_id.split('/')[-1]} {label(algo)}" for env_id in envs for algo in algos if (env_id, algo) not in have]
+    return [f"{env_id.split('/')[-1]} {algo_label(algo)}" for env_id in envs for algo in algos if (env_id, algo) not in have]
 
 
 REFERENCE_KEYS = {"random": ("returns", "successes"), "analytic": ("name", "returns", "successes")}

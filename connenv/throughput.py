@@ -546,6 +546,10 @@ def main(argv=None):
     parser.add_argument("--rigid-body", action="store_true", help="only the free rigid body's step against Pendulum-v1")
     parser.add_argument("--backend", choices=["numpy", "jax"], default="numpy",
                         help="numpy: the envs; jax: connenv.jax's rollouts beside the numpy vector env (the jax extra)")
+    parser.add_argument("--numpy-max", type=cli.positive_int, metavar="N",
+                        help="--backend jax: the largest N at which the numpy vector env runs beside (default: every N)")
+    parser.add_argument("--budget", type=cli.positive_float, metavar="SECONDS",
+                        help="--backend jax: measure no new (id, N) after this many seconds (the rows left say so)")
     args = parser.parse_args(argv)
     if args.rigid_body:
         body, pendulum = rigid_body_step_times(args.single_steps)
@@ -569,7 +573,7 @@ def main(argv=None):
         sizes = args.sizes if args.sizes != list(SIZES) else [1, 64, 1024, 4096, 65536]
         table(report, args.envs, sizes, misses,
               lambda env_id, n: vector_rates(env_id, n, args.seconds, sync=False, reference=None,
-                                             **checked_kwargs(env_id))[0])
+                                             **checked_kwargs(env_id))[0], args.numpy_max, args.budget)
         args.skip_single = args.skip_vector = True
         report.note("Targets missed: " + ("; ".join(misses) if misses else "none") + ".")
     if not args.skip_single:

@@ -367,15 +367,47 @@ def test_the_swimmer_resets_draw_their_targets(env_id, unit):
 def test_step_rows_is_the_vmapped_step(env_id, n):
     """step_rows (N envs in one call, a branch no row takes skipped) gives vmap(step_env)'s numbers to the bit; at
     N = 2048 the shell's Lie-group quadrature, which numpy's rows run in blocks of bounded memory, takes JAX's rows
-    whole (it raised TracerArrayConversionError there before)."""
+    whole (it raised TracerArrayConversionError there before). The shell's full (Kirchhoff) model, a branch run only
+    where some row is full, gives vmap's numbers with a third of the rows full as with none. A third of the rows at
+    the time limit (more than one chunk of the resets, which step_rows runs on the done rows alone) are reset_rows'
+    of the same key (to an ulp), the others step_env's; autoreset_rows with a key per group (two seeds' rows in one batch) resets
+    each group from its own key."""
     jenv, params = cj.make(env_id)
     obs, states = jenv.reset_rows(jax.random.key(0), n, params)
     actions = jax.random.uniform(jax.random.key(1), (n, *jenv.action_space(params).shape), minval=-1.0, maxval=1.0)
-    rows = jax.jit(jenv.step_rows)(jax.random.key(2), states, actions, params)
-    each = jax.jit(jax.vmap(jenv.step_env, (0, 0, 0, None)))(jax.random.split(jax.random.key(2), n), states, actions,
-                                                              params)
-    np.testing.assert_array_equal(np.asarray(rows[1].x), np.asarray(each[1].x))
-    np.testing.assert_array_equal(np.asarray(rows[2]), np.asarray(each[2]))
+    step_rows = jax.jit(jenv.step_rows)
+    each = jax.jit(jax.vmap(jenv.step_env, (0, 0, 0, None)))
+    batches = [states]
+    if env_id == "connenv/KozlovShell-v0":  # a third of the rows in the full model, with a momentum
+        numpy_env = gym.make(env_id).unwrapped
+        numpy_env.reset(seed=0, options={"state": {"momentum": (0.3, -0.2, 0.1)}})
+        full = np.arange(n) % 3 == 0
+        batches.append(cj.EnvState(jnp.where(full[:, None], numpy_env.model.pack(numpy_env.state), states.x),
+                                   states.time))
+    for batch in batches:
+        rows = step_rows(jax.random.key(2), batch, actions, params)
+        alone = each(jax.random.split(jax.random.key(2), n), batch, actions, params)
+        np.testing.assert_array_equal(np.asarray(rows[1].x), np.asarray(alone[1].x))
+        np.testing.assert_array_equal(np.asarray(rows[2]), np.asarray(alone[2]))
+        assert not np.any(np.asarray(rows[5]["stepper_failed"]))
+    ending = np.arange(n) % 3 == 1
+    at_limit = cj.EnvState(states.x, jnp.where(ending, params.max_steps_in_episode - 1, 0).astype(states.time.dtype))
+    rows = step_rows(jax.random.key(2), at_limit, actions, params)
+    alone = each(jax.random.split(jax.random.key(2), n), at_limit, actions, params)
+    fresh = jenv.reset_rows(jax.random.key(2), n, params)[1]
+    assert np.array_equal(np.asarray(rows[4]), ending)  # truncated
+    # the resets are reset_rows' to an ulp: XLA's code for the gathered chunk and for N rows may round apart
+    np.testing.assert_allclose(np.asarray(rows[1].x), np.where(ending[:, None], fresh.x, alone[1].x), rtol=1e-15,
+                               atol=1e-15)
+    np.testing.assert_array_equal(np.asarray(rows[1].time), np.where(ending, 0, alone[1].time))
+    if env_id == "connenv/Swing-v0":  # two seeds' rows in one batch, a key each: each half its own key's resets
+        keys = jax.random.split(jax.random.key(5), 2)
+        obs, after, info = jax.jit(jenv.autoreset_rows)(keys, alone[0], alone[1], jnp.asarray(ending), alone[5], params)
+        fresh = np.concatenate([np.asarray(jenv.reset_rows(k, n // 2, params)[1].x) for k in keys])
+        np.testing.assert_allclose(np.asarray(after.x), np.where(ending[:, None], fresh, alone[1].x), rtol=1e-15,
+                                   atol=1e-15)
+        np.testing.assert_array_equal(np.asarray(info["final_x"]), np.asarray(alone[1].x))
+
 
 
 def rollout_return(jenv, x0, steps):

@@ -165,11 +165,14 @@ def _per_coordinate(bound, n: int) -> list:
     return [bound] * n if isinstance(bound, float) else np.broadcast_to(np.asarray(bound, float), (n,)).tolist()
 
 
-def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float):
+def bounded_segments_batch(u, u_dot_cmd, low, high, dt: float, axes=None):
     """bounded_segments over a batch (..., m): a list of m + 1 segments (u at the start (..., m), u̇ (..., m),
     durations (...)), a duration 0 where a row has fewer, and (u, u̇) at the end of the step. A segment ends where a
     coordinate reaches its bound or at dt; row i's segments of nonzero length are bounded_segments' for row i. Written
-branch-free in the rows' namespace, so that JAX traces it (connenv.jax)."""
+    branch-free in the rows' namespace, so that JAX traces it (connenv.jax). axes: the coordinates whose u̇ may be
+    nonzero (the actuated ones; the others' u̇ must be 0), whose stops alone end segments: len(axes) + 1 segments,
+    the same ones less those of length 0 that a coordinate at rest adds at dt (traced rows step every segment, the
+    numpy rows skip those)."""
     ops = namespace(u_dot_cmd)
     u, u_dot = (u, u_dot_cmd) if traced(ops) else (np.array(floats(u)), np.array(floats(u_dot_cmd)))  # JAX's: immutable
     real = ops.real_part
@@ -181,7 +184,8 @@ branch-free in the rows' namespace, so that JAX traces it (connenv.jax)."""
         # u̇ = 1 where it is 0 or free: the rows where leaves it out are finite, for a trace's derivatives
         reach = (stops - u) / ops.where(moving, u_dot, 1.0)
         reach = ops.where(moving, ops.maximum_one_sided(reach, 0.0), math.inf)
-    ends = ops.concatenate([ops.sort(ops.minimum_one_sided(reach, dt), axis=-1), ops.full(free.shape, dt)], axis=-1)
+    ending = reach if axes is None else ops.stack([reach[..., k] for k in axes], axis=-1)
+    ends = ops.concatenate([ops.sort(ops.minimum_one_sided(ending, dt), axis=-1), ops.full(free.shape, dt)], axis=-1)
     segments, start = [], 0.0
     for k in range(ends.shape[-1]):
         end = ends[..., k]

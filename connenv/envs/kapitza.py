@@ -214,8 +214,10 @@ class KapitzaPendulumEnv(TaskEnv):
 
     def advance(self, s, u_dot_cmd, stepper, ops=SCALAR):
         """The state after a step at the commanded u̇, each axis (each row's, with ops=BATCH) held at its end stops."""
-        bounded = bounded_segments if ops is SCALAR else bounded_segments_batch
-        segments, u, u_dot = bounded(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt)
+        if ops is SCALAR:
+            segments, u, u_dot = bounded_segments(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt)
+        else:  # the actuated axes' stops alone end segments (a pivot on one axis: two segments, not three)
+            segments, u, u_dot = bounded_segments_batch(s.u, u_dot_cmd, -self.a_max, self.a_max, self.dt, self.axes)
         y, change = run_segments(stepper, self.system, s.y, segments, self.frame_energy)
         self.check_energy_error(s.energy_error + change)
         return self.at(y, u, u_dot, s.t + self.dt, self.system.energy(y, u_dot), s.energy_error + change, s, ops)

@@ -116,10 +116,12 @@ class PlanarSwimmer:
         return y[:, :3], y[:, 3:]
 
     def _swim_traced(self, s, full_segments, reduced_segments, stepper, ops):
-        """swim on traced rows (connenv.jax): both models on every row, each row keeping its own model's by ``where``;
-        the spatial momentum checked on the full rows (a failure as data)."""
+        """swim on traced rows (connenv.jax): each row keeping its own model's step by ``where``, the full model's run
+        where some row is full (``ops.branch``: rows stepped in one call skip it when none is, as the numpy rows do;
+        under vmap every row runs both); the spatial momentum checked on the full rows (a failure as data)."""
         full = ops.flag(s.full)
-        y = run_segments(stepper, self.full_system, ops.concat([s.pose, s.momentum], axis=-1), full_segments)[0]
+        y = ops.concat([s.pose, s.momentum], axis=-1)
+        y = ops.branch(full, lambda y: run_segments(stepper, self.full_system, y, full_segments)[0], lambda y: y, y)
         drift = self.full_system.spatial_momentum(y) - s.momentum0
         drift = ops.sqrt((drift * drift).sum(axis=-1))
         norm = ops.sqrt((s.momentum0 * s.momentum0).sum(axis=-1))

@@ -5,12 +5,14 @@ written once for Python floats (FLOATS, SCALAR) and numpy rows (ARRAYS, BATCH) t
 the rows' seams that numpy code reached outside ``ops`` before: ``stack``, ``real_part`` (the real part a decision
 reads; JAX differentiates by its own forward mode, so there are no complex rows and it is the value itself),
 ``any`` (whether a branch that only some rows take must be computed: always, as a trace cannot look at values; the
-rows that do not take it are left by ``where``), ``all``, ``sort``, ``concatenate``, ``full`` and ``ceil`` (the
-bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the connections'),
-``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with the derivative at a tie of the trace's tie rule
-(``ties``: "linear", the second argument's, for forward and reverse mode; "one-sided", ARRAYS', as the complex step
-takes it at a pivot's end stop, forward mode only), ``repeat`` (a loop to a trip count the numpy code reads off
-the rows' values, at a fixed trip count where the step's ``longest_segment`` bounds it), ``sinc`` and ``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),
+rows that do not take it are left by ``where``), ``branch`` (a branch computed only where some row takes it:
+``lax.cond`` on rows stepped in one call, both sides under vmap), ``all``, ``sort``, ``concatenate``, ``full`` and
+``ceil`` (the bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the
+connections'), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with the derivative at a tie of the trace's
+tie rule (``ties``: "linear", the second argument's, for forward and reverse mode; "one-sided", ARRAYS', as the
+complex step takes it at a pivot's end stop, forward mode only), ``repeat`` (a loop to a trip count the numpy code
+reads off the rows' values, at a fixed trip count where the step's ``longest_segment`` bounds it), ``sinc`` and
+``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),
 ``solve`` (numpy's linalg.solve, which the builders' Hamiltonian calls), ``atan2`` and ``hypot`` with ARRAYS'
 derivative (0 at the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions,
 below), ``single_precision`` (float32's values with derivative 1, the goals' rounding) and ``fail`` (a failure
@@ -69,7 +71,15 @@ def ellipj(u, m):
     # cephes takes dn = cn / cos(φ₁ − φ₀) unless it is small (DLMF 22.20.5's discussion); the quotient of two small
     # numbers near cn = 0 loses digits, where scipy's dn agrees with √(1 − m sn²): that is taken there too
     dn = jnp.where((jnp.abs(dnfix) < 0.1) | (jnp.abs(cn) < 0.1), jnp.sqrt(1.0 - m * sn * sn), dnfix)
-    # cephes' series at the ends of [0, 1]
+    # cephes' series at the ends of [0, 1], computed where some row needs them (every row under vmap)
+    is_small, is_one = m < 1e-9, m >= 0.9999999999
+    agm = tuple(jnp.broadcast_arrays(sn, cn, dn, phi))
+    small, near_one = branch(is_small | is_one, _end_series, lambda u, m: (agm, agm), u, m)
+    return tuple(jnp.where(is_small, s, jnp.where(is_one, o, x)) for s, o, x in zip(small, near_one, agm))
+
+
+def _end_series(u, m):
+    """cephes' series of (sn, cn, dn, φ) for m < 1e-9 and for m ≥ 1 − 1e-10 (ellipj's ends), each broadcast."""
     t, bb = jnp.sin(u), jnp.cos(u)
     ai = 0.25 * m * (u - t * bb)
     small = (t - ai * bb, bb + ai * t, 1.0 - 0.5 * m * t * t, u - ai)
@@ -79,8 +89,7 @@ def ellipj(u, m):
     aj = ai * t * inverse
     near_one = (t + ai * (twon - u) / (bb * bb), inverse - aj * (twon - u), inverse + aj * (twon + u),
                 2.0 * jnp.arctan(jnp.exp(u)) - math.pi / 2 + ai * (twon - u) / bb)
-    is_small, is_one = m < 1e-9, m >= 0.9999999999
-    return tuple(jnp.where(is_small, s, jnp.where(is_one, o, x)) for s, o, x in zip(small, near_one, (sn, cn, dn, phi)))
+    return tuple(jnp.broadcast_arrays(*small)), tuple(jnp.broadcast_arrays(*near_one))
 
 
 def ellipk(m):
@@ -228,6 +237,31 @@ def ties(rule: str):
 def tie_rule() -> str:
     """The tie rule of the code being traced: the innermost ``ties`` context's, "linear" outside any."""
     return _tie_rules[-1] if _tie_rules else TIES[0]
+
+
+def branch(taken, compute, otherwise, *operands):
+    """compute(*operands) where some row takes the branch (taken: a flag per row; traced), else otherwise(*operands)
+    (of the same shapes): ``lax.cond`` on jnp.any(taken), so that rows stepped in one call under jit (``step_rows``)
+    skip work no row needs, while under vmap JAX computes both (the same numbers: the caller keeps each row's by
+    ``where``). The failures ``compute`` records (``fail``) are carried out of the branch as its outputs and recorded
+    here, false where it is not taken. Differentiable in both modes."""
+    messages = []
+
+    def run(*operands):
+        with failures() as failed:
+            result = compute(*operands)
+        messages[:] = [message for _, message in failed]
+        return result, [jnp.asarray(condition) for condition, _ in failed]
+
+    shapes = jax.eval_shape(run, *operands)[1]
+
+    def skip(*operands):
+        return otherwise(*operands), [jnp.zeros(shape.shape, bool) for shape in shapes]
+
+    result, conditions = jax.lax.cond(jnp.any(taken), run, skip, *operands)
+    for condition, message in zip(conditions, messages):
+        fail(condition, message)
+    return result
 
 
 def one_sided(choose):
@@ -387,6 +421,7 @@ JAX = operations(
     broadcast_to=jnp.broadcast_to,
     repeat=repeat,
     longest_segment=longest_segment,
+    branch=branch,
     ellipj=ellipj,
     ellipk=ellipk,
     ellipeinc=ellipeinc,

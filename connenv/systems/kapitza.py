@@ -121,8 +121,9 @@ class KapitzaPendulum:
             theta, spin, v1, v2 = np.broadcast_arrays(theta, spin, v1, v2)
         flowed, flowed_spin = self._pendulum.pendulum_flow(theta, spin, self.length, tau, ops)
         near = ops.isnan(flowed)
-        if traced(ops):  # every row by RK4 as well, the near ones taken by where
-            stepped, stepped_spin = self._near_separatrix(theta, spin, tau, ops)
+        if traced(ops):  # RK4 where some row is near (every row under vmap), the near ones taken by where
+            stepped, stepped_spin = ops.branch(near, lambda *rows: self._near_separatrix(*rows, ops),
+                                               lambda theta, spin, tau: (flowed, flowed_spin), theta, spin, tau)
             flowed, flowed_spin = ops.where(near, stepped, flowed), ops.where(near, stepped_spin, flowed_spin)
         elif ops.any(near):  # the state (or those rows) by RK4
             if ops is ARRAYS:

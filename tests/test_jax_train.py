@@ -1,0 +1,118 @@
+"""PPO on connenv.jax (agents.jax_ppo, train.py --backend jax): its advantages bootstrap a time limit as a time limit,
+its running statistics are the data's, the policy file numpy runs is the network JAX trained, and a run from the
+command line leaves run folders that agents.evaluate and the score read."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+# as tests/test_jax.py: XLA without LLVM's optimization passes compiles several times faster; IEEE results either way
+os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_backend_optimization_level=0".strip()
+jax = pytest.importorskip("jax")
+pytest.importorskip("optax")
+jax.config.update("jax_enable_x64", True)
+import jax.numpy as jnp
+
+from agents import jax_ppo, jax_train, train
+from agents.evaluate import make_policy
+from agents.jax_policy import JaxPolicy
+
+
+def test_a_time_limit_is_bootstrapped_and_a_terminal_state_is_not():
+    """A constant reward r under an exact value V = r / (1 − γ): every advantage is 0 when the clock cuts an episode
+    (the final observation's value stands in for the future), and after a terminal step the advantage is the
+    missing future −γV; PureJaxRL's done-as-terminal would give −γV at the cut too."""
+    gamma, lam, r, T = 0.99, 0.95, 1.0, 6
+    V = r / (1 - gamma)
+    value, reward = jnp.full((T, 1), V, jnp.float32), jnp.full((T, 1), r)
+    flags = lambda t: jnp.zeros((T, 1), bool).at[t].set(True)
+    cut = jax_ppo.gae(reward, value, jnp.full(1, V), jnp.full((T, 1), V), flags(T + 1), flags(2), gamma, lam)
+    np.testing.assert_allclose(cut, 0.0, atol=1e-4)
+    ended = jax_ppo.gae(reward, value, jnp.full(1, V), jnp.full((T, 1), V), flags(2), flags(T + 1), gamma, lam)
+    np.testing.assert_allclose(ended[2, 0], -gamma * V, rtol=1e-5)  # the terminal step loses the whole future
+    np.testing.assert_allclose(ended[:2, 0], -gamma * V * (gamma * lam) ** np.arange(2, 0, -1), rtol=1e-5)
+    np.testing.assert_allclose(ended[3:], 0.0, atol=1e-4)  # the next episode: its own, exact
+
+
+def test_running_statistics_are_the_data_s_mean_and_variance():
+    """Chan et al.'s update over batches of different sizes gives the pooled mean and (population) variance."""
+    rng = np.random.default_rng(0)
+    batches = [rng.normal(3.0, 2.0, (n, 3)) for n in (5, 17, 64)]
+    stats = jax_ppo.stats_init(3)
+    for batch in batches:
+        stats = jax_ppo.stats_update(stats, jnp.asarray(batch))
+    data = np.concatenate(batches)
+    np.testing.assert_allclose(stats["mean"], data.mean(0), rtol=1e-4)  # the prior's 1e-4 pseudo-count
+    np.testing.assert_allclose(stats["var"], data.var(0), rtol=1e-4)
+
+
+def test_hyperparameters_are_read_as_rl_zoo3_writes_them_and_unknown_keys_refused():
+    config = jax_ppo.Config.from_hyperparams({"n_timesteps": "1e5", "learning_rate": "lin_3e-4", "net_arch": [32]})
+    assert (config.n_timesteps, config.learning_rate, config.linear_lr, config.net_arch) == (100000, 3e-4, True, (32,))
+    with pytest.raises(ValueError, match="use_sde"):
+        jax_ppo.Config.from_hyperparams({"n_timesteps": 1, "use_sde": True})
+    with pytest.raises(ValueError, match="n_envs = 0"):
+        jax_ppo.Config.from_hyperparams({"n_timesteps": 1, "n_envs": 0})
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--backend", "jax", "--algo", "sac"], "--backend jax trains ppo"),
+        (["--seeds", "4"], "seeds at once train on --backend jax"),
+    ],
+)
+def test_train_py_refuses_what_the_backend_cannot_do(argv, message, capsys):
+    with pytest.raises(SystemExit):
+        train.parse_args(argv)
+    assert message in capsys.readouterr().err
+
+
+def test_a_run_trains_seeds_together_and_leaves_policies_numpy_runs(tmp_path):
+    """Two seeds of Swing-v0, a few updates: each seed's folder has its config, evaluations, progress, policies and a
+    finished results.json; the policy file, run by numpy, gives the actions of the network JAX trained (float32 in
+    JAX, float64 in numpy: to 1e-5); a second run into the same folders is refused, naming --resume."""
+    hyperparams = tmp_path / "ppo_jax.yml"
+    hyperparams.write_text("connenv/Swing-v0: {n_timesteps: 512, n_envs: 4, n_steps: 64, batch_size: 128, "
+                           "n_epochs: 2, eval_episodes: 2, eval_freq: 256}\n")  # fmt: skip
+    argv = ["--backend", "jax", "--env", "connenv/Swing-v0", "--seeds", "2", "--seed", "3", "--runs", str(tmp_path),
+            "--hyperparams", str(hyperparams), "--eval-episodes", "2", "--checkpoint-freq", "256"]  # fmt: skip
+    report = train.main(argv)
+    labels = [row["policy"] for row in report["policies"]]
+    assert labels == ["ppo_jax:Swing-v0_ppo_jax_s3", "ppo_jax:Swing-v0_ppo_jax_s4", "analytic", "random"]
+    for seed in (3, 4):
+        folder = jax_train.run_folder(tmp_path, "connenv/Swing-v0", seed)
+        results = json.loads((folder / "results.json").read_text())
+        assert results["status"] == "finished" and results["timesteps"] == 512 and results["seed"] == seed
+        assert next(row["policy"] for row in results["evaluation"]["policies"]) == f"ppo_jax:{folder.name}"
+        assert np.load(folder / "evaluations.npz")["timesteps"].tolist() == [256, 512]
+        assert (folder / "connenv-Swing-v0" / "config.yml").is_file() and (folder / "progress.csv").is_file()
+    assert make_policy(f"jax:{folder}", "connenv/Swing-v0", 0)[0] == f"ppo_jax:{folder.name}"
+
+    import connenv.jax
+
+    env, params = connenv.jax.make("connenv/Swing-v0")
+    obs = np.asarray(env.reset_rows(jax.random.key(1), 8, params)[0])
+    policy = JaxPolicy(folder / "policy.npz", "connenv/Swing-v0")
+    checkpoint = jax_train.load_checkpoint(folder.with_name(folder.name.replace("s4", "s3")),
+                                           _template(env, params, hyperparams), 512)  # fmt: skip
+    trainer = _trainer(env, params, hyperparams)
+    runner = jax.tree_util.tree_map(lambda v: v[1], checkpoint)  # seed 4, the second of the two
+    expected = jnp.clip(jax_ppo.forward(runner["params"]["pi"], trainer.normalized(runner, jnp.asarray(obs)), jnp),
+                        trainer.low, trainer.high)  # fmt: skip
+    np.testing.assert_allclose(policy.action(obs), expected, atol=1e-5)
+    with pytest.raises(SystemExit, match="--resume continues it from its checkpoint at step 512"):
+        train.main(argv)
+
+
+def _trainer(env, params, hyperparams):
+    entry = jax_train.hyperparams_entry(hyperparams, "connenv/Swing-v0")
+    return jax_ppo.Trainer(env, params, jax_ppo.Config.from_hyperparams(entry))
+
+
+def _template(env, params, hyperparams):
+    return _trainer(env, params, hyperparams).init(jnp.stack([jax.random.key(3), jax.random.key(4)]))
