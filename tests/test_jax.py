@@ -4,6 +4,7 @@ reported as data, and the functional interface keeps gymnax's conventions."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 
@@ -499,6 +500,10 @@ def test_the_tie_rules_at_a_kink():
             jax.grad(maximum)(1.0, 1.0)
     with pytest.raises(ValueError, match=r"ties='both'.*\['linear', 'one-sided'\]"):
         cj.make("connenv/Swing-v0", ties="both")
+    jenv, params = cj.make("connenv/Swing-v0", ties="one-sided")  # the envs of other parameters trace by its rule
+    for change in ({"g": 9.0}, {"r_max": 2.1}):  # traced, static
+        other = jenv._for(cj.EnvParams(params.max_steps_in_episode, dataclasses.replace(params.physical, **change)))
+        assert other is not jenv and other.ties == "one-sided"
 
 
 def test_at_an_end_stop_the_tie_rules_take_their_sides():
