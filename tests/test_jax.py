@@ -286,6 +286,27 @@ def test_the_jacobians_at_rest_at_the_start_are_the_models(env_id):
     np.testing.assert_allclose(np.asarray(reward_by_action), central, rtol=1e-6, atol=1e-8)
 
 
+def test_the_cats_stop_at_the_disc_differentiates_in_reverse_mode():
+    """falling_cat.disc_segment (the bend stopped where β reaches max_bend) on rows staying inside the disc from the
+    straight cat (β = 0, whose root √b² is at 0), leaving it from its edge (c = 0), moving in from its edge but ending
+    out (the quotient not taken is 0/0) and crossing it: jax.grad equals jax.jacfwd, finite, as the root and the
+    quotients of the rows that do not take them are kept from 0 by where (reverse mode multiplied their cotangent 0
+    by an infinite derivative: NaN)."""
+    from connenv.systems import falling_cat
+
+    s = jnp.array([[0.0, 0.0], [0.5, 0.0], [0.5, 0.0], [0.3, 0.1]])
+    v = jnp.array([[0.3, -0.2], [1.0, 0.5], [-0.1, 10.0], [8.0, 0.0]])
+
+    def total(s, v):
+        tau, s_end, v_end = falling_cat.disc_segment(s, v, 0.5, 0.05)
+        return jnp.sum(tau * jnp.arange(1.0, 5.0)) + jnp.sum(s_end * jnp.array([1.0, 2.0])) + jnp.sum(v_end)
+
+    reverse, forward = jax.jit(lambda s, v: (jax.grad(total, (0, 1))(s, v), jax.jacfwd(total, (0, 1))(s, v)))(s, v)
+    for mine, theirs in zip(reverse, forward):
+        assert np.all(np.isfinite(np.asarray(mine)))
+        np.testing.assert_allclose(np.asarray(mine), np.asarray(theirs), rtol=1e-14, atol=1e-14)
+
+
 def test_the_cat_and_tube_resets_draw_their_distributions():
     """FallingCat-v0 starts straight at rest, upside down: g = Rz(ψ) Rx(π + δ), |δ| ≤ 0.2, its heading frame's first
     column the (horizontal) spine; TubeTwist-v0 at R = R₀ = I with ψ* uniform on [0.3, 3]; both from a key."""
@@ -432,12 +453,13 @@ REVERSE_COMPILE = {
     "BeadOnBar-v0": 9, "BeadOnBar-v1": 10, "ChaplyginSleigh-v0": 17, "FallingCat-v0": 34, "KapitzaPendulum-v0": 67,
     "KapitzaSwingUp-v0": 73, "KozlovShell-v0": 22, "RollingBall-v0": 10, "RollingBallPose-v0": 12,
     "RollingBallGoal-v0": 14, "RollingCoin-v0": 13, "Skier-v0": 170, "SnakeSwimmer-v0": 126, "Swing-v0": 19,
+    "TubeTwist-v0": 11,
     "RollingCoinSurface-v0-surface=x**2/20 - y/4 + cos(x)*exp(-(y - 2)**2)/2": 7,
 }
 """CPU seconds to build and compile the test below for the cases (by test id) left to CONNENV_ALL_GRADIENTS=1
 (measured at XLA's optimization level 0; Skier-v0's was stopped at 170 s, its trace alone takes 37 s): XLA compiles
-a step's transpose several times slower than its forward mode, and CI's budget takes the eight cases that compile
-fastest, one per code path (the sympy surface's is the hill's). Their grad equals jacfwd too (measured:
+a step's transpose several times slower than its forward mode, and CI's budget takes the seven cases that compile
+in seconds, one per code path (the sympy surface's is the hill's). Their grad equals jacfwd too (measured:
 docs/guides/jax.md, Gradients)."""
 
 
