@@ -264,10 +264,9 @@ def branch(taken, compute, otherwise, *operands):
     return result
 
 
-def one_sided(choose):
-    """maximum or minimum (choose) whose forward-mode derivative at a tie is the one-sided one along the tangent,
-    choose(ṫa, ṫb): ARRAYS' convention on a Jacobian's complex rows (`connenv.core.backend.selected`), where a row sits
-    on the kink (the pivot at its end stop). Its tangent is not linear there: forward mode only (jvp, jacfwd)."""
+def _selection(choose, first, name: str):
+    """maximum or minimum (choose) whose derivative is the first argument's where first(a, b, ṫa, ṫb, out) holds,
+    the second's elsewhere."""
 
     @jax.custom_jvp
     def function(a, b):
@@ -277,30 +276,24 @@ def one_sided(choose):
     def derivative(primals, tangents):
         (a, b), (ta, tb) = primals, tangents
         out = choose(a, b)
-        first = jnp.where(a == b, choose(ta, tb) == ta, choose(a, b) == a) | jnp.isnan(a)
-        return out, jnp.broadcast_to(jnp.where(first, ta, tb), jnp.shape(out)).astype(out.dtype)
+        return out, jnp.broadcast_to(jnp.where(first(a, b, ta, tb, out), ta, tb), jnp.shape(out)).astype(out.dtype)
 
-    function.__name__ = f"one_sided_{choose.__name__}"
+    function.__name__ = f"{name}_{choose.__name__}"
     return function
+
+
+def one_sided(choose):
+    """maximum or minimum (choose) whose forward-mode derivative at a tie is the one-sided one along the tangent,
+    choose(ṫa, ṫb): ARRAYS' convention on a Jacobian's complex rows (`connenv.core.backend.selected`), where a row sits
+    on the kink (the pivot at its end stop). Its tangent is not linear there: forward mode only (jvp, jacfwd)."""
+    return _selection(choose, lambda a, b, ta, tb, out: jnp.where(a == b, choose(ta, tb) == ta, out == a)
+                      | jnp.isnan(a), "one_sided")
 
 
 def second_at_ties(choose):
     """maximum or minimum (choose) whose derivative is the side's the values pick, at a tie the second argument's (a
     NaN's where one is): a selection by the values alone, linear in the tangents (forward and reverse mode)."""
-
-    @jax.custom_jvp
-    def function(a, b):
-        return choose(a, b)
-
-    @function.defjvp
-    def derivative(primals, tangents):
-        (a, b), (ta, tb) = primals, tangents
-        out = choose(a, b)
-        first = ((a != b) & (out == a)) | jnp.isnan(a)
-        return out, jnp.broadcast_to(jnp.where(first, ta, tb), jnp.shape(out)).astype(out.dtype)
-
-    function.__name__ = f"second_at_ties_{choose.__name__}"
-    return function
+    return _selection(choose, lambda a, b, ta, tb, out: ((a != b) & (out == a)) | jnp.isnan(a), "second_at_ties")
 
 
 def by_tie_rule(rules: dict):
