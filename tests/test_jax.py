@@ -4,6 +4,7 @@ reported as data, and the functional interface keeps gymnax's conventions."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 
@@ -22,6 +23,7 @@ import scipy.special  # noqa: E402
 
 import connenv.jax as cj  # noqa: E402
 from connenv.envs.spec import registry  # noqa: E402
+from connenv.core.backend import FLOATS  # noqa: E402
 from connenv.core.steppers import StepperError  # noqa: E402
 from connenv.jax.namespace import ellipj  # noqa: E402
 
@@ -121,7 +123,12 @@ def test_whole_trajectories_follow_numpys(case, one_step):
 
 
 def test_forward_mode_jacobians_are_the_models_complex_step_ones(case):
+    """jax.jacfwd of the step is model.jacobians' complex step at states of the numpy env's trajectories, ties of max,
+    min and sort included: under ties="one-sided", whose derivative at a tie is the complex step's one-sided one (a
+    pivot at its end stop, which random actions reach); the default rule ("linear") takes the second argument's
+    there, the same derivative everywhere else (test_reverse_mode_is_forward_mode_transposed)."""
     jenv, params, (env, X, A, *_) = case
+    jenv = cj.FunctionalEnv(jenv.env, jenv.max_episode_steps, ties="one-sided")
     pick = np.linspace(0, len(X) - 1, 20).astype(int)
     jac = jax.jit(jax.vmap(jax.jacfwd(lambda x, a: jenv.transition(x, a)[0], argnums=(0, 1))))
     JA, JB = (np.asarray(J) for J in jac(jnp.asarray(X[pick]), jnp.asarray(A[pick], float)))
@@ -273,16 +280,55 @@ def test_every_id_has_a_jax_version_and_a_stepper_without_one_is_refused_by_name
 @pytest.mark.parametrize("env_id", ["connenv/FallingCat-v0", "connenv/TubeTwist-v0"])
 def test_the_jacobians_at_rest_at_the_start_are_the_models(env_id):
     """From the start at rest with a zero action: the falling cat's β = 0 (√β² has no derivative there; β² is
-    stationary) and the tube's T = T₀ (hypot's apex), where JAX's own derivatives are NaN or not the complex step's."""
+    stationary) and the tube's T = T₀ (hypot's apex), where JAX's own derivatives are NaN or not the complex step's.
+    From there under a nonzero action, the reward's derivative in it is the numpy reward's central difference: finite
+    where the cat's spine lies on its start (its error √|spine × start|² at 0, whose derivative leaked ∞ · 0 = NaN)."""
     env = gym.make(env_id).unwrapped
     env.reset(seed=0)
-    x, a = env.model.pack(env.state), np.zeros(env.action_space.shape)
-    jenv, params = cj.make(env_id)
-    JA, JB = jax.jit(jax.jacfwd(lambda x, a: jenv.transition(x, a)[0], argnums=(0, 1)))(jnp.asarray(x),
-                                                                                        jnp.asarray(a))
-    MA, MB = env.model.jacobians(x[None], a[None])
+    model = env.model
+    x, a = model.pack(env.state), np.zeros(env.action_space.shape)
+    jenv, _ = cj.make(env_id)
+
+    def step(x, a):
+        x_next, _, reward, *_ = jenv.transition(x, a)
+        return x_next, reward
+
+    jacobians = jax.jit(jax.jacfwd(step, argnums=(0, 1)))
+    (JA, JB), _ = jacobians(jnp.asarray(x), jnp.asarray(a))
+    MA, MB = model.jacobians(x[None], a[None])
     for mine, theirs in ((JA, MA[0]), (JB, MB[0])):
         assert np.max(np.abs(np.asarray(mine) - theirs) / np.maximum(1.0, np.abs(theirs))) <= JACOBIAN_RTOL
+    # the reward's derivative at a nonzero action (the same compiled function), against numpy's central difference
+    b, h = np.linspace(0.3, -0.2, a.size), 1e-6
+    _, (_, reward_by_action) = jacobians(jnp.asarray(x), jnp.asarray(b))
+
+    def reward(b):
+        return model.reward(x, b, model.step(x, b))
+
+    central = [(reward(b + h * e) - reward(b - h * e)) / (2 * h) for e in np.eye(a.size)]
+    assert np.all(np.isfinite(np.asarray(reward_by_action)))
+    np.testing.assert_allclose(np.asarray(reward_by_action), central, rtol=1e-6, atol=1e-8)
+
+
+def test_the_cats_stop_at_the_disc_differentiates_in_reverse_mode():
+    """falling_cat.disc_segment (the bend stopped where β reaches max_bend) on rows staying inside the disc from the
+    straight cat (β = 0, whose root √b² is at 0), leaving it from its edge (c = 0), moving in from its edge but ending
+    out (the quotient not taken is 0/0) and crossing it: jax.grad equals jax.jacfwd, finite, as the root and the
+    quotients of the rows that do not take them are kept from 0 by where (reverse mode multiplied their cotangent 0
+    by an infinite derivative: NaN)."""
+    from connenv.systems import falling_cat
+
+    s = jnp.array([[0.0, 0.0], [0.5, 0.0], [0.5, 0.0], [0.3, 0.1]])
+    v = jnp.array([[0.3, -0.2], [1.0, 0.5], [-0.1, 10.0], [8.0, 0.0]])
+
+    def total(s, v):
+        tau, s_end, v_end = falling_cat.disc_segment(s, v, 0.5, 0.05)
+        return jnp.sum(tau * jnp.arange(1.0, 5.0)) + jnp.sum(s_end * jnp.array([1.0, 2.0])) + jnp.sum(v_end)
+
+    reverse, forward = jax.jit(lambda s, v: (jax.grad(total, (0, 1))(s, v), jax.jacfwd(total, (0, 1))(s, v)))(s, v)
+    for mine, theirs in zip(reverse, forward):
+        assert np.all(np.isfinite(np.asarray(mine)))
+        np.testing.assert_allclose(np.asarray(mine), np.asarray(theirs), rtol=1e-14, atol=1e-14)
 
 
 def test_the_cat_and_tube_resets_draw_their_distributions():
@@ -407,3 +453,161 @@ def test_step_rows_is_the_vmapped_step(env_id, n):
         np.testing.assert_allclose(np.asarray(after.x), np.where(ending[:, None], fresh, alone[1].x), rtol=1e-15,
                                    atol=1e-15)
         np.testing.assert_array_equal(np.asarray(info["final_x"]), np.asarray(alone[1].x))
+
+
+
+def rollout_return(jenv, x0, steps):
+    """The return of `steps` steps from x0 under actions (steps, *shape), plus a fixed weighting of the last state
+    (a sparse or flat reward would make a vanishing gradient, which any rule passes)."""
+    weights = jnp.linspace(0.5, 1.5, x0.shape[0])
+
+    def total(actions):
+        def one(x, a):
+            x_next, _, reward, *_ = jenv.transition(x, a)
+            return x_next, reward
+
+        x, rewards = jax.lax.scan(one, x0, actions)
+        return jnp.sum(rewards) + jnp.sum(weights * jnp.where(jnp.isfinite(x), x, 0.0))
+
+    return total
+
+
+REVERSE_RTOL = 1e-10
+REVERSE_COMPILE = {
+    "BeadOnBar-v0": 9, "BeadOnBar-v1": 10, "ChaplyginSleigh-v0": 17, "FallingCat-v0": 34, "KapitzaPendulum-v0": 67,
+    "KapitzaSwingUp-v0": 73, "KozlovShell-v0": 22, "RollingBall-v0": 10, "RollingBallPose-v0": 12,
+    "RollingBallGoal-v0": 14, "RollingCoin-v0": 13, "Skier-v0": 170, "SnakeSwimmer-v0": 126, "Swing-v0": 19,
+    "TubeTwist-v0": 11,
+    "RollingCoinSurface-v0-surface=x**2/20 - y/4 + cos(x)*exp(-(y - 2)**2)/2": 7,
+}
+"""CPU seconds to build and compile the test below for the cases (by test id) left to CONNENV_ALL_GRADIENTS=1
+(measured at XLA's optimization level 0; Skier-v0's was stopped at 170 s, its trace alone takes 37 s): XLA compiles
+a step's transpose several times slower than its forward mode, and CI's budget takes the seven cases that compile
+in seconds, one per code path (the sympy surface's is the hill's). Their grad equals jacfwd too (measured:
+docs/guides/jax.md, Gradients)."""
+
+
+def _reverse_case(env_id, kwargs, name):
+    if name not in REVERSE_COMPILE:
+        return pytest.param(env_id, kwargs, id=name)
+    reason = f"its reverse mode compiles in ~{REVERSE_COMPILE[name]} s of CPU; CONNENV_ALL_GRADIENTS=1 runs it"
+    return pytest.param(env_id, kwargs, id=name, marks=pytest.mark.skipif(
+        not os.environ.get("CONNENV_ALL_GRADIENTS"), reason=reason))
+
+
+@pytest.mark.parametrize("env_id, kwargs", [_reverse_case(i, kw, name) for (i, kw), name in zip(CASES, IDS)])
+def test_reverse_mode_is_forward_mode_transposed(env_id, kwargs):
+    """jax.grad of a 2-step rollout's return (from the reset, random actions) equals jax.jacfwd's, both from one
+    linearization in one compiled function: reverse mode transposes the step's linearization, which needs every rule
+    it passes through linear in the tangents (the default tie rule, ties="linear"), forward mode pushes each action's
+    direction through it. A NaN (a derivative of a branch where leaves out, leaking) fails it."""
+    jenv, params = cj.make(env_id, **(kwargs() if callable(kwargs) else kwargs))
+    _, state = jenv.reset(jax.random.key(0), params)
+    actions = jax.random.uniform(jax.random.key(1), (2, *jenv.action_space(params).shape), minval=-0.6, maxval=0.6)
+    total = rollout_return(jenv, state.x, 2)
+
+    def both(actions):
+        _, linear = jax.linearize(total, actions)
+        (reverse,) = jax.linear_transpose(linear, actions)(1.0)  # jax.grad's transpose
+        basis = jnp.eye(actions.size).reshape(actions.size, *actions.shape)
+        return reverse, jax.vmap(linear)(basis).reshape(actions.shape)  # jax.jacfwd's columns
+
+    reverse, forward = (np.asarray(v) for v in jax.jit(both)(actions))
+    scale = np.max(np.abs(forward))
+    print(f"{jenv.name}: |grad − jacfwd| / max|jacfwd| = {np.max(np.abs(reverse - forward)) / scale:.2g}")
+    assert scale > 0.0 and np.all(np.isfinite(reverse)) and np.all(np.isfinite(forward))
+    assert np.max(np.abs(reverse - forward)) <= REVERSE_RTOL * scale
+
+
+def test_the_tie_rules_at_a_kink():
+    """max(a, b) at a tie a = b: under "linear" b's derivative in every direction, a selection by the values, which
+    reverse mode transposes; under "one-sided" the larger tangent's (the complex step's one-sided derivative), not
+    linear, which it cannot (JAX raises: an AssertionError or a TypeError in JAX 0.10); away from a tie both are the
+    derivative of the side the values pick. sort's tangents at a tie of the values: in the values' stable order under
+    "linear", by the tangents under "one-sided"."""
+    from connenv.jax.namespace import JAX, ties
+
+    maximum, minimum = JAX.maximum_one_sided, JAX.minimum_one_sided
+    weights = jnp.array([1.0, 2.0, 3.0])
+    values, tangents = jnp.array([1.0, 1.0, 0.0]), jnp.array([5.0, 2.0, 0.0])
+    with ties("linear"):
+        assert [float(jax.jvp(maximum, (1.0, 1.0), (t, 2.0))[1]) for t in (3.0, -3.0)] == [2.0, 2.0]
+        assert [float(jax.jvp(minimum, (1.0, 1.0), (t, 2.0))[1]) for t in (3.0, -3.0)] == [2.0, 2.0]
+        assert [float(g) for g in jax.grad(maximum, (0, 1))(1.0, 1.0)] == [0.0, 1.0]
+        assert [float(g) for g in jax.grad(maximum, (0, 1))(2.0, 1.0)] == [1.0, 0.0]
+        assert [float(g) for g in jax.grad(minimum, (0, 1))(2.0, 1.0)] == [0.0, 1.0]
+        assert np.asarray(jax.jvp(JAX.sort, (values,), (tangents,))[1]).tolist() == [0.0, 5.0, 2.0]
+        assert np.asarray(jax.grad(lambda a: JAX.sort(a) @ weights)(values)).tolist() == [2.0, 3.0, 1.0]
+    with ties("one-sided"):
+        assert [float(jax.jvp(maximum, (1.0, 1.0), (t, 2.0))[1]) for t in (3.0, -3.0)] == [3.0, 2.0]
+        assert [float(jax.jvp(minimum, (1.0, 1.0), (t, 2.0))[1]) for t in (3.0, -3.0)] == [2.0, -3.0]
+        assert np.asarray(jax.jvp(JAX.sort, (values,), (tangents,))[1]).tolist() == [0.0, 2.0, 5.0]
+        with pytest.raises((AssertionError, TypeError)):  # JAX 0.10's transpose of a comparison of tangents
+            jax.grad(maximum)(1.0, 1.0)
+    with pytest.raises(ValueError, match=r"ties='both'.*\['linear', 'one-sided'\]"):
+        cj.make("connenv/Swing-v0", ties="both")
+    jenv, params = cj.make("connenv/Swing-v0", ties="one-sided")  # the envs of other parameters trace by its rule
+    for change in ({"g": 9.0}, {"r_max": 2.1}):  # traced, static
+        other = jenv._for(cj.EnvParams(params.max_steps_in_episode, dataclasses.replace(params.physical, **change)))
+        assert other is not jenv and other.ties == "one-sided"
+
+
+def test_at_an_end_stop_the_tie_rules_take_their_sides():
+    """A rotor on a body (ActiveConstraint-v0, velocity control) with the rotor's angle u at its low stop and a command
+    beyond it: the stop's reach (u_low − u)/u̇ = 0 ties max(reach, 0). ∂x_next/∂x under ties="one-sided" is
+    model.jacobians' (the complex step's one-sided derivative: u moved inside the range travels to the stop, turning
+    the body); under "linear" it is the second argument's (the reach held at 0, u at the stop all step), which is
+    model.jacobians' from just beyond the stop (1e-9), where max takes its second argument; and there jax.jacrev is
+    jax.jacfwd, the rule being linear."""
+    from connenv import examples
+
+    kwargs = {**examples.rotor(), "control": "velocity", "max_control_speed": 2.0, "integrator": "rk4"}
+    env = gym.make("connenv/ActiveConstraint-v0", **kwargs).unwrapped
+    env.reset(seed=0, options={"state": {"u": [env.u_low[0]], "p": [0.3]}})
+    x, a = env.model.pack(env.state), np.array([-0.5])
+    beyond = x.copy()
+    beyond[env.model.state_names.index("u1")] -= 1e-9
+    (at_tie, _), (past_it, _) = (env.model.jacobians(v, a) for v in (x, beyond))
+    for ties, expected in (("one-sided", at_tie), ("linear", past_it)):
+        jenv, _ = cj.make("connenv/ActiveConstraint-v0", ties=ties, **kwargs)
+
+        def step(x, jenv=jenv):
+            return jenv.transition(x, jnp.asarray(a))[0]
+
+        forward = np.asarray(jax.jit(jax.jacfwd(step))(jnp.asarray(x)))
+        np.testing.assert_allclose(forward, expected, rtol=0.0, atol=1e-8, err_msg=ties)
+        if ties == "linear":
+            reverse = np.asarray(jax.jit(jax.jacrev(step))(jnp.asarray(x)))
+            np.testing.assert_allclose(reverse, forward, rtol=0.0, atol=1e-15)
+    assert np.max(np.abs(at_tie - past_it)) > 0.1  # the rotor's stop turns the body: the sides differ
+
+
+def test_the_kapitza_separatrix_loop_has_a_fixed_trip_count():
+    """The Kapitza pendulum's RK4 near the separatrix (its substeps per row from the segment's length): in a step
+    being traced (``stepping(dt)``) it runs the count of the longest segment, dt's, so that reverse mode
+    differentiates it (jax.grad equals jax.jacfwd), with the numpy code's numbers for one state; a segment longer than
+    dt needs more trips than the bound and is a failure."""
+    from connenv.jax.namespace import JAX, failures, stepping
+    from connenv.systems.kapitza import KapitzaPendulum
+
+    system = KapitzaPendulum(length=0.25)  # ω₀ = 6.26/s: dt = 0.01 s takes up to ⌈6.26⌉ = 7 substeps
+    theta, spin, tau = np.array([3.0, 3.1]), np.array([0.2, -0.1]), np.array([0.01, 0.0037])
+
+    def run(theta, spin, tau, dt):
+        with failures() as failed, stepping(dt):
+            out = system._near_separatrix(theta, spin, tau, JAX)
+            return jnp.stack(out), jnp.any(jnp.stack([jnp.any(c) for c, _ in failed]))
+
+    out, failed = jax.jit(run, static_argnums=3)(theta, spin, tau, 0.01)
+    assert not bool(failed)
+    for k in range(2):
+        expected = system._near_separatrix(float(theta[k]), float(spin[k]), float(tau[k]), FLOATS)
+        np.testing.assert_allclose(np.asarray(out)[:, k], expected, rtol=1e-15, atol=1e-15)
+    def value(theta, spin, tau):
+        return jnp.sum(run(theta, spin, tau, 0.01)[0] * jnp.array([[1.0], [0.3]]))
+
+    both = jax.jit(lambda *args: (jax.grad(value, (0, 1, 2))(*args), jax.jacfwd(value, (0, 1, 2))(*args)))
+    reverse, forward = both(theta, spin, tau)
+    for mine, theirs in zip(reverse, forward):
+        np.testing.assert_allclose(np.asarray(mine), np.asarray(theirs), rtol=1e-12, atol=1e-14)
+    assert bool(jax.jit(run, static_argnums=3)(theta, spin, tau, 0.005)[1])  # 7 substeps past dt = 0.005's 4

@@ -190,7 +190,11 @@ class FallingCatEnv(ConnectionEnv):
             return math.atan2(state.g[7], state.g[8]), spine_error, math.hypot(*state.s.tolist())
         spine, start = g[..., :, 0], H[..., :, 0]
         across = falling_cat.cross(spine, start)  # np.cross's products and differences
-        norm = ops.sqrt(np.sum(across * across, -1))  # np.linalg.norm's arithmetic on real rows
+        square = np.sum(across * across, -1)  # np.linalg.norm's arithmetic on real rows
+        # the spine on its start (across = 0, as the cat turns only about its spine): √'s derivative at 0 is infinite,
+        # times the tangent's 0 a NaN under JAX; √ of a square kept from 0 by where, the norm 0 there (derivative 0)
+        aligned = ops.real_part(square) == 0.0
+        norm = ops.where(aligned, 0.0, ops.sqrt(ops.where(aligned, 1.0, square)))
         spine_error = ops.atan2(norm, np.sum(spine * start, -1))
         return ops.atan2(g[..., 2, 1], g[..., 2, 2]), spine_error, ops.hypot(state.s[..., 0], state.s[..., 1])
 

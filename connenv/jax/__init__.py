@@ -20,9 +20,12 @@ def checked_kwargs(env_id: str) -> dict:
     return first() if callable(first) else dict(first)
 
 
-def make(env_id: str, **kwargs) -> tuple[FunctionalEnv, EnvParams]:
+def make(env_id: str, ties: str = "linear", **kwargs) -> tuple[FunctionalEnv, EnvParams]:
     """(env, params) of a registered id with its make kwargs: ``env.reset(key, params)``, ``env.step(key, state,
-    action, params)``. float64 is required, as exactness is what connenv is for: JAX computes in float32 unless
+    action, params)``. ``ties`` is the derivative of max, min and sort at a tie of their values (a pivot at its end
+    stop; `connenv.jax.namespace.TIES`): "linear" (the default), the second argument's (the command, the stop),
+    which forward and reverse mode both take and agree on; "one-sided", numpy's ``model.jacobians``' (the complex
+    step's), which forward mode alone takes (jvp, jacfwd). float64 is required, as exactness is what connenv is for: JAX computes in float32 unless
     ``jax.config.update("jax_enable_x64", True)`` was called first, which a library does not do behind its user's
     back; without it, a RuntimeError says so."""
     import jax
@@ -33,6 +36,9 @@ def make(env_id: str, **kwargs) -> tuple[FunctionalEnv, EnvParams]:
             "before making an env"
         )
     import connenv  # noqa: F401  (registers the ids)
+    from connenv.jax.namespace import check_ties
+
+    check_ties(ties)
 
     from connenv.envs.spec import registry, spec
 
@@ -42,7 +48,7 @@ def make(env_id: str, **kwargs) -> tuple[FunctionalEnv, EnvParams]:
     max_steps = gym.spec(env_id).max_episode_steps
     numpy_env = gym.make(env_id, **kwargs).unwrapped
     steps = kwargs.get("max_episode_steps", max_steps)
-    env = FunctionalEnv(numpy_env, steps)
+    env = FunctionalEnv(numpy_env, steps, ties)
     numpy_env.close()
     needs = getattr(numpy_env, "JAX_NEEDS", None)  # a builder: its user's functions may not trace
     if needs is not None:

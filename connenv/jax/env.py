@@ -13,12 +13,15 @@ The step is the numpy env's own code, traced: the task's ``command``, ``advance`
 ``reward`` and ``terminated`` run with ops = ``connenv.jax.namespace.JAX_TASK`` on rows of one (the numpy vector
 env's path), and the physics asks its arrays for their namespace. A step whose stepper fails (where the numpy env
 raises StepperError) holds the state, reports ``info["stepper_failed"]`` and ends the episode as truncated.
+Everything it traces runs within the env's tie rule (``ties``, `connenv.jax.namespace.TIES`): the derivative of
+max, min and sort at a tie, which decides whether reverse mode differentiates the step.
 """
 
 from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 from typing import Any
 
 import jax
@@ -26,7 +29,7 @@ import jax.numpy as jnp
 
 from connenv.core.backend import is_traced
 from connenv.core.context import Context
-from connenv.jax.namespace import JAX_TASK, failures
+from connenv.jax.namespace import JAX_TASK, check_ties, failures, stepping, ties
 from connenv.jax.random import KeyGenerator
 from connenv.jax.spaces import Box, Dict, space_of
 from connenv.jax.steppers import traced_stepper
@@ -57,6 +60,17 @@ class EnvParams:
     physical: Any
 
 
+def under_tie_rule(method):
+    """A method of FunctionalEnv that traces the env's code, run within its tie rule (``ties``)."""
+
+    @functools.wraps(method)
+    def traced(self, *args, **kwargs):
+        with ties(self.ties):
+            return method(self, *args, **kwargs)
+
+    return traced
+
+
 REGISTERED: set[type] = set()
 
 
@@ -72,7 +86,8 @@ def register_params(cls: type, static: tuple[str, ...]):
 class FunctionalEnv:
     """A registered env's step and reset as pure JAX functions (see the module); made by ``connenv.jax.make``."""
 
-    def __init__(self, env, max_episode_steps: int):
+    def __init__(self, env, max_episode_steps: int, ties: str = "linear"):
+        self.ties = check_ties(ties)  # the derivative at a tie of max, min and sort (connenv.jax.namespace.TIES)
         self.env = copy.deepcopy(env)
         self.model = self.env.model
         self.name = self.env.name
@@ -92,7 +107,7 @@ class FunctionalEnv:
         self._contexts = {}
 
     def __repr__(self):
-        return f"connenv.jax FunctionalEnv({self.name}, n={self.model.n}, m={self.model.m})"
+        return f"connenv.jax FunctionalEnv({self.name}, n={self.model.n}, m={self.model.m}, ties={self.ties!r})"
 
     @property
     def default_params(self) -> EnvParams:
@@ -134,7 +149,7 @@ class FunctionalEnv:
         if any(value != getattr(base, name) for name, value in static.items()):
             key = tuple(static.items())
             if key not in self._models:
-                other = FunctionalEnv(self.model.with_params(static).env, self.max_episode_steps)
+                other = FunctionalEnv(self.model.with_params(static).env, self.max_episode_steps, self.ties)
                 other._models = self._models
                 self._models[key] = other
             env = self._models[key]
@@ -191,6 +206,7 @@ class FunctionalEnv:
                                                                             jnp.asarray(action, float)[None])
         return jax.tree_util.tree_map(lambda v: v[0], (X_next, obs, reward, terminated, info, stalled))
 
+    @under_tie_rule
     def _advance_rows(self, X, A):
         """(X_next, obs, reward, terminated, info, failed) of rows X (N, n) under actions A (N, *shape): the numpy
         vector env's path, each a row's; a row whose step failed is marked in ``failed``."""
@@ -198,7 +214,7 @@ class FunctionalEnv:
         a = jnp.asarray(A, float).reshape(N, *self._action_space.shape)
         a = jnp.minimum(jnp.maximum(a, self._low), self._high)
         before = self.state_of(X)
-        with failures() as failed:
+        with failures() as failed, stepping(self.env.dt):  # the segments' bound: loops of a fixed trip count
             after = self.env.advance(before, self.env.command(a), self.stepper, JAX_TASK)
             X_next = self.flatten(after)
         stalled = jnp.zeros(N, bool)
@@ -224,6 +240,7 @@ class FunctionalEnv:
         info = {**info, "stepper_failed": failed}
         return obs, EnvState(x_next, time), reward.astype(float), terminated, truncated & ~terminated, info
 
+    @under_tie_rule
     def reset_env(self, key, params: EnvParams | None = None):
         """The starting state of the task's own distribution (its ``start``, drawing from the key): (obs, state)."""
         env = self._for(params).env

@@ -8,9 +8,10 @@ reads; JAX differentiates by its own forward mode, so there are no complex rows 
 rows that do not take it are left by ``where``), ``branch`` (a branch computed only where some row takes it:
 ``lax.cond`` on rows stepped in one call, both sides under vmap), ``all``, ``sort``, ``concatenate``, ``full`` and
 ``ceil`` (the bounded segments' and the Kapitza pendulum's), ``broadcast_arrays`` and ``broadcast_to`` (the
-connections'), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with
-ARRAYS' derivative at a tie (the one-sided one, as the complex step takes it: a pivot at its end stop; forward mode
-only), ``repeat`` (a loop to a trip count the numpy code reads off the rows' values), ``sinc`` and
+connections'), ``maximum_one_sided``/``minimum_one_sided`` and ``sort`` with the derivative at a tie of the trace's
+tie rule (``ties``: "linear", the second argument's, for forward and reverse mode; "one-sided", ARRAYS', as the
+complex step takes it at a pivot's end stop, forward mode only), ``repeat`` (a loop to a trip count the numpy code
+reads off the rows' values, at a fixed trip count where the step's ``longest_segment`` bounds it), ``sinc`` and
 ``nan_to_num`` (numpy's, which the falling cat's rows call), ``sinh`` and ``cosh`` (the bead's closed-form step),
 ``solve`` (numpy's linalg.solve, which the builders' Hamiltonian calls), ``atan2`` and ``hypot`` with ARRAYS'
 derivative (0 at the origin, where they have none), ``ellipj``/``ellipk`` (traceable Jacobi elliptic functions,
@@ -172,11 +173,70 @@ def fail(condition, message: str):
     _collectors[-1].append((jnp.asarray(condition), message))
 
 
-def repeat(counts, body, carry):
-    """body(i, carry) for i = 0, 1, … up to the largest of counts (an array over rows; traced): JAX's fori_loop, a
-    while_loop where the count is traced (differentiable in forward mode). body holds a row past its own count by
-    ``where``; a loop whose trip count the numpy code takes from the rows' values (``max``) runs so."""
-    return jax.lax.fori_loop(0, jnp.max(counts).astype(int), body, carry)
+_step_lengths: list[float] = []
+
+
+@contextlib.contextmanager
+def stepping(dt: float):
+    """The step being traced is dt long: every control segment within it lasts at most dt, which bounds the trip
+    count of a loop whose count the numpy code takes from a segment's length (``longest_segment``, ``repeat``)."""
+    _step_lengths.append(float(dt))
+    try:
+        yield
+    finally:
+        _step_lengths.pop()
+
+
+def longest_segment():
+    """The longest a control segment of the step being traced can last (its dt, a Python float), or None outside
+    connenv.jax's step."""
+    return _step_lengths[-1] if _step_lengths else None
+
+
+def repeat(counts, body, carry, most=None):
+    """body(i, carry) for i = 0, 1, … up to the largest of counts (an array over rows; traced); body holds a row past
+    its own count by ``where``, so that every further trip leaves the rows as they are. With most (a static bound on
+    the counts, a Python int) the loop runs most trips, a fixed trip count that JAX's reverse mode differentiates as
+    well as its forward mode, and a row whose count passes it is a failure (``fail``); without it, a while_loop to the
+    largest count (forward mode only)."""
+    if most is None:
+        return jax.lax.fori_loop(0, jnp.max(counts).astype(int), body, carry)
+    fail(counts > most, f"a loop of more than {most} trips (its static bound)")
+    return jax.lax.fori_loop(0, int(most), body, carry)
+
+
+TIES = ("linear", "one-sided")
+"""The derivative rules of max, min and sort at a tie of their values (a kink: a pivot at its end stop), chosen per
+functional env (``connenv.jax.make(id, ties=...)``). "linear", the default: the second argument's derivative (the
+command, a ramp's stop: see `connenv.core.backend.selected`), a stable sort's order of the tangents; a rule linear in
+the tangents, so that reverse mode (grad, vjp) transposes it and agrees with forward mode. "one-sided": the one-sided
+derivative along the tangent, ARRAYS' (the complex step's: ``model.jacobians``), which is not linear in the tangent
+at a tie: forward mode only (jvp, jacfwd). Away from ties both are the derivative of the side the values pick."""
+
+_tie_rules: list[str] = []
+
+
+def check_ties(rule: str) -> str:
+    """rule, if it is one of TIES; else a ValueError naming them."""
+    if rule not in TIES:
+        raise ValueError(f"ties={rule!r}: the tie rule of connenv.jax's max, min and sort is one of {list(TIES)}")
+    return rule
+
+
+@contextlib.contextmanager
+def ties(rule: str):
+    """Trace max, min and sort with this tie rule (one of TIES) within: read where they are called, so that the rule
+    of a traced function is the one its trace saw, whenever JAX differentiates it later."""
+    _tie_rules.append(check_ties(rule))
+    try:
+        yield
+    finally:
+        _tie_rules.pop()
+
+
+def tie_rule() -> str:
+    """The tie rule of the code being traced: the innermost ``ties`` context's, "linear" outside any."""
+    return _tie_rules[-1] if _tie_rules else TIES[0]
 
 
 def branch(taken, compute, otherwise, *operands):
@@ -204,10 +264,9 @@ def branch(taken, compute, otherwise, *operands):
     return result
 
 
-def one_sided(choose):
-    """maximum or minimum (choose) whose forward-mode derivative at a tie is the one-sided one along the tangent,
-    choose(ṫa, ṫb): ARRAYS' convention on a Jacobian's complex rows (`connenv.core.backend.selected`), where a row sits
-    on the kink (the pivot at its end stop). Its tangent is not linear there: forward mode only (jvp, jacfwd)."""
+def _selection(choose, first, name: str):
+    """maximum or minimum (choose) whose derivative is the first argument's where first(a, b, ṫa, ṫb, out) holds,
+    the second's elsewhere."""
 
     @jax.custom_jvp
     def function(a, b):
@@ -217,19 +276,43 @@ def one_sided(choose):
     def derivative(primals, tangents):
         (a, b), (ta, tb) = primals, tangents
         out = choose(a, b)
-        first = jnp.where(a == b, choose(ta, tb) == ta, choose(a, b) == a) | jnp.isnan(a)
-        return out, jnp.broadcast_to(jnp.where(first, ta, tb), jnp.shape(out)).astype(out.dtype)
+        return out, jnp.broadcast_to(jnp.where(first(a, b, ta, tb, out), ta, tb), jnp.shape(out)).astype(out.dtype)
 
-    function.__name__ = f"one_sided_{choose.__name__}"
+    function.__name__ = f"{name}_{choose.__name__}"
+    return function
+
+
+def one_sided(choose):
+    """maximum or minimum (choose) whose forward-mode derivative at a tie is the one-sided one along the tangent,
+    choose(ṫa, ṫb): ARRAYS' convention on a Jacobian's complex rows (`connenv.core.backend.selected`), where a row sits
+    on the kink (the pivot at its end stop). Its tangent is not linear there: forward mode only (jvp, jacfwd)."""
+    return _selection(choose, lambda a, b, ta, tb, out: jnp.where(a == b, choose(ta, tb) == ta, out == a)
+                      | jnp.isnan(a), "one_sided")
+
+
+def second_at_ties(choose):
+    """maximum or minimum (choose) whose derivative is the side's the values pick, at a tie the second argument's (a
+    NaN's where one is): a selection by the values alone, linear in the tangents (forward and reverse mode)."""
+    return _selection(choose, lambda a, b, ta, tb, out: ((a != b) & (out == a)) | jnp.isnan(a), "second_at_ties")
+
+
+def by_tie_rule(rules: dict):
+    """The function of the tie rule being traced (``tie_rule``), picked where it is called."""
+
+    def function(*args, **kwargs):
+        return rules[tie_rule()](*args, **kwargs)
+
+    function.__name__ = rules[TIES[0]].__name__
     return function
 
 
 def sort(a, axis=-1):
-    """jnp.sort on the last axis, its forward-mode tangents ordered as numpy's sort orders a Jacobian's complex rows:
-    ties of the values by their tangents (the one-sided derivative; forward mode only)."""
+    """jnp.sort on the last axis, its tangents ordered by the tie rule (``ties``): "linear", a stable sort's order of
+    the values (ties in their order); "one-sided", as numpy's sort orders a Jacobian's complex rows: ties of the values
+    by their tangents (the one-sided derivative; forward mode only)."""
     if axis != -1:
         raise ValueError("connenv.jax's sort sorts the last axis")
-    return _sort_last(a)
+    return (_sort_last if tie_rule() == "one-sided" else _stable_sort_last)(a)
 
 
 @jax.custom_jvp
@@ -242,6 +325,18 @@ def _sort_jvp(primals, tangents):
     (a,), (ta,) = primals, tangents
     order = jnp.lexsort((ta, a), axis=-1)
     return jnp.sort(a, axis=-1), jnp.take_along_axis(ta, order, axis=-1)  # the values: ties are equal
+
+
+@jax.custom_jvp
+def _stable_sort_last(a):
+    return jnp.sort(a, axis=-1)
+
+
+@_stable_sort_last.defjvp
+def _stable_sort_jvp(primals, tangents):
+    (a,), (ta,) = primals, tangents
+    order = jnp.argsort(a, axis=-1, stable=True)
+    return jnp.sort(a, axis=-1), jnp.take_along_axis(ta, order, axis=-1)
 
 
 @jax.custom_jvp
@@ -309,8 +404,8 @@ JAX = operations(
     real_part=lambda x: x,
     all=jnp.all,
     sort=sort,
-    maximum_one_sided=one_sided(jnp.maximum),
-    minimum_one_sided=one_sided(jnp.minimum),
+    maximum_one_sided=by_tie_rule({"linear": second_at_ties(jnp.maximum), "one-sided": one_sided(jnp.maximum)}),
+    minimum_one_sided=by_tie_rule({"linear": second_at_ties(jnp.minimum), "one-sided": one_sided(jnp.minimum)}),
     concatenate=jnp.concatenate,
     full=jnp.full,
     ceil=jnp.ceil,
@@ -318,6 +413,7 @@ JAX = operations(
     broadcast_arrays=jnp.broadcast_arrays,
     broadcast_to=jnp.broadcast_to,
     repeat=repeat,
+    longest_segment=longest_segment,
     branch=branch,
     ellipj=ellipj,
     ellipk=ellipk,

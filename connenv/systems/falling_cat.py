@@ -296,9 +296,14 @@ def disc_segment(s, s_dot, max_bend: float, dt: float):
     c = minimum(np.sum(s * s, -1) - max_bend**2, 0.0)  # ≤ 0: s is in the disc
     end = s + v * dt
     inside = real(np.sum(end * end, -1)) <= max_bend**2
-    root = xp.sqrt(b * b - 4 * a * xp.where(inside, 0.0, c))
+    # the rows that stay inside take no root and no quotient (their τ is dt), nor a row the quotient it does not take:
+    # each kept from 0 by where (a where's branch not taken must stay finite: reverse mode multiplies its cotangent 0
+    # by the branch's derivative, NaN where that is infinite)
+    outward = real(b) >= 0
+    root = xp.sqrt(xp.where(inside, 1.0, b * b - 4 * a * c))
     with np.errstate(divide="ignore", invalid="ignore"):
-        reach = xp.where(real(b) >= 0, -2 * c / (b + root), (root - b) / (2 * a))
+        reach = xp.where(outward, -2 * c / xp.where(outward & ~inside, b + root, 1.0),
+                         (root - b) / xp.where(outward | inside, 1.0, 2 * a))
     reach = xp.nan_to_num(reach)
     tau = xp.where(inside, dt, np.clip(reach, 0.0, dt) if ops is np else minimum(maximum(reach, 0.0), dt))
     edge = s + v * tau[..., None]

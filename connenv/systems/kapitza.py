@@ -157,16 +157,21 @@ class KapitzaPendulum:
 
     def _near_separatrix_traced(self, theta, spin, tau, ops):
         """_near_separatrix on traced rows: each row's substeps from its own τ (the numpy code's count for one
-        state), run up to the rows' largest count with the rows past theirs held by ``where``."""
+        state), run with the rows past theirs held by ``where`` up to a fixed trip count, the count of the longest
+        segment the step can have (its dt: the same arithmetic, monotone in τ), so that reverse mode differentiates it;
+        a row needing more is a failure (ops.repeat)."""
         tau = tau + 0.0 * theta  # a length per row
         substeps = ops.maximum(1.0, ops.ceil(ops.sqrt(self.g / self.length) * ops.real_part(tau) / SEPARATRIX_STEP))
         h = tau / substeps
+        longest = ops.longest_segment()  # the step's dt: a static bound on τ, so on the count (monotone in τ)
+        most = None if longest is None else max(1, math.ceil(math.sqrt(self.g / self.length) * longest
+                                                             / SEPARATRIX_STEP))
 
         def substep(i, state):
             stepped, taken = self._rk4_step(*state, h, ops.sin), i < substeps
             return tuple(ops.where(taken, new, old) for new, old in zip(stepped, state))
 
-        return ops.repeat(substeps, substep, (theta, spin))
+        return ops.repeat(substeps, substep, (theta, spin), most)
 
     @cached_property
     def _pendulum(self) -> Swing:
