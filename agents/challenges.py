@@ -59,14 +59,17 @@ def chart(curves: dict[str, list[dict]], path: Path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(len(curves), 2, figsize=(10, 3.4 * len(curves)), squeeze=False)
+    fig, axes = plt.subplots(len(curves), 3, figsize=(14, 3.4 * len(curves)), squeeze=False)
     for row, (env_id, seeds) in enumerate(curves.items()):
         for i, c in enumerate(seeds):
             axes[row, 0].plot(c["steps"], c["success"], lw=1, label=f"seed {i}")
             axes[row, 1].plot(np.asarray(c["seconds"]) / 60, c["success"], lw=1)
+            axes[row, 2].plot(c["steps"], c["return"], lw=1)
         for ax, x in zip(axes[row], ("environment steps per seed", "wall time of the run (min)")):
             ax.set(xlabel=x, ylabel="success (deterministic, JAX env)", ylim=(-0.02, 1.02),
                    title=env_id.split("/")[-1])  # fmt: skip
+        axes[row, 2].set(xlabel="environment steps per seed", ylabel="return (deterministic, JAX env)",
+                         title=env_id.split("/")[-1])  # fmt: skip
         axes[row, 0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -91,7 +94,8 @@ def page(runs: Path, path: Path, command: str) -> str:
             ret = f"{unseen['return_mean']:.4g}" if "return_mean" in unseen else "–"
             last = f"{c['success'][-1]:.0%}" if c["success"] else "–"
             minutes = f"{result.get('train_seconds', np.nan) / 60:.1f}" if result else "–"
-            lines.append(f"| {folder.name.rsplit('_s', 1)[1]} | {result.get('status', 'running')} | "
+            status = result.get("status", "stopped without results.json (killed): its curves to its last checkpoint")
+            lines.append(f"| {folder.name.rsplit('_s', 1)[1]} | {status} | "
                          f"{result.get('timesteps', c['steps'][-1] if c['steps'] else 0):,} | {minutes} | {last} | "
                          f"{success} | {ret} |")  # fmt: skip
         lines.append("")
@@ -103,9 +107,10 @@ def page(runs: Path, path: Path, command: str) -> str:
         f"train.py --backend jax --env ID --seeds 5 --hyperparams {HYPERPARAMS} --eval-seed 100000` (PPO compiled "
         "with the env, 256 rows per seed; the hyperparameters' file says why each). A run stopped before its "
         "n_timesteps (Ctrl-C) is marked interrupted with the steps it reached; `--resume` continues it from its "
-        "last checkpoint.",
+        "last checkpoint. A run that stopped short of its n_timesteps (the table's steps) shows the curves so far, "
+        "not the budget's result.",
         "",
-        f"![success against steps and wall time]({path.with_suffix('.png').name})",
+        f"![success against steps and wall time, return against steps]({path.with_suffix('.png').name})",
         "",
     ]
     return "\n".join(head + lines)
