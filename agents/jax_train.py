@@ -111,8 +111,9 @@ def _latest(folder: Path) -> int | None:
 
 
 def claim(folders: list[Path], resume: bool, overwrite: bool) -> int | None:
-    """The step all seeds resume from, or None: agents.train.claim_run_folder of each folder, which must agree."""
-    from agents.train import claim_run_folder
+    """The step all seeds resume from, or None: agents.run_folders.claim_run_folder of each folder, which must
+    agree."""
+    from agents.run_folders import claim_run_folder
 
     steps = {claim_run_folder(folder, resume, overwrite) for folder in folders}
     if len(steps) > 1:

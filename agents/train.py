@@ -53,7 +53,6 @@ from __future__ import annotations
 
 import argparse
 import inspect
-import itertools
 import os
 import sys
 import time
@@ -73,6 +72,7 @@ from tqdm import TqdmExperimentalWarning
 import agents
 from agents import curriculum, evaluate
 from agents.controllers import CONTROLLERS
+from agents.run_folders import claim_run_folder, holds_run, latest_checkpoint, move_aside  # noqa: F401 (train.py's API)
 from agents.vec_env import make_native_vec_env
 from connenv import cli
 
@@ -194,45 +194,6 @@ class Checkpoints(CheckpointCallback):
                 for old in path.glob(f"rl_model_{kind}{before}_steps.*"):
                     old.unlink()
         self.saved = self.num_timesteps
-
-
-def latest_checkpoint(run: Path) -> int | None:
-    """The steps of the run folder's last completed checkpoint, or None."""
-    latest = run / "checkpoints" / "latest"
-    return int(latest.read_text()) if latest.is_file() else None
-
-
-def holds_run(run: Path) -> bool:
-    """Whether the folder holds a run: rl-zoo3 writes {env}/config.yml before any model, evaluation or checkpoint."""
-    return any(run.glob("*/config.yml"))
-
-
-def move_aside(run: Path) -> Path:
-    """Rename the run folder to {run}.{date-time} (with a counter if that is taken); return the new path."""
-    name = f"{run.name}.{time.strftime('%Y%m%d-%H%M%S')}"
-    aside = run.with_name(name)
-    for n in itertools.count(1):
-        if not aside.exists():
-            return run.rename(aside)
-        aside = run.with_name(f"{name}-{n}")
-
-
-def claim_run_folder(run: Path, resume: bool, overwrite: bool) -> int | None:
-    """The step to resume from, or None to train from step 0, once the run folder is free for this run: an earlier
-    run in it is continued from its last checkpoint with `resume`, moved aside with `overwrite` and refused without
-    either. Raises FileExistsError naming the folder and the ways out."""
-    steps = latest_checkpoint(run)
-    if not holds_run(run) or (resume and steps is not None):
-        if resume and steps is None:
-            print(f"{run}: no checkpoint to resume from, training from step 0")
-        return steps if resume else None
-    if overwrite:
-        print(f"{run} held a run: moved aside to {move_aside(run)}")
-        return None
-    aside = f"--overwrite moves it aside to {run}.<date-time> and trains anew"
-    if steps is None:
-        raise FileExistsError(f"{run} holds a run with no checkpoint to resume from: {aside}")
-    raise FileExistsError(f"{run} holds a run: --resume continues it from its checkpoint at step {steps}, {aside}")
 
 
 class TrainingInterrupted(KeyboardInterrupt):
