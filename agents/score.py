@@ -102,7 +102,8 @@ def aggregates(scores: dict[str, list[float]]) -> dict:
     return {"iqm": interval(pooled(iqm), envs), "optimality_gap": interval(pooled(optimality_gap), envs)}
 
 
-LABELS = {"ppo_jax": "PPO (JAX)"}  # train.py --backend jax's PPO (agents.jax_ppo); the others: their names in capitals
+LABELS = {"ppo_jax": "PPO (JAX)"}
+UNSHIPPED = ("ppo_jax",)  # algorithms whose runs are scored but of which no pretrained model ships  # train.py --backend jax's PPO (agents.jax_ppo); the others: their names in capitals
 
 
 def algo_label(algo: str) -> str:
@@ -150,6 +151,8 @@ def env_table(data: dict) -> list[str]:
         for algo, runs in env_scores(entry).items():
             cells = [mean_interval([run[key] for run in runs]) for key in ("success", "return", "score")]
             shipped = [f"{run['seed']}: {100 * run['success']:.0f}%, {run['score']:.3g}" for run in runs if run.get("shipped")]
+            if algo in UNSHIPPED:
+                shipped = ["none shipped"]
             lines.append(
                 f"| | {algo_label(algo)} | {', '.join(str(run['seed']) for run in runs)} | {cell(*cells[0], percent=True)} "
                 f"| {cell(*cells[1])} | {cell(*cells[2])} | {shipped[0] if shipped else 'an earlier round (below)'} |"
@@ -213,6 +216,9 @@ def aggregate_table(run_sets: dict[str, dict]) -> tuple[list[str], dict]:
     numbers = {}
     for key, scores in run_sets.items():
         for algo, by_env in sorted(scores.items()):
+            by_env = {env_id: runs for env_id, runs in by_env.items() if runs}  # shipped sets: none of an unshipped
+            if not by_env:
+                continue
             result = aggregates(by_env)
             numbers[(key, algo)] = result
             n_runs = sum(map(len, by_env.values()))
