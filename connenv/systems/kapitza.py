@@ -33,7 +33,7 @@ from functools import cached_property
 
 import numpy as np
 
-from connenv.core.backend import ARRAYS, FLOATS, floats, namespace, traced
+from connenv.core.backend import ARRAYS, FLOATS, floats, is_traced, namespace, traced
 from connenv.systems.swing import Swing
 
 FLOAT = np.dtype(float)  # the dtype of the states numpy makes, one object: `_frame` tells it by identity
@@ -164,8 +164,9 @@ class KapitzaPendulum:
         substeps = ops.maximum(1.0, ops.ceil(ops.sqrt(self.g / self.length) * ops.real_part(tau) / SEPARATRIX_STEP))
         h = tau / substeps
         longest = ops.longest_segment()  # the step's dt: a static bound on τ, so on the count (monotone in τ)
-        most = None if longest is None else max(1, math.ceil(math.sqrt(self.g / self.length) * longest
-                                                             / SEPARATRIX_STEP))
+        # traced g or length (connenv.jax's traced parameters) have no static bound: a loop to the largest count
+        static = longest is not None and not (is_traced(self.g) or is_traced(self.length))
+        most = max(1, math.ceil(math.sqrt(self.g / self.length) * longest / SEPARATRIX_STEP)) if static else None
 
         def substep(i, state):
             stepped, taken = self._rk4_step(*state, h, ops.sin), i < substeps
