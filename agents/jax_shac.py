@@ -47,6 +47,8 @@ import optax
 from agents import jax_policy, jax_ppo
 from agents.jax_policy import forward
 
+SHAC_LOSSES = ("actor_loss", "critic_loss", "grad_norm", "nonfinite", "std", "stepper_failures")
+
 ALGO = "shac_jax"
 APG_ALGO = "apg_jax"
 
@@ -323,7 +325,7 @@ def train(env_id: str, config: Config, seeds: list[int], runs: Path, eval_episod
     jax.config.update("jax_enable_x64", True)  # connenv.jax computes the physics in float64
     import connenv.jax
     from agents import evaluate
-    from agents.jax_train import write_progress
+    from agents.jax_train import record_chunk, write_records
 
     folders = [run_folder(runs, env_id, seed, config.algo) for seed in seeds]
     for folder in folders:
@@ -352,39 +354,15 @@ def train(env_id: str, config: Config, seeds: list[int], runs: Path, eval_episod
         timesteps = updates * config.rollout
         wall = time.perf_counter() - train_start
         metrics, evaluation = jax.tree_util.tree_map(np.asarray, (metrics, evaluation))
-        for i, (seed, folder) in enumerate(zip(seeds, folders)):
-            returns, successes = evaluation["return"][i], evaluation["success"][i]
-            record = evaluations[seed]
-            record["timesteps"].append(timesteps)
-            record["results"].append(returns.tolist())
-            record["successes"].append(successes.tolist())
-            for u in range(config.updates_per_eval):
-                episodes = int(metrics["episodes"][i, u])
-                progress[seed].append({
-                    "timesteps": (updates - config.updates_per_eval + u + 1) * config.rollout,
-                    "seconds": wall,
-                    "episodes": episodes,
-                    "episode_return": metrics["episode_return"][i, u] / max(episodes, 1),
-                    "success": metrics["successes"][i, u] / max(episodes, 1),
-                    "eval_return": float(np.mean(returns)),
-                    "eval_success": float(np.mean(successes)),
-                    **{k: float(metrics[k][i, u]) for k in ("actor_loss", "critic_loss", "grad_norm", "nonfinite",
-                                                             "std", "stepper_failures")},
-                })  # fmt: skip
-            if np.mean(returns) > best[seed]:
-                best[seed] = float(np.mean(returns))
-                jax_policy.save(folder / "best_policy.npz", *trainer.policy_arrays(runner, i), meta)
+        record_chunk(trainer, runner, seeds, folders, evaluations, progress, best, meta, metrics, evaluation,
+                     updates, wall, SHAC_LOSSES, eval_means=True)  # fmt: skip
         say(f"{timesteps:>10} steps  {wall:7.1f} s  evaluation: return {np.mean(evaluation['return']):.4g}, "
             f"success {np.mean(evaluation['success']):.0%} (mean of {len(seeds)} seeds)", flush=True)  # fmt: skip
     train_seconds = time.perf_counter() - train_start
     timesteps = updates * config.rollout
-    for i, (seed, folder) in enumerate(zip(seeds, folders)):
+    for i, folder in enumerate(folders):
         jax_policy.save(folder / "policy.npz", *trainer.policy_arrays(runner, i), meta)
-        record = evaluations[seed]
-        np.savez(folder / "evaluations.npz", timesteps=np.array(record["timesteps"]),
-                 results=np.array(record["results"]), successes=np.array(record["successes"]),
-                 ep_lengths=np.zeros_like(np.array(record["results"])))  # fmt: skip
-        write_progress(folder, progress[seed])
+    write_records(seeds, folders, evaluations, progress)
     say(f"trained {len(seeds)} seeds × {timesteps} timesteps in {train_seconds:.1f} s (+ {compile_seconds:.1f} s "
         "compiling)", flush=True)  # fmt: skip
     specs = [f"jax:{folder / 'best_policy.npz'}" for folder in folders]

@@ -137,6 +137,40 @@ def read_progress(folder: Path) -> list[dict]:
         return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(file)]
 
 
+PPO_LOSSES = ("policy_loss", "value_loss", "entropy", "approx_kl", "clip_fraction", "stepper_failures")
+
+
+def record_chunk(trainer, runner, seeds, folders, evaluations: dict, progress: dict, best: dict, meta: dict,
+                 metrics: dict, evaluation: dict, updates: int, wall: float, losses: tuple[str, ...],
+                 eval_means: bool = False):  # fmt: skip
+    """After a chunk of updates (numpy metrics (S, updates) and evaluation (S, episodes)): each seed's evaluation
+    and per-update progress rows appended (with eval_means, the evaluation's mean return and success in each row), and
+    best_policy.npz saved where the evaluation's mean return is the seed's best so far. Shared by the trainers on
+    connenv.jax (PPO here, agents.jax_shac)."""
+    config = trainer.config
+    for i, (seed, folder) in enumerate(zip(seeds, folders)):
+        returns, successes = evaluation["return"][i], evaluation["success"][i]
+        record = evaluations[seed]
+        record["timesteps"].append(updates * config.rollout)
+        record["results"].append(returns.tolist())
+        record["successes"].append(successes.tolist())
+        means = {"eval_return": float(np.mean(returns)), "eval_success": float(np.mean(successes))} if eval_means else {}
+        for u in range(config.updates_per_eval):
+            episodes = int(metrics["episodes"][i, u])
+            progress[seed].append({
+                "timesteps": (updates - config.updates_per_eval + u + 1) * config.rollout,
+                "seconds": wall,
+                "episodes": episodes,
+                "episode_return": metrics["episode_return"][i, u] / max(episodes, 1),
+                "success": metrics["successes"][i, u] / max(episodes, 1),
+                **means,
+                **{k: float(metrics[k][i, u]) for k in losses},
+            })  # fmt: skip
+        if np.mean(returns) > best[seed]:
+            best[seed] = float(np.mean(returns))
+            jax_policy.save(folder / "best_policy.npz", *trainer.policy_arrays(runner, i), meta)
+
+
 def wait(tree, poll: float = 0.05):
     """Until every array of the tree is computed, in short sleeps rather than one blocking call, so that Ctrl-C
     interrupts at once (Python handles a signal between its own steps, not inside XLA's wait)."""
@@ -226,26 +260,8 @@ def run(args: argparse.Namespace) -> dict:
             timesteps = updates * config.rollout
             wall = time.perf_counter() - train_start
             metrics, evaluation = jax.tree_util.tree_map(np.asarray, (metrics, evaluation))
-            for i, (seed, folder) in enumerate(zip(seeds, folders)):
-                returns, successes = evaluation["return"][i], evaluation["success"][i]
-                record = evaluations[seed]
-                record["timesteps"].append(timesteps)
-                record["results"].append(returns.tolist())
-                record["successes"].append(successes.tolist())
-                for u in range(config.updates_per_eval):
-                    episodes = int(metrics["episodes"][i, u])
-                    progress[seed].append({
-                        "timesteps": (updates - config.updates_per_eval + u + 1) * config.rollout,
-                        "seconds": wall,
-                        "episodes": episodes,
-                        "episode_return": metrics["episode_return"][i, u] / max(episodes, 1),
-                        "success": metrics["successes"][i, u] / max(episodes, 1),
-                        **{k: float(metrics[k][i, u]) for k in ("policy_loss", "value_loss", "entropy", "approx_kl",
-                                                                 "clip_fraction", "stepper_failures")},
-                    })  # fmt: skip
-                if np.mean(returns) > best[seed]:
-                    best[seed] = float(np.mean(returns))
-                    jax_policy.save(folder / "best_policy.npz", *trainer.policy_arrays(runner, i), meta)
+            record_chunk(trainer, runner, seeds, folders, evaluations, progress, best, meta, metrics, evaluation,
+                         updates, wall, PPO_LOSSES)  # fmt: skip
             mean_success = np.mean(evaluation["success"])
             print(f"{timesteps:>10} steps  {wall:7.1f} s  evaluation: return {np.mean(evaluation['return']):.4g}, "
                   f"success {mean_success:.0%} (mean of {len(seeds)} seeds)", flush=True)  # fmt: skip
