@@ -108,18 +108,30 @@ class Config:
 # -- the policy -----------------------------------------------------------------------------------------------------
 
 
+def orthogonal(key, shape: tuple[int, int], gain: float):
+    """`jax.nn.initializers.orthogonal(gain)(key, shape, float32)`'s draw, its QR taken by numpy on the host: XLA:CPU's
+    LAPACK QR of a batch (the seeds' inits, vmapped) waits for its parts on the thread pool it runs on, and where that
+    pool has two threads (2 cores) two such waits deadlock the program."""
+    n_rows, n_cols = shape
+    wide = n_rows < n_cols
+    A = np.asarray(jax.random.normal(key, (n_cols, n_rows) if wide else shape, jnp.float32), float)
+    Q, R = np.linalg.qr(A)
+    Q = Q * np.sign(np.diag(R))
+    return jnp.asarray(gain * (Q.T if wide else Q), jnp.float32)
+
+
 def init_layers(key, sizes: list[int], last_gain: float):
     """SB3's initialization: orthogonal weights of gain √2 (the last layer's `last_gain`), zero biases; float32."""
     layers = []
     keys = jax.random.split(key, len(sizes) - 1)
     for i, (n_in, n_out) in enumerate(itertools.pairwise(sizes)):
         gain = last_gain if i == len(sizes) - 2 else math.sqrt(2)
-        W = jax.nn.initializers.orthogonal(gain)(keys[i], (n_in, n_out), jnp.float32)
-        layers.append((W, jnp.zeros(n_out, jnp.float32)))
+        layers.append((orthogonal(keys[i], (n_in, n_out), gain), jnp.zeros(n_out, jnp.float32)))
     return layers
 
 
 def init_params(key, obs_dim: int, act_dim: int, config: Config) -> dict:
+    """One seed's networks, drawn on the host (not traceable: see `orthogonal`)."""
     k_pi, k_vf = jax.random.split(key)
     sizes = list(config.net_arch)
     return {
@@ -127,6 +139,15 @@ def init_params(key, obs_dim: int, act_dim: int, config: Config) -> dict:
         "vf": init_layers(k_vf, [obs_dim, *sizes, 1], 1.0),
         "log_std": jnp.full(act_dim, config.log_std_init, jnp.float32),
     }
+
+
+def init_runners(trainer, keys, config: Config) -> dict:
+    """The runners of the seeds' keys (S,): each key split in (networks, reset, runner's own), the networks drawn on
+    the host (`init_params`), the rest by the trainer's compiled, vmapped `_init(keys, params)`."""
+    splits = jax.vmap(lambda key: jax.random.split(key, 3))(keys)
+    nets = [init_params(k, trainer.obs_dim, trainer.act_dim, config) for k in splits[:, 0]]
+    params = jax.tree_util.tree_map(lambda *leaves: jnp.stack(leaves), *nets)
+    return trainer.init_rows(splits[:, 1:], params)
 
 
 def log_prob(mean, log_std, action):
@@ -191,7 +212,11 @@ class Trainer:
             optax.clip_by_global_norm(config.max_grad_norm), optax.adam(learning_rate=learning_rate, eps=1e-5)
         )
         self.run = jax.jit(self._run)  # of runners with a leading seed axis (init's)
-        self.init = jax.jit(jax.vmap(self._init))
+        self.init_rows = jax.jit(jax.vmap(self._init))
+
+    def init(self, keys) -> dict:
+        """The runners of the seeds' keys (S,)."""
+        return init_runners(self, keys, self.config)
 
     def meta(self, env_id: str) -> dict:
         return {"env": env_id, "obs_keys": self.obs_keys, "clip_obs": self.config.clip_obs,
@@ -206,10 +231,9 @@ class Trainer:
         s = runner["obs_stats"]
         return normalize(obs, s["mean"], s["var"], self.config.clip_obs, jnp).astype(jnp.float32)
 
-    def _init(self, key) -> dict:
+    def _init(self, keys, params) -> dict:
         c = self.config
-        k_params, k_reset, key = jax.random.split(key, 3)
-        params = init_params(k_params, self.obs_dim, self.act_dim, c)
+        k_reset, key = keys
         obs, state = self.env.reset_rows(k_reset, c.n_envs, self.env_params)
         return {
             "params": params,

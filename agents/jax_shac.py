@@ -123,18 +123,21 @@ class Trainer(jax_ppo.Trainer):
         self.critic_opt = optax.chain(optax.clip_by_global_norm(c.max_grad_norm),
                                       optax.adam(schedule(c.critic_lr, critic_steps, c.linear_lr), b1, b2))  # fmt: skip
         self.run = jax.jit(self._run)
-        self.init = jax.jit(jax.vmap(self._init))
+        self.init_rows = jax.jit(jax.vmap(self._init))
 
     dtype = jnp.float32  # the networks' inputs (float64: the loss computed in float64 throughout, as the test does)
 
     def normalized(self, runner, obs):
         return jax_ppo.Trainer.normalized(self, runner, obs).astype(self.dtype)
 
-    def _init(self, key) -> dict:
+    def init(self, keys) -> dict:
+        """The runners of the seeds' keys (S,), drawn as PPO's."""
+        ppo_like = jax_ppo.Config(n_timesteps=1, net_arch=self.config.net_arch, log_std_init=self.config.log_std_init)
+        return jax_ppo.init_runners(self, keys, ppo_like)
+
+    def _init(self, keys, params) -> dict:
         c = self.config
-        k_params, k_reset, key = jax.random.split(key, 3)
-        ppo_like = jax_ppo.Config(n_timesteps=1, net_arch=c.net_arch, log_std_init=c.log_std_init)
-        params = jax_ppo.init_params(k_params, self.obs_dim, self.act_dim, ppo_like)
+        k_reset, key = keys
         obs, state = self.env.reset_rows(k_reset, c.n_envs, self.env_params)
         actor = {"pi": params["pi"], "log_std": params["log_std"]}
         return {

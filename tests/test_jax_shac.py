@@ -27,7 +27,8 @@ def setup():
                              critic_minibatches=1, eval_episodes=1)  # fmt: skip
     trainer = jax_shac.Trainer(env, params, config)
     trainer.dtype = float
-    runners = jax.vmap(trainer._init)(jnp.stack([jax.random.key(0)]))  # eager: no compile
+    with jax.disable_jit():  # eager: no compile
+        runners = trainer.init(jnp.stack([jax.random.key(0)]))
     # float64 weights and inputs, so that a central difference resolves the derivative
     runners = {**runners, "params": jax.tree_util.tree_map(lambda v: v.astype(float), runners["params"]),
                "target_vf": jax.tree_util.tree_map(lambda v: v.astype(float) + 0.1, runners["target_vf"])}  # fmt: skip

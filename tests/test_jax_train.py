@@ -109,6 +109,27 @@ def test_a_run_trains_seeds_together_and_leaves_policies_numpy_runs(tmp_path):
         train.main(argv)
 
 
+def test_the_networks_are_drawn_orthogonal_as_jaxs_initializer_draws_them_and_several_seeds_start():
+    """The weights drawn on the host are JAX's orthogonal draw (the same normal matrix, its QR by numpy: to float32
+    rounding) and orthogonal (WᵀW or WWᵀ = gain² I); two seeds' runners start (their vmapped init deadlocked XLA:CPU
+    on 2 cores while it took a batched LAPACK QR)."""
+    key = jax.random.key(7)
+    for shape, gain in [((3, 64), 1.5), ((64, 64), 2**0.5), ((64, 1), 0.01)]:
+        W = np.asarray(jax_ppo.orthogonal(key, shape, gain), float)
+        reference = jax.nn.initializers.orthogonal(gain)(key, shape, jnp.float32)  # one matrix: no batched QR
+        np.testing.assert_allclose(W, reference, atol=2e-6 * gain)
+        gram = W.T @ W if shape[0] >= shape[1] else W @ W.T
+        np.testing.assert_allclose(gram, gain**2 * np.eye(min(shape)), atol=1e-6 * gain**2)
+    import connenv.jax
+
+    env, params = connenv.jax.make("connenv/FallingCat-v0")
+    hyperparams = {"n_timesteps": 64, "n_envs": 2, "n_steps": 8, "batch_size": 16}
+    trainer = jax_ppo.Trainer(env, params, jax_ppo.Config.from_hyperparams(hyperparams))
+    runners = jax.block_until_ready(trainer.init(jnp.stack([jax.random.key(s) for s in range(4)])))
+    assert runners["params"]["pi"][0][0].shape == (4, trainer.obs_dim, 64)
+    assert not np.array_equal(runners["params"]["pi"][0][0][0], runners["params"]["pi"][0][0][1])  # seeds differ
+
+
 def _trainer(env, params, hyperparams):
     entry = jax_train.hyperparams_entry(hyperparams, "connenv/Swing-v0")
     return jax_ppo.Trainer(env, params, jax_ppo.Config.from_hyperparams(entry))
