@@ -123,9 +123,11 @@ def train_argv(
     timesteps: int | None = None,
     evaluations: int = EVALUATIONS,
     book: str = "",
+    episodes: tuple[int, int] | None = None,
 ) -> list[str]:
     """train.py's arguments for a run: a periodic evaluation and a checkpoint `evaluations` times, resumed from its
-    last checkpoint if it has one; the hyperparameters of `book`, written into the run folder (BOOK) for train.py."""
+    last checkpoint if it has one; the hyperparameters of `book`, written into the run folder (BOOK) for train.py;
+    `episodes`: (each periodic evaluation's, the final table's) episodes, (10, FINAL_EPISODES) by default."""
     timesteps = timesteps or int(float(hyperparams(algo, env_id, book)["n_timesteps"]))
     argv = ["--env", env_id, "--algo", algo, "--seed", str(seed), "--runs", str(runs), "--timesteps", str(timesteps)]
     if book:
@@ -134,7 +136,9 @@ def train_argv(
         path.write_text(yaml.safe_dump({env_id: hyperparams(algo, env_id, book)}))
         argv += ["--hyperparams", str(path)]
     frequency = str(max(timesteps // evaluations, 1))
-    argv += ["--eval-freq", frequency, "--checkpoint-freq", frequency, "--eval-episodes", str(FINAL_EPISODES)]
+    periodic, final = episodes or (None, FINAL_EPISODES)
+    argv += ["--eval-freq", frequency, "--checkpoint-freq", frequency, "--eval-episodes", str(final)]
+    argv += ["--periodic-episodes", str(periodic)] if periodic else []
     return argv + ["--resume"] + (["--vector-env"] if algo == "ppo" else [])
 
 
@@ -143,7 +147,7 @@ def train_one(env_id: str, algo: str, seed: int, runs: Path = RUNS, **options) -
     unfinished run with them resumes from its last checkpoint; a folder with none, or with other hyperparameters, is
     moved aside (train.py's --overwrite, done here so that the logs below start in the new folder) and the run
     trained anew. Each attempt adds a line to the run's attempts.log: the process, the step it starts from and the
-    Ray node. options: train_argv's timesteps, evaluations and book."""
+    Ray node. options: train_argv's timesteps, evaluations, book and episodes."""
     import ray
 
     from agents import train
@@ -167,7 +171,7 @@ def train_all(
     envs: list[str], algos: list[str], jobs: int, address: str | None = None, seeds=SEEDS, **options
 ) -> list[str]:
     """Every (env, algo, seed) run as a Ray task of one CPU, retried from its checkpoint if its worker dies; print
-    each run's outcome as it ends. options: train_one's runs, timesteps, evaluations and book."""
+    each run's outcome as it ends. options: train_one's runs, timesteps, evaluations, book and episodes."""
     ray = cluster.connect(address, jobs)
     task = ray.remote(num_cpus=1, max_retries=cluster.MAX_RETRIES)(train_one)
     pending = {task.remote(env_id, algo, seed, **options): (env_id, algo, seed)

@@ -107,6 +107,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     parser.add_argument("--eval-episodes", type=evaluate.positive_int, default=100, help="episodes of the final table")
     parser.add_argument(
+        "--periodic-episodes",
+        type=evaluate.positive_int,
+        default=PERIODIC_EVAL_EPISODES,
+        help=f"episodes of each periodic evaluation (default: {PERIODIC_EVAL_EPISODES})",
+    )
+    parser.add_argument(
         "--eval-seed", type=evaluate.seed_int, default=0, help="final episode i is reset with eval-seed + i"
     )
     parser.add_argument("--runs", type=cli.writable_dir, default="runs", help="folder of the run folders")
@@ -331,7 +337,7 @@ def experiment(args: argparse.Namespace, env_kwargs: dict | None = None, after_e
         args.runs,
         n_timesteps=args.timesteps or 0,
         eval_freq=args.eval_freq,
-        n_eval_episodes=PERIODIC_EVAL_EPISODES,
+        n_eval_episodes=args.periodic_episodes,
         seed=args.seed,
         config=args.hyperparams,
         env_kwargs=env_kwargs,

@@ -32,7 +32,7 @@ from connenv.envs.spec import registry
 
 IDS = sorted(registry)  # every id with a spec
 BUILDERS = tuple(spec.id for spec in registry.values() if spec.example)  # made with a worked system
-BUDGET = 3.0  # s of fuzzing per id
+BUDGET = 1.5  # s of fuzzing per id
 STEPS = 5  # random steps after each accepted make or reset
 
 INVALID = [math.nan, math.inf, -math.inf, "1", 1j, True, [1.0], 0.0]
@@ -149,7 +149,7 @@ def test_bad_kwargs_states_and_actions_are_refused_naming_the_key_or_leave_every
             if not refused(lambda: step.append(env.step(action)), "action"):
                 assert_finite(f"{env_id} step with action={action!r}", *step[0][:2], step[0][4])
         cases += 1
-    assert cases >= 20, f"only {cases} cases in {BUDGET} s"
+    assert cases >= 10, f"only {cases} cases in {BUDGET} s"
 
 
 # -- the edges of float64 (issue 30): cases of tests/audit.py, few steps each --------------------------------------

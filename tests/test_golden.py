@@ -18,17 +18,20 @@ RTOL = 1e-12
 """Tolerance on a projection, relative to the array's Σ|x|. Another kernel rounds an operation's last bit (1.1e-16)
 differently; along an episode of a few hundred steps, and through an adaptive stepper's step choices, such
 roundings grow by up to a few hundred times, which stays within 1e-12 (test_other_kernels_replay_the_recorded_
-trajectories checks it on two other kernels). Any change of model, stepper, tolerance or task moves a projection by
+trajectories checks it on another platform's kernels). Any change of model, stepper, tolerance or task moves a projection by
 orders of magnitude more."""
 FLOOR = 1.0
 """Σ|x| below which an array is compared absolutely, to RTOL · FLOOR: a quantity that is all roundoff (the drift of
 a conserved quantity under an exact step) has no relative precision, and states and rewards are of order one in SI."""
 KERNELS = {
-    "openblas-haswell": {"OPENBLAS_CORETYPE": "Haswell"},
-    "numpy-baseline": {"NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4 AVX2 FMA3 AVX512F AVX512_SKX AVX512_ICL AVX512_SPR"},
+    "openblas-haswell+numpy-baseline": {
+        "OPENBLAS_CORETYPE": "Haswell",
+        "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4 AVX2 FMA3 AVX512F AVX512_SKX AVX512_ICL AVX512_SPR",
+    },
 }
-"""Other floating-point platforms an x86-64 machine can play: OpenBLAS's kernel for a Haswell-class CPU (as on an AMD
-EPYC), and numpy's baseline kernels (AVX2 and AVX-512 dispatch turned off, as on an older CPU)."""
+"""Another floating-point platform an x86-64 machine can play: OpenBLAS's kernel for a Haswell-class CPU (as on an
+AMD EPYC) and numpy's baseline kernels (AVX2 and AVX-512 dispatch turned off, as on an older CPU), both at once: each
+rounds its operations' last bits otherwise, and their differences add up along a trajectory."""
 
 x86 = pytest.mark.skipif(platform.machine() != "x86_64", reason="the kernels named are x86-64's")
 

@@ -28,16 +28,18 @@ LONG = {  # commands that train or evaluate for minutes: their arguments are che
 
 
 @pytest.mark.parametrize("code", PYTHON, ids=[f"python-{i}" for i in range(len(PYTHON))])
-def test_each_python_block_runs_on_its_own(code, tmp_path):
+def test_each_python_block_runs_on_its_own(code, tmp_path, env=HERE):
     done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300,
-                          env=HERE)  # fmt: skip
+                          env=env)  # fmt: skip
     assert done.returncode == 0, done.stderr[-3000:]
 
 
 @pytest.mark.parametrize("code", JAX_BLOCKS, ids=[f"jax-python-{i}" for i in range(len(JAX_BLOCKS))])
 def test_each_python_block_of_the_jax_guide_runs_on_its_own(code, tmp_path):
+    """As tests/test_jax.py: XLA without LLVM's optimization passes, which compiles several times faster."""
     pytest.importorskip("jax")
-    test_each_python_block_runs_on_its_own(code, tmp_path)
+    flags = f"{os.environ.get('XLA_FLAGS', '')} --xla_backend_optimization_level=0".strip()
+    test_each_python_block_runs_on_its_own(code, tmp_path, {**HERE, "XLA_FLAGS": flags})
 
 
 @pytest.mark.parametrize("command", COMMANDS, ids=[f"bash-{i}" for i in range(len(COMMANDS))])

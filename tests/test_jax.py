@@ -36,7 +36,6 @@ STEP_RTOL = 1e-12
 order of operations round differently from libm and numpy by an ulp or so, which a step's few dozen operations grow
 to a few times 1e-16; the floor of 1 stands for quantities that are all roundoff (an exact step's energy error)."""
 JACOBIAN_RTOL = 1e-10
-SLOW_JACOBIANS = {"Skier-v0": 42, "SnakeSwimmer-v0": 21}  # measured CPU s on 2 cores, 2026-12-03
 
 
 def trajectories(env_id, kwargs):
@@ -129,9 +128,6 @@ def test_forward_mode_jacobians_are_the_models_complex_step_ones(case):
     pivot at its end stop, which random actions reach); the default rule ("linear") takes the second argument's
     there, the same derivative everywhere else (test_reverse_mode_is_forward_mode_transposed)."""
     jenv, params, (env, X, A, *_) = case
-    if jenv.name in SLOW_JACOBIANS and not os.environ.get("CONNENV_ALL_GRADIENTS"):
-        pytest.skip(f"its jacfwd compiles in ~{SLOW_JACOBIANS[jenv.name]} s of CPU, past CI's budget; "
-                    "CONNENV_ALL_GRADIENTS=1 runs it")  # fmt: skip
     jenv = cj.FunctionalEnv(jenv.env, jenv.max_episode_steps, ties="one-sided")
     pick = np.linspace(0, len(X) - 1, 20).astype(int)
     jac = jax.jit(jax.vmap(jax.jacfwd(lambda x, a: jenv.transition(x, a)[0], argnums=(0, 1))))

@@ -26,7 +26,7 @@ from agents import baselines
 
 ROOT = Path(__file__).resolve().parents[1]
 STEPS = 2048  # per run, with an evaluation and a checkpoint every 1024 steps
-TINY = {"timesteps": STEPS, "evaluations": 2}
+TINY = {"timesteps": STEPS, "evaluations": 2, "episodes": (2, 2)}  # 2 episodes a periodic evaluation and at the end
 ROLLOUT = 8 * 256  # PPO's on Swing-v0: 8 envs × n_steps
 
 
@@ -85,7 +85,7 @@ def test_a_killed_run_resumes_from_its_checkpoint_and_no_other_run_is_repeated(r
 
     killer = threading.Thread(target=kill_seed_0)
     killer.start()
-    budget = {"timesteps": 3 * ROLLOUT // 2, "evaluations": 2}
+    budget = {**TINY, "timesteps": 3 * ROLLOUT // 2}
     outcomes = baselines.train_all(["connenv/Swing-v0"], ["ppo"], 2, seeds=(0, 1), runs=tmp_path, **budget)
     killer.join()
     print("\n".join(outcomes), *(f.name + ": " + (f / "attempts.log").read_text() for f in folders), sep="\n")
