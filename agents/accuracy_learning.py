@@ -56,8 +56,7 @@ BUDGETS = {"connenv/SnakeSwimmer-v0": 500_000}
 """Steps per seed where they differ from agents/hyperparams/ppo_jax.yml's n_timesteps: the swimmer's 2·10⁶ steps × 5
 seeds × 5 steppers did not fit the time of the first run on a shared 2-core machine (at 5·10⁵ no stepper learns it)."""
 DIVERGES = 0.5  # a stepper failing this share of single steps from the sampled states is not trained: its episodes
-# end at their first steps (the falling cat's Euler leaves SO(3) at once), and XLA's CPU runtime was seen to stall
-# on them
+# end at their first steps (the falling cat's Euler leaves SO(3) at once)
 NOT_RUN = "--errors-only"  # the note of a row that this run did not train
 EXPLOIT_PHYSICS = ("euler", "default")  # the physics every policy also runs on in connenv.jax (RK4's differ from the
 # default by less than 1e-6 a step: see the one-step error)

@@ -328,7 +328,7 @@ def train(env_id: str, config: Config, seeds: list[int], runs: Path, eval_episod
     jax.config.update("jax_enable_x64", True)  # connenv.jax computes the physics in float64
     import connenv.jax
     from agents import evaluate
-    from agents.jax_train import record_chunk, write_records
+    from agents.jax_train import record_chunk, wait, write_records
 
     folders = [run_folder(runs, env_id, seed, config.algo) for seed in seeds]
     for folder in folders:
@@ -352,7 +352,7 @@ def train(env_id: str, config: Config, seeds: list[int], runs: Path, eval_episod
     train_start = time.perf_counter()
     while updates < config.n_updates:
         runner, metrics, evaluation = compiled(runner)
-        jax.block_until_ready(runner)
+        wait(runner)  # in short sleeps: Ctrl-C interrupts at once
         updates += config.updates_per_eval
         timesteps = updates * config.rollout
         wall = time.perf_counter() - train_start
