@@ -47,9 +47,9 @@ import yaml
 
 import connenv
 from agents import cluster, score
-from agents.progress import progress
 from agents.controllers import CONTROLLERS
 from agents.evaluate import PRETRAINED, compare, evaluate, load_model, make_policy, pretrained_models
+from agents.progress import progress
 from connenv import cli
 from connenv.cli import positive_int
 from connenv.envs.spec import registry

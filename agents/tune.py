@@ -94,7 +94,16 @@ class Report(BaseCallback):
         return True
 
 
-def run_trial(config: dict, env_id: str, algo: str, timesteps: int, evaluations: int, seed: int, sweep_path: str):
+def run_trial(
+    config: dict,
+    env_id: str,
+    algo: str,
+    timesteps: int,
+    evaluations: int,
+    seed: int,
+    sweep_path: str,
+    episodes: int = 10,
+):
     """One trial: train.py with the sampled hyperparameters in {sweep_path}/trials/{trial id}/ (where a restored trial
     finds its checkpoint), its output in train.log there."""
     from ray import tune
@@ -108,13 +117,14 @@ def run_trial(config: dict, env_id: str, algo: str, timesteps: int, evaluations:
     frequency = str(max(timesteps // evaluations, 1))
     argv = ["--env", env_id, "--algo", algo, "--seed", str(seed), "--hyperparams", str(path), "--runs", str(folder)]
     argv += ["--timesteps", str(timesteps), "--eval-freq", frequency, "--checkpoint-freq", frequency]
+    argv += ["--periodic-episodes", str(episodes)]
     argv += ["--resume", "--overwrite"]  # a restored trial resumes from its checkpoint, or starts anew if it has none
     args = train.parse_args(argv + (["--vector-env"] if algo == "ppo" else []))
     with open(folder / "train.log", "a") as log, redirect_stdout(log), redirect_stderr(log):
         train.train(args, after_eval=Report())
 
 
-def sweep(env_id, algo, samples, timesteps, evaluations=10, seed=0, address=None, runs=RUNS, jobs=None):
+def sweep(env_id, algo, samples, timesteps, evaluations=10, seed=0, address=None, runs=RUNS, jobs=None, episodes=10):
     """Run (or resume) the sweep; return Tune's ResultGrid."""
     cluster.connect(address, jobs)
     from ray import tune
@@ -124,7 +134,14 @@ def sweep(env_id, algo, samples, timesteps, evaluations=10, seed=0, address=None
     name = f"{baselines.short(env_id)}_{algo}"
     path = Path(runs).resolve() / name
     trial = functools.partial(
-        run_trial, env_id=env_id, algo=algo, timesteps=timesteps, evaluations=evaluations, seed=seed, sweep_path=path
+        run_trial,
+        env_id=env_id,
+        algo=algo,
+        timesteps=timesteps,
+        evaluations=evaluations,
+        seed=seed,
+        sweep_path=path,
+        episodes=episodes,
     )
     trainable = tune.with_resources(trial, {"cpu": 1})
     if tune.Tuner.can_restore(str(path)):
@@ -174,6 +191,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--samples", type=positive_int, required=True, help="trials")
     parser.add_argument("--timesteps", type=positive_int, required=True, help="training steps per trial")
     parser.add_argument("--evaluations", type=positive_int, default=10, help="periodic evaluations per trial")
+    parser.add_argument("--episodes", type=positive_int, default=10, help="episodes of each periodic evaluation")
     parser.add_argument("--seed", type=cli.seed_int, default=0, help="of the sampler and of every trial's training")
     parser.add_argument(
         "--address", type=cluster.address, help="join the Ray cluster at ADDR (default: start a local Ray)"
@@ -187,7 +205,7 @@ def main(argv: list[str] | None = None) -> dict:
     args = parse_args(argv)
     results = sweep(
         args.env, args.algo, args.samples, args.timesteps, args.evaluations, args.seed, args.address, args.runs,
-        args.jobs,
+        args.jobs, args.episodes,
     )  # fmt: skip
     print(summary(results))
     best = Path(args.runs).resolve() / f"{baselines.short(args.env)}_{args.algo}" / "best.yml"

@@ -149,7 +149,7 @@ def test_a_sweep_writes_its_best_hyperparameters_for_train_py_and_resumes(ray_lo
     from agents import train, tune
 
     argv = ["--env", "connenv/Swing-v0", "--algo", "sac", "--samples", "3", "--timesteps", "300"]
-    argv += ["--evaluations", "2", "--runs", str(tmp_path)]
+    argv += ["--evaluations", "2", "--episodes", "2", "--runs", str(tmp_path)]
     best = tune.main(argv)
     path = tmp_path / "Swing-v0_sac" / "best.yml"
     assert yaml.safe_load(path.read_text()) == {"connenv/Swing-v0": best}
