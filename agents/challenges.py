@@ -8,7 +8,10 @@ RollingBallPose-v0 — each seed's periodic evaluations (evaluations.npz: the de
 its training curve (progress.csv: the training episodes' success, the wall time) and its results.json (the final
 policy on the numpy env's unseen episodes, reset seeds 100000–100099, with the status: finished, or interrupted at
 the steps it reached) — and writes the page and its chart (challenges.png beside it): success against steps and
-against wall time, per seed.
+against wall time, per seed. Beside them: the attempts of ATTEMPTS (their own run folders under --runs, their own
+hyperparameters: a start curriculum for the swing-up), and the first-order result, SHAC through the differentiable
+step beside PPO at the same budget, read from the run folders of ``python -m agents.exact_gradients``
+(--first-order-runs; its guide, docs/guides/exact-gradients.md, has the step Jacobian's spectrum along the rollouts).
 """
 
 from __future__ import annotations
@@ -25,6 +28,16 @@ from connenv import cli
 PROG = "python -m agents.challenges"
 CHALLENGES = ("connenv/KapitzaSwingUp-v0", "connenv/RollingBallPose-v0")
 HYPERPARAMS = "agents/hyperparams/ppo_jax_challenges.yml"
+SUCCESS = 0.9  # learned: this share of the unseen episodes, on the seeds' mean
+# (env id, run folders under --runs, hyperparameters, what was tried): attempts beside the budget's run
+ATTEMPTS = (
+    ("connenv/KapitzaSwingUp-v0", "curriculum", "agents/hyperparams/ppo_jax_curriculum.yml",
+     "Wide starts (SuPLE, ICRA 2025): half of the training episodes released at rest from any angle up to inverted, "
+     "cut at 2000 steps (agents/curriculum.py's kapitza_release); the evaluations start as the task does"),
+    ("connenv/RollingBallPose-v0", "recurrent", "agents/hyperparams/ppo_jax_recurrent.yml",
+     "A recurrent policy, for a controller that keeps a plan: a GRU of 64 units before the policy's and the value's "
+     "MLPs, trained on whole rollouts of rows (agents/jax_ppo.py, recurrent)"),
+)  # fmt: skip
 
 
 def seeds_of(runs: Path, env_id: str) -> list[Path]:
@@ -76,29 +89,89 @@ def chart(curves: dict[str, list[dict]], path: Path):
     plt.close(fig)
 
 
-def page(runs: Path, path: Path, command: str) -> str:
+def unseen(folder: Path) -> dict:
+    """The seed's own row of its results.json's evaluation on the numpy env's unseen episodes ({} if none)."""
+    evaluation = (final(folder) or {}).get("evaluation") or {}
+    return (evaluation.get("policies") or [{}])[0]
+
+
+def table(folders: list[Path], curves: list[dict]) -> list[str]:
+    lines = ["| seed | status | steps trained | wall time (min) | success on the JAX env, last evaluation | "
+             "success on unseen episodes (numpy env) | return on unseen episodes |",
+             "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for folder, c in zip(folders, curves):
+        result, row = final(folder) or {}, unseen(folder)
+        success = f"{row['success_rate']:.0%}" if "success_rate" in row else "–"
+        ret = f"{row['return_mean']:.4g}" if "return_mean" in row else "–"
+        last = f"{c['success'][-1]:.0%}" if c["success"] else "–"
+        minutes = f"{result.get('train_seconds', np.nan) / 60:.1f}" if result else "–"
+        status = result.get("status", "stopped without results.json (killed): its curves to its last checkpoint")
+        lines.append(f"| {folder.name.rsplit('_s', 1)[1]} | {status} | "
+                     f"{result.get('timesteps', c['steps'][-1] if c['steps'] else 0):,} | {minutes} | {last} | "
+                     f"{success} | {ret} |")  # fmt: skip
+    return lines + [""]
+
+
+def standing(env_id: str, folders: list[Path]) -> str:
+    """One sentence from the figures: learned (the seeds' mean success on unseen episodes ≥ SUCCESS) or open."""
+    rows = [unseen(f) for f in folders]
+    rates = [r["success_rate"] for r in rows if "success_rate" in r]
+    steps = min(((final(f) or {}).get("timesteps", 0) for f in folders), default=0)
+    if not rates:
+        return "No seed has been evaluated on the unseen episodes yet."
+    mean = float(np.mean(rates))
+    word = "**Learned**" if mean >= SUCCESS and steps >= 1e8 else "**Open**"
+    text = (f"{word}: over {len(rates)} seeds at {steps:,} steps each, {mean:.0%} of the unseen episodes succeed "
+            f"(seeds from {min(rates):.0%} to {max(rates):.0%}; learned means ≥ {SUCCESS:.0%} at ≥ 10⁸ steps), "
+            f"mean return {np.mean([r['return_mean'] for r in rows if 'return_mean' in r]):.3g}")  # fmt: skip
+    evaluation = (final(folders[0]) or {}).get("evaluation") or {}
+    analytic = next((r for r in evaluation.get("policies", []) if r.get("policy") == "analytic"), None)
+    if analytic is not None:
+        text += (f"; the analytic controller on the same episodes: {analytic['success_rate']:.0%}, return "
+                 f"{analytic['return_mean']:.3g}")  # fmt: skip
+    return text + "."
+
+
+def first_order(runs: Path, env_id: str) -> list[str]:
+    """SHAC and PPO at agents.exact_gradients' budget for this env, from its run folders (nothing where none)."""
+    from agents import exact_gradients as eg
+
+    if env_id not in eg.ENVS:
+        return []
+    steps, *_ = eg.ENVS[env_id]
+    found = {algo: [eg.final(f) for f in eg.folders(runs, env_id, algo, 5)] for algo in eg.ALGOS}
+    if not any(f for algo in found.values() for f in algo):
+        return []
+    lines = ["First-order result (`python -m agents.exact_gradients`, 5 seeds each at the same budget, the best "
+             "policies on the numpy env's unseen episodes; the step Jacobian's spectrum along their rollouts is in "
+             "[the exact-gradients guide](../guides/exact-gradients.md)):", "",
+             "| method | steps per seed | success [min, max over seeds] | return | training s (per run of 5 seeds) |",
+             "|---|---|---|---|---|"]  # fmt: skip
+    for algo, results in found.items():
+        done = [r for r in results if r is not None]
+        lines.append(f"| {eg.NAMES[algo]} | {steps:.0e} | {eg.percent([r['success'] for r in done])} | "
+                     f"{eg.mean_of([r['return'] for r in done])} | {eg.mean_of([r['train'] for r in done], '{:.0f}')} |")  # fmt: skip
+    return lines + [""]
+
+
+def page(runs: Path, path: Path, command: str, first_order_runs: Path) -> str:
     curves, lines = {}, []
     for env_id in CHALLENGES:
         folders = seeds_of(runs, env_id)
         curves[env_id] = [curve(f) for f in folders]
-        lines += [f"## {env_id.split('/')[-1]}", "",
-                  "| seed | status | steps trained | wall time (min) | success on the JAX env, last evaluation | "
-                  "success on unseen episodes (numpy env) | return on unseen episodes |",
-                  "|---|---|---|---|---|---|---|"]  # fmt: skip
-        for folder, c in zip(folders, curves[env_id]):
-            result = final(folder) or {}
-            evaluation = result.get("evaluation") or {}
-            policies = evaluation.get("policies") or [{}]
-            unseen = policies[0]
-            success = f"{unseen['success_rate']:.0%}" if "success_rate" in unseen else "–"
-            ret = f"{unseen['return_mean']:.4g}" if "return_mean" in unseen else "–"
-            last = f"{c['success'][-1]:.0%}" if c["success"] else "–"
-            minutes = f"{result.get('train_seconds', np.nan) / 60:.1f}" if result else "–"
-            status = result.get("status", "stopped without results.json (killed): its curves to its last checkpoint")
-            lines.append(f"| {folder.name.rsplit('_s', 1)[1]} | {status} | "
-                         f"{result.get('timesteps', c['steps'][-1] if c['steps'] else 0):,} | {minutes} | {last} | "
-                         f"{success} | {ret} |")  # fmt: skip
-        lines.append("")
+        lines += [f"## {env_id.split('/')[-1]}", "", standing(env_id, folders), "",
+                  *table(folders, curves[env_id]), *first_order(first_order_runs, env_id)]  # fmt: skip
+    attempts = [(env_id, sub, hyperparams, what) for env_id, sub, hyperparams, what in ATTEMPTS
+                if seeds_of(runs / sub, env_id)]  # fmt: skip
+    if attempts:
+        lines += ["## What the literature suggests, tried", ""]
+    for env_id, sub, hyperparams, what in attempts:
+        folders = seeds_of(runs / sub, env_id)
+        label = f"{env_id.split('/')[-1]}, {sub}"
+        curves[label] = [curve(f) for f in folders]
+        lines += [f"### {label}", "", f"{what}. `python train.py --backend jax --env {env_id} --seeds 5 "
+                  f"--hyperparams {hyperparams} --runs {runs / sub} --eval-seed 100000`.", "",
+                  standing(env_id, folders), "", *table(folders, curves[label])]  # fmt: skip
     chart(curves, path.with_suffix(".png"))
     head = [
         "# The open challenges at the field's budget",
@@ -120,6 +193,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = cli.ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", default="runs/challenges", help="the challenges' run folders")
     parser.add_argument("--write", type=cli.writable_file, default="docs/baselines/challenges.md")
+    parser.add_argument("--first-order-runs", default="runs/exact-gradients",
+                        help="python -m agents.exact_gradients' run folders (its --runs)")  # fmt: skip
     return parser.parse_args(argv)
 
 
@@ -128,7 +203,8 @@ def main(argv: list[str] | None = None) -> str:
     runs = Path(args.runs)
     if not any(seeds_of(runs, env_id) for env_id in CHALLENGES):
         raise FileNotFoundError(f"{runs}: no run folder of {', '.join(CHALLENGES)}")
-    text = page(runs, Path(args.write), f"{PROG} --runs {args.runs} --write {args.write}")
+    command = f"{PROG} --runs {args.runs} --write {args.write} --first-order-runs {args.first_order_runs}"
+    text = page(runs, Path(args.write), command, Path(args.first_order_runs))
     Path(args.write).write_text(text)
     print(text)
     return text

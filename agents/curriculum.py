@@ -9,7 +9,9 @@ rest short of the target; some training episodes put the target close to the bea
 the task.
 
 A curriculum is a hyperparameter of train.py (agents/hyperparams), the name of a function here, which rl-zoo3 never
-sees; train.py wraps the training env alone in ``StartCurriculum(env, starts)``.
+sees; train.py wraps the training env alone in ``StartCurriculum(env, starts)``. On ``--backend jax`` the same start
+function draws from a JAX key (connenv.jax's reset takes it as its options), and agents.jax_ppo restarts that share
+of the ended training rows from it (`jax_starts`).
 """
 
 from __future__ import annotations
@@ -65,6 +67,21 @@ CURRICULA = {
     "kapitza_release": (kapitza_release, {"max_steps": 2000}),
     "bead_near_target": (bead_near_target, {}),
 }
+
+
+NEEDS_INFO = {"bead_near_target"}  # starts that read the reset's info, which the JAX trainer does not give
+
+
+def jax_starts(name: str) -> tuple:
+    """(starts, share, max_steps) of a curriculum for PPO on connenv.jax (agents.jax_ppo), whose reset calls
+    ``starts(task, None)`` with the task drawing from a JAX key: ValueError naming it where it cannot."""
+    if name not in CURRICULA:
+        raise ValueError(f"curriculum {name!r} is not one of {sorted(CURRICULA)}")
+    if name in NEEDS_INFO:
+        raise ValueError(f"curriculum {name!r} reads the reset's info, which --backend jax does not give; there: "
+                         f"{sorted(set(CURRICULA) - NEEDS_INFO)}")  # fmt: skip
+    starts, options = CURRICULA[name]
+    return (lambda task: starts(task, None)), options.get("share", SHARE), options.get("max_steps")
 
 
 def wrapper(name: str):

@@ -42,6 +42,26 @@ def forward(layers, x, xp=np):
     return x
 
 
+def gru(cell: dict, h, x, xp=np):
+    """A GRU cell (Cho et al. 2014) of hidden state h (…, H) and input x: gates r, z and the candidate n from
+    x Wx + b and h Wh (their columns in that order), h′ = (1 − z) n + z h. cell: {"Wx", "Wh", "b"}."""
+    H = h.shape[-1]
+    gx, gh = x @ cell["Wx"] + cell["b"], h @ cell["Wh"]
+    r = 1.0 / (1.0 + xp.exp(-(gx[..., :H] + gh[..., :H])))
+    z = 1.0 / (1.0 + xp.exp(-(gx[..., H : 2 * H] + gh[..., H : 2 * H])))
+    n = xp.tanh(gx[..., 2 * H :] + r * gh[..., 2 * H :])
+    return (1.0 - z) * n + z * h
+
+
+def features(cell: dict | None, h, x, xp=np):
+    """(h′, the heads' input): without a cell (an MLP policy) (h, x); with one, the GRU's next state from the
+    normalized observation x, and x with it appended, which the policy's and the value's MLPs read."""
+    if cell is None:
+        return h, x
+    h = gru(cell, h, x, xp)
+    return h, xp.concatenate([x, h.astype(x.dtype)], axis=-1)
+
+
 def save(path: str | Path, params: dict, obs_mean, obs_var, meta: dict):
     """Write a policy file (params: {"pi": [(W, b), …], "vf": […], "log_std": array}) atomically."""
     arrays = {"log_std": np.asarray(params["log_std"]), "obs_mean": np.asarray(obs_mean),
@@ -49,6 +69,8 @@ def save(path: str | Path, params: dict, obs_mean, obs_var, meta: dict):
     for net in ("pi", "vf"):
         for i, (W, b) in enumerate(params[net]):
             arrays[f"{net}_W{i}"], arrays[f"{net}_b{i}"] = np.asarray(W), np.asarray(b)
+    for name, value in (params.get("gru") or {}).items():  # a recurrent policy's cell
+        arrays[f"gru_{name}"] = np.asarray(value)
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp.npz")
     np.savez(tmp, **arrays)
@@ -75,6 +97,7 @@ class JaxPolicy:
                 self.meta = json.loads(str(data["meta"]))
                 self.pi, self.vf = layers_of(data, "pi"), layers_of(data, "vf")
                 self.log_std, self.obs_mean, self.obs_var = data["log_std"], data["obs_mean"], data["obs_var"]
+                self.cell = {k: data[f"gru_{k}"] for k in ("Wx", "Wh", "b")} if "gru_Wx" in data.files else None
         except (OSError, KeyError, ValueError) as error:
             raise ValueError(f"policy 'jax:{path}' is no policy file of train.py --backend jax ({error})") from error
         if env_id is not None and self.meta["env"] != env_id:
@@ -82,10 +105,22 @@ class JaxPolicy:
         self.path = path
         self.low, self.high = np.asarray(self.meta["action_low"]), np.asarray(self.meta["action_high"])
 
-    def action(self, obs) -> np.ndarray:
-        """The deterministic action of an observation (or of rows of them)."""
+    def action(self, obs, hidden=None) -> np.ndarray:
+        """The deterministic action of an observation (or of rows of them); a recurrent policy's from its hidden
+        state before the observation (zeros: an episode's start), which `step` returns with the action."""
+        return self.step(obs, hidden)[0]
+
+    def step(self, obs, hidden=None) -> tuple[np.ndarray, np.ndarray | None]:
+        """(action, hidden state after the observation: None for an MLP policy)."""
         x = normalize(flat_observation(obs, self.meta["obs_keys"]), self.obs_mean, self.obs_var, self.meta["clip_obs"])
-        return np.clip(forward(self.pi, x), self.low, self.high)
+        if self.cell is not None and hidden is None:
+            hidden = np.zeros((*x.shape[:-1], self.cell["Wh"].shape[0]))
+        hidden, x = features(self.cell, hidden, x)
+        return np.clip(forward(self.pi, x), self.low, self.high), hidden
 
     def predict(self, obs, state=None, episode_start=None, deterministic=True):
-        return self.action(obs).astype(np.float32), state
+        """SB3's predict: a recurrent policy's state restarts where episode_start (as RecurrentPPO's)."""
+        if self.cell is not None and state is not None and episode_start is not None:
+            state = np.where(np.reshape(episode_start, (-1, *[1] * (np.ndim(state) - 1))), 0.0, state)
+        action, state = self.step(obs, state)
+        return action.astype(np.float32), state

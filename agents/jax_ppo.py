@@ -16,6 +16,11 @@ beyond them: an episode cut by the time limit (truncated) is bootstrapped with t
 (``info["final_observation"]``), as SB3 does, not counted as terminal (PureJaxRL's scripts treat both as done, which
 biases the value of a task whose episodes end only by the clock); VecNormalize's statistics are kept in the state.
 
+With ``recurrent: H`` the policy and the value read a GRU's state beside the observation (PureJaxRL's ppo_rnn
+layout): the state restarts from zeros with each episode, and each minibatch is whole rows' rollouts, the GRU run
+along them from the state the rollout started it in. With ``curriculum: NAME`` a share of the ended training episodes
+restart from agents.curriculum's starts.
+
 Each update is followed, every ``eval_freq`` steps, by a deterministic evaluation on ``eval_episodes`` episodes of
 the JAX env from a key fixed per seed; the best of these is kept as the seed's best policy. What a seed leaves is
 a policy file (agents.jax_policy), which numpy alone runs.
@@ -34,7 +39,7 @@ import numpy as np
 import optax
 
 from agents import jax_policy
-from agents.jax_policy import flat_observation, forward, normalize
+from agents.jax_policy import features, flat_observation, forward, normalize
 
 
 @dataclasses.dataclass(frozen=True)
@@ -61,6 +66,8 @@ class Config:
     clip_reward: float = 10.0
     eval_freq: int = 0  # steps between evaluations per seed; 0: a tenth of the budget
     eval_episodes: int = 16
+    curriculum: str | None = None  # a start curriculum of agents.curriculum for the training rows (not the evaluation)
+    recurrent: int = 0  # a GRU of this many units before the MLPs (0: none); minibatches are then whole rows' rollouts
 
     @property
     def rollout(self) -> int:
@@ -95,6 +102,10 @@ class Config:
         if n_timesteps is not None:
             entry["n_timesteps"] = n_timesteps
         kinds = {f.name: f.type for f in dataclasses.fields(cls)}
+        if entry.get("curriculum") is not None:
+            from agents import curriculum
+
+            curriculum.jax_starts(entry["curriculum"])  # a ValueError naming it, before anything is built
         for key, value in entry.items():
             if kinds[key] in ("int", "float") and not isinstance(value, bool):
                 entry[key] = int(float(value)) if kinds[key] == "int" else float(value)
@@ -102,6 +113,11 @@ class Config:
         for key in ("n_timesteps", "n_envs", "n_steps", "batch_size", "n_epochs"):
             if getattr(config, key) < 1:
                 raise ValueError(f"hyperparameter {key} = {getattr(config, key)} must be ≥ 1")
+        whole = config.batch_size % config.n_steps == 0 and config.batch_size <= config.rollout
+        if config.recurrent < 0 or config.recurrent and not whole:
+            raise ValueError(f"hyperparameters recurrent = {config.recurrent}, batch_size = {config.batch_size}: a "
+                             f"recurrent policy's minibatches are whole rollouts of rows, so batch_size must be a "
+                             f"multiple of n_steps = {config.n_steps} up to n_envs · n_steps = {config.rollout}")  # fmt: skip
         return config
 
 
@@ -131,14 +147,20 @@ def init_layers(key, sizes: list[int], last_gain: float):
 
 
 def init_params(key, obs_dim: int, act_dim: int, config: Config) -> dict:
-    """One seed's networks, drawn on the host (not traceable: see `orthogonal`)."""
-    k_pi, k_vf = jax.random.split(key)
+    """One seed's networks, drawn on the host (not traceable: see `orthogonal`); with `recurrent` H, a GRU cell
+    (orthogonal weights of gain 1, zero biases) whose state the MLPs read beside the observation."""
+    H = getattr(config, "recurrent", 0)
+    k_pi, k_vf, *k_gru = jax.random.split(key, 4 if H else 2)  # an MLP policy's draws as before
     sizes = list(config.net_arch)
-    return {
-        "pi": init_layers(k_pi, [obs_dim, *sizes, act_dim], 0.01),
-        "vf": init_layers(k_vf, [obs_dim, *sizes, 1], 1.0),
+    params = {
+        "pi": init_layers(k_pi, [obs_dim + H, *sizes, act_dim], 0.01),
+        "vf": init_layers(k_vf, [obs_dim + H, *sizes, 1], 1.0),
         "log_std": jnp.full(act_dim, config.log_std_init, jnp.float32),
     }
+    if H:
+        params["gru"] = {"Wx": orthogonal(k_gru[0], (obs_dim, 3 * H), 1.0), "Wh": orthogonal(k_gru[1], (H, 3 * H), 1.0),
+                         "b": jnp.zeros(3 * H, jnp.float32)}  # fmt: skip
+    return params
 
 
 def init_runners(trainer, keys, config: Config) -> dict:
@@ -194,8 +216,11 @@ class Trainer:
     """PPO of one env and Config; ``init(keys)`` the runners of several seeds, ``run(runners)`` updates_per_eval
     updates of each and an evaluation, compiled once."""
 
+    recurrent = 0  # the GRU's units (Config.recurrent)
+
     def __init__(self, env, env_params, config: Config):
         self.env, self.env_params, self.config = env, env_params, config
+        self.recurrent = config.recurrent
         space = env.observation_space(env_params)
         self.obs_keys = sorted(space.spaces) if hasattr(space, "spaces") else None
         sample = env.reset(jax.random.key(0), env_params)[0]
@@ -211,6 +236,11 @@ class Trainer:
         self.optimizer = optax.chain(
             optax.clip_by_global_norm(config.max_grad_norm), optax.adam(learning_rate=learning_rate, eps=1e-5)
         )
+        self.curriculum = None  # (starts, share, max_steps): agents.curriculum's, on the training rows alone
+        if config.curriculum is not None:
+            from agents import curriculum
+
+            self.curriculum = curriculum.jax_starts(config.curriculum)
         self.run = jax.jit(self._run)  # of runners with a leading seed axis (init's)
         self.init_rows = jax.jit(jax.vmap(self._init))
 
@@ -247,25 +277,31 @@ class Trainer:
             "key": key,
             "update": jnp.zeros((), jnp.int32),
             "eval_key": jax.random.fold_in(k_reset, 1),
+            **({"curriculum_rows": jnp.zeros(c.n_envs, bool)} if self.curriculum else {}),  # rows it started
+            **({"hidden": jnp.zeros((c.n_envs, self.recurrent), jnp.float32)} if self.recurrent else {}),
         }
 
-    def _policy(self, runners, obs):
-        """(normalized obs, mean action, value) of every seed's rows: obs (S, N, d), the seeds' own weights."""
+    def _policy(self, runners, obs, hidden=None):
+        """(normalized obs, mean action, value) of every seed's rows: obs (S, N, d), the seeds' own weights; a
+        recurrent policy's from its hidden state (S, N, H), and the state after the observation as a fourth."""
         nobs = jax.vmap(self.normalized)(runners, obs)
-        mean = jax.vmap(lambda p, x: forward(p["pi"], x, jnp))(runners["params"], nobs)
-        value = jax.vmap(lambda p, x: forward(p["vf"], x, jnp)[..., 0])(runners["params"], nobs)
-        return nobs, mean, value
+        h, x = jax.vmap(lambda p, h, x: features(p.get("gru"), h, x, jnp))(runners["params"], hidden, nobs)
+        mean = jax.vmap(lambda p, x: forward(p["pi"], x, jnp))(runners["params"], x)
+        value = jax.vmap(lambda p, x: forward(p["vf"], x, jnp)[..., 0])(runners["params"], x)
+        return (nobs, mean, value) if hidden is None else (nobs, mean, value, h)
 
-    def _env_step(self, keys, state, action, runners):
+    def _env_step(self, keys, state, action, runners, cut=None):
         """The env step of every seed's rows at once (one batch of S·N rows, so that a branch no row takes is
         skipped, which a vmap over the seeds would compute), then the autoreset of those rows, each seed's from its
-        own key (the done rows alone reset)."""
+        own key (the done rows alone reset). cut (S, N): the rows a curriculum started, truncated at its max_steps."""
         S, N = action.shape[:2]
         flat = lambda v: v.reshape(S * N, *v.shape[2:])
         rows = lambda v: v.reshape(S, N, *v.shape[1:])
         obs, after, reward, terminated, truncated, info = self.env.step_env_rows(
             None, jax.tree_util.tree_map(flat, state), flat(action), self.env_params
         )
+        if cut is not None and self.curriculum[2] is not None:
+            truncated = truncated | (flat(cut) & (after.time >= self.curriculum[2]) & ~terminated)
         obs, state, info = self.env.autoreset_rows(keys, obs, after, terminated | truncated, info, self.env_params)
         return jax.tree_util.tree_map(rows, (obs, state, reward, terminated, truncated, info))
 
@@ -276,18 +312,22 @@ class Trainer:
 
         def step(runners, _):
             keys = jax.vmap(lambda k: jax.random.split(k, 3))(runners["key"])
-            nobs, mean, value = self._policy(runners, runners["obs"])
+            hidden_in = runners.get("hidden")
+            nobs, mean, value, *hidden = self._policy(runners, runners["obs"], hidden_in)
             params = runners["params"]
             log_std = params["log_std"][:, None, :]
             noise = jax.vmap(lambda k, m: jax.random.normal(k, m.shape, m.dtype))(keys[:, 1], mean)
             action = mean + jnp.exp(log_std) * noise
             logp = log_prob(mean, log_std, action)
             obs, state, reward, terminated, truncated, info = self._env_step(
-                keys[:, 2], runners["env_state"], action.astype(float), runners
+                keys[:, 2], runners["env_state"], action.astype(float), runners, runners.get("curriculum_rows")
             )
-            final = jax.vmap(self.normalized)(runners, self.observe(info["final_observation"]))
-            final_value = jax.vmap(lambda p, x: forward(p["vf"], x, jnp)[..., 0])(params, final)
             done = terminated | truncated
+            if self.curriculum:
+                obs, state, started = self._curriculum_reset(keys[:, 2], obs, state, done)
+                runners = {**runners, "curriculum_rows": jnp.where(done, started, runners["curriculum_rows"])}
+            final = self.observe(info["final_observation"])  # its value from the state the step left
+            final_value = self._policy(runners, final, hidden[0] if hidden else None)[2]
             discounted = runners["discounted"] * c.gamma + reward
             episode_return = runners["episode_return"] + reward
             transition = {
@@ -295,14 +335,34 @@ class Trainer:
                 "terminated": terminated, "truncated": truncated, "final_value": final_value,
                 "raw_obs": runners["obs"], "discounted": discounted, "episode_return": episode_return,
                 "success": info["is_success"].astype(bool), "failed": info["stepper_failed"],
+                **({"hidden": hidden_in} if hidden else {}),  # the state before the step: the sequences' start
             }  # fmt: skip
             runners = {**runners, "key": keys[:, 0], "env_state": state, "obs": self.observe(obs),
                        "discounted": jnp.where(done, 0.0, discounted),
                        "episode_return": jnp.where(done, 0.0, episode_return)}  # fmt: skip
+            if hidden:  # a new episode starts from zeros
+                runners["hidden"] = jnp.where(done[..., None], 0.0, hidden[0])
             return runners, transition
 
         runners, t = jax.lax.scan(step, runners, None, c.n_steps)
         return runners, jax.tree_util.tree_map(lambda v: jnp.swapaxes(v, 0, 1), t)  # seeds first
+
+    def _curriculum_reset(self, keys, obs, state, done):
+        """Of the rows just reset (done), a share restarted from the curriculum's starts (`reset_env` with the
+        start function as its options, drawing from each row's key): (obs, state, the rows it started)."""
+        starts, share, _ = self.curriculum
+        S, N = done.shape
+        row_keys = jax.vmap(lambda k: jax.random.split(jax.random.fold_in(k, 2), N))(keys)  # (S, N)
+        drawn = jax.vmap(jax.vmap(lambda k: jax.random.uniform(jax.random.fold_in(k, 0)) < share))(row_keys)
+        reset = lambda k: self.env.reset_env(jax.random.fold_in(k, 1), self.env_params, starts)
+        fresh_obs, fresh = jax.vmap(jax.vmap(reset))(row_keys)
+        started = done & drawn
+
+        def pick(new, old):
+            return jnp.where(started.reshape(S, N, *([1] * (jnp.ndim(old) - 2))), new, old)
+
+        obs, state = jax.tree_util.tree_map(pick, (fresh_obs, fresh), (obs, state))
+        return obs, state, started
 
     def _learn(self, runner, t):
         """One seed's PPO update from its rollout t (n_steps, N, …): GAE, n_epochs of minibatch steps; the runner
@@ -310,7 +370,8 @@ class Trainer:
         c = self.config
         reward = t["reward"]
         # the rollout's values were computed with the statistics before this update's: so is the last one
-        last_value = forward(runner["params"]["vf"], self.normalized(runner, runner["obs"]), jnp)[..., 0]
+        _, x = features(runner["params"].get("gru"), runner.get("hidden"), self.normalized(runner, runner["obs"]), jnp)
+        last_value = forward(runner["params"]["vf"], x, jnp)[..., 0]
         if c.normalize:
             scale = jnp.sqrt(runner["ret_stats"]["var"] + OBS_EPSILON)
             reward = jnp.clip(reward / scale, -c.clip_reward, c.clip_reward)
@@ -322,15 +383,27 @@ class Trainer:
         returns = advantages + t["value"]
         batch = {"nobs": t["nobs"], "action": t["action"], "logp": t["logp"], "advantage": advantages,
                  "return": returns}  # fmt: skip
-        batch = jax.tree_util.tree_map(lambda v: v.reshape(c.rollout, *v.shape[2:]), batch)
+        if self.recurrent:  # minibatches of whole rows (time first), each from its state at the rollout's start
+            ended = t["terminated"] | t["truncated"]
+            batch |= {"hidden": t["hidden"], "first": jnp.concatenate([jnp.zeros_like(ended[:1]), ended[:-1]], 0)}
+        else:
+            batch = jax.tree_util.tree_map(lambda v: v.reshape(c.rollout, *v.shape[2:]), batch)
         opt_state = runner["opt_state"]
 
         def epoch(carry, key):
             params, opt_state = carry
-            order = jax.random.permutation(key, c.rollout)[: c.n_minibatches * c.batch_size]
-            minibatches = jax.tree_util.tree_map(
-                lambda v: v[order].reshape(c.n_minibatches, c.batch_size, *v.shape[1:]), batch
-            )
+            if self.recurrent:
+                rows = c.batch_size // c.n_steps
+                order = jax.random.permutation(key, c.n_envs)[: c.n_minibatches * rows]
+                minibatches = jax.tree_util.tree_map(
+                    lambda v: jnp.swapaxes(v[:, order].reshape(c.n_steps, c.n_minibatches, rows, *v.shape[2:]), 0, 1),
+                    batch,
+                )
+            else:
+                order = jax.random.permutation(key, c.rollout)[: c.n_minibatches * c.batch_size]
+                minibatches = jax.tree_util.tree_map(
+                    lambda v: v[order].reshape(c.n_minibatches, c.batch_size, *v.shape[1:]), batch
+                )
 
             def minibatch_step(carry, mb):
                 params, opt_state = carry
@@ -355,10 +428,22 @@ class Trainer:
         runner = {**runner, "params": params, "opt_state": opt_state, "key": key, "update": runner["update"] + 1}
         return runner, metrics
 
+    def _heads(self, params, mb):
+        """(mean action, value) of a minibatch's observations; a recurrent policy's by its GRU run along each row's
+        rollout (time first) from the state the rollout started it in, restarted from zeros where an episode did."""
+        if not self.recurrent:
+            return forward(params["pi"], mb["nobs"], jnp), forward(params["vf"], mb["nobs"], jnp)[..., 0]
+
+        def step(h, xs):
+            nobs, first = xs
+            h, x = features(params["gru"], jnp.where(first[:, None], 0.0, h), nobs, jnp)
+            return h, (forward(params["pi"], x, jnp), forward(params["vf"], x, jnp)[..., 0])
+
+        return jax.lax.scan(step, mb["hidden"][0], (mb["nobs"], mb["first"]))[1]
+
     def _loss(self, params, mb):
         c = self.config
-        mean = forward(params["pi"], mb["nobs"], jnp)
-        value = forward(params["vf"], mb["nobs"], jnp)[..., 0]
+        mean, value = self._heads(params, mb)
         logp = log_prob(mean, params["log_std"], mb["action"])
         advantage = mb["advantage"]
         advantage = (advantage - advantage.mean()) / (advantage.std() + 1e-8)
@@ -380,20 +465,21 @@ class Trainer:
         low, high = jnp.asarray(self.low), jnp.asarray(self.high)
 
         def step(carry, keys):
-            obs, state, total, success, running = carry
-            _, action, _ = self._policy(runners, self.observe(obs))
+            obs, state, total, success, running, hidden = carry
+            _, action, _, *hidden = self._policy(runners, self.observe(obs), hidden)
             action = jnp.clip(action.astype(float), low, high)
             obs, state, reward, terminated, truncated, info = self._env_step(keys, state, action, runners)
             done = terminated | truncated
             total = total + jnp.where(running, reward, 0.0)
             success = jnp.where(running & done, info["is_success"].astype(bool), success)
-            return (obs, state, total, success, running & ~done), None
+            return (obs, state, total, success, running & ~done, hidden[0] if hidden else None), None
 
         steps = self.env_params.max_steps_in_episode
         keys = jax.vmap(lambda k: jax.random.split(jax.random.fold_in(k, 1), steps))(runners["eval_key"])
         S = keys.shape[0]
-        carry = (obs, state, jnp.zeros((S, n)), jnp.zeros((S, n), bool), jnp.ones((S, n), bool))
-        (_, _, total, success, _), _ = jax.lax.scan(step, carry, jnp.swapaxes(keys, 0, 1))
+        hidden = jnp.zeros((S, n, self.recurrent), jnp.float32) if self.recurrent else None  # each episode's start
+        carry = (obs, state, jnp.zeros((S, n)), jnp.zeros((S, n), bool), jnp.ones((S, n), bool), hidden)
+        (_, _, total, success, _, _), _ = jax.lax.scan(step, carry, jnp.swapaxes(keys, 0, 1))
         return {"return": total, "success": success}
 
     def _run(self, runners):

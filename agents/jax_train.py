@@ -246,6 +246,9 @@ def run(args: argparse.Namespace) -> dict:
             progress[seed] = [row for row in read_progress(folder) if row["timesteps"] <= steps]
         print(f"resumed from the checkpoint at {steps} steps", flush=True)
     best = {seed: max((np.mean(r) for r in evaluations[seed]["results"]), default=-math.inf) for seed in seeds}
+    # a resumed run's wall time goes on from its checkpoint's: the curves against wall time and train_seconds count
+    # the training of every kept step, not only this process's
+    earlier = max((rows[-1]["seconds"] for rows in progress.values() if rows), default=0.0)
     meta = trainer.meta(args.env)
     saved_steps = steps or 0
     interrupted, pending = False, False
@@ -258,7 +261,7 @@ def run(args: argparse.Namespace) -> dict:
             pending = False
             updates += config.updates_per_eval
             timesteps = updates * config.rollout
-            wall = time.perf_counter() - train_start
+            wall = earlier + time.perf_counter() - train_start
             metrics, evaluation = jax.tree_util.tree_map(np.asarray, (metrics, evaluation))
             record_chunk(trainer, runner, seeds, folders, evaluations, progress, best, meta, metrics, evaluation,
                          updates, wall, PPO_LOSSES)  # fmt: skip
@@ -276,7 +279,7 @@ def run(args: argparse.Namespace) -> dict:
                 saved_steps = timesteps
     except KeyboardInterrupt:  # a chunk of updates under way is dropped: the state before it is kept
         interrupted, runner = True, previous if pending else runner
-    train_seconds = time.perf_counter() - train_start
+    train_seconds = earlier + time.perf_counter() - train_start
     timesteps = int(np.asarray(runner["update"])[0]) * config.rollout
     write_records(seeds, folders, evaluations, progress)
     for i, (seed, folder) in enumerate(zip(seeds, folders)):

@@ -331,6 +331,30 @@ def test_the_cats_stop_at_the_disc_differentiates_in_reverse_mode():
         np.testing.assert_allclose(np.asarray(mine), np.asarray(theirs), rtol=1e-14, atol=1e-14)
 
 
+def test_reset_options_set_the_start_as_the_numpy_envs_do_traced_or_drawn_from_the_key():
+    """KapitzaSwingUp-v0 released at rest at θ = 2 rad: the JAX reset with the numpy env's reset options gives its
+    observation and state (to rounding), the values given as numbers or traced under jit; a function of the task as
+    options draws from the key (agents.curriculum's kapitza_release: |θ| on [0.1, π], at rest)."""
+    from agents import curriculum
+
+    jenv, params = cj.make("connenv/KapitzaSwingUp-v0")
+    env = gym.make("connenv/KapitzaSwingUp-v0").unwrapped
+    options = {"state": {"theta": 2.0, "theta_dot": 0.0, "u": (0.0, 0.0), "u_dot": (0.0, 0.0)}}
+    obs, _ = env.reset(seed=0, options=options)
+    x = env.model.pack(env.state)
+    mine = jenv.reset(jax.random.key(0), params, options)
+    traced = jax.jit(lambda k, theta: jenv.reset(k, params, {"state": {**options["state"], "theta": theta}}))(
+        jax.random.key(1), 2.0)
+    for jax_obs, state in (mine, traced):
+        np.testing.assert_allclose(np.asarray(state.x), x, rtol=STEP_RTOL, atol=STEP_RTOL)
+        np.testing.assert_allclose(np.asarray(jax_obs), obs, rtol=1e-6)  # float32 observations
+    starts = curriculum.jax_starts("kapitza_release")[0]
+    _, states = jax.vmap(lambda k: jenv.reset(k, params, starts))(jax.random.split(jax.random.key(2), 2000))
+    theta, p = np.asarray(states.x[:, 0]), np.asarray(states.x[:, 1])
+    assert np.all((np.abs(theta) >= 0.1) & (np.abs(theta) <= np.pi)) and np.all(p == 0.0)
+    assert np.max(np.abs(theta)) > 3.0 and abs(np.mean(theta > 0) - 0.5) < 0.05  # up to inverted, either side
+
+
 def test_the_cat_and_tube_resets_draw_their_distributions():
     """FallingCat-v0 starts straight at rest, upside down: g = Rz(ψ) Rx(π + δ), |δ| ≤ 0.2, its heading frame's first
     column the (horizontal) spine; TubeTwist-v0 at R = R₀ = I with ψ* uniform on [0.3, 3]; both from a key."""

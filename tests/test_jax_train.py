@@ -75,7 +75,8 @@ def test_train_py_refuses_what_the_backend_cannot_do(argv, message, capsys):
 def test_a_run_trains_seeds_together_and_leaves_policies_numpy_runs(tmp_path):
     """Two seeds of Swing-v0, a few updates: each seed's folder has its config, evaluations, progress, policies and a
     finished results.json; the policy file, run by numpy, gives the actions of the network JAX trained (float32 in
-    JAX, float64 in numpy: to 1e-5); a second run into the same folders is refused, naming --resume."""
+    JAX, float64 in numpy: to 1e-5); a second run into the same folders is refused, naming --resume, and with --resume
+    goes on from its checkpoint, its curves and wall time continued."""
     hyperparams = tmp_path / "ppo_jax.yml"
     hyperparams.write_text("connenv/Swing-v0: {n_timesteps: 512, n_envs: 4, n_steps: 64, batch_size: 128, "
                            "n_epochs: 2, eval_episodes: 2, eval_freq: 256}\n")  # fmt: skip
@@ -107,6 +108,13 @@ def test_a_run_trains_seeds_together_and_leaves_policies_numpy_runs(tmp_path):
     np.testing.assert_allclose(policy.action(obs), expected, atol=1e-5)
     with pytest.raises(SystemExit, match="--resume continues it from its checkpoint at step 512"):
         train.main(argv)
+    before = jax_train.read_progress(folder)
+    train.main(argv + ["--resume", "--timesteps", "768"])  # continued from its checkpoint to a larger budget
+    after, results = jax_train.read_progress(folder), json.loads((folder / "results.json").read_text())
+    assert np.load(folder / "evaluations.npz")["timesteps"].tolist() == [256, 512, 768]
+    assert after[: len(before)] == before and [row["timesteps"] for row in after][-1] == 768
+    seconds = [row["seconds"] for row in after]  # the wall time goes on from the checkpoint's, not from 0
+    assert seconds == sorted(seconds) and results["train_seconds"] >= seconds[-1] > before[-1]["seconds"] > 0
 
 
 def test_the_networks_are_drawn_orthogonal_as_jaxs_initializer_draws_them_and_several_seeds_start():
@@ -128,6 +136,75 @@ def test_the_networks_are_drawn_orthogonal_as_jaxs_initializer_draws_them_and_se
     runners = jax.block_until_ready(trainer.init(jnp.stack([jax.random.key(s) for s in range(4)])))
     assert runners["params"]["pi"][0][0].shape == (4, trainer.obs_dim, 64)
     assert not np.array_equal(runners["params"]["pi"][0][0][0], runners["params"]["pi"][0][0][1])  # seeds differ
+
+
+def test_a_start_curriculum_restarts_a_share_of_the_ended_training_rows_and_cuts_them_at_its_max_steps():
+    """kapitza_release on JAX (agents.curriculum, share 0.5, max_steps 2000): of 4000 rows that end, about half restart
+    released from |θ| on [0.1, π] and the others start as the task does (|θ| on [0.05, 0.1]); rows that did not end
+    are kept; a curriculum row is truncated at 2000 steps, the task's own is not; bead_near_target, which reads the
+    reset's info, is refused on JAX by name."""
+    import connenv.jax
+
+    env, params = connenv.jax.make("connenv/KapitzaSwingUp-v0")
+    config = jax_ppo.Config.from_hyperparams({"n_timesteps": 64, "n_envs": 2000, "n_steps": 8, "batch_size": 16,
+                                              "curriculum": "kapitza_release"})  # fmt: skip
+    trainer = jax_ppo.Trainer(env, params, config)
+    obs, state = jax.vmap(env.reset_rows, (0, None, None))(jax.random.split(jax.random.key(0), 2), 2000, params)
+    done = jnp.ones((2, 2000), bool).at[:, :100].set(False)
+    _, new_state, started = trainer._curriculum_reset(jax.random.split(jax.random.key(1), 2), obs, state, done)
+    theta = np.abs(np.asarray(new_state.x[..., 0]))
+    started = np.asarray(started)
+    assert not started[:, :100].any() and np.array_equal(np.asarray(new_state.x[:, :100]), np.asarray(state.x[:, :100]))
+    assert abs(started.mean() - 0.5 * 0.95) < 0.03
+    assert np.all((theta[started] >= 0.1) & (theta[started] <= np.pi)) and theta[started].max() > 3.0
+    assert np.all((theta[~started] >= 0.05) & (theta[~started] <= 0.1))
+    late = connenv.jax.EnvState(new_state.x[:, :4], jnp.full((2, 4), 1999, jnp.int32))
+    cut = jnp.array([[True, False, True, False]] * 2)
+    truncated = trainer._env_step(jax.random.split(jax.random.key(2), 2), late, jnp.zeros((2, 4, 1)), None, cut)[4]
+    assert np.asarray(truncated).tolist() == [[True, False, True, False]] * 2
+    with pytest.raises(ValueError, match="curriculum 'bead_near_target' reads the reset's info"):
+        jax_ppo.Config.from_hyperparams({"n_timesteps": 64, "curriculum": "bead_near_target"})
+
+
+def test_a_recurrent_policy_learns_from_the_states_its_rollout_ran_and_numpy_runs_it_as_jax_did(tmp_path):
+    """A GRU policy (recurrent: 8) on Swing-v0 with 12-step episodes, so that episodes end inside the 32-step rollout:
+    the loss's GRU, run along each row's rollout from the state the rollout started it in and restarted from zeros
+    after each end, gives the rollout's own log-probabilities and values (float32); a policy file of it, run by numpy
+    with SB3's predict (state and episode_start), gives JAX's actions along an episode (float32 in JAX: to 1e-5); a
+    batch_size that splits rows' rollouts is refused by name."""
+    import dataclasses
+
+    import connenv.jax
+    from agents import jax_policy
+
+    env, params = connenv.jax.make("connenv/Swing-v0")
+    params = dataclasses.replace(params, max_steps_in_episode=12)
+    config = jax_ppo.Config.from_hyperparams({"n_timesteps": 1024, "n_envs": 4, "n_steps": 32, "batch_size": 64,
+                                              "recurrent": 8})  # fmt: skip
+    trainer = jax_ppo.Trainer(env, params, config)
+    runners = trainer.init(jnp.stack([jax.random.key(0)]))
+    runners, t = jax.jit(trainer._rollout)(runners)
+    t = jax.tree_util.tree_map(lambda v: v[0], t)  # the one seed's (T, N, …)
+    ended = np.asarray(t["terminated"] | t["truncated"])
+    assert ended[:-1].any() and np.all(np.asarray(t["hidden"][1:])[ended[:-1]] == 0.0)  # restarted after an end
+    first = jnp.concatenate([jnp.zeros_like(ended[:1]), ended[:-1]], 0)
+    one = jax.tree_util.tree_map(lambda v: v[0], runners["params"])
+    mean, value = trainer._heads(one, {"nobs": t["nobs"], "hidden": t["hidden"], "first": first})
+    np.testing.assert_allclose(value, t["value"], rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(jax_ppo.log_prob(mean, one["log_std"], t["action"]), t["logp"], rtol=1e-5, atol=1e-5)
+
+    path = tmp_path / "policy.npz"
+    jax_policy.save(path, *trainer.policy_arrays(runners, 0), trainer.meta("connenv/Swing-v0"))
+    policy = jax_policy.JaxPolicy(path, "connenv/Swing-v0")
+    obs = np.asarray(t["raw_obs"][:, 0])  # one row's observations along the rollout, normalized as in training
+    state, hidden = None, jnp.zeros((1, 1, 8), jnp.float32)
+    for step in range(12):
+        action, state = policy.predict(obs[step], state, np.array([step == 0]))
+        _, expected, _, hidden = trainer._policy(runners, jnp.asarray(obs[step])[None, None], hidden)
+        np.testing.assert_allclose(action, np.clip(expected[0, 0], trainer.low, trainer.high), atol=1e-5)
+    with pytest.raises(ValueError, match="recurrent = 8, batch_size = 48: .* multiple of n_steps = 32"):
+        jax_ppo.Config.from_hyperparams({"n_timesteps": 1024, "n_envs": 4, "n_steps": 32, "batch_size": 48,
+                                         "recurrent": 8})  # fmt: skip
 
 
 def _trainer(env, params, hyperparams):

@@ -325,7 +325,9 @@ class KapitzaSwingUpEnv(KapitzaPendulumEnv):
     DAgger clone of the analytic controller into the same network does, so observation and action suffice: what is
     missing is learning the catch, which the reward pays only through the time it saves once ℓ is capped. Clones and
     training curves: under Reference results below; attempts that did not help (a reward paying the hold, a curriculum
-    of starts released from every angle): the reference-results guide, "What changed, and what is still open".
+    of starts released from every angle): the reference-results guide, "What changed, and what is still open". At the
+    field's budget (JAX PPO, 10⁸ steps per seed), with wide starts, and with exact gradients (SHAC): the open
+    challenges' page of the baselines (docs/baselines/challenges.md).
     """
 
     metadata: ClassVar[dict] = {**TaskEnv.metadata, "measures": ()}

@@ -263,7 +263,9 @@ class RollingBallPoseEnv(RollingBallEnv):
     ℓ/ρ and moves it ℓ away, so at the origin no action pays more than standing still, and the target is reached only
     through a loop whose first half loses reward; the holonomy planner keeps a plan, which no memoryless network is
     known to reproduce. Clones, curves: Reference results below; the planner, the one-step greedy policy, the attempts:
-    the reference-results guide ("Why it did not learn, and what did", "What changed, and what is still open").
+    the reference-results guide ("Why it did not learn, and what did", "What changed, and what is still open"). At the
+    field's budget (JAX PPO, 10⁸ steps per seed), with a recurrent policy, and with exact gradients (SHAC): the open
+    challenges' page of the baselines (docs/baselines/challenges.md).
     """
 
     metadata = {**RollingBallEnv.metadata, "measures": ("angle_error", "position_error", "path_length")}

@@ -241,12 +241,18 @@ class FunctionalEnv:
         return obs, EnvState(x_next, time), reward.astype(float), terminated, truncated & ~terminated, info
 
     @under_tie_rule
-    def reset_env(self, key, params: EnvParams | None = None):
-        """The starting state of the task's own distribution (its ``start``, drawing from the key): (obs, state)."""
+    def reset_env(self, key, params: EnvParams | None = None, options=None):
+        """The starting state of the task's own distribution (its ``start``, drawing from the key): (obs, state).
+
+        ``options`` are the numpy env's reset options (``{"state": {...}}`` and the task's others), whose values may
+        be traced: a traced value has no number to check, and is taken as it is. Or a function ``options(task)`` of
+        the task drawing from the key (``task.np_random``, as the numpy env's does), which gives them: a start
+        distribution of one's own (agents.curriculum's start curricula), written once for both envs."""
         env = self._for(params).env
         task = copy.copy(env)
         task._np_random = KeyGenerator(key)
-        start = task.start({}, JAX_TASK)
+        options = {} if options is None else options(task) if callable(options) else options
+        start = task.start(options, JAX_TASK)
         X = self.flatten(self._rows(start))
         obs = jax.tree_util.tree_map(lambda v: v[0], env.observe(self.state_of(X), JAX_TASK))
         return obs, EnvState(X[0], jnp.zeros((), jnp.int32))
@@ -255,8 +261,8 @@ class FunctionalEnv:
         """A State of one (its fields traced scalars and arrays) as a State of rows of one."""
         return type(state)(**{k: jnp.asarray(v, float)[None] for k, v in state.fields().items()})
 
-    def reset(self, key, params: EnvParams | None = None):
-        return self.reset_env(key, params)
+    def reset(self, key, params: EnvParams | None = None, options=None):
+        return self.reset_env(key, params, options)
 
     def step(self, key, state: EnvState, action, params: EnvParams | None = None):
         """step_env, then a reset from the key where the episode ended; info["final_observation"] and
