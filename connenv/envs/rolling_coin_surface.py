@@ -292,6 +292,6 @@ SPECS = (
             ("coin_plane", {"max_episode_steps": 40, "tolerance": 1.0, "surface": "plane"}, None),
         ),
         bench="coin_surface",
-        jax=({}, {"surface": "x**2/20 - y/4 + cos(x)*exp(-(y - 2)**2)/2"}),
+        jax=({}, {"surface": "x**2/20 - y/4 + cos(x)*exp(-(y - 2)**2)/2"}, {"surface": "plane"}),
     ),
 )

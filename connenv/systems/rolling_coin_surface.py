@@ -101,23 +101,29 @@ class RollingCoinPlane(RollingCoinSurface):
     def exact_segment(self, y, u, u_dot, tau):
         """The state after τ at θ = θ₀ + Ω t (the module's closed form), over leading axes (numpy's rows, or JAX's:
         ``connenv.jax``, the same arithmetic in their namespace)."""
-        if np.ndim(y) == 1 and np.ndim(tau) == 0 and type(y) is np.ndarray:
+        if np.ndim(y) == 1 and np.ndim(tau) == 0 and type(y) is np.ndarray and y.dtype.kind == "f":
             return self._exact_one(y, float(u[0]), float(u_dot[0]), float(tau))
         if traced(ops := namespace(y)):
             theta0, omega = u[..., 0], u_dot[..., 0]
-        else:
-            ops, y = np, np.asarray(y, float)
-            theta0, omega = np.asarray(u, float)[..., 0], np.asarray(u_dot, float)[..., 0]
+        else:  # float rows, or a complex-step Jacobian's complex ones (kept complex: no cast to float)
+            ops, y = np, as_real(y)
+            theta0, omega = as_real(u)[..., 0], as_real(u_dot)[..., 0]
+        # The closed form's complex numbers (a plane vector x + i y) as pairs of real ones: the complex step's own
+        # imaginary part must not mix with them. turn = e^{iθ₀}, a = (sy − i sx) turn, φ₁, φ₂ = phi_pairs.
         sx, sy = self.surface.slope
         k, R = 2.0 * self.g / 3.0, self.radius
         v0 = R * y[..., 3]
-        phi1, phi2 = phi_functions(omega * tau, ops)
-        turn = ops.exp(1j * theta0)
-        a = (sy - 1j * sx) * turn
-        v = v0 - k * tau * (a * phi1).real
-        zeta = turn * tau * (v0 * phi1 - 0.5 * k * tau * (0.5 * a * phi1 * phi1 + a.conj() * phi2))
-        roll = (v0 * tau - k * tau * tau * (a * phi2).real) / R
-        rows = (y[..., 0] + zeta.imag, y[..., 1] + zeta.real, y[..., 2] + roll, v / R)
+        p1r, p1i, p2r, p2i = phi_pairs(omega * tau, ops)
+        c0, s0 = ops.cos(theta0), ops.sin(theta0)
+        ar, ai = sy * c0 + sx * s0, sy * s0 - sx * c0
+        v = v0 - k * tau * (ar * p1r - ai * p1i)  # v₀ − k τ Re(a φ₁)
+        q_r, q_i = p1r * p1r - p1i * p1i, 2.0 * p1r * p1i  # φ₁²
+        w = 0.5 * k * tau  # inner = v₀ φ₁ − ½ k τ (½ a φ₁² + ā φ₂)
+        in_r = v0 * p1r - w * (0.5 * (ar * q_r - ai * q_i) + (ar * p2r + ai * p2i))
+        in_i = v0 * p1i - w * (0.5 * (ar * q_i + ai * q_r) + (ar * p2i - ai * p2r))
+        zeta_r, zeta_i = tau * (c0 * in_r - s0 * in_i), tau * (c0 * in_i + s0 * in_r)  # ζ = turn τ inner
+        roll = (v0 * tau - k * tau * tau * (ar * p2r - ai * p2i)) / R
+        rows = (y[..., 0] + zeta_i, y[..., 1] + zeta_r, y[..., 2] + roll, v / R)
         return ops.stack(ops.broadcast_arrays(*rows), -1)
 
 
@@ -155,17 +161,29 @@ def odd_series(alpha):
     return alpha * (1 / 6 - a2 * (1 / 120 - a2 * (1 / 5040 - a2 * (1 / 362880 - a2 * (1 / 39916800 - a2 / 6227020800)))))
 
 
-def phi_functions(angle, xp=np):
-    """(φ₁(i α), φ₂(i α)) for real α = Ωτ, without cancellation: φ₁ = sin α/α + i (1 − cos α)/α,
-    φ₂ = (1 − cos α)/α² + i (α − sin α)/α², the half-angle forms and, for |α| < SERIES_BELOW, the series of
-    (α − sin α)/α². xp: numpy, or JAX's namespace on its rows (``connenv.jax``)."""
-    alpha = angle if traced(xp) else np.asarray(angle, float)
+def phi_pairs(angle, xp=np):
+    """The real and imaginary parts (Re φ₁, Im φ₁, Re φ₂, Im φ₂) of φ₁(i α), φ₂(i α) for real α = Ωτ, without
+    cancellation: φ₁ = sin α/α + i (1 − cos α)/α, φ₂ = (1 − cos α)/α² + i (α − sin α)/α², the half-angle forms and,
+    for |α| < SERIES_BELOW, the series of (α − sin α)/α². Each is an analytic function of α, so a complex α (a
+    complex-step Jacobian's) carries its derivative. xp: numpy, or JAX's namespace on its rows (``connenv.jax``)."""
+    alpha = angle if traced(xp) else as_real(angle)
     half = xp.sinc(alpha / (2.0 * math.pi))  # sin(α/2)/(α/2)
     versine = 0.5 * half * half  # (1 − cos α)/α²
     a2 = alpha * alpha
     series = odd_series(alpha)
-    small = xp.abs(alpha) < SERIES_BELOW
+    small = xp.abs(alpha if traced(xp) else alpha.real) < SERIES_BELOW  # the real part on complex-step rows
     with np.errstate(divide="ignore", invalid="ignore"):  # a2 = 0 only where the series is taken: 1 there, so
         direct = (alpha - xp.sin(alpha)) / xp.where(small, 1.0, a2)  # that no 0/0 reaches reverse mode's product
     odd = xp.where(small, series, direct)
-    return xp.sinc(alpha / math.pi) + 1j * alpha * versine, versine + 1j * odd
+    return xp.sinc(alpha / math.pi), alpha * versine, versine, odd
+
+
+def phi_functions(angle, xp=np):
+    """(φ₁(i α), φ₂(i α)) as complex numbers, of `phi_pairs`."""
+    p1r, p1i, p2r, p2i = phi_pairs(angle, xp)
+    return p1r + 1j * p1i, p2r + 1j * p2i
+
+
+def as_real(a) -> np.ndarray:
+    """a as float64, or complex128 where it is complex (a complex-step Jacobian's rows)."""
+    return np.asarray(a, np.result_type(a, np.float64))
