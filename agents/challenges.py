@@ -54,11 +54,14 @@ def curve(folder: Path) -> dict:
         with open(folder / "progress.csv") as file:
             rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(file)]
     seconds = {int(row["timesteps"]): row["seconds"] for row in rows}
+    tenth = rows[-max(1, len(rows) // 10) :]  # the training episodes that ended in the last tenth of the updates
+    episodes = sum(row.get("episodes", 0.0) for row in tenth)
+    training = sum(row.get("success", 0.0) * row.get("episodes", 0.0) for row in tenth) / episodes if episodes else None
     if data is None:
-        return {"steps": [], "success": [], "return": [], "seconds": []}
+        return {"steps": [], "success": [], "return": [], "seconds": [], "training_success": training}
     steps = data["timesteps"].tolist()
     return {"steps": steps, "success": data["successes"].mean(1).tolist(), "return": data["results"].mean(1).tolist(),
-            "seconds": [seconds.get(s, np.nan) for s in steps]}  # fmt: skip
+            "seconds": [seconds.get(s, np.nan) for s in steps], "training_success": training}  # fmt: skip
 
 
 def final(folder: Path) -> dict | None:
@@ -96,18 +99,19 @@ def unseen(folder: Path) -> dict:
 
 
 def table(folders: list[Path], curves: list[dict]) -> list[str]:
-    lines = ["| seed | status | steps trained | wall time (min) | success on the JAX env, last evaluation | "
-             "success on unseen episodes (numpy env) | return on unseen episodes |",
-             "|---|---|---|---|---|---|---|"]  # fmt: skip
+    lines = ["| seed | status | steps trained | wall time (min) | training episodes' success, last tenth | success on "
+             "the JAX env, last evaluation | success on unseen episodes (numpy env) | return on unseen episodes |",
+             "|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for folder, c in zip(folders, curves):
         result, row = final(folder) or {}, unseen(folder)
         success = f"{row['success_rate']:.0%}" if "success_rate" in row else "–"
         ret = f"{row['return_mean']:.4g}" if "return_mean" in row else "–"
         last = f"{c['success'][-1]:.0%}" if c["success"] else "–"
+        training = "–" if c.get("training_success") is None else f"{c['training_success']:.1%}"
         minutes = f"{result.get('train_seconds', np.nan) / 60:.1f}" if result else "–"
         status = result.get("status", "stopped without results.json (killed): its curves to its last checkpoint")
         lines.append(f"| {folder.name.rsplit('_s', 1)[1]} | {status} | "
-                     f"{result.get('timesteps', c['steps'][-1] if c['steps'] else 0):,} | {minutes} | {last} | "
+                     f"{result.get('timesteps', c['steps'][-1] if c['steps'] else 0):,} | {minutes} | {training} | {last} | "
                      f"{success} | {ret} |")  # fmt: skip
     return lines + [""]
 

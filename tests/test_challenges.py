@@ -20,9 +20,10 @@ def run_folder(runs, name, steps, success, results=True, seconds=60.0):
     np.savez(folder / "evaluations.npz", timesteps=checkpoints, results=np.zeros((4, 2)),
              successes=np.full((4, 2), success))  # fmt: skip
     with open(folder / "progress.csv", "w", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=["timesteps", "seconds"])
+        writer = csv.DictWriter(file, fieldnames=["timesteps", "seconds", "episodes", "success"])
         writer.writeheader()
-        writer.writerows({"timesteps": s, "seconds": seconds * (i + 1) / 4} for i, s in enumerate(checkpoints))
+        writer.writerows({"timesteps": s, "seconds": seconds * (i + 1) / 4, "episodes": 10, "success": success}
+                         for i, s in enumerate(checkpoints))  # fmt: skip
     if results:
         policies = [{"policy": jax_label(folder), "success_rate": success, "return_mean": 1.0},
                     {"policy": "analytic", "success_rate": 1.0, "return_mean": 3.9}]  # fmt: skip
@@ -53,4 +54,5 @@ def test_the_page_calls_a_challenge_learned_only_at_ninety_percent_and_ten_to_th
     assert "No seed has been evaluated" in pose and pose.count("stopped without results.json") == 2
     assert "30,000,000" in pose and "First-order" not in pose  # no SHAC runs of this env in the folder
     assert "**Learned**: over 2 seeds at 100,000,000 steps each, 95%" in tried and "kapitza_release" in tried
+    assert "| 0 | finished | 100,000,000 | 1.0 | 95.0% | 95% | 95% | 1 |" in tried  # the training episodes' success too
     assert path.with_suffix(".png").is_file() and path.read_text() == text
