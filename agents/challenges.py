@@ -128,11 +128,15 @@ def standing(env_id: str, folders: list[Path]) -> str:
     text = (f"{word}: over {len(rates)} seeds at {steps:,} steps each, {mean:.0%} of the unseen episodes succeed "
             f"(seeds from {min(rates):.0%} to {max(rates):.0%}; learned means ≥ {SUCCESS:.0%} at ≥ 10⁸ steps), "
             f"mean return {np.mean([r['return_mean'] for r in rows if 'return_mean' in r]):.3g}")  # fmt: skip
+    measures = [r["measures_mean"] for r in rows if r.get("measures_mean")]
+    if measures:  # the task's own measures at the episodes' ends (info's), the seeds' mean
+        text += ", " + ", ".join(f"{k} {np.mean([m[k] for m in measures]):.3g}" for k in measures[0])
     evaluation = (final(folders[0]) or {}).get("evaluation") or {}
     analytic = next((r for r in evaluation.get("policies", []) if r.get("policy") == "analytic"), None)
     if analytic is not None:
         text += (f"; the analytic controller on the same episodes: {analytic['success_rate']:.0%}, return "
                  f"{analytic['return_mean']:.3g}")  # fmt: skip
+        text += "".join(f", {k} {v:.3g}" for k, v in (analytic.get("measures_mean") or {}).items())
     return text + "."
 
 
@@ -185,7 +189,8 @@ def page(runs: Path, path: Path, command: str, first_order_runs: Path) -> str:
         "with the env, 256 rows per seed; the hyperparameters' file says why each). A run stopped before its "
         "n_timesteps (Ctrl-C) is marked interrupted with the steps it reached; `--resume` continues it from its "
         "last checkpoint. A run that stopped short of its n_timesteps (the table's steps) shows the curves so far, "
-        "not the budget's result.",
+        "not the budget's result. The measures after the return are the task's own at the episodes' ends, as "
+        "agents.evaluate reports them (SI: angles in rad, lengths in m).",
         "",
         f"![success against steps and wall time, return against steps]({path.with_suffix('.png').name})",
         "",
