@@ -75,18 +75,21 @@ NEEDS_INFO = {"bead_near_target"}  # starts that read the reset's info, which th
 def jax_starts(name: str) -> tuple:
     """(starts, share, max_steps) of a curriculum for PPO on connenv.jax (agents.jax_ppo), whose reset calls
     ``starts(task, None)`` with the task drawing from a JAX key: ValueError naming it where it cannot."""
-    if name not in CURRICULA:
-        raise ValueError(f"curriculum {name!r} is not one of {sorted(CURRICULA)}")
+    starts, options = entry(name)
     if name in NEEDS_INFO:
         raise ValueError(f"curriculum {name!r} reads the reset's info, which --backend jax does not give; there: "
                          f"{sorted(set(CURRICULA) - NEEDS_INFO)}")  # fmt: skip
-    starts, options = CURRICULA[name]
     return (lambda task: starts(task, None)), options.get("share", SHARE), options.get("max_steps")
+
+
+def entry(name: str) -> tuple:
+    """(starts, options) of a curriculum named in the hyperparameters: ValueError naming it and the known ones."""
+    if name not in CURRICULA:
+        raise ValueError(f"curriculum {name!r} is not one of {sorted(CURRICULA)}")
+    return CURRICULA[name]
 
 
 def wrapper(name: str):
     """The env wrapper of a curriculum named in the hyperparameters: ValueError naming it and the known ones."""
-    if name not in CURRICULA:
-        raise ValueError(f"curriculum {name!r} is not one of {sorted(CURRICULA)}")
-    starts, options = CURRICULA[name]
+    starts, options = entry(name)
     return lambda env: StartCurriculum(env, starts, **options)

@@ -149,7 +149,7 @@ def init_layers(key, sizes: list[int], last_gain: float):
 def init_params(key, obs_dim: int, act_dim: int, config: Config) -> dict:
     """One seed's networks, drawn on the host (not traceable: see `orthogonal`); with `recurrent` H, a GRU cell
     (orthogonal weights of gain 1, zero biases) whose state the MLPs read beside the observation."""
-    H = getattr(config, "recurrent", 0)
+    H = config.recurrent
     k_pi, k_vf, *k_gru = jax.random.split(key, 4 if H else 2)  # an MLP policy's draws as before
     sizes = list(config.net_arch)
     params = {

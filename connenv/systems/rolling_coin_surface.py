@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connenv.core.backend import FLOATS, namespace, traced
+from connenv.core.backend import FLOATS, floats, namespace, traced
 from connenv.systems.surfaces import Surface
 
 SERIES_BELOW = 0.3  # |Ωτ| under which (Ωτ − sin Ωτ)/(Ωτ)² is summed as its series (no cancellation)
@@ -106,8 +106,8 @@ class RollingCoinPlane(RollingCoinSurface):
         if traced(ops := namespace(y)):
             theta0, omega = u[..., 0], u_dot[..., 0]
         else:  # float rows, or a complex-step Jacobian's complex ones (kept complex: no cast to float)
-            ops, y = np, as_real(y)
-            theta0, omega = as_real(u)[..., 0], as_real(u_dot)[..., 0]
+            ops, y = np, floats(y)
+            theta0, omega = floats(u)[..., 0], floats(u_dot)[..., 0]
         # The closed form's complex numbers (a plane vector x + i y) as pairs of real ones: the complex step's own
         # imaginary part must not mix with them. turn = e^{iθ₀}, a = (sy − i sx) turn, φ₁, φ₂ = phi_pairs.
         sx, sy = self.surface.slope
@@ -142,7 +142,7 @@ class RollingCoinPlane(RollingCoinSurface):
 
 
 def phi_one(alpha: float):
-    """phi_functions of one float."""
+    """phi_pairs of one float, as complex numbers (φ₁, φ₂)."""
     h = 0.5 * alpha
     half = math.sin(h) / h if h != 0.0 else 1.0
     versine = 0.5 * half * half
@@ -166,7 +166,7 @@ def phi_pairs(angle, xp=np):
     cancellation: φ₁ = sin α/α + i (1 − cos α)/α, φ₂ = (1 − cos α)/α² + i (α − sin α)/α², the half-angle forms and,
     for |α| < SERIES_BELOW, the series of (α − sin α)/α². Each is an analytic function of α, so a complex α (a
     complex-step Jacobian's) carries its derivative. xp: numpy, or JAX's namespace on its rows (``connenv.jax``)."""
-    alpha = angle if traced(xp) else as_real(angle)
+    alpha = angle if traced(xp) else floats(angle)
     half = xp.sinc(alpha / (2.0 * math.pi))  # sin(α/2)/(α/2)
     versine = 0.5 * half * half  # (1 − cos α)/α²
     a2 = alpha * alpha
@@ -176,14 +176,3 @@ def phi_pairs(angle, xp=np):
         direct = (alpha - xp.sin(alpha)) / xp.where(small, 1.0, a2)  # that no 0/0 reaches reverse mode's product
     odd = xp.where(small, series, direct)
     return xp.sinc(alpha / math.pi), alpha * versine, versine, odd
-
-
-def phi_functions(angle, xp=np):
-    """(φ₁(i α), φ₂(i α)) as complex numbers, of `phi_pairs`."""
-    p1r, p1i, p2r, p2i = phi_pairs(angle, xp)
-    return p1r + 1j * p1i, p2r + 1j * p2i
-
-
-def as_real(a) -> np.ndarray:
-    """a as float64, or complex128 where it is complex (a complex-step Jacobian's rows)."""
-    return np.asarray(a, np.result_type(a, np.float64))
